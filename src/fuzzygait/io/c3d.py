@@ -1,0 +1,387 @@
+"""Read and write C3D trials.
+
+:func:`read_c3d` gives a :class:`~fuzzygait.io.trial.Trial` with markers in mm (NaN for
+missing samples), subject prefixes removed from the labels, model outputs (Plug-in Gait
+angles, forces, moments, powers, modelled and segment-frame virtual markers) kept apart
+from the markers, the ``EVENT`` group as :class:`~fuzzygait.io.trial.Event` objects and the
+``PROCESSING`` group as subject parameters.
+
+:func:`write_c3d` writes a trial back as a float C3D that Vicon Nexus, Mokka and ezc3d
+open: markers, model outputs (with Vicon's ``POINT:ANGLES`` etc. type lists), events,
+subject parameters and the subject prefix.
+
+Every problem with a file raises one :class:`~fuzzygait.errors.C3DError` whose message
+names the file and the cause.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from fuzzygait.errors import C3DError
+from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
+from fuzzygait.io.trial import OUTPUT_UNITS, Event, Trial
+
+#: Length units the reader understands, as factors to millimetres.
+LENGTH_UNITS_TO_MM = {"mm": 1.0, "millimeter": 1.0, "millimetre": 1.0, "cm": 10.0, "m": 1000.0}
+
+#: ``POINT`` parameters listing model outputs, with the output kind each list means.
+_TYPE_LISTS = {
+    "ANGLES": "angle",
+    "FORCES": "force",
+    "MOMENTS": "moment",
+    "POWERS": "power",
+    "SCALARS": "scalar",
+    "MODELED_MARKERS": "modeled_marker",
+}
+_KIND_TO_LIST = {kind: name for name, kind in _TYPE_LISTS.items()}
+_KIND_UNIT_PARAM = {
+    "angle": "ANGLE_UNITS",
+    "force": "FORCE_UNITS",
+    "moment": "MOMENT_UNITS",
+    "power": "POWER_UNITS",
+    "scalar": "SCALAR_UNITS",
+    "modeled_marker": "MODELED_MARKER_UNITS",
+}
+
+#: Plug-in Gait segment-frame virtual markers (origin, anterior, lateral, proximal).
+_SEGMENT_FRAME = re.compile(r"^(PEL|HED|TRX|[LR](FE|TI|FO|TO|CL|HU|RA|HN))[OALP]$")
+#: Output names by suffix, for files that carry no type lists.
+_OUTPUT_SUFFIX = [
+    (re.compile(r"Angles?$"), "angle"),
+    (re.compile(r"Force$"), "force"),
+    (re.compile(r"Moment$"), "moment"),
+    (re.compile(r"Power$"), "power"),
+]
+
+_MAX_LABEL = 32  # characters per label as Vicon writes them
+
+
+def _fail(path: Path, problem: str) -> C3DError:
+    return C3DError(f"{path}: {problem}")
+
+
+# =========================================================================== reading
+def read_c3d(path: str | os.PathLike[str]) -> Trial:
+    """Read a C3D file into a :class:`Trial` (markers in mm, NaN where missing).
+
+    Args:
+        path: the ``.c3d`` file.
+
+    Returns:
+        The trial; ``trial.notes`` lists anything the reader had to assume or repair
+        (missing rate parameter, renamed duplicate labels, unit conversion, fallback
+        reader, truncated data block).
+
+    Raises:
+        C3DError: the file is missing, unreadable, corrupt or inconsistent; the message
+            names the file and the problem.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise _fail(path, "no such file; check the path")
+    if not path.is_file():
+        raise _fail(path, "is not a file; give a .c3d file")
+    if path.stat().st_size < 512:
+        raise _fail(path, "too short to be a C3D file (under 512 bytes); the file is damaged")
+    try:
+        raw = decode(path)
+    except BackendError as exc:
+        raise _fail(path, f"cannot be read as C3D ({exc}); the file is corrupt or not C3D")
+    except OSError as exc:
+        raise _fail(path, f"cannot be opened ({exc.strerror or exc})")
+    return _interpret(path, raw)
+
+
+def _interpret(path: Path, raw: RawC3D) -> Trial:
+    notes = list(raw.warnings)
+    n_frames, n_points = raw.points.shape[:2]
+    if n_frames == 0:
+        raise _fail(path, "holds no frames of point data")
+    rate = _point_rate(path, raw, notes)
+    labels = _point_labels(path, raw, n_points, notes)
+
+    prefix = _label_prefix(raw, labels)
+    if prefix:
+        labels = [lbl[len(prefix) :] if lbl.startswith(prefix) else lbl for lbl in labels]
+    labels = _deduplicate(labels, notes)
+
+    points = raw.points.copy()
+    points[np.all(points == 0.0, axis=2)] = np.nan  # C3D writers that mark gaps by zeros
+    points[~np.all(np.isfinite(points), axis=2)] = np.nan
+    to_mm = _length_factor(path, raw, notes)
+
+    kinds = _output_kinds(raw, labels, prefix)
+    marker_cols = [i for i, lbl in enumerate(labels) if lbl not in kinds]
+    outputs: dict[str, np.ndarray] = {}
+    for i, lbl in enumerate(labels):
+        if lbl in kinds:
+            scale = to_mm if kinds[lbl] in ("modeled_marker", "segment_frame") else 1.0
+            outputs[lbl] = points[:, i, :] * scale
+
+    expected = _header_frame_count(raw)
+    if expected is not None and expected != n_frames:
+        notes.append(
+            f"header announces {expected} frames but the data block holds {n_frames}; "
+            f"using the {n_frames} frames present"
+        )
+    return Trial(
+        markers=points[:, marker_cols, :] * to_mm,
+        marker_labels=[labels[i] for i in marker_cols],
+        rate=rate,
+        first_frame=raw.first_frame,
+        outputs=outputs,
+        output_kinds=kinds,
+        events=_events(path, raw, notes),
+        parameters=_processing_parameters(raw),
+        subject=_subject_name(raw),
+        label_prefix=prefix,
+        source=path,
+        notes=notes,
+    )
+
+
+def _point_rate(path: Path, raw: RawC3D, notes: list[str]) -> float:
+    value = raw.get("POINT", "RATE")
+    rate = float(np.ravel(value)[0]) if value is not None and np.size(value) else float("nan")
+    if not np.isfinite(rate) or rate <= 0:
+        if raw.header_rate > 0:
+            notes.append(f"POINT:RATE missing or invalid; using the header rate {raw.header_rate:g} Hz")
+            rate = raw.header_rate
+        else:
+            raise _fail(path, "has no valid point rate (POINT:RATE and header); cannot time the data")
+    return rate
+
+
+def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[str]) -> list[str]:
+    labels = list(raw.labels[:n_points])
+    if len(labels) < n_points:
+        notes.append(f"{n_points - len(labels)} points have no label; named POINTnn")
+        labels += [""] * (n_points - len(labels))
+    return [lbl if lbl else f"POINT{i + 1}" for i, lbl in enumerate(labels)]
+
+
+def _label_prefix(raw: RawC3D, labels: list[str]) -> str:
+    """The subject prefix (``"A22:"``): from ``SUBJECTS:LABEL_PREFIXES`` or, failing
+    that, a ``name:`` prefix shared by every label."""
+    declared = raw.get("SUBJECTS", "LABEL_PREFIXES")
+    for prefix in declared or []:
+        if prefix and sum(lbl.startswith(prefix) for lbl in labels) >= len(labels) / 2:
+            return prefix
+    heads = {lbl.split(":", 1)[0] + ":" if ":" in lbl else "" for lbl in labels}
+    return heads.pop() if len(heads) == 1 and "" not in heads else ""
+
+
+def _deduplicate(labels: list[str], notes: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    result = []
+    for lbl in labels:
+        seen[lbl] = seen.get(lbl, 0) + 1
+        result.append(lbl if seen[lbl] == 1 else f"{lbl}_{seen[lbl]}")
+    renamed = sorted(lbl for lbl, count in seen.items() if count > 1)
+    if renamed:
+        notes.append(f"duplicate labels renamed with _2, _3, ...: {', '.join(renamed)}")
+    return result
+
+
+def _length_factor(path: Path, raw: RawC3D, notes: list[str]) -> float:
+    units = raw.get("POINT", "UNITS")
+    unit = (units[0] if units else "").strip().lower()
+    if not unit:
+        notes.append("POINT:UNITS missing; assuming millimetres")
+        return 1.0
+    if unit not in LENGTH_UNITS_TO_MM:
+        raise _fail(path, f"unknown POINT:UNITS {unit!r}; expected mm, cm or m")
+    factor = LENGTH_UNITS_TO_MM[unit]
+    if factor != 1.0:
+        notes.append(f"marker positions converted from {unit} to mm")
+    return factor
+
+
+def _output_kinds(raw: RawC3D, labels: list[str], prefix: str) -> dict[str, str]:
+    """Kind of every label that is a model output rather than a marker."""
+    kinds: dict[str, str] = {}
+    label_set = set(labels)
+    listed_any = False
+    for param, kind in _TYPE_LISTS.items():
+        for name in raw.get("POINT", param) or []:
+            listed_any = True
+            name = name[len(prefix) :] if prefix and name.startswith(prefix) else name
+            if name in label_set:
+                kinds[name] = kind
+    for lbl in labels:
+        if lbl in kinds:
+            continue
+        if _SEGMENT_FRAME.match(lbl):
+            kinds[lbl] = "segment_frame"
+        elif not listed_any:
+            for pattern, kind in _OUTPUT_SUFFIX:
+                if pattern.search(lbl):
+                    kinds[lbl] = kind
+                    break
+    return kinds
+
+
+def _header_frame_count(raw: RawC3D) -> int | None:
+    frames = raw.get("POINT", "FRAMES")
+    if frames is None or not np.size(frames):
+        return None
+    count = int(np.ravel(frames)[0])
+    return count + 65536 if count < 0 else count  # stored as signed 16-bit
+
+
+def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
+    used = raw.get("EVENT", "USED")
+    n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
+    if n <= 0:
+        if raw.header_events:
+            notes.append("events taken from the C3D header (no EVENT group); context unknown")
+        return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
+    times = np.asarray(raw.get("EVENT", "TIMES"), dtype=float)
+    if times.ndim == 1:  # a single event stored as a flat (minutes, seconds) pair
+        times = times.reshape(2, -1)
+    if times.shape[-1] < n:
+        raise _fail(path, f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}")
+    seconds = times[0, :n] * 60.0 + times[1, :n]
+
+    def texts(name: str, default: str) -> list[str]:
+        values = list(raw.get("EVENT", name) or [])
+        return (values + [default] * n)[:n]
+
+    return [
+        Event(label=lbl, context=ctx or "General", time=float(t), subject=subj, description=desc)
+        for lbl, ctx, t, subj, desc in zip(
+            texts("LABELS", "Event"),
+            texts("CONTEXTS", "General"),
+            seconds,
+            texts("SUBJECTS", ""),
+            texts("DESCRIPTIONS", ""),
+        )
+    ]
+
+
+def _processing_parameters(raw: RawC3D) -> dict[str, float]:
+    result: dict[str, float] = {}
+    for name in raw.parameter_names.get("PROCESSING", []):
+        value = raw.get("PROCESSING", name)
+        if value is None or isinstance(value, list) or np.size(value) != 1:
+            continue
+        result[name] = float(np.ravel(value)[0])
+    return result
+
+
+def _subject_name(raw: RawC3D) -> str:
+    names = raw.get("SUBJECTS", "NAMES")
+    return names[0] if names else ""
+
+
+# =========================================================================== writing
+def write_c3d(trial: Trial, path: str | os.PathLike[str]) -> None:
+    """Write ``trial`` to a float C3D file at ``path``.
+
+    Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
+    of -1. Model outputs follow Vicon's conventions (angles in degrees listed in
+    ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. The file appears
+    atomically: on any error nothing is left at ``path``.
+
+    Raises:
+        C3DError: the file cannot be written (names the path and the cause).
+    """
+    import ezc3d
+
+    path = Path(path)
+    prefix = trial.label_prefix
+    names = list(trial.marker_labels) + list(trial.outputs)
+    too_long = [n for n in names if len(prefix + n) > _MAX_LABEL]
+    if too_long:
+        raise _fail(path, f"labels longer than {_MAX_LABEL} characters: {too_long}; shorten them")
+
+    data = np.concatenate(
+        [trial.markers, np.stack(list(trial.outputs.values()), axis=1)]
+        if trial.outputs
+        else [trial.markers],
+        axis=1,
+    )  # (frames, points, 3)
+    valid = np.all(np.isfinite(data), axis=2)
+    block = np.zeros((4, data.shape[1], data.shape[0]))
+    block[:3] = np.where(valid[:, :, None], data, 0.0).transpose(2, 1, 0)
+    block[3] = 1.0
+
+    c = ezc3d.c3d()
+    c["parameters"]["POINT"]["RATE"]["value"] = np.array([trial.rate])
+    c["parameters"]["POINT"]["LABELS"]["value"] = [prefix + n for n in names]
+    c["parameters"]["POINT"]["DESCRIPTIONS"]["value"] = [""] * len(names)
+    c["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    c["data"]["points"] = block
+    c["data"]["meta_points"]["residuals"] = np.where(valid.T[None], 0.0, -1.0)
+    c["data"]["meta_points"]["camera_masks"] = np.zeros((7, data.shape[1], data.shape[0]), dtype=bool)
+    _write_output_lists(c, trial)
+    _write_subject(c, trial)
+    _write_trial_frames(c, trial)
+    for event in trial.events:
+        minutes, seconds = divmod(event.time, 60.0)
+        c.add_event(
+            time=[float(minutes), float(seconds)],
+            context=event.context,
+            label=event.label,
+            description=event.description,
+            subject=event.subject,
+        )
+    _atomic_write(path, c.write)
+
+
+def _write_output_lists(c: object, trial: Trial) -> None:
+    by_kind: dict[str, list[str]] = {}
+    for name, kind in trial.output_kinds.items():
+        by_kind.setdefault(kind, []).append(trial.label_prefix + name)
+    type_groups = []
+    for kind, list_name in _KIND_TO_LIST.items():
+        if kind in by_kind:
+            c.add_parameter("POINT", list_name, by_kind[kind])
+            c.add_parameter("POINT", _KIND_UNIT_PARAM[kind], [OUTPUT_UNITS[kind]])
+            type_groups += [list_name, list_name[:-1]]
+    if type_groups:
+        c.add_parameter("POINT", "TYPE_GROUPS", type_groups)
+
+
+def _write_subject(c: object, trial: Trial) -> None:
+    for name, value in trial.parameters.items():
+        c.add_parameter("PROCESSING", name, np.array([float(value)]))
+    if trial.subject or trial.label_prefix:
+        c.add_parameter("SUBJECTS", "USED", [1])
+        c.add_parameter("SUBJECTS", "NAMES", [trial.subject or trial.label_prefix.rstrip(":")])
+        c.add_parameter("SUBJECTS", "LABEL_PREFIXES", [trial.label_prefix])
+        c.add_parameter("SUBJECTS", "USES_PREFIXES", [1 if trial.label_prefix else 0])
+
+
+def _write_trial_frames(c: object, trial: Trial) -> None:
+    """Record the first frame number (header and Vicon's ``TRIAL`` group)."""
+    start = int(trial.first_frame)
+    end = start + trial.n_frames - 1
+    c.add_parameter("TRIAL", "ACTUAL_START_FIELD", [start % 65536, start // 65536])
+    c.add_parameter("TRIAL", "ACTUAL_END_FIELD", [end % 65536, end // 65536])
+    c["header"]["points"]["first_frame"] = start - 1
+
+
+def _atomic_write(path: Path, write: object) -> None:
+    path = path.resolve() if path.parent.exists() else path
+    if not path.parent.exists():
+        raise _fail(path, f"folder {path.parent} does not exist; create it first")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".tmp.c3d", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp_name)  # type: ignore[operator]
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp_name, 0o666 & ~umask)  # mkstemp makes it private; give normal rights
+        os.replace(tmp_name, path)
+    except Exception as exc:
+        Path(tmp_name).unlink(missing_ok=True)
+        if isinstance(exc, C3DError):
+            raise
+        raise _fail(path, f"cannot be written ({exc})") from exc

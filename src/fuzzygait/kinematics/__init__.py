@@ -1,0 +1,1 @@
+"""kinematics: see the issue tracker; filled in by later work."""

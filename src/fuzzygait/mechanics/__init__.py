@@ -1,0 +1,1 @@
+"""mechanics: see the issue tracker; filled in by later work."""

@@ -1,0 +1,1 @@
+"""uncertainty: see the issue tracker; filled in by later work."""

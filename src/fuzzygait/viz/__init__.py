@@ -1,0 +1,1 @@
+"""viz: see the issue tracker; filled in by later work."""
