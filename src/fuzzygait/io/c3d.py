@@ -92,7 +92,7 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
     try:
         raw = decode(path)
     except BackendError as exc:
-        raise _fail(path, f"cannot be read as C3D ({exc}); the file is corrupt or not C3D")
+        raise _fail(path, f"cannot be read as C3D: {exc}; the file is corrupt or not C3D")
     except OSError as exc:
         raise _fail(path, f"cannot be opened ({exc.strerror or exc})")
     return _interpret(path, raw)

@@ -55,6 +55,14 @@ class RawC3D:
     warnings: list[str] = field(default_factory=list)
 
 
+def _first_sentence(message: str) -> str:
+    """The reader's message without its advice to developers (first line, first sentence)."""
+    line = message.split("\n")[0].strip()
+    for cut in (". If you want", ", please open"):
+        line = line.split(cut)[0]
+    return line.rstrip(". ")
+
+
 def _clean_strings(values: Any) -> list[str]:
     return [str(v).strip() for v in np.atleast_1d(np.asarray(values, dtype=object)).ravel()]
 
@@ -68,7 +76,7 @@ def _decode_ezc3d(path: Path) -> RawC3D:
             warnings.simplefilter("always")
             c = ezc3d.c3d(str(path), extract_forceplat_data=False)
     except Exception as exc:  # ezc3d raises OSError, ValueError, RuntimeError, ...
-        raise BackendError(str(exc).split("\n")[0]) from exc
+        raise BackendError(_first_sentence(str(exc))) from exc
     params = c["parameters"]
 
     def get(group: str, name: str) -> Any:
@@ -157,7 +165,7 @@ def _decode_c3d(path: Path) -> RawC3D:
             # materialise every parameter now: the file closes when we leave this block
             cache = {(g, p): get(g, p) for g, params in names.items() for p in params}
     except Exception as exc:  # the c3d package raises ValueError, struct.error, ...
-        raise BackendError(str(exc).split("\n")[0] or type(exc).__name__) from exc
+        raise BackendError(_first_sentence(str(exc)) or type(exc).__name__) from exc
     if frames:
         block = np.stack(frames)  # (n_frames, n_points, 5): x, y, z, residual, cameras
         points = block[:, :, :3].astype(float)
@@ -190,13 +198,37 @@ def _c3d_header_events(header: Any) -> list[tuple[str, float]]:
 
 
 # --------------------------------------------------------------------------- public
+def check_parameter_section(path: Path) -> None:
+    """Parse header and parameter section with the ``c3d`` package (milliseconds).
+
+    ezc3d needs more than ten seconds to give up on some corrupt parameter sections;
+    this quick structural check refuses them at once.
+
+    Raises:
+        BackendError: the header or parameter section is not valid C3D.
+    """
+    import c3d
+
+    try:
+        with open(path, "rb") as handle, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            c3d.Reader(handle)
+    except Exception as exc:
+        raise BackendError(
+            f"header or parameter section is corrupt ({_first_sentence(str(exc)) or type(exc).__name__})"
+        ) from exc
+
+
 def decode(path: Path) -> RawC3D:
     """Decode ``path`` with ezc3d, falling back to the ``c3d`` package.
 
+    The parameter section is first checked by :func:`check_parameter_section`.
+
     Raises:
-        BackendError: when neither reader can decode the file; the message carries both
-            readers' reasons.
+        BackendError: when the parameter section is corrupt or neither reader can decode
+            the file; the message carries the readers' reasons.
     """
+    check_parameter_section(path)
     try:
         return _decode_ezc3d(path)
     except BackendError as first:

@@ -1,0 +1,5 @@
+"""``python -m fuzzygait`` runs the command line."""
+
+from fuzzygait.cli import main
+
+main()

@@ -1,0 +1,33 @@
+"""Motion-capture pre-processing: gap filling and zero-lag low-pass filtering."""
+
+from fuzzygait.mocap.filtering import (
+    ShortRunWarning,
+    butterworth_lowpass,
+    combined_gain_db,
+    design_cutoff,
+    filter_trial,
+    min_run_length,
+)
+from fuzzygait.mocap.gaps import (
+    Gap,
+    GapRun,
+    fill_gaps,
+    fill_trial_gaps,
+    find_gaps,
+    gap_report_table,
+)
+
+__all__ = [
+    "Gap",
+    "GapRun",
+    "ShortRunWarning",
+    "butterworth_lowpass",
+    "combined_gain_db",
+    "design_cutoff",
+    "fill_gaps",
+    "fill_trial_gaps",
+    "filter_trial",
+    "find_gaps",
+    "gap_report_table",
+    "min_run_length",
+]
