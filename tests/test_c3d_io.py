@@ -183,6 +183,16 @@ def test_round_trip_reproduces_everything(tmp_path) -> None:
     np.testing.assert_allclose(back.outputs["LKneeAngles"], trial.outputs["LKneeAngles"], atol=1e-4)
 
 
+def test_written_files_are_read_by_both_backends(tmp_path) -> None:
+    trial = _synthetic_trial()
+    path = tmp_path / "trial.c3d"
+    write_c3d(trial, path)
+    a, b = _decode_ezc3d(path), _decode_c3d(path)
+    np.testing.assert_array_equal(a.points, b.points)
+    assert a.first_frame == b.first_frame == trial.first_frame
+    assert a.labels == b.labels
+
+
 def test_round_trip_converts_metres_to_millimetres(tmp_path) -> None:
     """A file in metres reads back in mm (the writer always writes mm, so patch units)."""
     import ezc3d

@@ -353,19 +353,19 @@ def _write_subject(c: object, trial: Trial) -> None:
     for name, value in trial.parameters.items():
         c.add_parameter("PROCESSING", name, np.array([float(value)]))
     if trial.subject or trial.label_prefix:
-        c.add_parameter("SUBJECTS", "USED", [1])
+        c.add_parameter("SUBJECTS", "USED", 1)
         c.add_parameter("SUBJECTS", "NAMES", [trial.subject or trial.label_prefix.rstrip(":")])
         c.add_parameter("SUBJECTS", "LABEL_PREFIXES", [trial.label_prefix])
-        c.add_parameter("SUBJECTS", "USES_PREFIXES", [1 if trial.label_prefix else 0])
+        c.add_parameter("SUBJECTS", "USES_PREFIXES", 1 if trial.label_prefix else 0)
 
 
 def _write_trial_frames(c: object, trial: Trial) -> None:
-    """Record the first frame number (header and Vicon's ``TRIAL`` group)."""
-    start = int(trial.first_frame)
-    end = start + trial.n_frames - 1
-    c.add_parameter("TRIAL", "ACTUAL_START_FIELD", [start % 65536, start // 65536])
-    c.add_parameter("TRIAL", "ACTUAL_END_FIELD", [end % 65536, end // 65536])
-    c["header"]["points"]["first_frame"] = start - 1
+    """Record the first frame number in the header (ezc3d counts from 0 there).
+
+    Vicon's ``TRIAL:ACTUAL_START_FIELD`` is not written: ezc3d's Python API can only
+    store integer arrays as floats, which other readers reject for that parameter.
+    """
+    c["header"]["points"]["first_frame"] = int(trial.first_frame) - 1
 
 
 def _atomic_write(path: Path, write: object) -> None:

@@ -155,34 +155,49 @@ class Trial:
         """Whether a marker column named ``label`` exists."""
         return label in self.marker_labels
 
-    def marker(self, label: str) -> np.ndarray:
-        """Trajectory ``(n_frames, 3)`` in mm of marker ``label`` (a view).
-
-        Raises:
-            MarkerError: when the trial has no such marker.
-        """
+    def _column(self, label: str) -> int:
         try:
-            index = self.marker_labels.index(label)
+            return self.marker_labels.index(label)
         except ValueError:
             raise MarkerError(
                 f"{self.name}: marker {label!r} is missing "
                 f"(have: {', '.join(self.marker_labels) or 'none'}); "
                 "label it in your capture software or choose a model that does not need it"
             ) from None
-        return self.markers[:, index, :]
 
-    def with_markers(self, markers: np.ndarray, note: str | None = None) -> Trial:
-        """A copy of this trial with the marker array replaced (same labels)."""
-        notes = [*self.notes, note] if note else list(self.notes)
+    def marker(self, label: str) -> np.ndarray:
+        """Trajectory ``(n_frames, 3)`` in mm of marker ``label`` (a view).
+
+        Raises:
+            MarkerError: when the trial has no such marker.
+        """
+        return self.markers[:, self._column(label), :]
+
+    def _copy(self, markers: np.ndarray, labels: list[str], notes: list[str]) -> Trial:
         return replace(
             self,
             markers=np.array(markers, dtype=float),
+            marker_labels=list(labels),
             outputs={k: v.copy() for k, v in self.outputs.items()},
             output_kinds=dict(self.output_kinds),
             events=list(self.events),
             parameters=dict(self.parameters),
             notes=notes,
         )
+
+    def with_markers(self, markers: np.ndarray, note: str | None = None) -> Trial:
+        """A copy of this trial with the marker array replaced (same labels)."""
+        notes = [*self.notes, note] if note else list(self.notes)
+        return self._copy(markers, self.marker_labels, notes)
+
+    def select_markers(self, labels: list[str]) -> Trial:
+        """A copy holding only the markers ``labels``, in that order.
+
+        Raises:
+            MarkerError: when one of them is missing.
+        """
+        columns = [self._column(lbl) for lbl in labels]
+        return self._copy(self.markers[:, columns, :], labels, list(self.notes))
 
     def missing_mask(self) -> np.ndarray:
         """``(n_frames, n_markers)`` boolean: True where a marker sample is missing."""

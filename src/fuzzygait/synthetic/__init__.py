@@ -1,0 +1,78 @@
+"""Deterministic synthetic Plug-in Gait (CGM 1.0 lower body) trials with known angles.
+
+* :mod:`~fuzzygait.synthetic.gait_curves` -- the known angle curves (Fourier series of
+  gait phase, degrees);
+* :mod:`~fuzzygait.synthetic.leg_model` -- kinematic chain, sign conventions, Davis hip
+  joint centre, marker placement;
+* :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the ``sample_data`` folder.
+
+Regenerate the bundled data with ``python -m fuzzygait.synthetic [OUT_DIR]``.
+"""
+
+from fuzzygait.synthetic.gait_curves import (
+    FOOT_OFF_PHASE,
+    RIGHT_PHASE_SHIFT,
+    STRIDE_TIME_S,
+    FourierCurve,
+    joint_angle_curves,
+    limb_phase,
+    pelvis_angle_curves,
+    pelvis_translation_curves,
+)
+from fuzzygait.synthetic.generate import (
+    DEFAULT_GAPS,
+    CutGap,
+    angle_columns,
+    gait_events,
+    joint_centre_columns,
+    make_noisy_gapped,
+    make_static_trial,
+    make_walking_trial,
+    walking_state,
+    write_sample_data,
+)
+from fuzzygait.synthetic.leg_model import (
+    DYNAMIC_LABELS,
+    SIGNS,
+    STATIC_LABELS,
+    Pose,
+    SubjectGeometry,
+    davis_hjc,
+    euler_yxz,
+    joint_angles_from_rotation,
+    joint_rotation,
+    pose_lower_body,
+    static_offsets,
+)
+
+__all__ = [
+    "DEFAULT_GAPS",
+    "DYNAMIC_LABELS",
+    "FOOT_OFF_PHASE",
+    "RIGHT_PHASE_SHIFT",
+    "SIGNS",
+    "STATIC_LABELS",
+    "STRIDE_TIME_S",
+    "FourierCurve",
+    "CutGap",
+    "Pose",
+    "SubjectGeometry",
+    "angle_columns",
+    "davis_hjc",
+    "euler_yxz",
+    "gait_events",
+    "joint_angle_curves",
+    "joint_angles_from_rotation",
+    "joint_centre_columns",
+    "joint_rotation",
+    "limb_phase",
+    "make_noisy_gapped",
+    "make_static_trial",
+    "make_walking_trial",
+    "pelvis_angle_curves",
+    "pelvis_translation_curves",
+    "pose_lower_body",
+    "static_offsets",
+    "walking_state",
+    "write_sample_data",
+]

@@ -1,0 +1,499 @@
+"""Build synthetic Plug-in Gait trials with known angles and write the sample-data folder.
+
+All trials use the lab frame X = walking direction, Y = left, Z = up, positions in mm,
+first C3D frame 1, C3D frame ``n`` at ``(n - 1) / rate`` seconds.  Nothing is random in
+the clean trials; :func:`make_noisy_gapped` uses a fixed seed.  See
+:mod:`fuzzygait.synthetic.leg_model` for frames and sign conventions and
+:mod:`fuzzygait.synthetic.gait_curves` for the angle curves.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fuzzygait.errors import ParameterError
+from fuzzygait.io.trial import Event, Trial
+from fuzzygait.synthetic.gait_curves import (
+    FOOT_OFF_PHASE,
+    JOINTS,
+    RIGHT_PHASE_SHIFT,
+    STRIDE_TIME_S,
+    joint_angle_curves,
+    limb_phase,
+    pelvis_angle_curves,
+    pelvis_translation_curves,
+)
+from fuzzygait.synthetic.leg_model import (
+    DYNAMIC_LABELS,
+    SIDES,
+    STATIC_LABELS,
+    Pose,
+    SubjectGeometry,
+    pose_lower_body,
+    static_offsets,
+)
+
+#: Mean forward speed of the pelvis, mm/s (1.25 m/s).
+WALKING_SPEED_MM_S = 1250.0
+#: Mean height of the ASIS midpoint in the walking trial, mm (chosen so that the lowest
+#: sole point stays within about +-15 mm of the floor; there is no contact model).
+MEAN_PELVIS_HEIGHT_MM = 970.0
+#: The walking trial starts this many cycles before the first left Foot Strike ...
+LEAD_IN_CYCLES = 0.1
+#: ... and ends this many cycles after the last left Foot Strike (so the right side also
+#: has ``n_cycles`` complete cycles).
+LEAD_OUT_CYCLES = 0.55
+#: Subject name stored in the trials and events.
+SUBJECT_NAME = "Synthetic"
+#: Default standard deviation of the marker noise of the noisy trial, mm.
+NOISE_MM = 0.5
+#: Default seed of the noisy trial.
+NOISE_SEED = 20240611
+
+SEGMENT_ANGLE_NAMES = {"pelvis": "Pelvis", "hip": "Hip", "knee": "Knee", "ankle": "Ankle"}
+JOINT_CENTRE_NAMES = ("HJC", "KJC", "AJC")
+
+
+def angle_columns() -> list[str]:
+    """Truth angle column names: ``LPelvisAngles_X`` ... ``RAnkleAngles_Z`` (degrees)."""
+    return [
+        f"{side}{name}Angles_{axis}"
+        for side in SIDES
+        for name in SEGMENT_ANGLE_NAMES.values()
+        for axis in "XYZ"
+    ]
+
+
+def joint_centre_columns() -> list[str]:
+    """Truth joint-centre column names ``LHJC_X`` ... ``RAJC_Z`` (mm)."""
+    return [f"{side}{jc}_{axis}" for side in SIDES for jc in JOINT_CENTRE_NAMES for axis in "XYZ"]
+
+
+# ----------------------------------------------------------------------------- walking
+def walking_state(
+    times: np.ndarray,
+    geometry: SubjectGeometry | None = None,
+    first_strike_time: float = LEAD_IN_CYCLES * STRIDE_TIME_S,
+    x_offset: float = 0.0,
+) -> tuple[Pose, dict[tuple[str, str], np.ndarray], np.ndarray]:
+    """Exact walker state at arbitrary ``times`` (s).
+
+    The global (left) phase is ``(t - first_strike_time) / STRIDE_TIME_S``.  The pelvis
+    moves at :data:`WALKING_SPEED_MM_S` along +X (``x = x_offset + v t``), sways
+    laterally and bounces vertically around :data:`MEAN_PELVIS_HEIGHT_MM`.
+
+    Returns:
+        ``(pose, angles, phase)`` where ``angles`` maps ``(side, joint)`` (``joint`` in
+        pelvis/hip/knee/ankle) to ``(n, 3)`` clinical angles in degrees and ``phase`` is
+        the global phase ``(n,)``.
+    """
+    t = np.atleast_1d(np.asarray(times, dtype=float))
+    phase = (t - first_strike_time) / STRIDE_TIME_S
+    angles: dict[tuple[str, str], np.ndarray] = {}
+    for side in SIDES:
+        angles[(side, "pelvis")] = pelvis_angle_curves(phase, side)
+        for joint in JOINTS:
+            angles[(side, joint)] = joint_angle_curves(limb_phase(phase, side), joint)
+    sway = pelvis_translation_curves(phase)
+    origin = np.stack(
+        [x_offset + WALKING_SPEED_MM_S * t, sway[:, 0], MEAN_PELVIS_HEIGHT_MM + sway[:, 1]],
+        axis=-1,
+    )
+    pose = pose_lower_body(origin, angles[("L", "pelvis")], angles, geometry)
+    return pose, angles, phase
+
+
+def gait_events(
+    start_time: float, end_time: float, first_strike_time: float, subject: str = SUBJECT_NAME
+) -> list[Event]:
+    """Foot Strike / Foot Off events of both sides within ``[start_time, end_time]``.
+
+    Left Foot Strike at phase ``k``, left Foot Off at ``k + 0.6``, right Foot Strike at
+    ``k + 0.5`` and right Foot Off at ``k + 0.1`` (global phase); times rounded to 1 ns.
+    """
+    events: list[Event] = []
+    k_min = int(np.floor((start_time - first_strike_time) / STRIDE_TIME_S)) - 1
+    k_max = int(np.ceil((end_time - first_strike_time) / STRIDE_TIME_S)) + 1
+    specs = [
+        ("Foot Strike", "Left", 0.0),
+        ("Foot Off", "Left", FOOT_OFF_PHASE),
+        ("Foot Strike", "Right", RIGHT_PHASE_SHIFT),
+        ("Foot Off", "Right", (RIGHT_PHASE_SHIFT + FOOT_OFF_PHASE) % 1.0),
+    ]
+    for k in range(k_min, k_max + 1):
+        for label, context, phase in specs:
+            time = round(first_strike_time + (k + phase) * STRIDE_TIME_S, 9)
+            if start_time - 1e-9 <= time <= end_time + 1e-9:
+                events.append(Event(label=label, context=context, time=time, subject=subject))
+    return sorted(events, key=lambda e: (e.time, e.context, e.label))
+
+
+def make_walking_trial(
+    n_cycles: int = 4,
+    rate: float = 100.0,
+    geometry: SubjectGeometry | None = None,
+) -> tuple[Trial, pd.DataFrame]:
+    """Clean walking trial with exactly known angles.
+
+    The trial starts :data:`LEAD_IN_CYCLES` of a cycle before the first left Foot Strike
+    and ends :data:`LEAD_OUT_CYCLES` after the ``n_cycles``-th one, so both sides have
+    ``n_cycles`` complete cycles (at 100 Hz and 4 cycles: 512 frames, 5.11 s).  The
+    walk is centred on X = 0.  No randomness is involved (hence no seed).
+
+    Returns:
+        ``(trial, truth)``: ``trial`` has the markers of
+        :data:`~fuzzygait.synthetic.leg_model.DYNAMIC_LABELS`, the events and the subject
+        parameters; ``truth`` has columns ``frame`` (1-based), ``time_s``,
+        :func:`angle_columns` (degrees) and :func:`joint_centre_columns` (mm).
+    """
+    if n_cycles < 1:
+        raise ParameterError(f"n_cycles must be >= 1; got {n_cycles}")
+    if not np.isfinite(rate) or rate <= 0:
+        raise ParameterError(f"rate must be a positive number of Hz; got {rate}")
+    g = geometry or SubjectGeometry()
+    first_strike = LEAD_IN_CYCLES * STRIDE_TIME_S
+    duration = (LEAD_IN_CYCLES + n_cycles + LEAD_OUT_CYCLES) * STRIDE_TIME_S
+    n_frames = int(np.floor(duration * rate + 1e-9)) + 1
+    times = np.arange(n_frames) / rate
+    x_offset = -WALKING_SPEED_MM_S * times[-1] / 2.0
+    pose, angles, _ = walking_state(times, g, first_strike, x_offset)
+
+    markers = np.stack([pose.markers[label] for label in DYNAMIC_LABELS], axis=1)
+    events = gait_events(times[0], times[-1], first_strike)
+    trial = Trial(
+        markers=markers,
+        marker_labels=list(DYNAMIC_LABELS),
+        rate=float(rate),
+        first_frame=1,
+        events=events,
+        parameters=g.parameters(),
+        subject=SUBJECT_NAME,
+        notes=["synthetic walking trial generated by fuzzygait.synthetic (clean)"],
+    )
+
+    columns: dict[str, np.ndarray] = {
+        "frame": np.arange(1, n_frames + 1),
+        "time_s": np.round(times, 9),
+    }
+    for side in SIDES:
+        for joint, name in SEGMENT_ANGLE_NAMES.items():
+            values = angles[(side, joint)]
+            for i, axis in enumerate("XYZ"):
+                columns[f"{side}{name}Angles_{axis}"] = values[:, i]
+    for side in SIDES:
+        for jc in JOINT_CENTRE_NAMES:
+            values = pose.joint_centres[side + jc]
+            for i, axis in enumerate("XYZ"):
+                columns[f"{side}{jc}_{axis}"] = values[:, i]
+    return trial, pd.DataFrame(columns)
+
+
+# ----------------------------------------------------------------------------- static
+def make_static_trial(
+    rate: float = 100.0,
+    duration_s: float = 2.0,
+    geometry: SubjectGeometry | None = None,
+) -> Trial:
+    """Static standing trial: all joint and pelvis angles 0, pelvis level.
+
+    The ASIS midpoint stands at X = 0, Y = 0 and at the height that puts the soles on the
+    floor (:meth:`SubjectGeometry.standing_pelvis_height`, 991.585 mm); both feet point
+    along +X.  Includes the medial markers LKNM, RKNM, LMED, RMED.  Every frame is
+    identical; no events.
+    """
+    if not np.isfinite(rate) or rate <= 0:
+        raise ParameterError(f"rate must be a positive number of Hz; got {rate}")
+    if not np.isfinite(duration_s) or duration_s <= 0:
+        raise ParameterError(f"duration_s must be positive; got {duration_s}")
+    g = geometry or SubjectGeometry()
+    n = max(int(round(duration_s * rate)), 1)
+    origin = np.tile([0.0, 0.0, g.standing_pelvis_height()], (n, 1))
+    zeros = np.zeros((n, 3))
+    angles = {(side, joint): zeros for side in SIDES for joint in JOINTS}
+    pose = pose_lower_body(origin, zeros, angles, g, medial_markers=True)
+    markers = np.stack([pose.markers[label] for label in STATIC_LABELS], axis=1)
+    return Trial(
+        markers=markers,
+        marker_labels=list(STATIC_LABELS),
+        rate=float(rate),
+        first_frame=1,
+        parameters=g.parameters(),
+        subject=SUBJECT_NAME,
+        notes=["synthetic static trial generated by fuzzygait.synthetic"],
+    )
+
+
+# ----------------------------------------------------------------------------- noise/gaps
+@dataclass(frozen=True)
+class CutGap:
+    """A cut stretch of one marker: C3D frames ``start_frame .. start_frame+length-1``."""
+
+    marker: str
+    start_frame: int
+    length: int
+
+
+#: Gaps cut by :func:`make_noisy_gapped` (1-based C3D frames of the default 512-frame
+#: walking trial): one at the trial start, five interior ones of 1-10 frames and one of
+#: 23 frames.
+DEFAULT_GAPS: tuple[CutGap, ...] = (
+    CutGap("RHEE", 1, 6),
+    CutGap("LTHI", 45, 1),
+    CutGap("RKNE", 120, 4),
+    CutGap("LTOE", 200, 10),
+    CutGap("RTIB", 290, 7),
+    CutGap("LASI", 350, 2),
+    CutGap("LANK", 400, 23),
+)
+
+
+def make_noisy_gapped(
+    trial: Trial,
+    noise_mm: float = NOISE_MM,
+    seed: int = NOISE_SEED,
+    gaps: Sequence[CutGap] | None = None,
+) -> tuple[Trial, list[CutGap]]:
+    """Copy of ``trial`` with Gaussian marker noise and cut gaps.
+
+    Noise is drawn independently per coordinate from ``N(0, noise_mm^2)`` with
+    ``numpy.random.default_rng(seed)`` over the whole ``(frames, markers, 3)`` array;
+    then the samples of each gap are set to NaN.
+
+    Args:
+        trial: clean trial (first frame and labels are used to place the gaps).
+        noise_mm: noise standard deviation in mm.
+        seed: random seed.
+        gaps: gaps to cut (default :data:`DEFAULT_GAPS`).
+
+    Returns:
+        ``(noisy_trial, gaps)``.
+
+    Raises:
+        ParameterError: a gap names an unknown marker or does not fit in the trial.
+    """
+    if not np.isfinite(noise_mm) or noise_mm < 0:
+        raise ParameterError(f"noise_mm must be >= 0; got {noise_mm}")
+    gaps = list(DEFAULT_GAPS if gaps is None else gaps)
+    rng = np.random.default_rng(seed)
+    markers = trial.markers + rng.normal(0.0, noise_mm, size=trial.markers.shape)
+    last = trial.first_frame + trial.n_frames - 1
+    for gap in gaps:
+        if gap.marker not in trial.marker_labels:
+            raise ParameterError(f"gap marker {gap.marker!r} is not in the trial")
+        if gap.length < 1 or gap.start_frame < trial.first_frame:
+            raise ParameterError(f"gap {gap} does not fit frames {trial.first_frame}..{last}")
+        if gap.start_frame + gap.length - 1 > last:
+            raise ParameterError(f"gap {gap} does not fit frames {trial.first_frame}..{last}")
+        i0 = gap.start_frame - trial.first_frame
+        markers[i0 : i0 + gap.length, trial.marker_labels.index(gap.marker), :] = np.nan
+    noisy = trial.with_markers(
+        markers, note=f"Gaussian noise sigma={noise_mm} mm (seed {seed}); {len(gaps)} gaps cut"
+    )
+    return noisy, gaps
+
+
+# ----------------------------------------------------------------------------- writers
+def subject_toml_text(parameters: dict[str, float]) -> str:
+    """TOML text of the subject parameters (flat keys, fixed order, exact floats)."""
+    lines = [
+        "# Synthetic Plug-in Gait subject (generated by fuzzygait.synthetic; do not edit).",
+        "# Vicon PROCESSING parameter names. Units: lengths in mm, angles in rad, mass in kg.",
+        "# L/RAsisTrocanterDistance = 0.1288 * LegLength - 48.56 (Plug-in Gait regression).",
+        "",
+    ]
+    lines += [f"{name} = {float(value)!r}" for name, value in parameters.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _csv_text(frame: pd.DataFrame, float_format: str) -> str:
+    return frame.to_csv(index=False, float_format=float_format, lineterminator="\n")
+
+
+def truth_angles_csv_text(truth: pd.DataFrame) -> str:
+    """CSV text of ``frame, time_s`` and the truth angles (degrees, 9 decimals)."""
+    return _csv_text(truth[["frame", "time_s", *angle_columns()]], "%.9f")
+
+
+def truth_joint_centres_csv_text(truth: pd.DataFrame) -> str:
+    """CSV text of ``frame, time_s`` and the truth joint centres (mm, 6 decimals)."""
+    return _csv_text(truth[["frame", "time_s", *joint_centre_columns()]], "%.6f")
+
+
+def gaps_csv_text(gaps: Sequence[CutGap]) -> str:
+    """CSV text ``marker,start_frame,length`` (1-based C3D frames)."""
+    rows = ["marker,start_frame,length"] + [f"{g.marker},{g.start_frame},{g.length}" for g in gaps]
+    return "\n".join(rows) + "\n"
+
+
+def _write_text(path: Path, text: str) -> Path:
+    path.write_text(text, encoding="utf-8", newline="\n")
+    return path
+
+
+def write_sample_data(out_dir: Path | str = "sample_data") -> list[Path]:
+    """Generate and write the sample-data folder; returns the written paths.
+
+    Files: ``static.c3d``, ``walking.c3d``, ``walking_noisy.c3d``, ``subject.toml``,
+    ``walking_truth_angles.csv``, ``walking_truth_joint_centres.csv``,
+    ``walking_noisy_gaps.csv`` and ``README.md`` (see that README for the contents).
+    """
+    from fuzzygait.io.c3d import write_c3d  # deferred: keeps the generator importable
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    geometry = SubjectGeometry()
+    static = make_static_trial(geometry=geometry)
+    walking, truth = make_walking_trial(geometry=geometry)
+    noisy, gaps = make_noisy_gapped(walking)
+
+    written: list[Path] = []
+    for name, trial in (("static.c3d", static), ("walking.c3d", walking),
+                        ("walking_noisy.c3d", noisy)):  # fmt: skip
+        path = out / name
+        write_c3d(trial, path)
+        written.append(path)
+    written.append(_write_text(out / "subject.toml", subject_toml_text(walking.parameters)))
+    written.append(_write_text(out / "walking_truth_angles.csv", truth_angles_csv_text(truth)))
+    written.append(
+        _write_text(out / "walking_truth_joint_centres.csv", truth_joint_centres_csv_text(truth))
+    )
+    written.append(_write_text(out / "walking_noisy_gaps.csv", gaps_csv_text(gaps)))
+    written.append(_write_text(out / "README.md", readme_text(geometry, walking, gaps)))
+    return written
+
+
+def readme_text(geometry: SubjectGeometry, walking: Trial, gaps: Sequence[CutGap]) -> str:
+    """The sample-data README (generated so that it always matches the files)."""
+    offsets = static_offsets(geometry)
+    hjc = geometry.hjc_local("L")
+    params = "\n".join(f"| `{k}` | {v!r} |" for k, v in walking.parameters.items())
+    gap_rows = "\n".join(f"| {g.marker} | {g.start_frame} | {g.length} |" for g in gaps)
+    n_events = {
+        (label, ctx): sum(1 for e in walking.events if e.label == label and e.context == ctx)
+        for label in ("Foot Strike", "Foot Off")
+        for ctx in ("Left", "Right")
+    }
+    events = ", ".join(f"{n} {ctx} {label}" for (label, ctx), n in n_events.items())
+    return _README_TEMPLATE.format(
+        n_frames=walking.n_frames,
+        duration=walking.times[-1],
+        rate=walking.rate,
+        stride=STRIDE_TIME_S,
+        speed=WALKING_SPEED_MM_S / 1000.0,
+        height=MEAN_PELVIS_HEIGHT_MM,
+        standing=geometry.standing_pelvis_height(),
+        events=events,
+        first_strike=LEAD_IN_CYCLES * STRIDE_TIME_S,
+        noise=NOISE_MM,
+        seed=NOISE_SEED,
+        gap_rows=gap_rows,
+        params=params,
+        hjc_x=hjc[0],
+        hjc_y=hjc[1],
+        hjc_z=hjc[2],
+        thigh=geometry.thigh_length,
+        shank=geometry.shank_length,
+        toe=geometry.toe_local,
+        hee=geometry.hee_local,
+        sole=geometry.sole_depth,
+        pf_rad=offsets["plantarflexion"],
+        pf_deg=np.degrees(offsets["plantarflexion"]),
+        rot_rad=offsets["rotation"],
+    )
+
+
+_README_TEMPLATE = """\
+# Sample data: synthetic Plug-in Gait trials with known joint angles
+
+Everything in this folder is generated by code (`fuzzygait.synthetic`); nothing is
+measured or copied. Regenerate it (byte-identical) with
+
+    python -m fuzzygait.synthetic sample_data
+
+Synthetic subject "Synthetic", Plug-in Gait / CGM 1.0 lower-body marker set.
+
+## Files
+
+| file | content |
+|---|---|
+| `static.c3d` | standing trial, {rate:g} Hz, 2 s, every frame identical; all joint and pelvis angles 0, pelvis level, feet parallel along +X, soles on the floor (ASIS midpoint at X=Y=0, Z={standing:.3f} mm). Markers: LASI RASI LPSI RPSI LTHI LKNE LTIB LANK LHEE LTOE RTHI RKNE RTIB RANK RHEE RTOE + medial LKNM RKNM LMED RMED. No events. |
+| `walking.c3d` | clean walking trial, {rate:g} Hz, {n_frames} frames (0 .. {duration:.2f} s), 4 complete gait cycles per side, the 16 dynamic markers. Events: {events}. |
+| `walking_noisy.c3d` | `walking.c3d` + Gaussian noise (sigma = {noise} mm per coordinate, seed {seed}) + the gaps of `walking_noisy_gaps.csv`; same events. |
+| `subject.toml` | subject parameters (Vicon `PROCESSING` names; mm, rad, kg), also stored in every C3D. |
+| `walking_truth_angles.csv` | exact joint angles of `walking.c3d`: `frame` (1-based C3D frame), `time_s`, `LPelvisAngles_X/Y/Z`, `LHipAngles_*`, `LKneeAngles_*`, `LAnkleAngles_*`, then the same for R; degrees; X = sagittal, Y = frontal, Z = transverse. |
+| `walking_truth_joint_centres.csv` | exact joint centres of `walking.c3d`: `frame`, `time_s`, `LHJC_X/Y/Z`, `LKJC_*`, `LAJC_*`, `RHJC_*`, `RKJC_*`, `RAJC_*`, mm, lab frame. |
+| `walking_noisy_gaps.csv` | the gaps cut in `walking_noisy.c3d`: `marker`, `start_frame` (1-based C3D frame), `length` (frames). |
+
+The C3D files store float32, so markers read back differ from the exact values by up to
+~2e-4 mm; the CSVs carry 9 (angles) and 6 (positions) decimals.
+
+## Conventions
+
+* Lab frame: X = walking direction, Y = left, Z = up; mm. C3D frame n is at (n-1)/rate s.
+* Segment frames (both sides): pelvis, thigh, shank: x anterior, y left, z proximal;
+  foot: x anterior along the foot (HEE->TOE), y left, z dorsal. Origins: ASIS midpoint,
+  HJC, KJC, AJC. At ankle angle 0 the foot frame equals the shank frame.
+* Joint angles: `R_distal = R_proximal * R_y(fs*X) * R_x(as*Y) * R_z(rs*Z)` (intrinsic
+  Y-X-Z, Grood-Suntay order: flexion about the proximal y, rotation about the distal z,
+  adduction about the floating axis). The pelvis angles are the pelvis relative to the
+  lab (= progression) frame.
+
+| joint | fs | as L / R | rs L / R | + X | + Y | + Z |
+|---|---|---|---|---|---|---|
+| Pelvis | +1 | +1 / -1 | -1 / +1 | anterior tilt (ASIS below PSIS) | own side up | own ASIS forward |
+| Hip | -1 | -1 / +1 | -1 / +1 | flexion (knee anterior) | adduction (knee medial) | internal rotation (lateral knee marker turns anterior) |
+| Knee | +1 | -1 / +1 | -1 / +1 | flexion (ankle posterior) | varus (ankle medial) | internal rotation |
+| Ankle | -1 | -1 / +1 | -1 / +1 | dorsiflexion (toe up) | inversion (sole turns medially) | internal rotation (toe medial) |
+
+  Every joint, the ankle included, uses this Y-X-Z sequence in the frames above (the
+  ankle's last rotation is about the foot's dorsal z axis). A joint-angle code that
+  decomposes the ankle with another sequence (e.g. Y-Z-X in these frames) differs from
+  this truth on this trial by up to about 0.58 deg (X), 0.04 deg (Y) and 0.02 deg (Z).
+
+* Gait timing: stride {stride} s; left Foot Strike at phase 0 (first at {first_strike:.2f} s),
+  Foot Off at phase 0.6; the right side runs half a cycle later. Angle curves are
+  Fourier series (<= 6 harmonics) of phase, see `fuzzygait/synthetic/gait_curves.py`.
+* Pelvis: ASIS midpoint moves at {speed} m/s along +X (walk centred on X = 0), sways
+  +-20 mm laterally once per stride and +-15 mm vertically twice per stride around
+  Z = {height:g} mm; pelvis tilt 5 +- 1.5 deg, obliquity and rotation about +-4 deg.
+  There is no foot-contact model: the lowest sole point stays within about +-15 mm of
+  the floor and the stance foot slides a little.
+
+## Geometry (exact; the Plug-in Gait reconstruction should find it)
+
+* Hip joint centres at Plug-in Gait's Davis regression location in the pelvis frame:
+  ({hjc_x:.6f}, +-{hjc_y:.6f}, {hjc_z:.6f}) mm.
+* PSIS {{LPSI,RPSI}} 160 mm behind the ASIS, +-45 mm lateral, in the pelvis x-y plane
+  (so SACR = their midpoint gives Plug-in Gait's pelvis x axis exactly).
+* Thigh length (HJC-KJC) {thigh:g} mm, shank length (KJC-AJC) {shank:g} mm.
+  KNE = KJC +- (KneeWidth/2 + MarkerDiameter/2) along the thigh y axis, ANK = AJC +-
+  (AnkleWidth/2 + MarkerDiameter/2) along the shank y axis (lateral), so the chord
+  constructions are exact. THI: mid-thigh, 75 mm lateral, in the thigh y-z plane
+  (ThighRotation 0); TIB: mid-shank, 65 mm lateral, in the shank y-z plane
+  (ShankRotation 0, TibialTorsion 0). Static KNM / MED are the medial mirror images.
+* Foot (x, y, z relative to the AJC in the foot frame): TOE {toe} mm, HEE {hee} mm; the
+  sole is {sole:g} mm below the AJC (TOE and HEE are 30 mm above the floor when
+  standing). HEE->TOE is parallel to the foot x axis.
+* Expected Plug-in Gait static offsets:
+  static plantarflexion offset = angle between AJC->TOE and the foot x axis =
+  **{pf_rad:.6f} rad ({pf_deg:.4f} deg)** (TOE below the AJC's x line);
+  static rotation offset = **{rot_rad:.6f} rad** (TOE and HEE in the foot x-z plane).
+  (`fuzzygait.synthetic.static_offsets()`.)
+
+## Gaps in `walking_noisy.c3d`
+
+| marker | start frame | length |
+|---|---|---|
+{gap_rows}
+
+## Subject parameters
+
+| name | value |
+|---|---|
+{params}
+"""
