@@ -1,1 +1,1 @@
-"""kinematics: see the issue tracker; filled in by later work."""
+"""Conventional Gait Model (Plug-in Gait lower body): segments, joint centres, angles."""

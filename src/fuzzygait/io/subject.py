@@ -1,0 +1,266 @@
+"""Subject (anthropometric) parameters of the Conventional Gait Model / Plug-in Gait.
+
+Three sources give the same :class:`SubjectParameters`:
+
+* a TOML file with Vicon ``PROCESSING`` names at top level (``LLegLength = 900.0``),
+  see ``sample_data/subject.toml``;
+* a Vicon ``.vsk`` subject file (XML; ``LeftLegLength`` / ``RightLegLength`` names);
+* the ``PROCESSING`` group of a C3D file (``trial.parameters``).
+
+Units: lengths in mm, angles in **radians** (as Vicon stores them), mass in kg.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from fuzzygait.errors import ParameterError
+
+#: Default marker diameter (mm) when a source does not give one.
+DEFAULT_MARKER_DIAMETER = 14.0
+
+
+def asis_trochanter_regression(leg_length: float) -> float:
+    """Plug-in Gait ASIS-trochanter distance (mm) from the leg length (mm)."""
+    return 0.1288 * leg_length - 48.56
+
+
+@dataclass(frozen=True)
+class SideParameters:
+    """Parameters of one leg (Vicon names without the ``L``/``R`` prefix).
+
+    Attributes:
+        leg_length: ASIS to medial malleolus, mm (``LegLength``).
+        knee_width: mm (``KneeWidth``).
+        ankle_width: mm (``AnkleWidth``).
+        asis_trochanter_distance: mm (``AsisTrocanterDistance``); None: regression.
+        tibial_torsion: rad (``TibialTorsion``).
+        thigh_rotation: rad (``ThighRotation``), thigh-wand offset.
+        shank_rotation: rad (``ShankRotation``), tibia-wand offset.
+        ankle_abadd: rad (``AnkleAbAdd``).
+        sole_delta: mm (``SoleDelta``), heel minus toe sole thickness (flat-foot option).
+        static_plantar_flex: rad (``StaticPlantFlex``), from static calibration.
+        static_rot_off: rad (``StaticRotOff``), from static calibration.
+    """
+
+    leg_length: float
+    knee_width: float
+    ankle_width: float
+    asis_trochanter_distance: float | None = None
+    tibial_torsion: float = 0.0
+    thigh_rotation: float = 0.0
+    shank_rotation: float = 0.0
+    ankle_abadd: float = 0.0
+    sole_delta: float = 0.0
+    static_plantar_flex: float = 0.0
+    static_rot_off: float = 0.0
+
+    @property
+    def asis_trochanter(self) -> float:
+        """ASIS-trochanter distance in mm, from the regression when not given."""
+        if self.asis_trochanter_distance is None or self.asis_trochanter_distance <= 0:
+            return asis_trochanter_regression(self.leg_length)
+        return self.asis_trochanter_distance
+
+
+#: Vicon suffix of each SideParameters field.
+_SIDE_NAMES = {
+    "leg_length": "LegLength",
+    "knee_width": "KneeWidth",
+    "ankle_width": "AnkleWidth",
+    "asis_trochanter_distance": "AsisTrocanterDistance",
+    "tibial_torsion": "TibialTorsion",
+    "thigh_rotation": "ThighRotation",
+    "shank_rotation": "ShankRotation",
+    "ankle_abadd": "AnkleAbAdd",
+    "sole_delta": "SoleDelta",
+    "static_plantar_flex": "StaticPlantFlex",
+    "static_rot_off": "StaticRotOff",
+}
+_REQUIRED_SIDE = ("leg_length", "knee_width", "ankle_width")
+_ANGLE_FIELDS = {"tibial_torsion", "thigh_rotation", "shank_rotation", "ankle_abadd",
+                 "static_plantar_flex", "static_rot_off"}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SubjectParameters:
+    """All subject parameters the lower-body model needs.
+
+    Attributes:
+        left, right: per-leg parameters.
+        body_mass: kg (``Bodymass``); 0 when unknown (not needed for kinematics).
+        height: mm (``Height``); 0 when unknown.
+        marker_diameter: mm (``MarkerDiameter``).
+        inter_asis_distance: mm (``InterAsisDistance``); None: measure it from the
+            static trial (or, failing that, from the dynamic trial's ASIS markers).
+        source: where the values came from, for messages.
+    """
+
+    left: SideParameters
+    right: SideParameters
+    body_mass: float = 0.0
+    height: float = 0.0
+    marker_diameter: float = DEFAULT_MARKER_DIAMETER
+    inter_asis_distance: float | None = None
+    source: str = field(default="", compare=False)
+
+    @property
+    def marker_radius(self) -> float:
+        """Marker radius in mm."""
+        return self.marker_diameter / 2.0
+
+    def side(self, side: str) -> SideParameters:
+        """Parameters of ``"L"`` or ``"R"``."""
+        if side not in ("L", "R"):
+            raise ParameterError(f"side must be 'L' or 'R'; got {side!r}")
+        return self.left if side == "L" else self.right
+
+    def with_side(self, side: str, **changes: float) -> SubjectParameters:
+        """A copy with fields of one side replaced (e.g. static offsets)."""
+        key = "left" if side == "L" else "right"
+        return replace(self, **{key: replace(self.side(side), **changes)})
+
+    def to_processing(self) -> dict[str, float]:
+        """The parameters under Vicon ``PROCESSING`` names (for C3D output and TOML)."""
+        out: dict[str, float] = {
+            "Bodymass": self.body_mass,
+            "Height": self.height,
+            "MarkerDiameter": self.marker_diameter,
+        }
+        if self.inter_asis_distance is not None:
+            out["InterAsisDistance"] = self.inter_asis_distance
+        for prefix, params in (("L", self.left), ("R", self.right)):
+            for name, vicon in _SIDE_NAMES.items():
+                value = getattr(params, name)
+                out[prefix + vicon] = params.asis_trochanter if value is None else float(value)
+        return out
+
+    # ------------------------------------------------------------------ validation
+    def validate(self) -> SubjectParameters:
+        """Check plausibility; returns self.
+
+        Raises:
+            ParameterError: naming every implausible value (negative widths, lengths that
+                look like metres, angles that look like degrees, ...).
+        """
+        problems = []
+
+        def check_range(name: str, value: float | None, low: float, high: float, unit: str) -> None:
+            if value is None:
+                return
+            if not math.isfinite(value) or not low <= value <= high:
+                problems.append(f"{name}={value:g} (expected {low:g}..{high:g} {unit})")
+
+        check_range("MarkerDiameter", self.marker_diameter, 1, 40, "mm")
+        check_range("InterAsisDistance", self.inter_asis_distance, 100, 500, "mm")
+        check_range("Bodymass", self.body_mass, 0, 400, "kg")
+        for prefix, params in (("L", self.left), ("R", self.right)):
+            check_range(f"{prefix}LegLength", params.leg_length, 300, 1400, "mm")
+            check_range(f"{prefix}KneeWidth", params.knee_width, 40, 250, "mm")
+            check_range(f"{prefix}AnkleWidth", params.ankle_width, 30, 200, "mm")
+            check_range(f"{prefix}SoleDelta", params.sole_delta, -100, 100, "mm")
+            for name in _ANGLE_FIELDS:
+                check_range(f"{prefix}{_SIDE_NAMES[name]}", getattr(params, name), -math.pi, math.pi, "rad")
+        if problems:
+            where = f"{self.source}: " if self.source else ""
+            raise ParameterError(
+                f"{where}implausible subject parameters: {'; '.join(problems)}; "
+                "lengths are in mm and angles in radians"
+            )
+        return self
+
+
+# ---------------------------------------------------------------------- constructors
+def subject_from_processing(values: Mapping[str, float], source: str = "") -> SubjectParameters:
+    """Build parameters from Vicon ``PROCESSING`` names (``LLegLength``, ...).
+
+    Raises:
+        ParameterError: when required values are missing (all of them named) or
+            implausible.
+    """
+    missing = [f"{p}{_SIDE_NAMES[n]}" for p in "LR" for n in _REQUIRED_SIDE if f"{p}{_SIDE_NAMES[n]}" not in values]
+    if missing:
+        where = f"{source}: " if source else ""
+        raise ParameterError(
+            f"{where}missing subject parameters {', '.join(missing)}; "
+            "give them in a subject file (--subject SUBJECT.toml or .vsk)"
+        )
+
+    def side(prefix: str) -> SideParameters:
+        kwargs: dict[str, float | None] = {}
+        for name, vicon in _SIDE_NAMES.items():
+            if prefix + vicon in values:
+                kwargs[name] = float(values[prefix + vicon])
+        return SideParameters(**kwargs)  # type: ignore[arg-type]
+
+    inter_asis = values.get("InterAsisDistance")
+    return SubjectParameters(
+        left=side("L"),
+        right=side("R"),
+        body_mass=float(values.get("Bodymass", 0.0)),
+        height=float(values.get("Height", 0.0)),
+        marker_diameter=float(values.get("MarkerDiameter", DEFAULT_MARKER_DIAMETER)),
+        inter_asis_distance=float(inter_asis) if inter_asis else None,
+        source=source,
+    ).validate()
+
+
+def read_subject_toml(path: str | os.PathLike[str]) -> SubjectParameters:
+    """Read a TOML subject file with Vicon ``PROCESSING`` names at top level."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such subject file; check the path") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{path}: not a valid TOML file ({exc})") from None
+    table = data.get("subject", data) if isinstance(data.get("subject"), dict) else data
+    numbers = {k: v for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    bad = [k for k, v in table.items() if not isinstance(v, (int, float, dict, str))]
+    if bad:
+        raise ParameterError(f"{path}: parameters {bad} must be numbers")
+    return subject_from_processing(numbers, source=str(path))
+
+
+def read_vsk(path: str | os.PathLike[str]) -> SubjectParameters:
+    """Read a Vicon ``.vsk`` subject file (``LeftLegLength`` style names)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such subject file; check the path") from None
+    except ET.ParseError as exc:
+        raise ParameterError(f"{path}: not a valid Vicon .vsk (XML) file ({exc})") from None
+    values: dict[str, float] = {}
+    for element in root.iter():
+        if not element.tag.endswith("Parameter") or "NAME" not in element.attrib:
+            continue
+        raw = element.attrib.get("VALUE")
+        if raw is None:
+            continue  # Vicon leaves unset optional parameters without a VALUE
+        name = element.attrib["NAME"]
+        for long, short in (("Left", "L"), ("Right", "R")):
+            if name.startswith(long):
+                name = short + name[len(long) :]
+        try:
+            values[name] = float(raw)
+        except ValueError:
+            raise ParameterError(f"{path}: parameter {name} has non-numeric value {raw!r}") from None
+    return subject_from_processing(values, source=str(path))
+
+
+def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
+    """Read a subject file by extension: ``.toml`` or ``.vsk``."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".toml":
+        return read_subject_toml(path)
+    if suffix == ".vsk":
+        return read_vsk(path)
+    raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml or .vsk")
+
