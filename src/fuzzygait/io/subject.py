@@ -45,7 +45,7 @@ class SideParameters:
         shank_rotation: rad (``ShankRotation``), tibia-wand offset.
         ankle_abadd: rad (``AnkleAbAdd``).
         sole_delta: mm (``SoleDelta``), heel minus toe sole thickness (flat-foot option).
-        static_plantar_flex: rad (``StaticPlantFlex``), from static calibration.
+        static_plant_flex: rad (``StaticPlantFlex``), from static calibration.
         static_rot_off: rad (``StaticRotOff``), from static calibration.
     """
 
@@ -58,7 +58,7 @@ class SideParameters:
     shank_rotation: float = 0.0
     ankle_abadd: float = 0.0
     sole_delta: float = 0.0
-    static_plantar_flex: float = 0.0
+    static_plant_flex: float = 0.0
     static_rot_off: float = 0.0
 
     @property
@@ -80,12 +80,12 @@ _SIDE_NAMES = {
     "shank_rotation": "ShankRotation",
     "ankle_abadd": "AnkleAbAdd",
     "sole_delta": "SoleDelta",
-    "static_plantar_flex": "StaticPlantFlex",
+    "static_plant_flex": "StaticPlantFlex",
     "static_rot_off": "StaticRotOff",
 }
 _REQUIRED_SIDE = ("leg_length", "knee_width", "ankle_width")
 _ANGLE_FIELDS = {"tibial_torsion", "thigh_rotation", "shank_rotation", "ankle_abadd",
-                 "static_plantar_flex", "static_rot_off"}  # fmt: skip
+                 "static_plant_flex", "static_rot_off"}  # fmt: skip
 
 
 @dataclass(frozen=True)
