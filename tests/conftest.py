@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -24,3 +26,23 @@ def shared_file(*parts: str) -> Path:
     if not path.is_file():
         pytest.skip(f"reference file {path} is absent")
     return path
+
+
+def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """Run the `fuzzygait` command in a subprocess, as a user would."""
+    return subprocess.run(
+        [sys.executable, "-m", "fuzzygait", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def assert_one_line_error(result: subprocess.CompletedProcess[str], *needles: str) -> None:
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr + result.stdout
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("fuzzygait: error: ")
+    for needle in needles:
+        assert needle in lines[0]

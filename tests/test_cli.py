@@ -2,34 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SAMPLE_DATA, SHARED_DATA, needs_shared, shared_file
+from conftest import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
-
-
-def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "fuzzygait", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-
-
-def assert_one_line_error(result: subprocess.CompletedProcess[str], *needles: str) -> None:
-    assert result.returncode != 0
-    assert "Traceback" not in result.stderr + result.stdout
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("fuzzygait: error: ")
-    for needle in needles:
-        assert needle in lines[0]
 
 
 @needs_shared

@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from fuzzygait.errors import C3DError
+from fuzzygait.errors import C3DError, FuzzyGaitError
+from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
 from fuzzygait.io.trial import OUTPUT_UNITS, Event, Trial
 
@@ -369,19 +369,10 @@ def _write_trial_frames(c: object, trial: Trial) -> None:
 
 
 def _atomic_write(path: Path, write: object) -> None:
-    path = path.resolve() if path.parent.exists() else path
-    if not path.parent.exists():
-        raise _fail(path, f"folder {path.parent} does not exist; create it first")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".tmp.c3d", dir=path.parent)
-    os.close(fd)
     try:
-        write(tmp_name)  # type: ignore[operator]
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp_name, 0o666 & ~umask)  # mkstemp makes it private; give normal rights
-        os.replace(tmp_name, path)
+        with atomic_output(path) as tmp:
+            write(str(tmp))  # type: ignore[operator]
+    except FuzzyGaitError as exc:
+        raise _fail(path, str(exc).removeprefix(f"{path}: ")) from None
     except Exception as exc:
-        Path(tmp_name).unlink(missing_ok=True)
-        if isinstance(exc, C3DError):
-            raise
         raise _fail(path, f"cannot be written ({exc})") from exc
