@@ -1,5 +1,20 @@
-"""Motion-capture pre-processing: gap filling and zero-lag low-pass filtering."""
+"""Motion-capture pre-processing (gap filling, zero-lag low-pass), gait events and
+gait-cycle normalisation."""
 
+from fuzzygait.mocap.cycles import (
+    GaitCycle,
+    cycle_statistics,
+    gait_cycles,
+    mean_sd_table,
+    normalise_cycles,
+    normalised_angle_table,
+)
+from fuzzygait.mocap.events import (
+    SOURCE_DETECTED,
+    SOURCE_FILE,
+    detect_gait_events,
+    trial_gait_events,
+)
 from fuzzygait.mocap.filtering import (
     ShortRunWarning,
     butterworth_lowpass,
@@ -18,6 +33,16 @@ from fuzzygait.mocap.gaps import (
 )
 
 __all__ = [
+    "SOURCE_DETECTED",
+    "SOURCE_FILE",
+    "GaitCycle",
+    "cycle_statistics",
+    "detect_gait_events",
+    "gait_cycles",
+    "mean_sd_table",
+    "normalise_cycles",
+    "normalised_angle_table",
+    "trial_gait_events",
     "Gap",
     "GapRun",
     "ShortRunWarning",
