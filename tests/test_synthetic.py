@@ -150,7 +150,7 @@ _TEST_SIGNS = {
     ("Pelvis", "L"): (1, 1, -1), ("Pelvis", "R"): (1, -1, 1),
     ("Hip", "L"): (-1, -1, -1), ("Hip", "R"): (-1, 1, 1),
     ("Knee", "L"): (1, -1, -1), ("Knee", "R"): (1, 1, 1),
-    ("Ankle", "L"): (-1, -1, -1), ("Ankle", "R"): (-1, 1, 1),
+    ("Ankle", "L"): (-1, 1, -1), ("Ankle", "R"): (-1, -1, 1),
 }  # fmt: skip
 
 
@@ -160,6 +160,16 @@ def _yxz_deg(R: np.ndarray) -> np.ndarray:
     b = np.arcsin(-R[:, 1, 2])
     c = np.arctan2(R[:, 1, 0], R[:, 1, 1])
     return np.degrees(np.stack([a, b, c], axis=-1))
+
+
+def _yzx_deg(R: np.ndarray) -> np.ndarray:
+    """Angles (deg) of R = Ry(a) Rz(b) Rx(c) (intrinsic Y-Z-X), returned as (a, c, b):
+    flexion, rotation about the foot's long x axis, rotation about the floating axis --
+    Plug-in Gait's ankle sequence (X, Y, Z outputs before the signs)."""
+    a = np.arctan2(-R[:, 2, 0], R[:, 0, 0])
+    b = np.arcsin(R[:, 1, 0])
+    c = np.arctan2(-R[:, 1, 2], R[:, 1, 1])
+    return np.degrees(np.stack([a, c, b], axis=-1))
 
 
 def _frames_from_markers(trial, truth) -> dict[str, np.ndarray]:
@@ -196,7 +206,8 @@ def test_angles_recovered_independently(trial, truth, truth_csv):
             "Ankle": (frames[side + "Shank"], frames[side + "Foot"]),
         }
         for joint, (prox, dist) in pairs.items():
-            angles = _yxz_deg(tr(prox, 1, 2) @ dist) * np.array(_TEST_SIGNS[(joint, side)])
+            decompose = _yzx_deg if joint == "Ankle" else _yxz_deg
+            angles = decompose(tr(prox, 1, 2) @ dist) * np.array(_TEST_SIGNS[(joint, side)])
             expected = truth_csv[[f"{side}{joint}Angles_{a}" for a in "XYZ"]].to_numpy()
             err = np.max(np.abs(angles - expected))
             assert err <= 1e-6, (side, joint, err)
@@ -258,14 +269,15 @@ def test_sign_meanings(side):
     assert medial * _delta(s, "knee", 2, s + "TOE")[1] > 5
     # ankle dorsiflexion + => toe up towards the shank
     assert _delta(s, "ankle", 0, s + "TOE")[2] > 10
-    # ankle inversion + => sole turns medially (its normal -z_foot points medially) and
-    # the medial border of the foot lifts
+    # ankle Y + (what Vicon Nexus reports as "inversion") => the foot turns about its
+    # long axis so that the LATERAL border lifts and the sole (normal -z_foot) faces
+    # laterally -- Nexus's numbers, verified against its output in test_cgm_vicon.py
     pose = _single_pose(s, "ankle", 1, 10.0)
     R_foot = pose.rotations[s + "Foot"][0]
     sole_normal = -R_foot[:, 2]
-    assert medial * sole_normal[1] == pytest.approx(math.sin(math.radians(10)), abs=1e-12)
-    medial_dir = R_foot @ np.array([0.0, medial, 0.0])
-    assert medial_dir[2] == pytest.approx(math.sin(math.radians(10)), abs=1e-12)
+    assert -medial * sole_normal[1] == pytest.approx(math.sin(math.radians(10)), abs=1e-12)
+    lateral_dir = R_foot @ np.array([0.0, -medial, 0.0])
+    assert lateral_dir[2] == pytest.approx(math.sin(math.radians(10)), abs=1e-12)
     # ankle internal rotation + => toe points medially
     assert medial * _delta(s, "ankle", 2, s + "TOE")[1] > 10
     # the distal joint centres do not move for rotations about the segment axis
@@ -435,6 +447,9 @@ def test_subject_toml(trial):
         assert params[s + "AsisTrocanterDistance"] == pytest.approx(0.1288 * 900 - 48.56, abs=1e-9)
         for name in ("TibialTorsion", "ThighRotation", "ShankRotation", "AnkleAbAdd", "SoleDelta"):
             assert params[s + name] == 0.0
+        # the static offsets a Plug-in Gait calibration of static.c3d stores
+        assert params[s + "StaticPlantFlex"] == pytest.approx(math.atan2(60, 140), abs=1e-12)
+        assert params[s + "StaticRotOff"] == 0.0
 
 
 # --------------------------------------------------------------------------- noise and gaps

@@ -166,6 +166,102 @@ def preprocess(
         )
 
 
+# --------------------------------------------------------------------------- angles
+@app.command()
+def angles(
+    dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
+    static: Annotated[
+        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
+    ] = None,
+    subject: Annotated[
+        Path | None,
+        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
+    ] = None,
+    out_table: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Angles per frame, .csv or .parquet.")
+    ] = None,
+    c3d_out: Annotated[
+        Path | None, typer.Option("--c3d-out", help="C3D with markers, angles and virtual markers.")
+    ] = None,
+    cycles: Annotated[
+        Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
+    ] = None,
+    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
+    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
+    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+    flat_foot: Annotated[bool, typer.Option("--flat-foot", help="Static calibration with flat feet.")] = False,
+) -> None:
+    """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
+    from fuzzygait.io import write_c3d
+    from fuzzygait.io.tables import check_table_path, write_table
+    from fuzzygait.pipeline import Preprocessing, model_output_trial, run_angles
+
+    with _user_errors():
+        for path, option in ((out_table, "--out"), (cycles, "--cycles")):
+            if path is not None:
+                check_table_path(path, option)
+        if c3d_out is not None and c3d_out.suffix.lower() != ".c3d":
+            raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
+        run = run_angles(
+            dynamic,
+            static=static,
+            subject_file=subject,
+            preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+            flat_foot=flat_foot,
+        )
+        written = []
+        for path, make in (
+            (out_table, run.angle_table),
+            (cycles, run.cycle_statistics),
+        ):
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                written.append(write_table(make(), path))
+        if c3d_out is not None:
+            c3d_out.parent.mkdir(parents=True, exist_ok=True)
+            write_c3d(model_output_trial(run), c3d_out)
+            written.append(c3d_out)
+    _print_run_summary(run)
+    for path in written:
+        out.print(f"wrote {path}", markup=False)
+
+
+def _print_run_summary(run: object) -> None:
+    from fuzzygait.pipeline import AnglesRun
+
+    assert isinstance(run, AnglesRun)
+    trial = run.trial
+    computed = [name for name in run.result.angles if name not in run.result.unavailable]
+    counts = {side: sum(1 for e in run.events if e.context == ctx and e.label == "Foot Strike")
+              for side, ctx in (("L", "Left"), ("R", "Right"))}  # fmt: skip
+    out.print(
+        f"{trial.name}: {trial.n_frames} frames at {trial.rate:g} Hz, "
+        f"{len(computed)} angles computed, foot strikes L {counts['L']} / R {counts['R']} "
+        f"(events: {run.event_source})",
+        markup=False,
+    )
+    for note in run.notes:
+        out.print(f"  note: {note}", markup=False)
+
+
+# --------------------------------------------------------------------------- demo
+@app.command()
+def demo(
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for the results.")] = Path(
+        "results/demo"
+    ),
+    data: Annotated[
+        Path, typer.Option("--data", help="Sample-data folder (generated when absent).")
+    ] = Path("sample_data"),
+) -> None:
+    """The main job on the bundled sample: angles, gait cycles, a plot and a summary."""
+    from fuzzygait.viz.demo import run_demo
+
+    with _user_errors():
+        summary = run_demo(data, out_dir, progress=err)
+    out.print(summary, markup=False)
+
+
 # --------------------------------------------------------------------------- sample data
 @app.command("sample-data")
 def sample_data(

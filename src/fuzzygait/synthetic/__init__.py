@@ -18,6 +18,7 @@ from fuzzygait.synthetic.gait_curves import (
     limb_phase,
     pelvis_angle_curves,
     pelvis_translation_curves,
+    plug_in_gait_ankle_y,
 )
 from fuzzygait.synthetic.generate import (
     DEFAULT_GAPS,
@@ -71,6 +72,7 @@ __all__ = [
     "make_walking_trial",
     "pelvis_angle_curves",
     "pelvis_translation_curves",
+    "plug_in_gait_ankle_y",
     "pose_lower_body",
     "static_offsets",
     "walking_state",

@@ -22,7 +22,11 @@ Angle meanings (clinical, identical on both sides; signs are realised geometrica
 :func:`fuzzygait.synthetic.leg_model.joint_rotation`):
 
 * hip / knee / ankle ``flexion``: hip flexion +, knee flexion +, ankle dorsiflexion +;
-* ``adduction``: hip adduction +, knee varus (adduction) +, ankle inversion (adduction) +;
+* ``adduction``: hip adduction +, knee varus (adduction) +; for the ankle, Plug-in Gait's
+  "inversion" (Y) output, which is not a free curve: Plug-in Gait's foot has only the TOE
+  marker and the ankle joint centre, so its roll about the long axis follows the tibia's
+  flexion axis and the ankle Y it reports is a fixed function of the ankle rotation Z and
+  the static plantarflexion offset (:func:`plug_in_gait_ankle_y`);
 * ``rotation``: internal rotation + (for the ankle: toe pointing medially +).
 
 Pelvis curves are given for the **left** side, relative to the laboratory frame, whose
@@ -128,10 +132,6 @@ JOINT_CURVES: dict[tuple[str, str], FourierCurve] = {
     ("knee", "rotation"): FourierCurve(
         -0.733, (-0.948, -0.046, -0.141), (5.362, -0.295, -0.119)
     ),
-    # ankle inversion: -3..+4
-    ("ankle", "adduction"): FourierCurve(
-        1.090, (-0.688, 0.967, 0.361), (-2.841, 0.254, -0.081)
-    ),
     # ankle (foot) internal rotation: -8..-2 (toe out)
     ("ankle", "rotation"): FourierCurve(
         -4.652, (1.312, -0.364, -0.248), (2.444, -0.501, 0.024)
@@ -171,21 +171,49 @@ def limb_phase(phase: np.ndarray | float, side: str) -> np.ndarray:
     raise ValueError(f"side must be 'L' or 'R'; got {side!r}")
 
 
-def joint_angle_curves(phase: np.ndarray | float, joint: str) -> np.ndarray:
+def plug_in_gait_ankle_y(rotation_deg: np.ndarray, plantar_flex_offset: float) -> np.ndarray:
+    """Ankle Y (degrees) that Plug-in Gait reports for ankle rotation ``rotation_deg`` (Z).
+
+    Plug-in Gait builds the foot from AJC->TOE and the tibia's flexion axis, then turns it
+    by the static plantarflexion offset ``beta`` (rad; the static rotation offset is 0
+    here).  Every such foot has, in Vicon's decomposition, ``Y = atan2(-sin(b0) sin(beta),
+    cos(b0))`` with ``sin(b0) = sin(Z) / cos(beta)`` on either side: the "inversion"
+    output is cross-talk of the foot rotation through the offset, independent of the
+    dorsiflexion.
+    """
+    z = np.radians(np.asarray(rotation_deg, dtype=float))
+    b0 = np.arcsin(np.sin(z) / np.cos(plantar_flex_offset))
+    return np.degrees(np.arctan2(-np.sin(b0) * np.sin(plantar_flex_offset), np.cos(b0)))
+
+
+def joint_angle_curves(
+    phase: np.ndarray | float, joint: str, plantar_flex_offset: float | None = None
+) -> np.ndarray:
     """Clinical angles of ``joint`` at a limb's own ``phase``.
 
     Args:
         phase: limb phase in cycles (scalar or ``(n,)``).
         joint: ``"hip"``, ``"knee"`` or ``"ankle"``.
+        plantar_flex_offset: static plantarflexion offset (rad) of the ankle Y
+            (:func:`plug_in_gait_ankle_y`); default: that of the default
+            :class:`~fuzzygait.synthetic.leg_model.SubjectGeometry`.
 
     Returns:
-        ``(n, 3)`` degrees: flexion (dorsiflexion), adduction (varus, inversion),
-        internal rotation.
+        ``(n, 3)`` degrees: flexion (dorsiflexion), adduction (varus; ankle: Plug-in
+        Gait's Y), internal rotation.
     """
     if joint not in JOINTS:
         raise ValueError(f"joint must be one of {JOINTS}; got {joint!r}")
     p = np.atleast_1d(np.asarray(phase, dtype=float))
-    return np.stack([JOINT_CURVES[(joint, c)](p) for c in COMPONENTS], axis=-1)
+    if joint != "ankle":
+        return np.stack([JOINT_CURVES[(joint, c)](p) for c in COMPONENTS], axis=-1)
+    if plantar_flex_offset is None:
+        from fuzzygait.synthetic.leg_model import static_offsets
+
+        plantar_flex_offset = static_offsets()["plantarflexion"]
+    flexion, rotation = JOINT_CURVES[("ankle", "flexion")](p), JOINT_CURVES[("ankle", "rotation")](p)
+    inversion = plug_in_gait_ankle_y(rotation, plantar_flex_offset)
+    return np.stack([flexion, inversion, rotation], axis=-1)
 
 
 def pelvis_angle_curves(phase: np.ndarray | float, side: str = "L") -> np.ndarray:

@@ -94,11 +94,19 @@ def walking_state(
     """
     t = np.atleast_1d(np.asarray(times, dtype=float))
     phase = (t - first_strike_time) / STRIDE_TIME_S
+    offsets = static_offsets(geometry)
+    if offsets["rotation"] != 0.0:
+        raise ParameterError(
+            "the walking trial needs TOE in the foot's x-z plane (toe_local y = 0): the "
+            "Plug-in Gait ankle Y of the truth assumes a zero static rotation offset"
+        )
     angles: dict[tuple[str, str], np.ndarray] = {}
     for side in SIDES:
         angles[(side, "pelvis")] = pelvis_angle_curves(phase, side)
         for joint in JOINTS:
-            angles[(side, joint)] = joint_angle_curves(limb_phase(phase, side), joint)
+            angles[(side, joint)] = joint_angle_curves(
+                limb_phase(phase, side), joint, offsets["plantarflexion"]
+            )
     sway = pelvis_translation_curves(phase)
     origin = np.stack(
         [x_offset + WALKING_SPEED_MM_S * t, sway[:, 0], MEAN_PELVIS_HEIGHT_MM + sway[:, 1]],
@@ -440,20 +448,28 @@ The C3D files store float32, so markers read back differ from the exact values b
   HJC, KJC, AJC. At ankle angle 0 the foot frame equals the shank frame.
 * Joint angles: `R_distal = R_proximal * R_y(fs*X) * R_x(as*Y) * R_z(rs*Z)` (intrinsic
   Y-X-Z, Grood-Suntay order: flexion about the proximal y, rotation about the distal z,
-  adduction about the floating axis). The pelvis angles are the pelvis relative to the
-  lab (= progression) frame.
+  adduction about the floating axis) for the pelvis, hip and knee. The ankle uses Vicon
+  Plug-in Gait's Y-Z-X sequence in these frames: `R_foot = R_shank * R_y(fs*X) *
+  R_z(rs*Z) * R_x(as*Y)` (foot rotation about the floating axis, Y last about the
+  foot's long axis). The pelvis angles are the pelvis relative to the lab (=
+  progression) frame. The signs reproduce what Vicon Nexus reports (checked against
+  Nexus output with `fuzzygait.kinematics`).
 
 | joint | fs | as L / R | rs L / R | + X | + Y | + Z |
 |---|---|---|---|---|---|---|
 | Pelvis | +1 | +1 / -1 | -1 / +1 | anterior tilt (ASIS below PSIS) | own side up | own ASIS forward |
 | Hip | -1 | -1 / +1 | -1 / +1 | flexion (knee anterior) | adduction (knee medial) | internal rotation (lateral knee marker turns anterior) |
 | Knee | +1 | -1 / +1 | -1 / +1 | flexion (ankle posterior) | varus (ankle medial) | internal rotation |
-| Ankle | -1 | -1 / +1 | -1 / +1 | dorsiflexion (toe up) | inversion (sole turns medially) | internal rotation (toe medial) |
+| Ankle | -1 | +1 / -1 | -1 / +1 | dorsiflexion (toe up) | Plug-in Gait "inversion" (see below) | internal rotation (toe medial) |
 
-  Every joint, the ankle included, uses this Y-X-Z sequence in the frames above (the
-  ankle's last rotation is about the foot's dorsal z axis). A joint-angle code that
-  decomposes the ankle with another sequence (e.g. Y-Z-X in these frames) differs from
-  this truth on this trial by up to about 0.58 deg (X), 0.04 deg (Y) and 0.02 deg (Z).
+  Ankle Y: Vicon labels it inversion/adduction, but as Nexus computes it a positive
+  value turns the foot about its long axis so that the lateral border rises (the sole
+  faces laterally) on both sides. It is not a free curve here: Plug-in Gait's foot has
+  only TOE and the ankle joint centre, its roll follows the tibia's flexion axis, so the
+  Y it reports is `atan2(-sin(b0) sin(beta), cos(b0))` with `sin(b0) = sin(Z) /
+  cos(beta)` and `beta` the static plantarflexion offset (cross-talk of the ankle
+  rotation; `fuzzygait.synthetic.gait_curves.plug_in_gait_ankle_y`). The feet are posed
+  accordingly, so the truth is exactly what Plug-in Gait reports.
 
 * Gait timing: stride {stride} s; left Foot Strike at phase 0 (first at {first_strike:.2f} s),
   Foot Off at phase 0.6; the right side runs half a cycle later. Angle curves are
@@ -483,7 +499,8 @@ The C3D files store float32, so markers read back differ from the exact values b
   static plantarflexion offset = angle between AJC->TOE and the foot x axis =
   **{pf_rad:.6f} rad ({pf_deg:.4f} deg)** (TOE below the AJC's x line);
   static rotation offset = **{rot_rad:.6f} rad** (TOE and HEE in the foot x-z plane).
-  (`fuzzygait.synthetic.static_offsets()`.)
+  (`fuzzygait.synthetic.static_offsets()`.) Like trials calibrated in Nexus, every C3D
+  file and `subject.toml` carry them as `L/RStaticPlantFlex` and `L/RStaticRotOff`.
 
 ## Gaps in `walking_noisy.c3d`
 

@@ -18,9 +18,13 @@ Joint rotations (Grood-Suntay / Plug-in Gait order)
 ---------------------------------------------------
 ``R_distal = R_proximal @ R_joint`` with ``R_joint = R_y(fs*flexion) @ R_x(as*adduction)
 @ R_z(rs*rotation)`` (intrinsic Y-X-Z: flexion about the proximal y axis, adduction
-about the floating axis, rotation about the distal z axis).  ``R_x, R_y, R_z`` are
-right-handed rotations.  The signs ``fs, as, rs`` (see :data:`SIGNS`) make the clinical
-meanings hold on both sides:
+about the floating axis, rotation about the distal z axis) for the pelvis, hip and knee.
+The **ankle** uses Vicon Plug-in Gait's Y-Z-X sequence in these frames: ``R_joint =
+R_y(fs*flexion) @ R_z(rs*rotation) @ R_x(as*adduction)`` (rotation about the floating
+axis, "inversion" last about the foot's long x axis); this is what Nexus computes with
+its own foot frame (z along the foot), verified on Vicon output
+(``fuzzygait.kinematics``).  ``R_x, R_y, R_z`` are right-handed rotations.  The signs
+``fs, as, rs`` (see :data:`SIGNS`) reproduce Plug-in Gait's outputs on both sides:
 
 =======  ====  =========  =========  =============================================
 joint    fs    as (L/R)   rs (L/R)   meaning of + (flexion / adduction / rotation)
@@ -30,14 +34,20 @@ hip      -1    -1 / +1    -1 / +1    flexion (knee anterior) / adduction (knee
                                      medial) / internal (lateral knee turns anterior)
 knee     +1    -1 / +1    -1 / +1    flexion (ankle posterior) / varus (ankle
                                      medial) / internal rotation of the shank
-ankle    -1    -1 / +1    -1 / +1    dorsiflexion (toe up) / inversion (sole turns
-                                     medially) / internal (toe points medially)
+ankle    -1    +1 / -1    -1 / +1    dorsiflexion (toe up) / Plug-in Gait "inversion"
+                                     (see below) / internal (toe points medially)
 =======  ====  =========  =========  =============================================
 
 The pelvis "joint" is pelvis relative to the lab (= progression) frame.  For the joints
 the left side's adduction and rotation axes are mirrored (sign flipped) relative to the
-right, as in Plug-in Gait.  :func:`joint_angles_from_rotation` inverts
-:func:`joint_rotation` exactly (for |adduction| < 90 deg).
+right, as in Plug-in Gait.  The ankle's Y output is what Vicon labels
+"inversion/adduction", but as Nexus computes it a positive value turns the foot about
+its long axis so that the **lateral** border rises (the sole faces laterally) on both
+sides; the generator follows Vicon's numbers, not the label.  In the walking trial the
+ankle Y is not free (Plug-in Gait's two-marker foot cannot roll on its own; see
+:func:`fuzzygait.synthetic.gait_curves.plug_in_gait_ankle_y`).
+:func:`joint_angles_from_rotation` inverts :func:`joint_rotation` exactly (for
+|adduction| < 90 deg).
 
 Geometry
 --------
@@ -62,8 +72,8 @@ SIGNS: dict[tuple[str, str], tuple[float, float, float]] = {
     ("hip", "R"): (-1.0, 1.0, 1.0),
     ("knee", "L"): (1.0, -1.0, -1.0),
     ("knee", "R"): (1.0, 1.0, 1.0),
-    ("ankle", "L"): (-1.0, -1.0, -1.0),
-    ("ankle", "R"): (-1.0, 1.0, 1.0),
+    ("ankle", "L"): (-1.0, 1.0, -1.0),
+    ("ankle", "R"): (-1.0, -1.0, 1.0),
 }
 
 SIDES = ("L", "R")
@@ -125,14 +135,16 @@ def joint_rotation(
 ) -> np.ndarray:
     """Rotation of the distal segment relative to the proximal one, ``(n, 3, 3)``.
 
-    ``R_joint = R_y(fs*flexion) @ R_x(as*adduction) @ R_z(rs*rotation)`` with the signs of
+    ``R_joint = R_y(fs*flexion) @ R_x(as*adduction) @ R_z(rs*rotation)`` (ankle:
+    ``R_y(fs*flexion) @ R_z(rs*rotation) @ R_x(as*adduction)``) with the signs of
     :data:`SIGNS` (see the module docstring for the meaning of each sign); the distal
     frame is ``R_proximal @ R_joint``.  For ``joint="pelvis"`` the proximal frame is the
     lab (progression) frame.
 
     Args:
         flexion: flexion / dorsiflexion / anterior tilt in **degrees**, scalar or ``(n,)``.
-        adduction: adduction / varus / inversion / obliquity (own side up) in degrees.
+        adduction: adduction / varus / Plug-in Gait ankle "inversion" / obliquity (own
+            side up) in degrees.
         rotation: internal rotation / own ASIS forward (pelvis) in degrees.
         side: ``"L"`` or ``"R"``.
         joint: ``"pelvis"``, ``"hip"``, ``"knee"`` or ``"ankle"``.
@@ -146,7 +158,12 @@ def joint_rotation(
         np.atleast_1d(np.asarray(adduction, dtype=float)),
         np.atleast_1d(np.asarray(rotation, dtype=float)),
     )
-    return rot_y(np.radians(fs * f)) @ rot_x(np.radians(as_ * a)) @ rot_z(np.radians(rs * r))
+    flex = rot_y(np.radians(fs * f))
+    add = rot_x(np.radians(as_ * a))
+    rot = rot_z(np.radians(rs * r))
+    if joint == "ankle":
+        return flex @ rot @ add
+    return flex @ add @ rot
 
 
 def euler_yxz(rotation: np.ndarray) -> np.ndarray:
@@ -158,6 +175,15 @@ def euler_yxz(rotation: np.ndarray) -> np.ndarray:
     return np.stack([a, b, c], axis=-1)
 
 
+def euler_yzx(rotation: np.ndarray) -> np.ndarray:
+    """Angles ``(a, b, c)`` in rad with ``R = R_y(a) @ R_z(b) @ R_x(c)``; ``(n, 3)``."""
+    R = np.asarray(rotation, dtype=float).reshape(-1, 3, 3)
+    a = np.arctan2(-R[:, 2, 0], R[:, 0, 0])
+    b = np.arcsin(np.clip(R[:, 1, 0], -1.0, 1.0))
+    c = np.arctan2(-R[:, 1, 2], R[:, 1, 1])
+    return np.stack([a, b, c], axis=-1)
+
+
 def joint_angles_from_rotation(rotation: np.ndarray, side: str, joint: str) -> np.ndarray:
     """Inverse of :func:`joint_rotation`: clinical angles ``(n, 3)`` in degrees.
 
@@ -166,6 +192,9 @@ def joint_angles_from_rotation(rotation: np.ndarray, side: str, joint: str) -> n
         side, joint: as for :func:`joint_rotation`.
     """
     signs = np.asarray(SIGNS[(joint, side)])
+    if joint == "ankle":
+        flexion, rotation_z, adduction = euler_yzx(rotation).T
+        return np.degrees(np.stack([flexion, adduction, rotation_z], axis=-1)) * signs
     return np.degrees(euler_yxz(rotation)) * signs
 
 
@@ -248,6 +277,10 @@ class SubjectGeometry:
             "AnkleAbAdd": 0.0,
             "SoleDelta": 0.0,
         }
+        # the offsets Vicon's static calibration stores in calibrated trials
+        offsets = static_offsets(self)
+        per_side["StaticPlantFlex"] = offsets["plantarflexion"]
+        per_side["StaticRotOff"] = offsets["rotation"]
         for name, value in per_side.items():
             for side in SIDES:
                 params[side + name] = float(value)

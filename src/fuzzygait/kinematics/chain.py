@@ -1,0 +1,202 @@
+"""The Plug-in Gait lower-body chain of one trial: joint centres and segment frames.
+
+:class:`LowerBodyChain` computes, on demand and once, every intermediate quantity of the
+model for all frames at once (``(n, 3)`` positions in mm, ``(n, 3, 3)`` frames, lab
+coordinates).  It is shared by the dynamic model (:mod:`fuzzygait.kinematics.model`) and
+the static calibration (:mod:`fuzzygait.kinematics.static`).
+
+Joint centres
+-------------
+* HJC: Davis regression in the pelvis frame (:func:`~fuzzygait.kinematics.joint_centres.davis_hjc_local`).
+* KJC: chord function on THI, HJC, KNE with ``KneeWidth / 2 + marker radius``.
+* AJC: chord function on TIB, KJC, ANK with ``AnkleWidth / 2 + marker radius``.
+* Optional medial markers (``use_medial_markers=True``, CGM 2.x style, not Plug-in Gait):
+  KJC = midpoint of KNE and KNM, AJC = midpoint of ANK and MED; THI and TIB are then not
+  used.  The segment frames are built the same way from these centres (the lateral
+  marker direction is made orthogonal to the long axis).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.io.trial import Trial
+from fuzzygait.kinematics.joint_centres import chord_joint_centre, davis_hjc_local
+from fuzzygait.kinematics.pelvis import inter_asis_distance, pelvis_frame
+from fuzzygait.kinematics.segments import (
+    corrected_foot,
+    long_bone_frame,
+    uncorrected_foot,
+    untorsioned_tibia,
+)
+from fuzzygait.kinematics.vectors import to_lab
+
+#: Segments of one leg in chain order.
+LEG_SEGMENTS = ("thigh", "tibia", "foot")
+
+
+
+def _memo(method: Callable[..., Any]) -> Callable[..., Any]:
+    """Cache a ``LowerBodyChain`` method per side: every quantity is computed once."""
+
+    @functools.wraps(method)
+    def cached(self: LowerBodyChain, side: str = "") -> Any:
+        key = (method.__name__, side)
+        if key not in self._cache:
+            self._cache[key] = method(self, side) if side else method(self)
+        return self._cache[key]
+
+    return cached
+
+
+def pelvis_markers(trial: Trial) -> list[str]:
+    """Markers of the pelvis: LASI, RASI and SACR when labelled, else LPSI and RPSI."""
+    return ["LASI", "RASI"] + (["SACR"] if trial.has_marker("SACR") else ["LPSI", "RPSI"])
+
+
+def segment_markers(trial: Trial, segment: str, side: str, use_medial_markers: bool) -> list[str]:
+    """Every marker needed to build ``segment`` of ``side`` (including the chain above it).
+
+    Args:
+        segment: ``"pelvis"``, ``"thigh"``, ``"tibia"`` or ``"foot"``.
+    """
+    needed = pelvis_markers(trial)
+    if segment == "pelvis":
+        return needed
+    own = {
+        "thigh": ["KNE", "KNM"] if use_medial_markers else ["THI", "KNE"],
+        "tibia": ["ANK", "MED"] if use_medial_markers else ["TIB", "ANK"],
+        "foot": ["TOE"],
+    }
+    for seg in LEG_SEGMENTS[: LEG_SEGMENTS.index(segment) + 1]:
+        needed += [side + m for m in own[seg]]
+    return needed
+
+
+def required_markers(trial: Trial, use_medial_markers: bool) -> list[str]:
+    """All markers of the complete lower-body chain (both feet)."""
+    labels = pelvis_markers(trial)
+    for side in "LR":
+        labels += segment_markers(trial, "foot", side, use_medial_markers)[len(pelvis_markers(trial)) :]
+    return labels
+
+
+class LowerBodyChain:
+    """Lazily computed joint centres and frames of a trial (see the module docstring).
+
+    Args:
+        trial: markers in mm.
+        subject: validated subject parameters; ``inter_asis_distance`` None means "measure
+            it on this trial".
+        use_medial_markers: KJC/AJC as KNE-KNM / ANK-MED midpoints instead of the chord.
+
+    Accessing a quantity whose markers are absent raises :class:`MarkerError`.
+    """
+
+    def __init__(self, trial: Trial, subject: SubjectParameters, use_medial_markers: bool = False):
+        self.trial = trial
+        self.subject = subject
+        self.use_medial_markers = use_medial_markers
+        self._cache: dict[tuple[str, str], Any] = {}
+
+    def marker(self, label: str) -> np.ndarray:
+        """Trajectory of ``label`` (raises MarkerError when absent)."""
+        return self.trial.marker(label)
+
+    def missing(self, segment: str, side: str = "L") -> list[str]:
+        """Markers of ``segment`` (and the chain above it) missing from the trial."""
+        return [
+            m
+            for m in segment_markers(self.trial, segment, side, self.use_medial_markers)
+            if not self.trial.has_marker(m)
+        ]
+
+    # ------------------------------------------------------------------ pelvis
+    def sacrum(self) -> np.ndarray:
+        """SACR, or the PSIS midpoint when there is no SACR marker, mm."""
+        if self.trial.has_marker("SACR"):
+            return self.marker("SACR")
+        return 0.5 * (self.marker("LPSI") + self.marker("RPSI"))
+
+    @_memo
+    def pelvis(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(ASIS midpoint, pelvis frame)``."""
+        return pelvis_frame(self.marker("LASI"), self.marker("RASI"), self.sacrum())
+
+    @_memo
+    def inter_asis_distance(self) -> float:
+        """The subject's inter-ASIS distance, or this trial's mean LASI-RASI distance."""
+        if self.subject.inter_asis_distance is not None:
+            return self.subject.inter_asis_distance
+        return inter_asis_distance(self.marker("LASI"), self.marker("RASI"))
+
+    @_memo
+    def hjc(self, side: str) -> np.ndarray:
+        """Hip joint centre (Davis), mm."""
+        origin, frame = self.pelvis()
+        s = self.subject
+        local = davis_hjc_local(
+            0.5 * (s.left.leg_length + s.right.leg_length),
+            s.side(side).asis_trochanter,
+            self.inter_asis_distance(),
+            s.marker_radius,
+            side,
+        )
+        return to_lab(frame, origin, local)
+
+    # ------------------------------------------------------------------ leg
+    def _offset(self, width: float) -> float:
+        return width / 2.0 + self.subject.marker_radius
+
+    @_memo
+    def kjc(self, side: str) -> np.ndarray:
+        """Knee joint centre, mm."""
+        if self.use_medial_markers:
+            return 0.5 * (self.marker(side + "KNE") + self.marker(side + "KNM"))
+        offset = self._offset(self.subject.side(side).knee_width)
+        thi, kne = self.marker(side + "THI"), self.marker(side + "KNE")
+        return chord_joint_centre(thi, self.hjc(side), kne, offset)
+
+    @_memo
+    def ajc(self, side: str) -> np.ndarray:
+        """Ankle joint centre, mm."""
+        if self.use_medial_markers:
+            return 0.5 * (self.marker(side + "ANK") + self.marker(side + "MED"))
+        offset = self._offset(self.subject.side(side).ankle_width)
+        tib, ank = self.marker(side + "TIB"), self.marker(side + "ANK")
+        return chord_joint_centre(tib, self.kjc(side), ank, offset)
+
+    @_memo
+    def thigh(self, side: str) -> np.ndarray:
+        """Thigh (femur) frame, origin KJC."""
+        return long_bone_frame(self.hjc(side), self.kjc(side), self.marker(side + "KNE"), side)
+
+    @_memo
+    def torsioned_tibia(self, side: str) -> np.ndarray:
+        """Marker-based tibia frame (y = ankle flexion axis), origin AJC."""
+        return long_bone_frame(self.kjc(side), self.ajc(side), self.marker(side + "ANK"), side)
+
+    @_memo
+    def tibia(self, side: str) -> np.ndarray:
+        """Untorsioned tibia frame (knee flexion axis), origin AJC."""
+        return untorsioned_tibia(self.torsioned_tibia(side), self.subject.side(side).tibial_torsion, side)
+
+    @_memo
+    def uncorrected_foot(self, side: str) -> np.ndarray:
+        """Foot frame before the static offsets (z from TOE to AJC)."""
+        ankle_axis = self.torsioned_tibia(side)[:, :, 1]
+        return uncorrected_foot(self.ajc(side), self.marker(side + "TOE"), ankle_axis)
+
+    @_memo
+    def foot(self, side: str) -> np.ndarray:
+        """Anatomical Plug-in Gait foot frame (z along the foot, backwards; x dorsal)."""
+        p = self.subject.side(side)
+        return corrected_foot(self.uncorrected_foot(side), p.static_plant_flex, p.static_rot_off, side)
+
+
+__all__ = ["LowerBodyChain", "pelvis_markers", "required_markers", "segment_markers"]

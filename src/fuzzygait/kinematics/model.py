@@ -1,0 +1,181 @@
+"""Conventional Gait Model 1.0 / Vicon Plug-in Gait lower body: the whole model of a trial.
+
+:func:`compute_lower_body` runs the chain of :mod:`fuzzygait.kinematics.chain` on every
+frame at once and returns the ten Plug-in Gait lower-body angle outputs, the joint
+centres, the segment frames and Vicon-style virtual markers.  On
+``Movement_trial.c3d`` (Vicon Nexus 2, stair descent) every angle component agrees with
+Nexus's stored outputs to better than 1e-4 degree.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.io.trial import Trial
+from fuzzygait.kinematics import virtual_markers as vm
+from fuzzygait.kinematics.angles import joint_angles
+from fuzzygait.kinematics.chain import LowerBodyChain
+from fuzzygait.kinematics.progression import progression_frame
+
+#: The Plug-in Gait lower-body angle outputs, in Vicon's names.
+ANGLE_NAMES: tuple[str, ...] = (
+    "LPelvisAngles", "RPelvisAngles", "LHipAngles", "RHipAngles", "LKneeAngles",
+    "RKneeAngles", "LAnkleAngles", "RAnkleAngles", "LFootProgressAngles", "RFootProgressAngles",
+)  # fmt: skip
+
+#: Angle output -> (proximal, distal) segment whose markers it needs.
+_ANGLE_SEGMENT = {
+    "Pelvis": "pelvis", "Hip": "thigh", "Knee": "tibia", "Ankle": "foot", "FootProgress": "foot",
+}  # fmt: skip
+
+
+@dataclass
+class CGMResult:
+    """Output of :func:`compute_lower_body`.
+
+    Attributes:
+        angles: output name (:data:`ANGLE_NAMES`) -> ``(n_frames, 3)`` degrees; X/Y/Z =
+            sagittal/frontal/transverse with Plug-in Gait signs; NaN where an input
+            sample is missing.  Angles that cannot be computed at all are absent (see
+            ``unavailable``).
+        joint_centres: ``"LHJC"``, ``"RHJC"``, ``"LKJC"``, ``"RKJC"``, ``"LAJC"``,
+            ``"RAJC"`` -> ``(n_frames, 3)`` mm, lab frame.
+        segment_frames: ``"pelvis"``, ``"left_thigh"``, ``"left_tibia"`` (untorsioned),
+            ``"left_tibia_torsioned"``, ``"left_foot"`` (Plug-in Gait orientation: z
+            along the foot backwards, x dorsal) and the right-side equivalents ->
+            ``(n_frames, 3, 3)`` rotations whose columns are the axes in lab coordinates.
+        virtual_markers: Vicon-style segment markers (``PELO``..., ``LFEO``..., ``LTIO``...,
+            ``LFOO``..., ``LTOO``...) and the joint centres, ``(n_frames, 3)`` mm.
+        unavailable: angle name -> why it could not be computed (names the missing
+            markers).
+        progression: ``(3, 3)`` progression frame (columns forward, left, up in lab
+            coordinates) of the pelvis and foot-progression angles.
+        notes: remarks on the computation (measured parameters, ignored parameters...).
+    """
+
+    angles: dict[str, np.ndarray] = field(default_factory=dict)
+    joint_centres: dict[str, np.ndarray] = field(default_factory=dict)
+    segment_frames: dict[str, np.ndarray] = field(default_factory=dict)
+    virtual_markers: dict[str, np.ndarray] = field(default_factory=dict)
+    unavailable: dict[str, str] = field(default_factory=dict)
+    progression: np.ndarray = field(default_factory=lambda: np.full((3, 3), np.nan))
+    notes: list[str] = field(default_factory=list)
+
+
+def _missing_reason(missing: list[str]) -> str:
+    return f"marker{'s' if len(missing) > 1 else ''} {', '.join(missing)} missing"
+
+
+def _parameter_notes(subject: SubjectParameters) -> list[str]:
+    notes = []
+    for side, params in (("L", subject.left), ("R", subject.right)):
+        unsupported = {
+            "ThighRotation": params.thigh_rotation,
+            "ShankRotation": params.shank_rotation,
+            "AnkleAbAdd": params.ankle_abadd,
+        }
+        for name, value in unsupported.items():
+            if value != 0.0:
+                notes.append(f"{side}{name}={value:g} rad is not applied (only 0 is supported)")
+        if params.tibial_torsion != 0.0:
+            notes.append(
+                f"{side}TibialTorsion={params.tibial_torsion:g} rad applied as an external torsion of the "
+                "marker-based tibia; this sign convention is not validated against Vicon output"
+            )
+    return notes
+
+
+def compute_lower_body(
+    trial: Trial, subject: SubjectParameters, *, use_medial_markers: bool | None = None
+) -> CGMResult:
+    """Run the Plug-in Gait lower-body model on every frame of ``trial``.
+
+    Markers: LASI, RASI and SACR (or LPSI + RPSI); per side THI, KNE, TIB, ANK, TOE (HEE
+    only for the foot virtual markers).  Missing markers do not raise: the angles that
+    need them go to :attr:`CGMResult.unavailable` and everything else is computed.
+    Frames where a marker is NaN give NaN outputs (no gap filling here).
+
+    Args:
+        trial: markers in mm.
+        subject: subject parameters (lengths mm, angles rad) including the static offsets
+            (see :func:`~fuzzygait.kinematics.static.static_calibration`).  When
+            ``inter_asis_distance`` is None it is measured on this trial.
+        use_medial_markers: True to place KJC / AJC at the KNE-KNM / ANK-MED midpoints
+            (CGM 2.x style; Plug-in Gait ignores medial markers).  None or False: the
+            Plug-in Gait chord construction.
+
+    Raises:
+        ParameterError: implausible subject parameters (names them).
+    """
+    subject.validate()
+    medial = bool(use_medial_markers)
+    chain = LowerBodyChain(trial, subject, use_medial_markers=medial)
+    result = CGMResult(notes=_parameter_notes(subject))
+    if medial:
+        result.notes.append(
+            "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"
+        )
+
+    missing_pelvis = chain.missing("pelvis")
+    if missing_pelvis:
+        for name in ANGLE_NAMES:
+            result.unavailable[name] = _missing_reason(missing_pelvis)
+        return result
+    if subject.inter_asis_distance is None:
+        result.notes.append(f"InterAsisDistance measured on this trial: {chain.inter_asis_distance():.2f} mm")
+
+    origin, pelvis = chain.pelvis()
+    hjc = {side: chain.hjc(side) for side in "LR"}
+    result.segment_frames["pelvis"] = pelvis
+    result.virtual_markers.update(vm.pelvis_markers(hjc["L"], hjc["R"], pelvis))
+    try:
+        result.progression = progression_frame(0.5 * (hjc["L"] + hjc["R"]), pelvis[:, :, 0])
+    except FuzzyGaitError as exc:
+        result.notes.append(f"no progression frame ({exc}); pelvis and foot progression angles are NaN")
+
+    for side in "LR":
+        long = "left" if side == "L" else "right"
+        result.joint_centres[side + "HJC"] = hjc[side]
+        result.angles[side + "PelvisAngles"] = joint_angles(result.progression, pelvis, "Pelvis", side)
+        for name, segment in _ANGLE_SEGMENT.items():
+            missing = chain.missing(segment, side)
+            if missing and segment != "pelvis":
+                result.unavailable[side + name + "Angles"] = _missing_reason(missing)
+        if chain.missing("thigh", side):
+            continue
+        kjc, thigh = chain.kjc(side), chain.thigh(side)
+        result.joint_centres[side + "KJC"] = kjc
+        result.segment_frames[long + "_thigh"] = thigh
+        result.virtual_markers.update(vm.thigh_markers(side, hjc[side], kjc, thigh))
+        result.angles[side + "HipAngles"] = joint_angles(pelvis, thigh, "Hip", side)
+        if chain.missing("tibia", side):
+            continue
+        ajc, tibia = chain.ajc(side), chain.tibia(side)
+        result.joint_centres[side + "AJC"] = ajc
+        result.segment_frames[long + "_tibia"] = tibia
+        result.segment_frames[long + "_tibia_torsioned"] = chain.torsioned_tibia(side)
+        knee_width = subject.side(side).knee_width
+        result.virtual_markers.update(vm.tibia_markers(side, kjc, ajc, tibia, knee_width))
+        result.angles[side + "KneeAngles"] = joint_angles(thigh, tibia, "Knee", side)
+        if chain.missing("foot", side):
+            continue
+        foot = chain.foot(side)
+        result.segment_frames[long + "_foot"] = foot
+        result.angles[side + "AnkleAngles"] = joint_angles(chain.torsioned_tibia(side), foot, "Ankle", side)
+        result.angles[side + "FootProgressAngles"] = joint_angles(
+            result.progression, foot, "FootProgress", side
+        )
+        if trial.has_marker(side + "HEE"):
+            hee, toe = trial.marker(side + "HEE"), trial.marker(side + "TOE")
+            length = vm.foot_bone_length(hee, toe, subject.marker_radius)
+            result.virtual_markers.update(vm.foot_markers(side, ajc, foot, length))
+        else:
+            result.notes.append(f"no {side}HEE marker: {side}FO*/{side}TO* virtual markers not produced")
+
+    result.virtual_markers.update(result.joint_centres)
+    result.angles = {name: result.angles[name] for name in ANGLE_NAMES if name in result.angles}
+    return result

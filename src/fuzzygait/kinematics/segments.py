@@ -1,0 +1,111 @@
+"""Plug-in Gait segment frames: thigh (femur), tibia (torsioned and untorsioned), foot.
+
+Frames are ``(n, 3, 3)`` rotation matrices whose columns are the segment axes in lab
+coordinates (see :mod:`fuzzygait.kinematics.vectors`).  Both sides use the same
+right-handed axis directions (no mirroring of axes):
+
+* **thigh** (origin KJC): z = ``unit(HJC - KJC)`` (proximal); y points to the subject's
+  left, along ``KNE - KJC`` on the left leg and ``KJC - KNE`` on the right; x = y × z
+  (anterior).  Vicon exports it as ``LFEO/LFEA/LFEL/LFEP``.
+* **tibia** (origin AJC): the same construction from KJC, AJC and ANK.  The frame built
+  from the markers is the *torsioned* tibia, whose y axis is the ankle flexion axis (the
+  TIB wand defines the ankle axis).  The *untorsioned* tibia, used for the knee angles and
+  exported as ``LTIO...``, is the torsioned one turned back about its z axis by the
+  tibial torsion ``τ``: ``R_untorsioned = R_torsioned @ R_z(-s τ)`` with ``s = +1`` left,
+  ``-1`` right, so a positive ``TibialTorsion`` means an ankle axis externally rotated
+  relative to the knee axis on either side.  With ``τ = 0`` (all Vicon reference data at
+  hand) the two coincide.
+* **foot** (Plug-in Gait orientation, as Vicon exports ``LFOA/LFOL/LFOP``): z runs along
+  the foot from the toe backwards, x points dorsally (up), y to the left.  The
+  *uncorrected* foot has z = ``unit(AJC - TOE)``, x = ``unit(y_ankle × z)`` with
+  ``y_ankle`` the torsioned tibia's y axis, y = z × x.  The static calibration offsets
+  turn it into the anatomical foot: ``R_foot = R_uncorrected @ R_y(-StaticPlantFlex) @
+  R_x(-s StaticRotOff)`` (``s = +1`` left, ``-1`` right).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fuzzygait.kinematics.vectors import cross, frame_from_axes, rotate_frame, unit
+
+
+def side_sign(side: str) -> float:
+    """``+1.0`` for the left side, ``-1.0`` for the right."""
+    if side == "L":
+        return 1.0
+    if side == "R":
+        return -1.0
+    raise ValueError(f"side must be 'L' or 'R'; got {side!r}")
+
+
+def long_bone_frame(
+    proximal_jc: np.ndarray, distal_jc: np.ndarray, lateral_marker: np.ndarray, side: str
+) -> np.ndarray:
+    """Frame of a thigh or tibia, origin at ``distal_jc``.
+
+    z = ``unit(proximal_jc - distal_jc)``; y = the component orthogonal to z of the
+    direction from the lateral marker towards the subject's left (``marker - jc`` on the
+    left leg, ``jc - marker`` on the right); x = y × z.  For joint centres from
+    :func:`~fuzzygait.kinematics.joint_centres.chord_joint_centre` the marker direction is
+    already orthogonal to z.
+
+    Args:
+        proximal_jc, distal_jc, lateral_marker: ``(n, 3)`` mm.
+        side: ``"L"`` or ``"R"``.
+    """
+    z = unit(proximal_jc - distal_jc)
+    towards_left = side_sign(side) * (lateral_marker - distal_jc)
+    x = unit(cross(towards_left, z))
+    y = cross(z, x)
+    return frame_from_axes(x, y, z)
+
+
+def untorsioned_tibia(torsioned: np.ndarray, tibial_torsion: float, side: str) -> np.ndarray:
+    """Untorsioned (knee) tibia from the marker-based torsioned (ankle) tibia.
+
+    Args:
+        torsioned: ``(n, 3, 3)`` tibia frame from KJC, AJC and ANK.
+        tibial_torsion: ``TibialTorsion`` in rad (positive = external).
+        side: ``"L"`` or ``"R"``.
+    """
+    if tibial_torsion == 0.0:
+        return torsioned
+    return rotate_frame(torsioned, 2, -side_sign(side) * tibial_torsion)
+
+
+def uncorrected_foot(ajc: np.ndarray, toe: np.ndarray, ankle_axis: np.ndarray) -> np.ndarray:
+    """Plug-in Gait foot frame before the static offsets (z from TOE to AJC).
+
+    Args:
+        ajc, toe: ``(n, 3)`` mm.
+        ankle_axis: ``(n, 3)`` ankle flexion axis (the torsioned tibia's y axis).
+    """
+    z = unit(ajc - toe)
+    x = unit(cross(ankle_axis, z))
+    y = cross(z, x)
+    return frame_from_axes(x, y, z)
+
+
+def corrected_foot(
+    uncorrected: np.ndarray, static_plant_flex: float, static_rot_off: float, side: str
+) -> np.ndarray:
+    """Anatomical foot frame: the uncorrected foot turned by the static offsets (rad)."""
+    foot = rotate_frame(uncorrected, 1, -static_plant_flex)
+    return rotate_frame(foot, 0, -side_sign(side) * static_rot_off)
+
+
+def foot_offsets(uncorrected: np.ndarray, foot_axis: np.ndarray, side: str) -> np.ndarray:
+    """Static offsets ``(plantar_flex, rot_off)`` in rad, per frame ``(n, 2)``.
+
+    Inverse of :func:`corrected_foot` for the foot's long axis: ``foot_axis`` is the unit
+    direction the anatomical foot z axis must take (TOE towards HEE, see
+    :mod:`fuzzygait.kinematics.static`).  With ``u`` its coordinates in the uncorrected
+    frame, ``plantar_flex = atan(-u_x / u_z)`` and ``rot_off = s * atan(u_y /
+    sqrt(u_x² + u_z²))`` (``s = +1`` left, ``-1`` right).
+    """
+    u = np.einsum("nji,nj->ni", uncorrected, foot_axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        plantar_flex = np.arctan(-u[:, 0] / u[:, 2])
+        rot_off = side_sign(side) * np.arctan(u[:, 1] / np.hypot(u[:, 0], u[:, 2]))
+    return np.stack([plantar_flex, rot_off], axis=-1)

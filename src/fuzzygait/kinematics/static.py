@@ -1,0 +1,81 @@
+"""Plug-in Gait static calibration: foot offsets and (if not given) inter-ASIS distance.
+
+The dynamic foot frame is built from the TOE marker and the ankle joint centre only; the
+static trial tells how that "uncorrected" foot is turned relative to the anatomical
+foot, whose long axis runs from TOE to HEE (Plug-in Gait "foot flat" off) or from TOE to
+HEE brought to the height of TOE + SoleDelta in the laboratory vertical (foot flat on:
+the sole is parallel to the floor, apart from a heel raise of ``SoleDelta`` mm).  The
+offsets ``StaticPlantFlex`` and ``StaticRotOff`` (rad) are the angles of that long axis
+in the uncorrected foot frame (see :func:`~fuzzygait.kinematics.segments.foot_offsets`),
+computed per frame and averaged over the frames where every marker is seen.  This
+reproduces the values Vicon Nexus stores in ``L/RStaticPlantFlex`` and
+``L/RStaticRotOff`` to better than 1e-6 rad.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from fuzzygait.errors import MarkerError, ParameterError
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.io.trial import Trial
+from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
+from fuzzygait.kinematics.pelvis import inter_asis_distance
+from fuzzygait.kinematics.segments import foot_offsets
+from fuzzygait.kinematics.vectors import unit
+
+#: Laboratory vertical axis (Z up) used for the flat-foot option.
+VERTICAL_AXIS = 2
+
+
+def static_calibration(
+    static: Trial, subject: SubjectParameters, *, flat_foot: bool = False
+) -> SubjectParameters:
+    """Calibrate the foot offsets (and the inter-ASIS distance if unknown) on a static trial.
+
+    Args:
+        static: standing trial with the Plug-in Gait lower-body markers (HEE included).
+        subject: subject parameters (static offsets in it are ignored).
+        flat_foot: Plug-in Gait's "foot flat" option: the sole is taken as parallel to the
+            floor (HEE is moved to the height of TOE + ``SoleDelta`` along lab Z).
+
+    Returns:
+        A copy of ``subject`` with ``static_plant_flex`` and ``static_rot_off`` set on
+        both sides and, when it was None, ``inter_asis_distance`` = the mean LASI-RASI
+        distance of the static trial.
+
+    Raises:
+        MarkerError: a needed marker is absent from the trial (all of them named).
+        ParameterError: implausible subject parameters, or no frame with every marker.
+    """
+    subject.validate()
+    labels = required_markers(static, use_medial_markers=False) + ["LHEE", "RHEE"]
+    missing = [m for m in labels if not static.has_marker(m)]
+    if missing:
+        raise MarkerError(
+            f"{static.name}: static calibration needs marker(s) {', '.join(missing)}; "
+            "label them in the static trial"
+        )
+    calibrated = subject
+    if subject.inter_asis_distance is None:
+        iad = inter_asis_distance(static.marker("LASI"), static.marker("RASI"))
+        calibrated = replace(subject, inter_asis_distance=iad).validate()
+
+    chain = LowerBodyChain(static, calibrated, use_medial_markers=False)
+    columns = [static.marker_labels.index(m) for m in labels]
+    seen = np.all(np.isfinite(static.markers[:, columns, :]), axis=(1, 2))
+    if not seen.any():
+        raise ParameterError(f"{static.name}: no frame shows every marker {', '.join(labels)}")
+    for side in "LR":
+        toe = static.marker(side + "TOE")
+        hee = static.marker(side + "HEE").copy()
+        if flat_foot:
+            hee[:, VERTICAL_AXIS] = toe[:, VERTICAL_AXIS] + calibrated.side(side).sole_delta
+        offsets = foot_offsets(chain.uncorrected_foot(side), unit(hee - toe), side)
+        plantar_flex, rot_off = np.mean(offsets[seen], axis=0)
+        calibrated = calibrated.with_side(
+            side, static_plant_flex=float(plantar_flex), static_rot_off=float(rot_off)
+        )
+    return calibrated.validate()

@@ -1,0 +1,151 @@
+"""The joint-angle pipeline shared by the CLI, the batch report and notebooks.
+
+read C3D -> fill gaps -> low-pass -> subject parameters (file, or PROCESSING group) ->
+static calibration (optional) -> Plug-in Gait lower body -> gait events -> cycles.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.io import Event, Trial, read_c3d
+from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
+from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
+from fuzzygait.mocap import fill_trial_gaps, filter_trial
+from fuzzygait.mocap.cycles import mean_sd_table, normalised_angle_table
+from fuzzygait.mocap.events import trial_gait_events
+from fuzzygait.mocap.gaps import Gap
+
+AXES = ("X", "Y", "Z")
+
+
+@dataclass(frozen=True)
+class Preprocessing:
+    """Pre-processing options: gaps up to ``max_gap`` frames filled, then a zero-lag
+    Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False."""
+
+    max_gap: int = 10
+    cutoff: float = 6.0
+    filter: bool = True
+
+    def apply(self, trial: Trial) -> tuple[Trial, list[Gap]]:
+        """The pre-processed trial and its gap report."""
+        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap)
+        return (filter_trial(filled, cutoff=self.cutoff) if self.filter else filled), gaps
+
+
+@dataclass
+class AnglesRun:
+    """Everything one run of the pipeline produced.
+
+    Attributes:
+        raw: the trial as read.
+        trial: the pre-processed trial the model saw.
+        subject: subject parameters used (after static calibration, if any).
+        result: model output (angles in degrees, joint centres in mm).
+        gaps: gap report of the dynamic trial.
+        events: gait events used for the cycles.
+        event_source: ``"file"`` or how they were detected.
+        notes: data-quality notes for reports.
+    """
+
+    raw: Trial
+    trial: Trial
+    subject: SubjectParameters
+    result: CGMResult
+    gaps: list[Gap]
+    events: list[Event]
+    event_source: str
+    notes: list[str] = field(default_factory=list)
+
+    def angle_table(self) -> pd.DataFrame:
+        """One row per frame: ``frame``, ``time`` (s), then ``<Angle>_X/Y/Z`` in degrees
+        for every Plug-in Gait angle (NaN where it could not be computed)."""
+        columns: dict[str, np.ndarray] = {"frame": self.trial.frames, "time": self.trial.times}
+        nan = np.full((self.trial.n_frames, 3), np.nan)
+        for name in ANGLE_NAMES:
+            values = self.result.angles.get(name, nan)
+            for k, axis in enumerate(AXES):
+                columns[f"{name}_{axis}"] = values[:, k]
+        return pd.DataFrame(columns)
+
+    def cycle_table(self) -> pd.DataFrame:
+        """Gait-cycle-normalised angles, long format (angle, side, cycle, percent, value)."""
+        return normalised_angle_table(self.result.angles, self.trial, self.events)
+
+    def cycle_statistics(self) -> pd.DataFrame:
+        """Mean and SD over cycles per angle component and percent of the cycle."""
+        return mean_sd_table(self.cycle_table())
+
+
+def resolve_subject(
+    trial: Trial, subject_file: str | os.PathLike[str] | None
+) -> SubjectParameters:
+    """Subject parameters from ``subject_file`` or else the trial's PROCESSING group."""
+    if subject_file is not None:
+        return read_subject(subject_file)
+    if not trial.parameters:
+        raise FuzzyGaitError(
+            f"{trial.name}: no subject parameters in the file (no PROCESSING group); "
+            "give a subject file with --subject SUBJECT.toml or .vsk"
+        )
+    return subject_from_processing(trial.parameters, source=f"{trial.name} PROCESSING group")
+
+
+def run_angles(
+    dynamic: str | os.PathLike[str] | Trial,
+    *,
+    static: str | os.PathLike[str] | Trial | None = None,
+    subject_file: str | os.PathLike[str] | None = None,
+    preprocessing: Preprocessing = Preprocessing(),
+    flat_foot: bool = False,
+) -> AnglesRun:
+    """Run the joint-angle pipeline on one dynamic trial.
+
+    Args:
+        dynamic: the walking trial (path or :class:`Trial`).
+        static: static calibration trial; without it the static offsets of the subject
+            parameters are used as they are.
+        subject_file: ``.toml`` or ``.vsk``; without it the dynamic trial's PROCESSING
+            group.
+        preprocessing: gap filling and filter options (applied to both trials).
+        flat_foot: static calibration with the flat-foot option (uses SoleDelta).
+    """
+    raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
+    trial, gaps = preprocessing.apply(raw)
+    subject = resolve_subject(raw, subject_file)
+    notes = list(trial.notes)
+    if static is not None:
+        static_trial = static if isinstance(static, Trial) else read_c3d(static)
+        static_clean, _ = preprocessing.apply(static_trial)
+        subject = static_calibration(static_clean, subject, flat_foot=flat_foot)
+        notes.append(f"static offsets calibrated from {static_trial.name}")
+    result = compute_lower_body(trial, subject)
+    notes += result.notes
+    notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
+    events, source = trial_gait_events(trial)
+    if source != "file":
+        notes.append(f"gait events {source}")
+    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes)
+
+
+def model_output_trial(run: AnglesRun) -> Trial:
+    """The pre-processed trial with the computed angles and virtual markers as model
+    outputs, the subject parameters used and the events (for ``--c3d-out``)."""
+    out = run.trial.with_markers(run.trial.markers)
+    for name, values in run.result.angles.items():
+        out.outputs[name] = values
+        out.output_kinds[name] = "angle"
+    for name, values in run.result.virtual_markers.items():
+        if name not in out.marker_labels:
+            out.outputs[name] = values
+            out.output_kinds[name] = "modeled_marker" if name.endswith("JC") else "segment_frame"
+    out.parameters.update(run.subject.to_processing())
+    out.events = list(run.events)
+    return out

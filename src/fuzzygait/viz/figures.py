@@ -1,0 +1,89 @@
+"""Matplotlib figures for clinicians: gait-cycle-normalised joint angles."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never needs a display
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from fuzzygait.io.atomic import atomic_output  # noqa: E402
+
+#: Rows of the standard gait-report grid: (angle name without side, row title).
+ANGLE_ROWS = (
+    ("PelvisAngles", "Pelvis"),
+    ("HipAngles", "Hip"),
+    ("KneeAngles", "Knee"),
+    ("AnkleAngles", "Ankle"),
+    ("FootProgressAngles", "Foot progression"),
+)
+#: Plane of each component and the clinical meaning of positive values.
+PLANES = (
+    ("X", "sagittal", {"Pelvis": "ant. tilt", "Hip": "flexion", "Knee": "flexion",
+                       "Ankle": "dorsiflexion", "Foot progression": ""}),
+    ("Y", "frontal", {"Pelvis": "up", "Hip": "adduction", "Knee": "varus",
+                      "Ankle": "inversion", "Foot progression": ""}),
+    ("Z", "transverse", {"Pelvis": "int. rot.", "Hip": "int. rot.", "Knee": "int. rot.",
+                         "Ankle": "int. rot.", "Foot progression": "internal"}),
+)  # fmt: skip
+SIDE_STYLE = {"L": ("Left", "tab:red"), "R": ("Right", "tab:green")}
+
+
+def plot_gait_cycles(
+    stats: pd.DataFrame,
+    path: str | os.PathLike[str],
+    *,
+    title: str = "",
+    rows: Sequence[tuple[str, str]] = ANGLE_ROWS,
+) -> Path:
+    """Write the classic gait-report grid (joints x planes; mean ± 1 SD per side).
+
+    Args:
+        stats: output of :func:`fuzzygait.mocap.cycles.mean_sd_table` (columns
+            ``angle`` like ``LKneeAngles_X``, ``percent``, ``mean``, ``sd``,
+            ``n_cycles``); degrees.
+        path: PNG, SVG or PDF file, by suffix.
+        title: figure title.
+        rows: which angles to show.
+
+    Returns:
+        The written path.
+    """
+    path = Path(path)
+    fig, axes = plt.subplots(len(rows), 3, figsize=(11, 2.3 * len(rows) + 0.8), sharex=True, squeeze=False)
+    for r, (angle, row_title) in enumerate(rows):
+        for c, (axis, plane, meaning) in enumerate(PLANES):
+            ax = axes[r, c]
+            for side, (side_name, colour) in SIDE_STYLE.items():
+                sel = stats[stats["angle"] == f"{side}{angle}_{axis}"].sort_values("percent")
+                if sel.empty or sel["mean"].isna().all():
+                    continue
+                n = int(sel["n_cycles"].max())
+                ax.plot(sel["percent"], sel["mean"], color=colour, lw=1.5, label=f"{side_name} (n={n})")
+                ax.fill_between(
+                    sel["percent"], sel["mean"] - sel["sd"], sel["mean"] + sel["sd"],
+                    color=colour, alpha=0.2, lw=0,
+                )  # fmt: skip
+            ax.axhline(0.0, color="0.6", lw=0.6)
+            ax.grid(alpha=0.3)
+            label = meaning[row_title]
+            ax.set_ylabel(f"{row_title} (deg)" + (f"\n+ {label}" if label else ""), fontsize=8)
+            if r == 0:
+                ax.set_title(plane)
+            if r == len(rows) - 1:
+                ax.set_xlabel("gait cycle (%)")
+            ax.set_xlim(0, 100)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="upper right", fontsize=8)
+    fig.suptitle(title or "Joint angles over the gait cycle (mean ± 1 SD)")
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, dpi=110, format=path.suffix.lstrip(".") or "png")
+    plt.close(fig)
+    return path

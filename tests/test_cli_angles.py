@@ -1,0 +1,123 @@
+"""``fuzzygait angles`` and ``fuzzygait demo`` end to end (subprocess, as users run them)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import SAMPLE_DATA, assert_one_line_error, needs_shared, run, shared_file
+
+from fuzzygait.io import read_c3d, write_c3d
+
+ANGLES = [f"{s}{a}" for a in ("PelvisAngles", "HipAngles", "KneeAngles", "AnkleAngles", "FootProgressAngles") for s in "LR"]
+SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
+
+
+def test_angles_csv_recovers_the_synthetic_truth(tmp_path: Path) -> None:
+    out = tmp_path / "angles.csv"
+    result = run("angles", SAMPLE_DATA / "walking.c3d", *SAMPLE_ARGS, "--no-filter", "--out", out)
+    assert result.returncode == 0, result.stderr
+    table = pd.read_csv(out)
+    expected = ["frame", "time"] + [f"{a}_{x}" for a in ANGLES for x in "XYZ"]
+    assert sorted(table.columns) == sorted(expected)
+    truth = pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
+    merged = table.merge(truth, on="frame", suffixes=("", "_truth"))
+    assert len(merged) == len(truth)
+    compared = [c for c in truth.columns if c not in ("frame", "time_s")]
+    assert len(compared) >= 24
+    for column in compared:
+        diff = np.abs(merged[column] - merged[f"{column}_truth"])
+        assert diff.max() <= 0.01, (column, diff.max())
+
+
+def test_angles_parquet_cycles_and_c3d_outputs(tmp_path: Path) -> None:
+    result = run(
+        "angles", SAMPLE_DATA / "walking_noisy.c3d", *SAMPLE_ARGS,
+        "--out", tmp_path / "a.parquet", "--cycles", tmp_path / "c.csv", "--c3d-out", tmp_path / "m.c3d",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    table = pd.read_parquet(tmp_path / "a.parquet")
+    assert table.shape[0] == read_c3d(SAMPLE_DATA / "walking_noisy.c3d").n_frames
+    cycles = pd.read_csv(tmp_path / "c.csv")
+    assert {"angle", "percent", "mean", "sd", "n_cycles"} <= set(cycles.columns)
+    knee = cycles[cycles["angle"] == "LKneeAngles_X"]
+    assert len(knee) == 101 and knee["n_cycles"].max() >= 3
+    assert 50 < knee["mean"].max() < 70  # swing-phase knee flexion of the synthetic gait
+    model = read_c3d(tmp_path / "m.c3d")
+    assert model.output_kinds["LKneeAngles"] == "angle"
+    np.testing.assert_allclose(model.outputs["LKneeAngles"][:, 0], table["LKneeAngles_X"], atol=1e-3)
+    assert "LFEO" in model.outputs and "LStaticPlantFlex" in model.parameters
+    assert len(model.events) >= 6
+
+
+def test_missing_marker_names_it_and_keeps_the_other_angles(tmp_path: Path) -> None:
+    trial = read_c3d(SAMPLE_DATA / "walking.c3d")
+    without = trial.select_markers([m for m in trial.marker_labels if m != "LKNE"])
+    write_c3d(without, tmp_path / "no_lkne.c3d")
+    out = tmp_path / "angles.csv"
+    result = run("angles", tmp_path / "no_lkne.c3d", *SAMPLE_ARGS, "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "LKNE" in result.stdout and "LKneeAngles" in result.stdout
+    table = pd.read_csv(out)
+    assert table["LKneeAngles_X"].isna().all()
+    for name in ("RKneeAngles", "RHipAngles", "LPelvisAngles", "RAnkleAngles"):
+        assert table[f"{name}_X"].notna().all(), name
+
+
+def test_implausible_subject_is_one_line(tmp_path: Path) -> None:
+    text = (SAMPLE_DATA / "subject.toml").read_text().replace("LLegLength = 900.0", "LLegLength = 0.9")
+    (tmp_path / "s.toml").write_text(text)
+    out = tmp_path / "a.csv"
+    result = run("angles", SAMPLE_DATA / "walking.c3d", "--subject", tmp_path / "s.toml", "--out", out)
+    assert_one_line_error(result, "LLegLength", "mm")
+    assert not out.exists()
+
+
+def test_bad_output_suffix_is_refused_before_work(tmp_path: Path) -> None:
+    result = run("angles", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "a.xlsx")
+    assert_one_line_error(result, "a.xlsx", ".csv or .parquet")
+
+
+@needs_shared
+def test_angles_match_vicon_on_movement_trial(tmp_path: Path) -> None:
+    """Acceptance through the CLI: --no-filter, PROCESSING parameters."""
+    source = shared_file("vicon", "Movement_trial.c3d")
+    out = tmp_path / "angles.csv"
+    result = run("angles", source, "--no-filter", "--out", out)
+    assert result.returncode == 0, result.stderr
+    table = pd.read_csv(out)
+    vicon = read_c3d(source).outputs
+    for name in ANGLES:
+        for k, axis in enumerate("XYZ"):
+            ours = table[f"{name}_{axis}"].to_numpy()
+            theirs = vicon[name][:, k]
+            both = np.isfinite(ours) & np.isfinite(theirs)
+            assert both.sum() > 250, name
+            diff = ours[both] - theirs[both]
+            assert np.sqrt(np.mean(diff**2)) <= 0.001 and np.abs(diff).max() <= 0.01, (name, axis)
+
+
+def test_demo_writes_results(tmp_path: Path) -> None:
+    out = tmp_path / "demo"
+    result = run("demo", "--out", out)
+    assert result.returncode == 0, result.stderr
+    for name in ("angles.csv", "cycles.csv", "gait_cycles.png", "summary.md"):
+        assert (out / name).is_file(), name
+    assert (out / "gait_cycles.png").stat().st_size > 20_000
+    summary = (out / "summary.md").read_text()
+    assert "| LKneeAngles_X |" in summary
+
+
+def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:
+    result = run("demo", "--data", tmp_path / "data", "--out", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    assert "generating" in result.stderr
+    assert (tmp_path / "data" / "walking.c3d").is_file()
+
+
+@pytest.mark.parametrize("flag", ["--cycles", "--out"])
+def test_table_options_check_suffix(tmp_path: Path, flag: str) -> None:
+    result = run("angles", SAMPLE_DATA / "walking.c3d", flag, tmp_path / "x.txt")
+    assert_one_line_error(result, flag)
