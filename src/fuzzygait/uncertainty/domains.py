@@ -1,0 +1,120 @@
+"""Feasible parameter sets of one α-level: boxes (independent fuzzy numbers) and
+products of balls (fuzzy spatial deviations).
+
+A domain answers what the α-level optimisation needs: membership tests, projection,
+the maximiser of a linear function (the linearised model's optimum, in closed form),
+random starting points and scipy bounds/constraints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import NonlinearConstraint
+
+
+@dataclass(frozen=True)
+class BoxDomain:
+    """``lower <= p <= upper`` component-wise (the α-cut box)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.size)
+
+    @property
+    def centre(self) -> np.ndarray:
+        return 0.5 * (self.lower + self.upper)
+
+    def contains(self, p: np.ndarray, tol: float = 0.0) -> np.ndarray:
+        """Whether each row of ``p`` (``(..., dim)``) lies in the box (+ ``tol`` slack)."""
+        return np.all((p >= self.lower - tol) & (p <= self.upper + tol), axis=-1)
+
+    def project(self, p: np.ndarray) -> np.ndarray:
+        return np.clip(p, self.lower, self.upper)
+
+    def linear_argmax(self, gradient: np.ndarray) -> np.ndarray:
+        """Vertex maximising ``gradient · p`` (ties: the centre value)."""
+        return np.where(gradient > 0, self.upper, np.where(gradient < 0, self.lower, self.centre))
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        return self.lower + (self.upper - self.lower) * rng.random((n, self.dim))
+
+    def scipy_bounds(self) -> list[tuple[float, float]]:
+        return list(zip(self.lower.tolist(), self.upper.tolist()))
+
+    def scipy_constraints(self) -> list[NonlinearConstraint]:
+        return []
+
+
+@dataclass(frozen=True)
+class BallsDomain:
+    """Product of balls: ``|p_k − centre_k| <= radius_k`` for each block ``k`` of
+    ``block`` coordinates (e.g. one 3-D ball per marker)."""
+
+    centres: np.ndarray  # (n_balls, block)
+    radii: np.ndarray  # (n_balls,)
+
+    @property
+    def block(self) -> int:
+        return int(self.centres.shape[1])
+
+    @property
+    def dim(self) -> int:
+        return int(self.centres.size)
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self.centres.ravel().copy()
+
+    def _blocks(self, p: np.ndarray) -> np.ndarray:
+        return np.asarray(p, dtype=float).reshape(*np.shape(p)[:-1], *self.centres.shape)
+
+    def contains(self, p: np.ndarray, tol: float = 0.0) -> np.ndarray:
+        d = np.linalg.norm(self._blocks(p) - self.centres, axis=-1)
+        return np.all(d <= self.radii + tol, axis=-1)
+
+    def project(self, p: np.ndarray) -> np.ndarray:
+        blocks = self._blocks(p) - self.centres
+        norm = np.linalg.norm(blocks, axis=-1, keepdims=True)
+        scale = np.where(norm > self.radii[:, None], self.radii[:, None] / np.maximum(norm, 1e-300), 1.0)
+        return (self.centres + blocks * scale).reshape(np.shape(p))
+
+    def linear_argmax(self, gradient: np.ndarray) -> np.ndarray:
+        g = self._blocks(gradient)
+        norm = np.linalg.norm(g, axis=-1, keepdims=True)
+        direction = np.where(norm > 0, g / np.maximum(norm, 1e-300), 0.0)
+        return (self.centres + self.radii[:, None] * direction).ravel()
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """Uniform points in each ball."""
+        direction = rng.standard_normal((n, *self.centres.shape))
+        direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
+        radius = self.radii * rng.random((n, self.radii.size)) ** (1.0 / self.block)
+        return (self.centres + direction * radius[..., None]).reshape(n, self.dim)
+
+    def scipy_bounds(self) -> list[tuple[float, float]]:
+        lo = (self.centres - self.radii[:, None]).ravel()
+        hi = (self.centres + self.radii[:, None]).ravel()
+        return list(zip(lo.tolist(), hi.tolist()))
+
+    def scipy_constraints(self) -> list[NonlinearConstraint]:
+        """``|p_k − c_k|² <= r_k²`` for every ball (smooth form for SLSQP/trust-constr)."""
+
+        def squared(p: np.ndarray) -> np.ndarray:
+            return np.sum((self._blocks(p) - self.centres) ** 2, axis=-1)
+
+        def jac(p: np.ndarray) -> np.ndarray:
+            blocks = 2.0 * (self._blocks(p) - self.centres)
+            out = np.zeros((self.radii.size, self.dim))
+            for k in range(self.radii.size):
+                out[k, k * self.block : (k + 1) * self.block] = blocks[k]
+            return out
+
+        return [NonlinearConstraint(squared, -np.inf, self.radii**2, jac=jac)]
+
+
+Domain = BoxDomain | BallsDomain

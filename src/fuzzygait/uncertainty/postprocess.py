@@ -1,0 +1,95 @@
+"""Post-processing of fuzzy outputs: nesting repair (Fig. 2.11), the combined envelope
+(Fig. 5.3) and failure probabilities from a limit state (§5.6, Eq. 5.4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from fuzzygait.errors import ParameterError
+
+
+def repair_nesting(hull: np.ndarray) -> np.ndarray:
+    """Make every lower α-level's hull contain the next higher one's.
+
+    Args:
+        hull: ``(n_alpha, 2, ...)`` with α increasing along axis 0 and bound
+            ``(lower, upper)`` along axis 1.
+
+    Returns:
+        A repaired copy: going down from the highest α, a lower hull value above the
+        higher level's is lowered to it, an upper hull value below it is raised to it —
+        an optimisation over a set cannot be worse than over a subset (thesis §2.7.2).
+    """
+    repaired = np.array(hull, dtype=float, copy=True)
+    for a in range(repaired.shape[0] - 2, -1, -1):
+        repaired[a, 0] = np.minimum(repaired[a, 0], repaired[a + 1, 0])
+        repaired[a, 1] = np.maximum(repaired[a, 1], repaired[a + 1, 1])
+    return repaired
+
+
+def combined_envelope(result: xr.Dataset) -> xr.Dataset:
+    """The overall extreme envelope over all α-levels (Fig. 5.3): ``lower``, ``upper``
+    and ``deterministic`` over time. The membership information is dropped."""
+    hull = result["hull"]
+    return xr.Dataset(
+        {
+            "lower": hull.sel(bound="lower").min("alpha"),
+            "upper": hull.sel(bound="upper").max("alpha"),
+            "deterministic": result["deterministic"],
+        }
+    )
+
+
+def failure_probability(result: xr.Dataset, limit: float, failure_above: bool = True) -> xr.DataArray:
+    """Failure probability per time node from the fuzzy output (Eq. 5.4).
+
+    The output's membership function at each node is the piecewise-linear function
+    through the hull values of the α-levels; the limit state splits the area under it
+    into the failure area ``A_f`` (output beyond ``limit``) and the safe area ``A_s``:
+    ``v = A_f / (A_f + A_s)``, with the membership at the limit interpolated.
+
+    Args:
+        result: output of :func:`~fuzzygait.uncertainty.graph_follower`.
+        limit: the limit value of the target output.
+        failure_above: True if outputs above ``limit`` fail, False if below.
+
+    Returns:
+        ``v`` over ``time`` in [0, 1]. Where the output is crisp (zero area) ``v`` is 1
+        or 0 by which side of the limit the deterministic value lies.
+    """
+    alphas = result["alpha"].to_numpy()
+    if alphas[0] != 0.0 or alphas[-1] != 1.0:
+        raise ParameterError("failure probability needs the α-levels 0 and 1")
+    lower = result["hull"].sel(bound="lower").to_numpy()  # (n_alpha, n_time)
+    upper = result["hull"].sel(bound="upper").to_numpy()
+    # the membership polygon: up the left flank, down the right flank
+    xs = np.concatenate([lower, upper[::-1]], axis=0)  # (2 n_alpha, n_time)
+    mu = np.concatenate([alphas, alphas[::-1]])
+    total = _area_left_of(xs, mu, np.full(xs.shape[1], np.inf))
+    below = _area_left_of(xs, mu, np.full(xs.shape[1], float(limit)))
+    above = total - below
+    with np.errstate(invalid="ignore", divide="ignore"):
+        v = (above if failure_above else below) / total
+    crisp = total <= 0
+    det = result["deterministic"].to_numpy()
+    v = np.where(crisp, (det > limit) if failure_above else (det < limit), v)
+    return xr.DataArray(np.clip(v, 0.0, 1.0), coords={"time": result["time"]}, dims="time", name="failure_probability")
+
+
+def _area_left_of(xs: np.ndarray, mu: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """Area under the piecewise-linear membership polygon ``(xs[:, t], mu)`` for
+    ``x <= cut[t]``, exact for every segment (trapezoids clipped at the cut)."""
+    area = np.zeros(xs.shape[1])
+    for k in range(xs.shape[0] - 1):
+        x0, x1 = xs[k], xs[k + 1]
+        m0, m1 = mu[k], mu[k + 1]
+        lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
+        m_lo = np.where(x0 <= x1, m0, m1)
+        m_hi = np.where(x0 <= x1, m1, m0)
+        right = np.clip(cut, lo, hi)
+        width = hi - lo
+        with np.errstate(invalid="ignore", divide="ignore"):
+            m_right = np.where(width > 0, m_lo + (m_hi - m_lo) * (right - lo) / width, m_lo)
+        area += 0.5 * (m_lo + m_right) * (right - lo)
+    return area

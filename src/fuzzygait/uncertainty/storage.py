@@ -1,0 +1,54 @@
+"""Saving and loading fuzzy results (netCDF ``.nc`` or zarr ``.zarr``), atomically."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import xarray as xr
+
+from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.io.atomic import atomic_output
+
+SUFFIXES = (".nc", ".zarr")
+
+
+def _kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise FuzzyGaitError(f"{path}: results are saved as .nc (netCDF) or .zarr")
+    return suffix
+
+
+def save_result(result: xr.Dataset, path: str | os.PathLike[str]) -> Path:
+    """Write ``result`` to ``path``; nothing is left at ``path`` on failure."""
+    path = Path(path)
+    if _kind(path) == ".nc":
+        with atomic_output(path) as tmp:
+            result.to_netcdf(tmp, engine="scipy")
+        return path
+    if not path.parent.exists():
+        raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.stem}-", suffix=".tmp.zarr", dir=path.parent))
+    try:
+        result.to_zarr(tmp, mode="w")
+        if path.exists():
+            shutil.rmtree(path)
+        tmp.rename(path)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return path
+
+
+def load_result(path: str | os.PathLike[str]) -> xr.Dataset:
+    """Read a result written by :func:`save_result` (fully into memory)."""
+    path = Path(path)
+    kind = _kind(path)
+    if not path.exists():
+        raise FuzzyGaitError(f"{path}: no such result; check the path")
+    if kind == ".nc":
+        with xr.open_dataset(path, engine="scipy") as ds:
+            return ds.load()
+    return xr.open_zarr(path).load()
