@@ -27,13 +27,13 @@ def save_result(result: xr.Dataset, path: str | os.PathLike[str]) -> Path:
     path = Path(path)
     if _kind(path) == ".nc":
         with atomic_output(path) as tmp:
-            result.to_netcdf(tmp, engine="scipy")
+            result.to_netcdf(tmp, engine="h5netcdf")
         return path
     if not path.parent.exists():
         raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.stem}-", suffix=".tmp.zarr", dir=path.parent))
     try:
-        result.to_zarr(tmp, mode="w")
+        result.to_zarr(tmp, mode="w", zarr_format=2, consolidated=True)  # widest compatibility
         if path.exists():
             shutil.rmtree(path)
         tmp.rename(path)
@@ -49,6 +49,6 @@ def load_result(path: str | os.PathLike[str]) -> xr.Dataset:
     if not path.exists():
         raise FuzzyGaitError(f"{path}: no such result; check the path")
     if kind == ".nc":
-        with xr.open_dataset(path, engine="scipy") as ds:
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
             return ds.load()
     return xr.open_zarr(path).load()
