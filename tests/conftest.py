@@ -2,6 +2,13 @@
 
 from __future__ import annotations
 
+import os
+
+# Small linear-algebra calls (scipy's optimisers, 3x3 frames) only lose time to BLAS
+# threads on the 2-core CI machine; set before numpy is first imported.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 import subprocess
 import sys
 from pathlib import Path

@@ -76,12 +76,14 @@ class _Follower:
     """State of one Graph Follower run (library, counters, options)."""
 
     def __init__(self, model: CountedModel, params: FuzzyVector | FuzzyBalls, *, mode: str,
-                 novelty_tol: float, starts: int, max_iterations: int, seed: int) -> None:  # fmt: skip
+                 novelty_tol: float, starts: int, max_iterations: int, seed: int,
+                 nodes: np.ndarray) -> None:  # fmt: skip
         self.model, self.params, self.mode = model, params, mode
         self.novelty_tol, self.starts, self.max_iterations = novelty_tol, starts, max_iterations
         self.rng = np.random.default_rng(seed)
         self.scale = params.scale
-        self.library = Library(params.dim, model.n_time, self.scale)
+        self.library = Library(params.dim, model.n_time, self.scale, nodes=nodes)
+        self._domains: dict[float, BoxDomain | BallsDomain] = {}
         self.counts = _Counts()
         self.linearised = mode == "linearised"
         self.gain_tol = 0.0  # set once the deterministic trajectory is known
@@ -94,24 +96,32 @@ class _Follower:
             return self.library.add(p, f, jac)
         return self.library.add(p, self.model.trajectory(p))
 
-    def admissible(self, domain: BoxDomain | BallsDomain) -> np.ndarray:
-        return domain.contains(self.library.parameters, tol=MEMBERSHIP_SLACK * float(self.scale.max()))
+    def domain(self, alpha: float) -> BoxDomain | BallsDomain:
+        """The α-level set (one object per level, so membership caching can key on α)."""
+        if alpha not in self._domains:
+            self._domains[alpha] = self.params.domain(alpha)
+        return self._domains[alpha]
+
+    def admissible(self, alpha: float) -> np.ndarray:
+        """Mask of the library entries inside the α-level set (cached, incremental)."""
+        domain, slack = self.domain(alpha), MEMBERSHIP_SLACK * float(self.scale.max())
+        return self.library.inside(alpha, lambda p: domain.contains(p, tol=slack))
 
     # ------------------------------------------------------------------ one node
-    def optimise_node(self, domain: BoxDomain | BallsDomain, node: int, sense: float,
+    def optimise_node(self, alpha: float, node: int, sense: float,
                       warm: np.ndarray | None) -> np.ndarray:  # fmt: skip
         self.counts.optimisations += 1
         if self.linearised:
-            return self._linearised(domain, node, sense)
-        return self._direct(domain, node, sense, warm)
+            return self._linearised(alpha, node, sense)
+        return self._direct(alpha, node, sense, warm)
 
-    def _linearised(self, domain: BoxDomain | BallsDomain, node: int, sense: float) -> np.ndarray:
-        library = self.library
-        best = library.best(self.admissible(domain), node, sense)
-        if library.sensitivities(best) is None:  # stored without sensitivities: add them
+    def _linearised(self, alpha: float, node: int, sense: float) -> np.ndarray:
+        library, domain = self.library, self.domain(alpha)
+        best = library.best(self.admissible(alpha), node, sense)
+        if not library.has_sensitivities(best):  # stored without sensitivities: add them
             best = self.simulate(library.parameters[best])
         p0, f0 = library.parameters[best], library.trajectories[best, node]
-        g0 = sense * library.sensitivities(best)[node]
+        g0 = sense * library.gradient(best, node)
         step = domain.linear_argmax(g0) - p0  # the thesis' step: the linear model's optimum
         for _ in range(self.max_iterations):
             size = float(np.max(np.abs(step) / self.scale)) if step.size else 0.0
@@ -119,24 +129,41 @@ class _Follower:
                 break
             candidate = domain.project(p0 + step)
             index, distance = library.closest(candidate)
-            if distance > self.novelty_tol or library.sensitivities(index) is None:
+            if distance > self.novelty_tol or not library.has_sensitivities(index):
                 index = self.simulate(candidate)
             f1 = library.trajectories[index, node]
-            g1 = sense * library.sensitivities(index)[node]
+            g1 = sense * library.gradient(index, node)
             if sense * f1 > sense * f0:  # improvement: continue from there
                 p0, f0, g0 = library.parameters[index], f1, g1
                 step = domain.linear_argmax(g0) - p0
                 continue
-            # overshoot: the directional derivative changed sign in between -> secant
-            slope0, slope1 = float(g0 @ step), float(g1 @ step)
-            fraction = slope0 / (slope0 - slope1) if slope1 < 0 else 0.25
-            step = step * float(np.clip(fraction, 0.05, 0.9))
+            step = self._shortened(domain, step, g0, g1)
         return p0
 
-    def _direct(self, domain: BoxDomain | BallsDomain, node: int, sense: float,
+    @staticmethod
+    def _shortened(domain: BoxDomain | BallsDomain, step: np.ndarray, g0: np.ndarray,
+                   g1: np.ndarray) -> np.ndarray:  # fmt: skip
+        """Shorten a step that overshot: where the derivative along the step changed sign
+        between its ends, a secant estimate of the stationary point. In a box this is
+        done per coordinate (an interior optimum in one coordinate, a bound in another);
+        otherwise along the whole step. Without a sign change: a quarter step."""
+        slope0, slope1 = g0 * step, g1 * step
+        if isinstance(domain, BoxDomain):
+            crossed = (slope0 > 0) & (slope1 < 0)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                secant = np.where(crossed, slope0 / (slope0 - slope1), 1.0)
+            fraction = np.clip(secant, 0.05, 1.0)
+            if np.all(fraction > 0.999):  # no coordinate crossed: coupling; back off
+                fraction = np.full_like(fraction, 0.25)
+            return step * fraction
+        total0, total1 = float(slope0.sum()), float(slope1.sum())
+        fraction = total0 / (total0 - total1) if total1 < 0 else 0.25
+        return step * float(np.clip(fraction, 0.05, 0.9))
+
+    def _direct(self, alpha: float, node: int, sense: float,
                 warm: np.ndarray | None) -> np.ndarray:  # fmt: skip
-        library = self.library
-        starts = [library.parameters[library.best(self.admissible(domain), node, sense)]]
+        library, domain = self.library, self.domain(alpha)
+        starts = [library.parameters[library.best(self.admissible(alpha), node, sense)]]
         if warm is not None:
             starts.append(domain.project(warm))
         if self.starts > len(starts):
@@ -158,7 +185,12 @@ class _Follower:
             candidate = domain.project(result.x)
             if result.fun < best_v and domain.contains(candidate, tol=1e-9):
                 best_p, best_v = candidate, float(result.fun)
-        if library.is_novel(best_p, self.novelty_tol):
+        # Novelty is judged against the entries inside this α-level set only: SLSQP may
+        # end marginally outside a ball (~1e-7); that iterate is in the library but never
+        # counts in the hull, so it must not stop the projected optimum being simulated.
+        inside = library.parameters[self.admissible(alpha)]
+        distance = np.max(np.abs(inside - best_p) / self.scale, axis=1)
+        if distance.size == 0 or float(distance.min()) > self.novelty_tol:
             self.simulate(best_p)
         return best_p
 
@@ -205,21 +237,20 @@ def graph_follower(
     levels = _check_arguments(alphas, mode, stride, starts)
     levels = np.union1d(levels, [1.0])
     counted = CountedModel(model, scale=params.scale)
+    nodes = optimisation_nodes(counted.n_time, stride)
     follower = _Follower(counted, params, mode=mode, novelty_tol=novelty_tol, starts=starts,
-                         max_iterations=max_iterations, seed=seed)  # fmt: skip
+                         max_iterations=max_iterations, seed=seed, nodes=nodes)  # fmt: skip
     det_index = follower.simulate(params.deterministic)
     deterministic = follower.library.trajectories[det_index].copy()
     follower.gain_tol = gain_tol * max(float(np.max(np.abs(deterministic))), np.finfo(float).tiny)
 
-    nodes = optimisation_nodes(counted.n_time, stride)
     below_one = levels[levels < 1.0][::-1]  # highest first: its finds help lower levels
     total, done = 2 * nodes.size * below_one.size, 0
     for alpha in below_one:
-        domain = params.domain(float(alpha))
         for bound in BOUNDS:
             warm = None
             for node in nodes:
-                warm = follower.optimise_node(domain, int(node), SENSES[bound], warm)
+                warm = follower.optimise_node(float(alpha), int(node), SENSES[bound], warm)
                 done += 1
                 if progress is not None:
                     progress(done, total)
@@ -263,7 +294,7 @@ def _post_process(follower: _Follower, params: FuzzyVector | FuzzyBalls, levels:
             hull[a] = deterministic
             extremiser[a] = params.deterministic
             continue
-        admissible = np.flatnonzero(follower.admissible(params.domain(float(alpha))))
+        admissible = np.flatnonzero(follower.admissible(float(alpha)))
         values = library.trajectories[admissible]
         for b, bound in enumerate(BOUNDS):
             pick = np.argmax(SENSES[bound] * values, axis=0)

@@ -32,10 +32,12 @@ def combined_envelope(result: xr.Dataset) -> xr.Dataset:
     """The overall extreme envelope over all α-levels (Fig. 5.3): ``lower``, ``upper``
     and ``deterministic`` over time. The membership information is dropped."""
     hull = result["hull"]
+    # drop=True: the scalar `bound` coordinates ("lower" vs "upper") would otherwise
+    # conflict when the two are put in one Dataset (xarray MergeError)
     return xr.Dataset(
         {
-            "lower": hull.sel(bound="lower").min("alpha"),
-            "upper": hull.sel(bound="upper").max("alpha"),
+            "lower": hull.sel(bound="lower", drop=True).min("alpha"),
+            "upper": hull.sel(bound="upper", drop=True).max("alpha"),
             "deterministic": result["deterministic"],
         }
     )
