@@ -18,7 +18,7 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.io.trial import Trial
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
-from fuzzygait.kinematics.chain import LowerBodyChain
+from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers
 from fuzzygait.kinematics.progression import progression_frame
 
 #: The Plug-in Gait lower-body angle outputs, in Vicon's names.
@@ -64,6 +64,39 @@ class CGMResult:
     unavailable: dict[str, str] = field(default_factory=dict)
     progression: np.ndarray = field(default_factory=lambda: np.full((3, 3), np.nan))
     notes: list[str] = field(default_factory=list)
+
+
+def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The (proximal, distal) frames whose relative rotation is the angle ``name``.
+
+    Args:
+        chain: the lower-body chain of a trial.
+        name: one of :data:`ANGLE_NAMES`.
+        progression: ``(3, 3)`` progression frame (pelvis and foot-progression angles).
+    """
+    side, joint = name[0], name[1:].removesuffix("Angles")
+    if joint == "Pelvis":
+        return progression, chain.pelvis()[1]
+    if joint == "Hip":
+        return chain.pelvis()[1], chain.thigh(side)
+    if joint == "Knee":
+        return chain.thigh(side), chain.tibia(side)
+    if joint == "Ankle":
+        return chain.torsioned_tibia(side), chain.foot(side)
+    if joint == "FootProgress":
+        return progression, chain.foot(side)
+    raise KeyError(f"unknown angle {name!r}")
+
+
+def angle_from_chain(chain: LowerBodyChain, name: str, progression: np.ndarray) -> np.ndarray:
+    """Angle ``name`` (``(n_frames, 3)`` degrees, Plug-in Gait conventions) of ``chain``."""
+    proximal, distal = angle_segments(chain, name, progression)
+    return joint_angles(proximal, distal, name[1:].removesuffix("Angles"), name[0])
+
+
+def angle_markers(trial: Trial, name: str, use_medial_markers: bool = False) -> list[str]:
+    """The markers the angle ``name`` depends on (its segments and the chain above)."""
+    return segment_markers(trial, _ANGLE_SEGMENT[name[1:].removesuffix("Angles")], name[0], use_medial_markers)
 
 
 def _missing_reason(missing: list[str]) -> str:
@@ -140,7 +173,7 @@ def compute_lower_body(
     for side in "LR":
         long = "left" if side == "L" else "right"
         result.joint_centres[side + "HJC"] = hjc[side]
-        result.angles[side + "PelvisAngles"] = joint_angles(result.progression, pelvis, "Pelvis", side)
+        result.angles[side + "PelvisAngles"] = angle_from_chain(chain, side + "PelvisAngles", result.progression)
         for name, segment in _ANGLE_SEGMENT.items():
             missing = chain.missing(segment, side)
             if missing and segment != "pelvis":
@@ -151,7 +184,7 @@ def compute_lower_body(
         result.joint_centres[side + "KJC"] = kjc
         result.segment_frames[long + "_thigh"] = thigh
         result.virtual_markers.update(vm.thigh_markers(side, hjc[side], kjc, thigh))
-        result.angles[side + "HipAngles"] = joint_angles(pelvis, thigh, "Hip", side)
+        result.angles[side + "HipAngles"] = angle_from_chain(chain, side + "HipAngles", result.progression)
         if chain.missing("tibia", side):
             continue
         ajc, tibia = chain.ajc(side), chain.tibia(side)
@@ -160,15 +193,13 @@ def compute_lower_body(
         result.segment_frames[long + "_tibia_torsioned"] = chain.torsioned_tibia(side)
         knee_width = subject.side(side).knee_width
         result.virtual_markers.update(vm.tibia_markers(side, kjc, ajc, tibia, knee_width))
-        result.angles[side + "KneeAngles"] = joint_angles(thigh, tibia, "Knee", side)
+        result.angles[side + "KneeAngles"] = angle_from_chain(chain, side + "KneeAngles", result.progression)
         if chain.missing("foot", side):
             continue
         foot = chain.foot(side)
         result.segment_frames[long + "_foot"] = foot
-        result.angles[side + "AnkleAngles"] = joint_angles(chain.torsioned_tibia(side), foot, "Ankle", side)
-        result.angles[side + "FootProgressAngles"] = joint_angles(
-            result.progression, foot, "FootProgress", side
-        )
+        for name in ("AnkleAngles", "FootProgressAngles"):
+            result.angles[side + name] = angle_from_chain(chain, side + name, result.progression)
         if trial.has_marker(side + "HEE"):
             hee, toe = trial.marker(side + "HEE"), trial.marker(side + "TOE")
             length = vm.foot_bone_length(hee, toe, subject.marker_radius)

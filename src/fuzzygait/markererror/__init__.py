@@ -1,1 +1,1 @@
-"""markererror: see the issue tracker; filled in by later work."""
+"""The spherical fuzzy marker-error model on joint angles (thesis §3.7, §5.5)."""

@@ -40,8 +40,17 @@ class BoxDomain:
         """Vertex maximising ``gradient · p`` (ties: the centre value)."""
         return np.where(gradient > 0, self.upper, np.where(gradient < 0, self.lower, self.centre))
 
-    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+    def sample(self, rng: np.random.Generator, n: int, surface: bool = False) -> np.ndarray:
+        """Uniform points in the box (random vertices with ``surface=True``)."""
+        if surface:
+            return np.where(rng.random((n, self.dim)) < 0.5, self.lower, self.upper)
         return self.lower + (self.upper - self.lower) * rng.random((n, self.dim))
+
+    def rescale_from(self, other: BoxDomain, p: np.ndarray) -> np.ndarray:
+        """Map points of ``other`` to the same relative position in this box."""
+        width = other.upper - other.lower
+        relative = np.where(width > 0, (p - other.lower) / np.where(width > 0, width, 1.0), 0.5)
+        return self.lower + relative * (self.upper - self.lower)
 
     def scipy_bounds(self) -> list[tuple[float, float]]:
         return list(zip(self.lower.tolist(), self.upper.tolist()))
@@ -87,14 +96,21 @@ class BallsDomain:
         g = self._blocks(gradient)
         norm = np.linalg.norm(g, axis=-1, keepdims=True)
         direction = np.where(norm > 0, g / np.maximum(norm, 1e-300), 0.0)
-        return (self.centres + self.radii[:, None] * direction).ravel()
+        return (self.centres + self.radii[:, None] * direction).reshape(np.shape(gradient))
 
-    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        """Uniform points in each ball."""
+    def sample(self, rng: np.random.Generator, n: int, surface: bool = False) -> np.ndarray:
+        """Uniform points in each ball (on each sphere with ``surface=True``)."""
         direction = rng.standard_normal((n, *self.centres.shape))
         direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
-        radius = self.radii * rng.random((n, self.radii.size)) ** (1.0 / self.block)
+        fraction = 1.0 if surface else rng.random((n, self.radii.size)) ** (1.0 / self.block)
+        radius = self.radii * fraction
         return (self.centres + direction * radius[..., None]).reshape(n, self.dim)
+
+    def rescale_from(self, other: BallsDomain, p: np.ndarray) -> np.ndarray:
+        """Map points of ``other`` radially to the same relative position in these balls."""
+        ratio = np.where(other.radii > 0, self.radii / np.where(other.radii > 0, other.radii, 1.0), 0.0)
+        blocks = self._blocks(p) - other.centres
+        return (self.centres + blocks * ratio[:, None]).reshape(np.shape(p))
 
     def scipy_bounds(self) -> list[tuple[float, float]]:
         lo = (self.centres - self.radii[:, None]).ravel()

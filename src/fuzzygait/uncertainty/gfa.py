@@ -34,6 +34,7 @@ import xarray as xr
 from scipy.optimize import minimize
 
 from fuzzygait.errors import ParameterError
+from fuzzygait.uncertainty import batched
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 from fuzzygait.uncertainty.library import Library
 from fuzzygait.uncertainty.model import CountedModel
@@ -208,6 +209,9 @@ def graph_follower(
     gain_tol: float = 1e-7,
     seed: int = 0,
     progress: Progress | None = None,
+    batch_iterations: int = 25,
+    window: int = 2,
+    screen: int = 64,
 ) -> xr.Dataset:
     """Fuzzy target output of ``model`` for fuzzy parameters ``params``.
 
@@ -226,6 +230,11 @@ def graph_follower(
             gain below ``gain_tol`` times the largest deterministic output magnitude.
         seed: seed of the random multistart points.
         progress: called as ``progress(done, total)`` after each optimisation.
+        batch_iterations: iterations of the all-nodes-at-once direct mode (used when the
+            model offers ``evaluate_nodes``; see :mod:`fuzzygait.uncertainty.batched`).
+        window: neighbouring nodes (each side) at which that mode re-evaluates each
+            node's optimum.
+        screen: random points per node screened for that mode's random starts.
 
     Returns:
         ``xarray.Dataset`` with ``hull (alpha, bound, time)``, ``deterministic (time)``,
@@ -237,6 +246,10 @@ def graph_follower(
     levels = _check_arguments(alphas, mode, stride, starts)
     levels = np.union1d(levels, [1.0])
     counted = CountedModel(model, scale=params.scale)
+    if mode == "direct" and callable(getattr(model, "evaluate_nodes", None)):
+        return _batched_direct(counted, params, levels, stride=stride, starts=starts, seed=seed,
+                               iterations=batch_iterations, window=window, screen=screen,
+                               progress=progress)  # fmt: skip
     nodes = optimisation_nodes(counted.n_time, stride)
     follower = _Follower(counted, params, mode=mode, novelty_tol=novelty_tol, starts=starts,
                          max_iterations=max_iterations, seed=seed, nodes=nodes)  # fmt: skip
@@ -279,6 +292,68 @@ def graph_follower(
             "seed": seed,
         },
     )
+
+
+def _result_dataset(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
+                    hull: np.ndarray, extremiser: np.ndarray, deterministic: np.ndarray,
+                    attrs: dict[str, object]) -> xr.Dataset:  # fmt: skip
+    times = np.asarray(model.model.times, dtype=float)
+    return xr.Dataset(
+        {
+            "hull": (("alpha", "bound", "time"), hull),
+            "deterministic": (("time",), deterministic),
+            "extremiser": (("alpha", "bound", "time", "parameter"), extremiser),
+        },
+        coords={"alpha": levels, "bound": list(BOUNDS), "time": times, "parameter": params.names},
+        attrs={"model_evaluations": model.evaluations, "node_evaluations": model.node_evaluations, **attrs},
+    )
+
+
+def _batched_direct(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray, *,
+                    stride: int, starts: int, seed: int, iterations: int, window: int,
+                    screen: int, progress: Progress | None) -> xr.Dataset:  # fmt: skip
+    """Direct mode with all optimisation nodes solved side by side (see
+    :mod:`fuzzygait.uncertainty.batched`)."""
+    deterministic = model.trajectory(params.deterministic)
+    n_time, rng = model.n_time, np.random.default_rng(seed)
+    nodes = optimisation_nodes(n_time, stride)
+    others = np.setdiff1d(np.arange(n_time), nodes)
+    counts = batched.BatchCounts()
+    hull = np.empty((levels.size, 2, n_time))
+    extremiser = np.empty((levels.size, 2, n_time, params.dim))
+    hull[-1], extremiser[-1] = deterministic, params.deterministic
+    tolerance = 1e-7 * max(float(np.max(np.abs(deterministic))), 1.0)
+    previous: dict[str, np.ndarray] = {}
+    previous_domain = params.domain(1.0)
+    below_one = np.arange(levels.size - 1)[::-1]
+    for step, a in enumerate(below_one):
+        domain = params.domain(float(levels[a]))
+        for b, bound in enumerate(BOUNDS):
+            objective = batched.BatchedObjective(model.model, SENSES[bound], params.scale, 1e-6, counts)
+            first = [np.tile(params.deterministic, (nodes.size, 1))]
+            if bound in previous:  # the higher level's optimum, as it is and scaled out
+                first += [previous[bound], domain.rescale_from(previous_domain, previous[bound])]
+            extra = batched.screened_starts(objective, domain, nodes, rng, max(0, starts - len(first)), screen)
+            points, values = batched.maximise(objective, domain, nodes, first + extra, iterations, tolerance)
+            points, values = batched.neighbour_pass(objective, nodes, points, values, window)
+            previous[bound] = points
+            hull[a, b, nodes], extremiser[a, b, nodes] = SENSES[bound] * values, points
+            if others.size:  # nodes between optimisation nodes: the bracketing optima
+                right = np.minimum(np.searchsorted(nodes, others), nodes.size - 1)
+                left = np.maximum(right - 1, 0)
+                v_left = objective.values(points[left], others)
+                v_right = objective.values(points[right], others)
+                use_right = v_right > v_left
+                hull[a, b, others] = SENSES[bound] * np.where(use_right, v_right, v_left)
+                extremiser[a, b, others] = np.where(use_right[:, None], points[right], points[left])
+            if progress is not None:
+                progress(2 * step + b + 1, 2 * below_one.size)
+        previous_domain = domain
+    model.node_evaluations += counts.node_evaluations
+    attrs = {"optimisations": int(2 * below_one.size * nodes.size), "library_size": 0, "mode": "direct",
+             "stride": stride, "starts": starts, "batch_iterations": iterations, "window": window, "screen": screen,
+             "iterations": counts.iterations, "seed": seed}  # fmt: skip
+    return _result_dataset(model, params, levels, repair_nesting(hull), extremiser, deterministic, attrs)
 
 
 def _post_process(follower: _Follower, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,

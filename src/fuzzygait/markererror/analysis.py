@@ -1,0 +1,265 @@
+"""Fuzzy joint angles from fuzzy marker errors (thesis §3.7.3, §5.5).
+
+For every joint-angle component, frame and α-level the largest and smallest angle over
+all marker deviations inside the α-level balls is found by the Graph Follower algorithm
+in direct mode (all frames side by side, see :mod:`fuzzygait.uncertainty.batched`).
+
+Result layout (an ``xarray.Dataset``):
+
+* dims ``alpha`` (ascending, includes 1 = the measured angle), ``bound`` (``lower``,
+  ``upper``), ``frame`` (1-based C3D frame numbers; coordinate ``time`` in s),
+  ``marker``;
+* one variable per angle component named like the angle table columns, e.g.
+  ``LKneeAngles_X`` ``(alpha, bound, frame)`` in degrees; NaN on frames where a needed
+  marker is missing;
+* ``<name>__deviation`` ``(alpha, bound, frame, marker)``: Euclidean norm (mm) of each
+  marker's deviation that produces the hull value (Fig. 5.12); NaN for markers the
+  angle does not use;
+* ``ball_radius`` ``(marker)``: α = 0 ball radius Σ (mm);
+* attributes: ``trial``, ``sources``, ``method``, ``model_evaluations`` (node
+  evaluations in total), ``seconds``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from fuzzygait.errors import ParameterError
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.io.trial import Trial
+from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
+from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
+from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
+from fuzzygait.pipeline import AnglesRun, Preprocessing, run_angles
+from fuzzygait.uncertainty import FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
+
+DEFAULT_ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
+METHODS = ("cartesian", "spherical")
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class FuzzyAngleOptions:
+    """Options of the fuzzy joint-angle analysis.
+
+    Attributes:
+        alphas: α-levels (1 is added).
+        sources: error sources summed into each marker's radius (Table 3.1).
+        error_model: segment values and per-marker overrides.
+        method: ``"cartesian"`` (deviation vectors with the norm constraint) or
+            ``"spherical"`` (radius and two angles per marker, box constraints).
+        starts: multistart points per frame (deterministic, higher α-level's optimum,
+            then random).
+        iterations: optimiser iterations per start at most.
+        workers: processes for the angle components (1: in this process).
+        seed: seed of the random starting points.
+    """
+
+    alphas: Sequence[float] = DEFAULT_ALPHAS
+    sources: Sequence[str] = SOURCES
+    error_model: ErrorModel = field(default_factory=ErrorModel)
+    method: str = "cartesian"
+    starts: int = 3
+    iterations: int = 25
+    workers: int = 1
+    seed: int = 0
+
+
+def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, int]:
+    """One angle component: hull (alpha, bound, n_valid) and deviation norms."""
+    trial, subject, progression, name, axis, frames, markers, radii, options = args
+    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers)
+    if options.method == "cartesian":
+        params = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
+        fuzzy_model: object = model
+    else:
+        numbers = []
+        for label, radius in zip(markers, radii):
+            numbers += [
+                FuzzyNumber(np.array([0.0, 1.0]), np.array([0.0, 0.0]), np.array([radius, 0.0]), f"{label}_r"),
+                FuzzyNumber(np.array([0.0, 1.0]), np.array([0.0, 0.0]), np.array([np.pi, np.pi]), f"{label}_theta"),
+                FuzzyNumber(np.array([0.0, 1.0]), np.array([-np.pi, -np.pi]), np.array([np.pi, np.pi]), f"{label}_phi"),
+            ]
+        params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(model)
+    result = graph_follower(fuzzy_model, params, options.alphas, mode="direct", starts=options.starts,
+                            batch_iterations=options.iterations, seed=options.seed)  # fmt: skip
+    extremiser = result["extremiser"].to_numpy().reshape(*result["hull"].shape, len(markers), 3)
+    if options.method == "spherical":
+        norms = np.abs(extremiser[..., 0])
+    else:
+        norms = np.linalg.norm(extremiser, axis=-1)
+    return f"{name}_{AXES[axis]}", result["hull"].to_numpy(), norms, int(result.attrs["node_evaluations"])
+
+
+def fuzzy_joint_angles(
+    trial: Trial,
+    subject: SubjectParameters,
+    result: CGMResult,
+    options: FuzzyAngleOptions = FuzzyAngleOptions(),
+    angles: Sequence[str] | None = None,
+    progress: Progress | None = None,
+) -> xr.Dataset:
+    """Fuzzy joint angles of a trial (see the module docstring for the layout).
+
+    Args:
+        trial: the pre-processed trial the angles were computed from.
+        subject: the subject parameters used (static offsets included).
+        result: the deterministic model output of ``trial``.
+        options: α-levels, error sources, method, optimiser settings.
+        angles: angle names (default: every angle ``result`` holds).
+        progress: called as ``progress(done, total)`` per angle component.
+    """
+    if options.method not in METHODS:
+        raise ParameterError(f"method must be one of {METHODS}; got {options.method!r}")
+    sources = parse_sources(options.sources)
+    names = [n for n in (angles or ANGLE_NAMES) if n in result.angles]
+    if not names:
+        raise ParameterError(f"{trial.name}: none of the requested angles could be computed")
+    fixed = fixed_subject(trial, subject)
+    alphas = np.union1d(np.asarray(options.alphas, dtype=float), [1.0])
+    options = FuzzyAngleOptions(**{**options.__dict__, "alphas": tuple(alphas)})
+
+    tasks, markers_all = [], []
+    for name in names:
+        model_markers = JointAngleModel(trial, fixed, result.progression, name, 0, [0]).markers
+        values = np.column_stack([trial.marker(m) for m in model_markers] + [result.angles[name]])
+        frames = np.flatnonzero(np.all(np.isfinite(values), axis=1))
+        radii = np.array([options.error_model.radius(m, sources) for m in model_markers])
+        markers_all += [m for m in model_markers if m not in markers_all]
+        for axis in range(3):
+            tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options))
+
+    start = time.perf_counter()
+    outputs = _run_tasks(tasks, options.workers, progress)
+    return _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
+
+
+def _run_tasks(tasks: list[tuple], workers: int, progress: Progress | None) -> list[tuple]:
+    outputs = []
+    if workers <= 1:
+        for i, task in enumerate(tasks):
+            outputs.append(_component_task(task))
+            if progress is not None:
+                progress(i + 1, len(tasks))
+        return outputs
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for i, out in enumerate(pool.map(_component_task, tasks)):
+            outputs.append(out)
+            if progress is not None:
+                progress(i + 1, len(tasks))
+    return outputs
+
+
+def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: list[str],
+              alphas: np.ndarray, options: FuzzyAngleOptions, sources: Sequence[str],
+              seconds: float) -> xr.Dataset:  # fmt: skip
+    n_frames = trial.n_frames
+    data: dict[str, tuple] = {}
+    evaluations = 0
+    radius = {m: options.error_model.radius(m, sources) for m in markers}
+    for task, (column, hull, norms, count) in zip(tasks, outputs):
+        frames, used = task[5], task[6]
+        full = np.full((alphas.size, 2, n_frames), np.nan)
+        full[:, :, frames] = hull
+        deviation = np.full((alphas.size, 2, n_frames, len(markers)), np.nan)
+        columns = [markers.index(m) for m in used]
+        deviation[:, :, frames[:, None], np.asarray(columns)[None, :]] = norms
+        data[column] = (("alpha", "bound", "frame"), full)
+        data[f"{column}__deviation"] = (("alpha", "bound", "frame", "marker"), deviation)
+        evaluations += count
+    data["ball_radius"] = (("marker",), np.array([radius[m] for m in markers]))
+    return xr.Dataset(
+        data,
+        coords={
+            "alpha": alphas,
+            "bound": ["lower", "upper"],
+            "frame": trial.frames,
+            "time": ("frame", trial.times),
+            "marker": markers,
+        },
+        attrs={
+            "trial": trial.name,
+            "sources": ",".join(sources),
+            "method": options.method,
+            "starts": options.starts,
+            "model_evaluations": evaluations,
+            "seconds": round(seconds, 3),
+            "units": "angles deg, deviations and radii mm",
+        },
+    )
+
+
+def angle_components(fuzzy: xr.Dataset) -> list[str]:
+    """Names of the angle-component variables (``LKneeAngles_X`` ...)."""
+    return [v for v in fuzzy.data_vars if "__" not in v and v != "ball_radius"]
+
+
+def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
+    """ΔΦ of Eq. 5.3 in % per angle component (rows) and α-level < 1 (columns):
+    ``max_t (upper − lower) / max_t |Φ(t)|`` with Φ the measured angle (α = 1).
+
+    The thesis divides by the largest angle; the magnitude is used here so angles that
+    stay negative get a positive reference.
+    """
+    rows = {}
+    for name in angle_components(fuzzy):
+        hull = fuzzy[name]
+        measured = hull.sel(alpha=1.0, bound="upper")
+        reference = float(np.nanmax(np.abs(measured)))
+        width = (hull.sel(bound="upper") - hull.sel(bound="lower")).max("frame", skipna=True)
+        rows[name] = {float(a): 100.0 * float(width.sel(alpha=a)) / reference
+                      for a in fuzzy["alpha"].to_numpy() if a < 1.0}  # fmt: skip
+    table = pd.DataFrame.from_dict(rows, orient="index")
+    table.index.name = "angle"
+    return table[sorted(table.columns, reverse=True)]
+
+
+@dataclass
+class MarkerErrorAnalysis:
+    """A trial's deterministic run, its fuzzy angles and their ΔΦ table."""
+
+    run: AnglesRun
+    fuzzy: xr.Dataset
+    delta_phi: pd.DataFrame
+    notes: list[str]
+
+
+def analyse_trial(
+    dynamic: str | os.PathLike[str] | Trial,
+    *,
+    static: str | os.PathLike[str] | Trial | None = None,
+    subject_file: str | os.PathLike[str] | None = None,
+    preprocessing: Preprocessing = Preprocessing(),
+    errors_file: str | os.PathLike[str] | None = None,
+    sources: Sequence[str] = SOURCES,
+    alphas: Sequence[float] = DEFAULT_ALPHAS,
+    angles: Sequence[str] | None = None,
+    method: str = "cartesian",
+    workers: int | None = None,
+    progress: Progress | None = None,
+) -> MarkerErrorAnalysis:
+    """The pipeline of :func:`fuzzygait.pipeline.run_angles` followed by the fuzzy
+    marker-error analysis of every computed angle (or ``angles``)."""
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
+    error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()
+    options = FuzzyAngleOptions(
+        alphas=tuple(alphas), sources=parse_sources(sources), error_model=error_model, method=method,
+        workers=workers if workers is not None else min(2, os.cpu_count() or 1),
+    )  # fmt: skip
+    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, angles, progress)
+    notes = list(run.notes) + [
+        f"marker errors: {', '.join(options.sources)} ({error_model.source}), {method} formulation, "
+        f"α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}"
+    ]
+    fuzzy.attrs["trial"] = Path(run.trial.name).name
+    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)

@@ -1,0 +1,114 @@
+"""One Plug-in Gait joint-angle component as a model of marker deviations, for the
+uncertainty engine (thesis §3.7.3).
+
+The parameters are the deviations ``p = [p_1, …, p_m]`` (mm, lab frame, 3 per marker) of
+the markers the angle depends on; the output at frame ``j`` is the angle component
+(degrees) computed from ``r_i(t_j) + p_i`` (Eq. 3.1). The same deviation applies at every
+frame of a trajectory (so one evaluation is a whole angle curve), and
+:meth:`JointAngleModel.evaluate_nodes` evaluates any number of (deviation, frame) pairs
+in one vectorised pass of the model.
+
+Subject measures stay fixed: the inter-ASIS distance and the progression frame are
+those of the unperturbed trial (the thesis does not propagate the anthropometric
+measures, §3.6).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.io.trial import Trial
+from fuzzygait.kinematics.chain import LowerBodyChain
+from fuzzygait.kinematics.model import angle_from_chain, angle_markers
+from fuzzygait.kinematics.pelvis import inter_asis_distance
+
+AXES = ("X", "Y", "Z")
+
+
+def fixed_subject(trial: Trial, subject: SubjectParameters) -> SubjectParameters:
+    """``subject`` with the inter-ASIS distance fixed (measured on ``trial`` if unset)."""
+    if subject.inter_asis_distance is not None:
+        return subject
+    return replace(subject, inter_asis_distance=inter_asis_distance(trial.marker("LASI"), trial.marker("RASI")))
+
+
+@dataclass
+class JointAngleModel:
+    """Angle component ``name_axis`` as a function of the deviations of ``markers``.
+
+    Attributes:
+        trial: the (pre-processed) trial; only frames ``frames`` are used.
+        subject: subject parameters with a fixed inter-ASIS distance.
+        progression: ``(3, 3)`` progression frame of the unperturbed trial.
+        name: Plug-in Gait angle, e.g. ``"LKneeAngles"``.
+        axis: 0, 1, 2 for X (sagittal), Y (frontal), Z (transverse).
+        frames: sample indices (0-based) of the trial used as time nodes.
+        markers: labels whose deviations are the parameters (default: all the angle
+            depends on).
+    """
+
+    trial: Trial
+    subject: SubjectParameters
+    progression: np.ndarray
+    name: str
+    axis: int
+    frames: np.ndarray
+    markers: list[str] = field(default_factory=list)
+    use_medial_markers: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.markers:
+            self.markers = angle_markers(self.trial, self.name, self.use_medial_markers)
+        self.frames = np.asarray(self.frames, dtype=int)
+        self._base = np.stack([self.trial.marker(m)[self.frames] for m in self.markers], axis=1)
+        self.times = self.trial.times[self.frames]
+
+    @property
+    def n_parameters(self) -> int:
+        return 3 * len(self.markers)
+
+    def angles_of(self, positions: np.ndarray) -> np.ndarray:
+        """All three components (degrees) for marker positions ``(k, n_markers, 3)``."""
+        rows = Trial(markers=positions, marker_labels=list(self.markers), rate=self.trial.rate)
+        chain = LowerBodyChain(rows, self.subject, use_medial_markers=self.use_medial_markers)
+        return angle_from_chain(chain, self.name, self.progression)
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """Angle component at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
+        positions = self._base[nodes] + np.asarray(P, dtype=float).reshape(len(nodes), -1, 3)
+        return self.angles_of(positions)[:, self.axis]
+
+    def evaluate(self, p: np.ndarray) -> np.ndarray:
+        """The angle component over all time nodes with one deviation ``p`` (n_p,)."""
+        nodes = np.arange(self.frames.size)
+        return self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes)
+
+
+def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:
+    """Deviations given per marker as (r, θ, φ) — radius mm, polar and azimuthal angles
+    in rad — to Cartesian (x, y, z) mm; any leading shape, last axis 3 per marker."""
+    q = np.asarray(P, dtype=float).reshape(*np.shape(P)[:-1], -1, 3)
+    r, theta, phi = q[..., 0], q[..., 1], q[..., 2]
+    xyz = np.stack([r * np.sin(theta) * np.cos(phi), r * np.sin(theta) * np.sin(phi), r * np.cos(theta)], axis=-1)
+    return xyz.reshape(np.shape(P))
+
+
+@dataclass
+class SphericalDeviationModel:
+    """The same model with each marker's deviation in spherical coordinates (thesis
+    §3.7.2: the α-level sets become boxes, no norm constraint)."""
+
+    cartesian: JointAngleModel
+
+    @property
+    def times(self) -> np.ndarray:
+        return self.cartesian.times
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        return self.cartesian.evaluate_nodes(spherical_to_cartesian(P), nodes)
+
+    def evaluate(self, p: np.ndarray) -> np.ndarray:
+        return self.cartesian.evaluate(spherical_to_cartesian(p))

@@ -1,0 +1,159 @@
+"""Direct-mode α-level optimisation of all time nodes at once, for models that evaluate
+many ``(parameter, node)`` pairs in one vectorised call.
+
+Cheap models such as joint angles from markers (thesis §3.7.3, OP-II) offer::
+
+    model.evaluate_nodes(P, nodes) -> values      # P (k, n_p), nodes (k,) -> (k,)
+
+The α-level optimisations of different nodes are independent, so they are solved side by
+side: every iteration evaluates forward-difference gradients of all nodes' current
+points in one call, moves each towards the optimum of its linearisation over the α-level
+set (a point on the ball surfaces or a box vertex, closed form) with a line search
+(Frank–Wolfe steps, ``τ ∈ {1, 1/2, …, 1/16}``), and keeps a node's point only if it
+improves. Starting points (multistart): the deterministic parameters, the higher
+α-level's optimum of the same node (admissible, since the α-level sets are nested — this
+also makes the hulls nested by construction) and the best of a screen of seeded random
+points (inside the set and on its boundary). After the optimisation each
+node's optimum is also evaluated at the ``window`` neighbouring nodes on either side
+and the best value found there counts (the library post-processing of the Graph
+Follower, restricted to neighbours because whole trajectories are not needed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
+
+STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
+#: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
+MIN_REACH = 1e-6
+
+
+@dataclass
+class BatchCounts:
+    """Work done: node evaluations (rows) and iterations."""
+
+    node_evaluations: int = 0
+    iterations: int = 0
+
+
+class BatchedObjective:
+    """``sense · f(P, nodes)`` with counting and forward-difference gradients."""
+
+    def __init__(self, model: object, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts):
+        self.model, self.sense, self.counts = model, sense, counts
+        self.h = fd_step * np.asarray(scale, dtype=float)
+
+    def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        self.counts.node_evaluations += int(P.shape[0])
+        out = np.asarray(self.model.evaluate_nodes(P, nodes), dtype=float)
+        return self.sense * out
+
+    def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k, n_p = P.shape
+        shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
+        shifted[:, 1:, :] += np.diag(self.h)[None]
+        values = self.values(shifted.reshape(-1, n_p), np.repeat(nodes, n_p + 1)).reshape(k, n_p + 1)
+        return values[:, 0], (values[:, 1:] - values[:, :1]) / self.h
+
+
+def maximise(
+    objective: BatchedObjective,
+    domain: BoxDomain | BallsDomain,
+    nodes: np.ndarray,
+    starts: list[np.ndarray],
+    iterations: int,
+    tolerance: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Best point and value per node over all starting points.
+
+    Args:
+        objective: the (sense-adjusted) objective to maximise.
+        domain: the α-level set.
+        nodes: ``(k,)`` node indices.
+        starts: list of ``(k, n_p)`` starting points (projected onto the domain).
+        iterations: Frank–Wolfe iterations at most.
+        tolerance: a node stops once its improvement falls below this.
+
+    Returns:
+        ``(points (k, n_p), values (k,))`` in the objective's sense.
+    """
+    k = nodes.size
+    P = np.concatenate([domain.project(s) for s in starts])  # (S k, n_p)
+    rows = np.tile(nodes, len(starts))
+    value = np.full(P.shape[0], -np.inf)
+    reach = np.ones(P.shape[0])  # per-point step scale: shrinks after failures, grows after full steps
+    active = np.ones(P.shape[0], dtype=bool)
+    for _ in range(iterations):
+        objective.counts.iterations += 1
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        v0, g = objective.values_and_gradients(P[idx], rows[idx])
+        value[idx] = v0
+        target = domain.linear_argmax(g)
+        tau = STEP_FRACTIONS[None, :, None] * reach[idx, None, None]
+        chord = target - P[idx]  # Frank-Wolfe: towards the linear model's optimum
+        ascent = target - domain.centre  # projected gradient: along the gradient, projected
+        fw = P[idx, None, :] + tau * chord[:, None, :]
+        pg = domain.project(P[idx, None, :] + tau * ascent[:, None, :])
+        trial = np.concatenate([fw, pg], axis=1)  # chords cut through a ball, projections follow its surface
+        n_f = trial.shape[1]
+        tried = objective.values(trial.reshape(-1, P.shape[1]), np.repeat(rows[idx], n_f)).reshape(-1, n_f)
+        best = np.argmax(tried, axis=1)
+        gain = tried[np.arange(idx.size), best] - v0
+        better = gain > 0
+        P[idx[better]] = trial[better, best[better]]
+        value[idx[better]] = tried[better, best[better]]
+        full_step = better & (best % STEP_FRACTIONS.size == 0)
+        reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
+        reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
+        active[idx[(better & (gain <= tolerance)) | (reach[idx] < MIN_REACH)]] = False
+    value = value.reshape(len(starts), k)
+    pick = np.argmax(value, axis=0)
+    points = P.reshape(len(starts), k, -1)[pick, np.arange(k)]
+    return points, value[pick, np.arange(k)]
+
+
+def neighbour_pass(
+    objective: BatchedObjective, nodes: np.ndarray, points: np.ndarray, values: np.ndarray, window: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate each node's optimum at up to ``window`` neighbouring nodes on either side
+    and keep, per node, the best value found (library post-processing)."""
+    k = nodes.size
+    points, values = points.copy(), values.copy()
+    for shift in [s for w in range(1, window + 1) for s in (w, -w)]:
+        source = np.arange(k) - shift
+        ok = (source >= 0) & (source < k)
+        target = np.flatnonzero(ok)
+        candidate = points[source[ok]]
+        v = objective.values(candidate, nodes[target])
+        better = v > values[target]
+        points[target[better]] = candidate[better]
+        values[target[better]] = v[better]
+    return points, values
+
+
+def screened_starts(objective: BatchedObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
+                    rng: np.random.Generator, n_starts: int, n_screen: int) -> list[np.ndarray]:  # fmt: skip
+    """``n_starts`` starting points per node: the best of ``n_screen`` seeded random
+    points per node (half inside the set, half on its boundary, where extremes of angle
+    functions mostly lie), evaluated in one call."""
+    if n_starts <= 0:
+        return []
+    k = nodes.size
+    n_screen = max(n_screen, n_starts)
+    half = n_screen // 2
+    candidates = np.concatenate(
+        [domain.sample(rng, k * half), domain.sample(rng, k * (n_screen - half), surface=True)]
+    ).reshape(n_screen, k, -1)
+    values = objective.values(candidates.reshape(n_screen * k, -1), np.tile(nodes, n_screen)).reshape(n_screen, k)
+    order = np.argsort(-values, axis=0)[:n_starts]  # (n_starts, k)
+    return [candidates[order[i], np.arange(k)] for i in range(n_starts)]
+
+
+Progress = Callable[[int, int], None]
