@@ -262,6 +262,216 @@ def demo(
     out.print(summary, markup=False)
 
 
+# --------------------------------------------------------------------------- uncertainty
+@app.command()
+def uncertainty(
+    dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
+    static: Annotated[
+        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
+    ] = None,
+    subject: Annotated[
+        Path | None,
+        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
+    ] = None,
+    errors: Annotated[
+        Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
+    ] = None,
+    sources: Annotated[str, typer.Option(help="Marker error sources to add up, comma-separated.")] = (
+        "measurement,placement,sta"
+    ),
+    alphas: Annotated[
+        str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
+    ] = "0,0.25,0.5,0.75",
+    angle_names: Annotated[
+        str | None, typer.Option("--angles", help="Angles to analyse, comma-separated; default: all.")
+    ] = None,
+    method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
+    workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
+    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
+    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
+    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+) -> None:
+    """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
+    every angle component over all marker deviations inside the α-level balls."""
+    from fuzzygait.kinematics import ANGLE_NAMES
+    from fuzzygait.markererror.analysis import analyse_trial
+    from fuzzygait.pipeline import Preprocessing
+    from fuzzygait.uncertainty.storage import SUFFIXES, save_result
+
+    with _user_errors():
+        if out_file.suffix.lower() not in SUFFIXES:
+            raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
+        if rrd is not None and rrd.suffix.lower() != ".rrd":
+            raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+        if workers < 1:
+            raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
+        selected = None
+        if angle_names is not None:
+            selected = [n.strip() for n in angle_names.split(",") if n.strip()]
+            unknown = [n for n in selected if n not in ANGLE_NAMES]
+            if unknown or not selected:
+                raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(angle_names)}; "
+                                     f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+        progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                            TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
+        with progress:
+            task = progress.add_task("fuzzy angles", total=None)
+            analysis = analyse_trial(
+                dynamic, static=static, subject_file=subject, errors_file=errors, sources=sources.split(","),
+                alphas=_report_alphas(alphas), angles=selected, method=method, workers=workers,
+                preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+                progress=lambda done, total: progress.update(task, completed=done, total=total),
+            )  # fmt: skip
+        out_file.parent.mkdir(parents=True, exist_ok=True)
+        save_result(analysis.fuzzy, out_file)
+        if rrd is not None:
+            from fuzzygait.viz.rerun_log import write_recording
+
+            rrd.parent.mkdir(parents=True, exist_ok=True)
+            write_recording(rrd, analysis.run.trial, analysis.run.result, analysis.fuzzy)
+    _print_run_summary(analysis.run)
+    table = analysis.delta_phi
+    out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|:", markup=False)
+    out.print(table.round(1).to_string(), markup=False)
+    out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
+
+
+# --------------------------------------------------------------------------- report
+def _report_inputs(inputs: Sequence[Path], static: Path | None) -> list[Path]:
+    """The trials of ``fuzzygait report``: files as given; folders searched recursively
+    for ``*.c3d`` (any case), skipping files there whose name contains "static" (any
+    case: calibration trials). The ``--static`` file is never a trial; duplicates once."""
+    found: list[Path] = []
+    for path in inputs:
+        if path.is_dir():
+            files = sorted(p for p in path.rglob("*") if p.is_file() and p.suffix.lower() == ".c3d"
+                           and "static" not in p.name.lower())  # fmt: skip
+            if not files:
+                raise FuzzyGaitError(f"{path}: no walking trials (*.c3d without 'static' in the name) in this folder")
+            found += files
+        else:
+            found.append(path)
+    skip = {static.resolve()} if static is not None else set()
+    unique: dict[Path, Path] = {}
+    for path in found:
+        if path.resolve() not in skip:
+            unique.setdefault(path.resolve(), path)
+    if not unique:
+        raise FuzzyGaitError("no trials to report (the only input is the --static trial)")
+    return list(unique.values())
+
+
+def _report_alphas(text: str) -> tuple[float, ...]:
+    """``"0,0.25,0.5"`` -> sorted α-levels in [0, 1), plus 1 (the measured curve)."""
+    message = f"--alphas must be comma-separated numbers from 0 to below 1, e.g. 0,0.5; got {text!r}"
+    try:
+        values = {float(v) for v in text.split(",") if v.strip()}
+    except ValueError:
+        raise FuzzyGaitError(message) from None
+    values.discard(1.0)
+    if not values or not all(0.0 <= v < 1.0 for v in values):
+        raise FuzzyGaitError(message)
+    return (*sorted(values), 1.0)
+
+
+@app.command()
+def report(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(metavar="INPUT", help="Walking trials: C3D files, or folders searched "
+                       "recursively for *.c3d (files there with 'static' in the name are skipped)."),
+    ],
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
+    static: Annotated[
+        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
+    ] = None,
+    subject: Annotated[
+        Path | None,
+        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: each file's PROCESSING group."),
+    ] = None,
+    errors: Annotated[
+        Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
+    ] = None,
+    sources: Annotated[
+        str, typer.Option(help="Marker error sources to add up, comma-separated.")
+    ] = "measurement,placement,sta",
+    alphas: Annotated[
+        str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
+    ] = "0,0.25,0.5,0.75",
+    angle_names: Annotated[
+        str | None,
+        typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles,RKneeAngles); "
+                     "default: all. The others are drawn without bands."),
+    ] = None,
+    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
+    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
+    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+) -> None:
+    """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
+    bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
+
+    A trial that fails is listed in the index with its error; the others are still
+    reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
+    """
+    from fuzzygait.kinematics import ANGLE_NAMES
+    from fuzzygait.pipeline import Preprocessing
+    from fuzzygait.viz.report import ReportItem, ReportWriter
+
+    debug = _state["debug"]
+    with _user_errors():
+        alpha_levels = _report_alphas(alphas)
+        selected = None
+        if angle_names is not None:
+            selected = [n.strip() for n in angle_names.split(",") if n.strip()]
+            unknown = [n for n in selected if n not in ANGLE_NAMES]
+            if unknown or not selected:
+                raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(angle_names)}; "
+                                     f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+        try:
+            from fuzzygait.markererror.analysis import analyse_trial
+            from fuzzygait.markererror.sources import parse_sources, read_error_model
+        except ModuleNotFoundError as exc:
+            if not (exc.name or "").startswith("fuzzygait"):
+                raise
+            raise FuzzyGaitError("the marker-error analysis is not available in this installation") from None
+        error_sources = parse_sources(sources)
+        if errors is not None:
+            read_error_model(errors)  # a bad errors file fails once, not once per trial
+        paths = _report_inputs(inputs, static)
+        preprocessing = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter)
+        with ReportWriter(out_dir, strict=debug) as writer:
+            for path in progress_over(paths, "report"):
+                try:
+                    item = ReportItem(path, analyse_trial(
+                        path, static=static, subject_file=subject, preprocessing=preprocessing,
+                        errors_file=errors, sources=error_sources, alphas=alpha_levels, angles=selected,
+                    ), None)  # fmt: skip
+                except FuzzyGaitError as exc:
+                    if debug:
+                        raise
+                    item = ReportItem(path, None, str(exc))
+                except Exception as exc:  # a bug: listed as failed, the batch goes on
+                    if debug:
+                        raise
+                    item = ReportItem(path, None, f"internal error {type(exc).__name__}: {exc} "
+                                      "(rerun with --debug and report it)")  # fmt: skip
+                entry = writer.add(item)
+                del item
+                if not entry.ok:
+                    where = "" if path.name in (entry.error or "") else f"{path}: "
+                    err.print(f"fuzzygait: failed: {where}{entry.error}", markup=False)
+            index = writer.finish()
+    n_ok = sum(e.ok for e in writer.entries)
+    n_failed = len(writer.entries) - n_ok
+    out.print(f"report: {n_ok} of {len(writer.entries)} trials OK" + (f", {n_failed} failed" if n_failed else ""),
+              markup=False)  # fmt: skip
+    out.print(f"wrote {index}", markup=False)
+    if n_ok == 0:
+        raise typer.Exit(EXIT_USER_ERROR)
+
+
 # --------------------------------------------------------------------------- sample data
 @app.command("sample-data")
 def sample_data(

@@ -1,0 +1,43 @@
+"""``fuzzygait uncertainty`` end to end (subprocess)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from conftest import SAMPLE_DATA, assert_one_line_error, run
+
+from fuzzygait.io import read_c3d
+from fuzzygait.uncertainty import load_result
+
+SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
+
+
+def test_uncertainty_writes_dataset_and_recording(tmp_path: Path) -> None:
+    out, rrd = tmp_path / "fuzzy.nc", tmp_path / "trial.rrd"
+    result = run("uncertainty", SAMPLE_DATA / "walking.c3d", *SAMPLE_ARGS, "--angles", "LHipAngles",
+                 "--alphas", "0,0.5", "--out", out, "--rrd", rrd, "--workers", "1")  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "ΔΦ" in result.stdout and "LHipAngles_X" in result.stdout
+    ds = load_result(out)
+    assert set(ds["alpha"].to_numpy()) == {0.0, 0.5, 1.0}
+    assert {"LHipAngles_X", "LHipAngles_Y", "LHipAngles_Z", "LHipAngles_X__deviation", "ball_radius"} <= set(ds)
+    trial = read_c3d(SAMPLE_DATA / "walking.c3d")
+    np.testing.assert_array_equal(ds["frame"].to_numpy(), trial.frames)
+    hull = ds["LHipAngles_X"]
+    lower, upper = hull.sel(bound="lower"), hull.sel(bound="upper")
+    # nested hulls around the measured angle; α = 1 is the measured curve itself
+    assert bool((lower.sel(alpha=0.0) <= lower.sel(alpha=0.5) + 1e-9).all())
+    assert bool((upper.sel(alpha=0.0) >= upper.sel(alpha=0.5) - 1e-9).all())
+    np.testing.assert_array_equal(lower.sel(alpha=1.0), upper.sel(alpha=1.0))
+    assert bool((upper.sel(alpha=0.5) > lower.sel(alpha=0.5)).all())
+    assert rrd.stat().st_size > 100_000
+
+
+def test_uncertainty_bad_arguments_are_one_line(tmp_path: Path) -> None:
+    walking = SAMPLE_DATA / "walking.c3d"
+    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.csv"), ".nc or .zarr")
+    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--alphas", "2"), "--alphas")
+    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--sources", "magic"), "magic")
+    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--angles", "LElbow"), "LElbow")
+    assert not list(tmp_path.iterdir())
