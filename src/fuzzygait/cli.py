@@ -405,6 +405,7 @@ def report(
         typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles,RKneeAngles); "
                      "default: all. The others are drawn without bands."),
     ] = None,
+    workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
     no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
     max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
     cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
@@ -422,6 +423,8 @@ def report(
     debug = _state["debug"]
     with _user_errors():
         alpha_levels = _report_alphas(alphas)
+        if workers < 1:
+            raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
         selected = None
         if angle_names is not None:
             selected = [n.strip() for n in angle_names.split(",") if n.strip()]
@@ -447,6 +450,7 @@ def report(
                     item = ReportItem(path, analyse_trial(
                         path, static=static, subject_file=subject, preprocessing=preprocessing,
                         errors_file=errors, sources=error_sources, alphas=alpha_levels, angles=selected,
+                        workers=workers,
                     ), None)  # fmt: skip
                 except FuzzyGaitError as exc:
                     if debug:
