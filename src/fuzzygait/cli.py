@@ -8,6 +8,7 @@ standard error and exits with a non-zero code; no partial output file is left be
 from __future__ import annotations
 
 import sys
+import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -96,6 +97,12 @@ def _main(
     ] = False,
 ) -> None:
     _state["debug"] = debug
+    if not debug:  # data-quality warnings as one plain line each, not Python's two-line form
+        warnings.showwarning = _show_warning
+
+
+def _show_warning(message: Warning | str, category: type[Warning], *_args: object, **_kwargs: object) -> None:
+    err.print(f"fuzzygait: warning: {message}", markup=False)
 
 
 # --------------------------------------------------------------------------- info
