@@ -105,6 +105,43 @@ def _show_warning(message: Warning | str, category: type[Warning], *_args: objec
     err.print(f"fuzzygait: warning: {message}", markup=False)
 
 
+# --------------------------------------------------------------------------- shared options
+StaticOption = Annotated[Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")]
+SubjectOption = Annotated[
+    Path | None,
+    typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
+]
+ErrorsOption = Annotated[
+    Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
+]
+SourcesOption = Annotated[str, typer.Option(help="Marker error sources to add up, comma-separated.")]
+AlphasOption = Annotated[
+    str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
+]
+AnglesOption = Annotated[
+    str | None, typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles); default: all.")
+]
+NoFilterOption = Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")]
+MaxGapOption = Annotated[int, typer.Option(help="Longest gap (frames) to fill.")]
+CutoffOption = Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")]
+DEFAULT_SOURCES = "measurement,placement,sta"
+DEFAULT_ALPHAS = "0,0.25,0.5,0.75"
+
+
+def _parse_angles(text: str | None) -> list[str] | None:
+    """``"LKneeAngles,RKneeAngles"`` -> validated angle names (None: all)."""
+    from fuzzygait.kinematics import ANGLE_NAMES
+
+    if text is None:
+        return None
+    selected = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in selected if n not in ANGLE_NAMES]
+    if unknown or not selected:
+        raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(text)}; "
+                             f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+    return selected
+
+
 # --------------------------------------------------------------------------- info
 @app.command()
 def info(
@@ -177,13 +214,8 @@ def preprocess(
 @app.command()
 def angles(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
-    static: Annotated[
-        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
-    ] = None,
-    subject: Annotated[
-        Path | None,
-        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
-    ] = None,
+    static: StaticOption = None,
+    subject: SubjectOption = None,
     out_table: Annotated[
         Path | None, typer.Option("--out", "-o", help="Angles per frame, .csv or .parquet.")
     ] = None,
@@ -193,9 +225,9 @@ def angles(
     cycles: Annotated[
         Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
     ] = None,
-    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
-    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
-    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
     flat_foot: Annotated[bool, typer.Option("--flat-foot", help="Static calibration with flat feet.")] = False,
 ) -> None:
     """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
@@ -274,35 +306,21 @@ def demo(
 def uncertainty(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
-    static: Annotated[
-        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
-    ] = None,
-    subject: Annotated[
-        Path | None,
-        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
-    ] = None,
-    errors: Annotated[
-        Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
-    ] = None,
-    sources: Annotated[str, typer.Option(help="Marker error sources to add up, comma-separated.")] = (
-        "measurement,placement,sta"
-    ),
-    alphas: Annotated[
-        str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
-    ] = "0,0.25,0.5,0.75",
-    angle_names: Annotated[
-        str | None, typer.Option("--angles", help="Angles to analyse, comma-separated; default: all.")
-    ] = None,
+    static: StaticOption = None,
+    subject: SubjectOption = None,
+    errors: ErrorsOption = None,
+    sources: SourcesOption = DEFAULT_SOURCES,
+    alphas: AlphasOption = DEFAULT_ALPHAS,
+    angle_names: AnglesOption = None,
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
     workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
-    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
-    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
-    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
 ) -> None:
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
     every angle component over all marker deviations inside the α-level balls."""
-    from fuzzygait.kinematics import ANGLE_NAMES
     from fuzzygait.markererror.analysis import analyse_trial
     from fuzzygait.pipeline import Preprocessing
     from fuzzygait.uncertainty.storage import SUFFIXES, save_result
@@ -314,20 +332,14 @@ def uncertainty(
             raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
         if workers < 1:
             raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
-        selected = None
-        if angle_names is not None:
-            selected = [n.strip() for n in angle_names.split(",") if n.strip()]
-            unknown = [n for n in selected if n not in ANGLE_NAMES]
-            if unknown or not selected:
-                raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(angle_names)}; "
-                                     f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+        selected = _parse_angles(angle_names)
         progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                             TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
         with progress:
             task = progress.add_task("fuzzy angles", total=None)
             analysis = analyse_trial(
                 dynamic, static=static, subject_file=subject, errors_file=errors, sources=sources.split(","),
-                alphas=_report_alphas(alphas), angles=selected, method=method, workers=workers,
+                alphas=_parse_alphas(alphas), angles=selected, method=method, workers=workers,
                 preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
                 progress=lambda done, total: progress.update(task, completed=done, total=total),
             )  # fmt: skip
@@ -370,7 +382,7 @@ def _report_inputs(inputs: Sequence[Path], static: Path | None) -> list[Path]:
     return list(unique.values())
 
 
-def _report_alphas(text: str) -> tuple[float, ...]:
+def _parse_alphas(text: str) -> tuple[float, ...]:
     """``"0,0.25,0.5"`` -> sorted α-levels in [0, 1), plus 1 (the measured curve)."""
     message = f"--alphas must be comma-separated numbers from 0 to below 1, e.g. 0,0.5; got {text!r}"
     try:
@@ -391,31 +403,16 @@ def report(
                        "recursively for *.c3d (files there with 'static' in the name are skipped)."),
     ],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
-    static: Annotated[
-        Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")
-    ] = None,
-    subject: Annotated[
-        Path | None,
-        typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: each file's PROCESSING group."),
-    ] = None,
-    errors: Annotated[
-        Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
-    ] = None,
-    sources: Annotated[
-        str, typer.Option(help="Marker error sources to add up, comma-separated.")
-    ] = "measurement,placement,sta",
-    alphas: Annotated[
-        str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
-    ] = "0,0.25,0.5,0.75",
-    angle_names: Annotated[
-        str | None,
-        typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles,RKneeAngles); "
-                     "default: all. The others are drawn without bands."),
-    ] = None,
+    static: StaticOption = None,
+    subject: SubjectOption = None,
+    errors: ErrorsOption = None,
+    sources: SourcesOption = DEFAULT_SOURCES,
+    alphas: AlphasOption = DEFAULT_ALPHAS,
+    angle_names: AnglesOption = None,
     workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
-    no_filter: Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")] = False,
-    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill.")] = 10,
-    cutoff: Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")] = 6.0,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
 ) -> None:
     """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
     bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
@@ -423,22 +420,15 @@ def report(
     A trial that fails is listed in the index with its error; the others are still
     reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
-    from fuzzygait.kinematics import ANGLE_NAMES
     from fuzzygait.pipeline import Preprocessing
     from fuzzygait.viz.report import ReportItem, ReportWriter
 
     debug = _state["debug"]
     with _user_errors():
-        alpha_levels = _report_alphas(alphas)
+        alpha_levels = _parse_alphas(alphas)
         if workers < 1:
             raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
-        selected = None
-        if angle_names is not None:
-            selected = [n.strip() for n in angle_names.split(",") if n.strip()]
-            unknown = [n for n in selected if n not in ANGLE_NAMES]
-            if unknown or not selected:
-                raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(angle_names)}; "
-                                     f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+        selected = _parse_angles(angle_names)
         try:
             from fuzzygait.markererror.analysis import analyse_trial
             from fuzzygait.markererror.sources import parse_sources, read_error_model

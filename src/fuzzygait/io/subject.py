@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from fuzzygait.errors import ParameterError
+from fuzzygait.io.tomlfile import load_toml
 
 #: Default marker diameter (mm) when a source does not give one.
 DEFAULT_MARKER_DIAMETER = 14.0
@@ -214,12 +214,7 @@ def subject_from_processing(values: Mapping[str, float], source: str = "") -> Su
 def read_subject_toml(path: str | os.PathLike[str]) -> SubjectParameters:
     """Read a TOML subject file with Vicon ``PROCESSING`` names at top level."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such subject file; check the path") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{path}: not a valid TOML file ({exc})") from None
+    data = load_toml(path, "subject file")
     table = data.get("subject", data) if isinstance(data.get("subject"), dict) else data
     numbers = {k: v for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
     bad = [k for k, v in table.items() if not isinstance(v, (int, float, dict, str))]

@@ -29,12 +29,12 @@ in a TOML file::
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzygait.errors import ParameterError
+from fuzzygait.io.tomlfile import load_toml
 
 SOURCES = ("measurement", "placement", "sta")
 SOURCE_TITLES = {
@@ -130,12 +130,7 @@ def _check_values(path: Path, where: str, table: object, allowed: Sequence[str])
 def read_error_model(path: str | os.PathLike[str]) -> ErrorModel:
     """Read segment and marker overrides from a TOML file (see the module docstring)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such errors file; check the path") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{path}: not a valid TOML file ({exc})") from None
+    data = load_toml(path, "errors file")
     unknown = set(data) - {"segments", "markers"}
     if unknown:
         raise ParameterError(f"{path}: unknown tables {sorted(unknown)}; use [segments.*] and [markers.*]")

@@ -13,25 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from fuzzygait.io.atomic import atomic_output  # noqa: E402
-
-#: Rows of the standard gait-report grid: (angle name without side, row title).
-ANGLE_ROWS = (
-    ("PelvisAngles", "Pelvis"),
-    ("HipAngles", "Hip"),
-    ("KneeAngles", "Knee"),
-    ("AnkleAngles", "Ankle"),
-    ("FootProgressAngles", "Foot progression"),
-)
-#: Plane of each component and the clinical meaning of positive values.
-PLANES = (
-    ("X", "sagittal", {"Pelvis": "ant. tilt", "Hip": "flexion", "Knee": "flexion",
-                       "Ankle": "dorsiflexion", "Foot progression": ""}),
-    ("Y", "frontal", {"Pelvis": "up", "Hip": "adduction", "Knee": "varus",
-                      "Ankle": "inversion", "Foot progression": ""}),
-    ("Z", "transverse", {"Pelvis": "int. rot.", "Hip": "int. rot.", "Knee": "int. rot.",
-                         "Ankle": "int. rot.", "Foot progression": "internal"}),
-)  # fmt: skip
-SIDE_STYLE = {"L": ("Left", "tab:red"), "R": ("Right", "tab:green")}
+from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
 
 def plot_gait_cycles(

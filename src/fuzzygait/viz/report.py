@@ -59,7 +59,7 @@ from matplotlib.patches import Patch  # noqa: E402
 from fuzzygait import __version__  # noqa: E402
 from fuzzygait.errors import FuzzyGaitError  # noqa: E402
 from fuzzygait.mocap.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points  # noqa: E402
-from fuzzygait.viz.figures import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
+from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
 if TYPE_CHECKING:
     import xarray as xr

@@ -70,31 +70,15 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = [
-    "ANGLE_ROWS",
     "AXIS_LENGTH_MM",
-    "PLANES",
     "write_recording",
 ]
 
+from fuzzygait.viz.layout import ANGLE_ROWS, PLANES  # noqa: E402
+
 #: Length of the drawn segment axes, mm.
 AXIS_LENGTH_MM = 100.0
-#: Rows of the angle grid: (angle name without side, row title).
-ANGLE_ROWS = (
-    ("PelvisAngles", "Pelvis"),
-    ("HipAngles", "Hip"),
-    ("KneeAngles", "Knee"),
-    ("AnkleAngles", "Ankle"),
-    ("FootProgressAngles", "Foot progression"),
-)
-#: Columns of the angle grid: (component, plane, row title -> meaning of positive values).
-PLANES = (
-    ("X", "sagittal", {"Pelvis": "ant. tilt", "Hip": "flexion", "Knee": "flexion",
-                       "Ankle": "dorsiflexion", "Foot progression": ""}),
-    ("Y", "frontal", {"Pelvis": "up", "Hip": "adduction", "Knee": "varus",
-                      "Ankle": "inversion", "Foot progression": ""}),
-    ("Z", "transverse", {"Pelvis": "int. rot.", "Hip": "int. rot.", "Knee": "int. rot.",
-                         "Ankle": "int. rot.", "Foot progression": "internal"}),
-)  # fmt: skip
+
 _SIDES = {"L": ("Left", (214, 39, 40)), "R": ("Right", (44, 160, 44))}
 _AXIS_COLOURS = [(230, 50, 50), (40, 190, 60), (50, 110, 240)]  # x, y, z
 _MARKER_COLOUR = (210, 210, 210)
