@@ -108,6 +108,9 @@ def test_demo_writes_results(tmp_path: Path) -> None:
     assert (out / "gait_cycles.png").stat().st_size > 20_000
     summary = (out / "summary.md").read_text()
     assert "| LKneeAngles_X |" in summary
+    assert "ΔΦ" in summary
+    index = (out / "report" / "index.html").read_text()
+    assert "walking_noisy" in index and "OK" in index
 
 
 def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:

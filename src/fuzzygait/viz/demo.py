@@ -6,7 +6,9 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``angles.csv`` -- Plug-in Gait angles per frame (degrees),
 * ``cycles.csv`` -- mean and SD over gait cycles,
 * ``gait_cycles.png`` -- the gait-report grid,
-* ``summary.md`` -- what was done and how close the angles are to the known truth.
+* ``summary.md`` -- what was done, how close the angles are to the known truth and how
+  wide the knee angles' fuzzy bands are,
+* ``report/index.html`` -- the clinicians' uncertainty report of the knee angles.
 """
 
 from __future__ import annotations
@@ -18,8 +20,14 @@ import pandas as pd
 from rich.console import Console
 
 from fuzzygait.io.tables import write_table
+from fuzzygait.markererror.analysis import analyse_trial
 from fuzzygait.pipeline import AnglesRun, run_angles
 from fuzzygait.viz.figures import plot_gait_cycles
+from fuzzygait.viz.report import ReportItem, write_report
+
+#: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
+DEMO_FUZZY_ANGLES = ("LKneeAngles", "RKneeAngles")
+DEMO_ALPHAS = (0.0, 0.5, 1.0)
 
 SAMPLE_FILES = ("walking_noisy.c3d", "static.c3d", "subject.toml", "walking_truth_angles.csv")
 
@@ -63,6 +71,14 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     write_table(stats, out_dir / "cycles.csv")
     plot_gait_cycles(stats, out_dir / "gait_cycles.png", title="Synthetic sample: joint angles (mean ± 1 SD)")
     comparison = truth_comparison(run, pd.read_csv(data / "walking_truth_angles.csv"))
+    if progress is not None:
+        progress.print("fuzzy marker-error analysis of the knee angles (about 30 s)...", markup=False)
+    analysis = analyse_trial(
+        data / "walking_noisy.c3d", static=data / "static.c3d", subject_file=data / "subject.toml",
+        angles=DEMO_FUZZY_ANGLES, alphas=DEMO_ALPHAS,
+    )  # fmt: skip
+    index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
+    knee = analysis.delta_phi.loc[["LKneeAngles_X", "RKneeAngles_X"]]
 
     n_cycles = {side: int(stats[stats["angle"].str.startswith(side)]["n_cycles"].max())
                 for side in ("L", "R")}  # fmt: skip
@@ -85,8 +101,18 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
         "|---|---|---|",
     ]
     lines += [f"| {r.angle} | {r.rms_deg:.3f} | {r.max_deg:.3f} |" for r in comparison.itertuples()]
+    lines += [
+        "",
+        "How far to trust the knee flexion: relative width ΔΦ (Eq. 5.3, %) of its fuzzy band when every "
+        "marker may be off by (1 − α) times its Table 3.1 error (measurement + placement + soft tissue):",
+        "",
+        "| angle | " + " | ".join(f"α = {a:g}" for a in knee.columns) + " |",
+        "|---|" + "---|" * len(knee.columns),
+    ]
+    lines += [f"| {name} | " + " | ".join(f"{v:.0f}" for v in row) + " |" for name, row in knee.iterrows()]
+    lines += ["", f"Uncertainty report (knee angles): `{index}`"]
     lines += ["", "Notes:"] + [f"- {note}" for note in run.notes]
-    lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`"]
+    lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`, `report/index.html`"]
     summary = "\n".join(lines) + "\n"
     (out_dir / "summary.md").write_text(summary, encoding="utf-8")
     return summary
