@@ -413,3 +413,4 @@ def test_uniform_ball_samples_fill_the_ball() -> None:
     assert abs(np.mean(norms[:, 1] <= 16.0) - 0.125) < 0.01
     assert np.all(np.abs(P[:, 1].mean(axis=0)) < 0.5)
     assert pd.Series(norms[:, 2]).eq(0).all()
+
