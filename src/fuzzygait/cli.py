@@ -65,18 +65,18 @@ def _user_errors() -> Iterator[None]:
         ) from None
 
 
+def _progress_bars() -> Progress:
+    """Progress bars on stderr (removed when done; silent when stderr is not a terminal)."""
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
+
+
 def progress_over(items: Sequence[T], description: str) -> Iterator[T]:
     """Iterate ``items`` with a progress bar on stderr when there is more than one."""
     if len(items) <= 1:
         yield from items
         return
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-    )
-    with Progress(*columns, console=err, transient=True) as progress:
+    with _progress_bars() as progress:
         task = progress.add_task(description, total=len(items))
         for item in items:
             yield item
@@ -333,8 +333,7 @@ def uncertainty(
         if workers < 1:
             raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
         selected = _parse_angles(angle_names)
-        progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                            TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
+        progress = _progress_bars()
         with progress:
             task = progress.add_task("fuzzy angles", total=None)
             analysis = analyse_trial(
@@ -441,13 +440,21 @@ def report(
             read_error_model(errors)  # a bad errors file fails once, not once per trial
         paths = _report_inputs(inputs, static)
         preprocessing = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter)
-        with ReportWriter(out_dir, strict=debug) as writer:
-            for path in progress_over(paths, "report"):
+        bars = _progress_bars()
+        with ReportWriter(out_dir, strict=debug) as writer, bars:
+            trials = bars.add_task("trials", total=len(paths))
+            components = bars.add_task("angle components", total=None)
+
+            def angle_progress(done: int, total: int) -> None:
+                bars.update(components, completed=done, total=total)
+
+            for path in paths:
+                bars.update(components, completed=0, total=None, description=f"{path.name}: angle components")
                 try:
                     item = ReportItem(path, analyse_trial(
                         path, static=static, subject_file=subject, preprocessing=preprocessing,
                         errors_file=errors, sources=error_sources, alphas=alpha_levels, angles=selected,
-                        workers=workers,
+                        workers=workers, progress=angle_progress,
                     ), None)  # fmt: skip
                 except FuzzyGaitError as exc:
                     if debug:
@@ -459,6 +466,7 @@ def report(
                     item = ReportItem(path, None, f"internal error {type(exc).__name__}: {exc} "
                                       "(rerun with --debug and report it)")  # fmt: skip
                 entry = writer.add(item)
+                bars.advance(trials)
                 del item
                 if not entry.ok:
                     where = "" if path.name in (entry.error or "") else f"{path}: "
