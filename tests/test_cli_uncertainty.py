@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from conftest import SAMPLE_DATA, assert_one_line_error, run
+from conftest import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
 
 from fuzzygait.io import read_c3d
 from fuzzygait.uncertainty import load_result
@@ -41,3 +41,20 @@ def test_uncertainty_bad_arguments_are_one_line(tmp_path: Path) -> None:
     assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--sources", "magic"), "magic")
     assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--angles", "LElbow"), "LElbow")
     assert not list(tmp_path.iterdir())
+
+
+@needs_shared
+def test_report_over_the_vicon_folder(tmp_path: Path) -> None:
+    """Every trial of ../shared/data/vicon: a page or one clear error line, no traceback
+    (reduced to one angle and one α-level for speed; the full run is in RESULTS.md)."""
+    out = tmp_path / "report"
+    result = run("report", VICON, "--out", out, "--angles", "LKneeAngles", "--alphas", "0.5", "--workers", "1")
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stdout + result.stderr
+    index = (out / "index.html").read_text()
+    assert (out / "Movement_trial.html").is_file()
+    for name in ("Movement_trial.c3d", "gait-pig.c3d", "gait-raw.c3d"):
+        assert name in index
+    assert "Static_trial.c3d" not in index.split("Trials")[1].split("</table>")[0]  # a calibration trial
+    failures = [line for line in result.stderr.splitlines() if line.startswith("fuzzygait: failed:")]
+    assert len(failures) == 2 and all("--subject" in line for line in failures)
