@@ -197,6 +197,16 @@ def _envelope_colour(side_colour: tuple[int, int, int], alpha: float) -> tuple[i
 
 
 # ----------------------------------------------------------------------------- logging
+def _log_points(rec: Any, rr: Any, entity: str, indexes: list[Any], positions: np.ndarray,
+                labels: list[str], radius: float, colour: tuple[int, int, int]) -> None:  # fmt: skip
+    """Labelled points ``(n_frames, n_points, 3)`` (mm) with a static style; NaN points
+    are left out of their frame."""
+    valid = np.all(np.isfinite(positions), axis=2)
+    names = np.broadcast_to(np.array(labels, dtype=object), valid.shape)
+    rec.log(entity, rr.Points3D.from_fields(radii=[radius], colors=[colour]), static=True, strict=True)
+    _send_instances(rec, entity, indexes, rr.Points3D.columns, {"positions": positions, "labels": names}, valid)
+
+
 def _send_instances(
     rec: Any,
     entity: str,
@@ -224,17 +234,7 @@ def _log_world(
 
     markers = trial.markers
     valid = np.all(np.isfinite(markers), axis=2)
-    labels = np.broadcast_to(np.array(trial.marker_labels, dtype=object), valid.shape)
-    rec.log(
-        "world/markers",
-        rr.Points3D.from_fields(radii=[_MARKER_RADIUS_MM], colors=[_MARKER_COLOUR]),
-        static=True,
-        strict=True,
-    )
-    _send_instances(
-        rec, "world/markers", indexes, rr.Points3D.columns,
-        {"positions": markers, "labels": labels}, valid,
-    )  # fmt: skip
+    _log_points(rec, rr, "world/markers", indexes, markers, trial.marker_labels, _MARKER_RADIUS_MM, _MARKER_COLOUR)
 
     if fuzzy is not None and "ball_radius" in fuzzy.data_vars:
         radius_of = {
@@ -259,17 +259,7 @@ def _log_world(
     if result.joint_centres:
         names = list(result.joint_centres)
         centres = np.stack([result.joint_centres[k] for k in names], axis=1)
-        rec.log(
-            "world/joint_centres",
-            rr.Points3D.from_fields(radii=[_JOINT_RADIUS_MM], colors=[_JOINT_COLOUR]),
-            static=True,
-            strict=True,
-        )
-        _send_instances(
-            rec, "world/joint_centres", indexes, rr.Points3D.columns,
-            {"positions": centres, "labels": np.broadcast_to(np.array(names, dtype=object), centres.shape[:2])},
-            np.all(np.isfinite(centres), axis=2),
-        )  # fmt: skip
+        _log_points(rec, rr, "world/joint_centres", indexes, centres, names, _JOINT_RADIUS_MM, _JOINT_COLOUR)
 
     for name, rotation in result.segment_frames.items():
         origin = _segment_origin(name, trial, result)
