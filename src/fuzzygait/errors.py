@@ -22,3 +22,7 @@ class MarkerError(FuzzyGaitError):
 
 class ParameterError(FuzzyGaitError, ValueError):
     """An argument or subject parameter is impossible (names the parameter)."""
+
+
+class SimulationError(FuzzyGaitError):
+    """A simulation step failed (names the time, the residual and the parameter values)."""

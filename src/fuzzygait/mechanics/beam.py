@@ -1,0 +1,181 @@
+"""Predeformed geometrically exact beam in director form (thesis §4.2.1, Eqs. 4.30–4.33).
+
+Each beam node is a 12-coordinate block ``[φ, d1, d2, d3]`` like a rigid body; d3 is the
+tangent of the unstressed centreline, d1 and d2 span the cross-section (d1 along the width
+b, d2 along the thickness a).  One two-node element with one-point (midpoint) quadrature
+gives, with ``φ' = (φ_b − φ_a)/L``, ``d_i = (d_ia + d_ib)/2``, ``d_i' = (d_ib − d_ia)/L``:
+
+* ``Γ_i = d_i·φ' − [d_i·φ']_ref`` (shear Γ1, Γ2 and elongation Γ3, Eq. 4.31),
+* ``K_i = ½ ε_ijk (d_k·d_j' − [d_k·d_j']_ref)`` (bending K1, K2 and torsion K3, Eq. 4.32),
+
+relative to the curved reference, so the reference configuration is stress free.  Stored
+energy (Eq. 4.30) ``W_e = L/2 (Γᵀ D^Γ Γ + Kᵀ D^K K)`` with ``D^Γ = diag(κGA, κGA, EA)``
+and ``D^K = diag(EI_1, EI_2, GJ)``; Kelvin–Voigt dissipation (Eq. 4.33)
+``V_visc,e = L/2 (Γ̇ᵀ D^η1 Γ̇ + K̇ᵀ D^η2 K̇)`` with ``D^η1 = η diag(κA, κA, A)`` and
+``D^η2 = η diag(I_1, I_2, J)`` (η in Pa·s, the thesis' η_E = η_G = η).  Inertia: consistent
+linear-element mass for φ (ρA) and for the directors (Euler tensor: ρI_2 on d1 — the
+spread of mass along d1 — and ρI_1 on d2; d3 carries none).  Gravity acts on ρA.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import casadi as ca
+import numpy as np
+
+from fuzzygait.mechanics.assembly import Body, ElementGroup, SystemBuilder, dot3
+
+
+def element_strains(qa, qb, length):
+    """Strain measures ``(γ1, γ2, γ3, κ1, κ2, κ3)`` of one element, not yet referenced.
+
+    ``qa``, ``qb`` are the 12-coordinate blocks of the element's nodes (numpy arrays or CasADi
+    SX), ``length`` the reference element length (m).  Returns a list of six scalars
+    (γ dimensionless, κ in 1/m).
+    """
+    phi_a, phi_b = qa[0:3], qb[0:3]
+    da = [qa[3 + 3 * i : 6 + 3 * i] for i in range(3)]
+    db = [qb[3 + 3 * i : 6 + 3 * i] for i in range(3)]
+    dphi = (phi_b - phi_a) / length
+    d = [(da[i] + db[i]) / 2 for i in range(3)]
+    dd = [(db[i] - da[i]) / length for i in range(3)]
+    gamma = [dot3(d[i], dphi) for i in range(3)]
+    kappa = [
+        0.5 * (dot3(d[2], dd[1]) - dot3(d[1], dd[2])),
+        0.5 * (dot3(d[0], dd[2]) - dot3(d[2], dd[0])),
+        0.5 * (dot3(d[1], dd[0]) - dot3(d[0], dd[1])),
+    ]
+    return gamma + kappa
+
+
+@dataclass(frozen=True)
+class BeamSection:
+    """Cross-section data per element (arrays of length n_elements, SI units).
+
+    Attributes:
+        area: A (m²).
+        second_moment_1: I_1 = ∫ x2² dA (m⁴), bending about d1.
+        second_moment_2: I_2 = ∫ x1² dA (m⁴), bending about d2.
+        torsion_constant: Saint-Venant J (m⁴).
+        shear_factor: shear correction factor κ (5/6 for a rectangle).
+    """
+
+    area: np.ndarray
+    second_moment_1: np.ndarray
+    second_moment_2: np.ndarray
+    torsion_constant: np.ndarray
+    shear_factor: float = 5.0 / 6.0
+
+
+BEAM_KERNEL = "gebeam2-midpoint-v1"
+N_ELEMENT_CONSTANTS = 12  # L, A, I1, I2, J, κ, six reference strains
+
+
+def _beam_kernels() -> tuple[ca.Function, ca.Function]:
+    """Element kernels of the two-node beam element (see the module docstring)."""
+    qe = ca.SX.sym("qe", 24)
+    ve = ca.SX.sym("ve", 24)
+    ce = ca.SX.sym("ce", N_ELEMENT_CONSTANTS)
+    pe = ca.SX.sym("pe", 3)  # E (Pa), ν, η (Pa s)
+    length, area, i1, i2, torsion, shear_factor = (ce[k] for k in range(6))
+    modulus, poisson, damping = pe[0], pe[1], pe[2]
+    shear_modulus = modulus / (2 * (1 + poisson))
+    raw = ca.vertcat(*element_strains(qe[:12], qe[12:], length))
+    strain = raw - ce[6:12]
+    stiffness = ca.vertcat(
+        shear_factor * shear_modulus * area,
+        shear_factor * shear_modulus * area,
+        modulus * area,
+        modulus * i1,
+        modulus * i2,
+        shear_modulus * torsion,
+    )
+    energy = 0.5 * length * ca.sum1(stiffness * strain**2)
+    rate = ca.jtimes(raw, qe, ve)
+    viscosity = damping * ca.vertcat(shear_factor * area, shear_factor * area, area, i1, i2, torsion)
+    dissipation = 0.5 * length * ca.sum1(viscosity * rate**2)
+    # element force of the step equations: ∇W − f with the viscous force f = −∂V_visc/∂v
+    force = ca.gradient(energy, qe) + ca.gradient(dissipation, ve)
+    kernel = ca.Function(
+        "beam_kernel",
+        [qe, ve, ce, pe],
+        [force, ca.densify(ca.jacobian(force, qe)), ca.densify(ca.jacobian(force, ve)),
+         ca.densify(ca.jacobian(force, pe))],
+    )
+    energy_kernel = ca.Function(
+        "beam_energy",
+        [qe, ve, ce, pe],
+        [energy, 2 * dissipation, ca.densify(ca.gradient(energy, qe)), ca.densify(ca.jacobian(energy, pe))],
+    )
+    return kernel, energy_kernel
+
+
+def add_beam(
+    builder: SystemBuilder,
+    label: str,
+    nodes: Sequence[Body],
+    reference: np.ndarray,
+    element_length: np.ndarray,
+    section: BeamSection,
+    *,
+    modulus: str = "E",
+    poisson: str = "nu",
+    density: str = "rho",
+    damping: str = "eta",
+) -> None:
+    """Add a beam's elements, inertia and gravity to ``builder``.
+
+    Args:
+        nodes: the node bodies in order along the beam.
+        reference: (n_nodes, 12) reference (unstressed) configuration, inertial frame.
+        element_length: (n_nodes − 1,) reference element lengths (m).
+        section: per-element cross-section data.
+        modulus, poisson, density, damping: names of the parameters E (Pa), ν, ρ (kg/m³) and
+            η (Pa·s) in the builder's parameter vector.
+    """
+    n_el = len(nodes) - 1
+    element_length = np.asarray(element_length, float)
+    reference_strains = np.array(
+        [element_strains(reference[e], reference[e + 1], element_length[e]) for e in range(n_el)]
+    )
+    constants = np.column_stack(
+        [
+            element_length,
+            np.broadcast_to(section.area, n_el),
+            np.broadcast_to(section.second_moment_1, n_el),
+            np.broadcast_to(section.second_moment_2, n_el),
+            np.broadcast_to(section.torsion_constant, n_el),
+            np.full(n_el, section.shear_factor),
+            reference_strains,
+        ]
+    )
+    kernel, energy_kernel = _beam_kernels()
+    names = list(builder.parameter_names)
+    builder.add_element_group(
+        ElementGroup(
+            name=label,
+            kernel_name=BEAM_KERNEL,
+            kernel=kernel,
+            energy_kernel=energy_kernel,
+            node_offsets=np.array([[nodes[e].offset, nodes[e + 1].offset] for e in range(n_el)]),
+            constants=constants,
+            parameter_indices=(names.index(modulus), names.index(poisson), names.index(damping)),
+        )
+    )
+    rho = builder.parameter(density)
+    q = builder.q
+    lengths = builder.constant(f"{label}_length", element_length)
+    area = builder.constant(f"{label}_area", constants[:, 1])
+    i1 = builder.constant(f"{label}_I1", constants[:, 2])
+    i2 = builder.constant(f"{label}_I2", constants[:, 3])
+    pick = (lambda x, e: x[e]) if n_el > 1 else (lambda x, e: x)
+    for e in range(n_el):
+        a, b = nodes[e], nodes[e + 1]
+        length, A = pick(lengths, e), pick(area, e)
+        # consistent mass of a linear element: L/6 [[2, 1], [1, 2]] per unit line density;
+        # Euler tensor of the section: ρ∫x1² dA = ρI_2 on d1, ρ∫x2² dA = ρI_1 on d2, none on d3
+        for block, line_density in ((0, rho * A), (1, rho * pick(i2, e)), (2, rho * pick(i1, e))):
+            builder.add_coupled_inertia(a, b, block, line_density * length / 3, line_density * length / 6)
+        builder.add_gravity_energy(rho * A * length * builder.gravity * 0.5 * (a.position(q)[2] + b.position(q)[2]))

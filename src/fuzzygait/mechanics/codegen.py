@@ -1,0 +1,92 @@
+"""Compile CasADi functions to a shared library once and cache it on disk.
+
+The library is keyed by the model structure (body count, joints, outputs — see
+:attr:`SystemBuilder.structure_key`), the CasADi version and this module's code version;
+parameters and constants are function inputs, so every run and every worker process with
+the same structure loads the same file instead of recompiling.  The cache directory is
+``$FUZZYGAIT_CACHE_DIR`` or ``~/.cache/fuzzygait``.  Without a C compiler (or with
+``FUZZYGAIT_NO_COMPILE=1``) the functions run in CasADi's virtual machine: same numbers,
+slower.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import warnings
+from pathlib import Path
+from typing import Sequence
+
+import casadi as ca
+
+CODE_VERSION = "1"
+
+
+def cache_dir() -> Path:
+    """Directory of the compiled libraries."""
+    root = os.environ.get("FUZZYGAIT_CACHE_DIR")
+    return Path(root) if root else Path.home() / ".cache" / "fuzzygait"
+
+
+def compiler() -> str | None:
+    """The C compiler to use, or None (compilation disabled or none found)."""
+    if os.environ.get("FUZZYGAIT_NO_COMPILE", "") not in ("", "0"):
+        return None
+    return os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc") or shutil.which("clang")
+
+
+def library_key(structure_key: str, names: Sequence[str]) -> str:
+    text = "|".join([CODE_VERSION, ca.__version__, structure_key, *names])
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def cached_library(structure_key: str, names: Sequence[str]) -> Path:
+    return cache_dir() / f"fg_{library_key(structure_key, names)}.so"
+
+
+def load_cached(structure_key: str, names: Sequence[str]) -> dict[str, ca.Function] | None:
+    """The compiled functions of this structure if a library is cached, else None."""
+    path = cached_library(structure_key, names)
+    if compiler() is None or not path.exists():
+        return None
+    return {name: ca.external(name, str(path)) for name in names}
+
+
+def compile_functions(
+    structure_key: str, functions: Sequence[ca.Function], optimisation: str = "-O1"
+) -> dict[str, ca.Function]:
+    """Compile ``functions`` into one cached shared library and load them from it.
+
+    Falls back to the given (virtual-machine) functions with a warning when no compiler is
+    available or compilation fails.
+    """
+    names = [f.name() for f in functions]
+    cached = load_cached(structure_key, names)
+    if cached is not None:
+        return cached
+    cc = compiler()
+    if cc is None:
+        return {f.name(): f for f in functions}
+    target = cached_library(structure_key, names)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        source_name = f"fg_{library_key(structure_key, names)}.c"
+        generator = ca.CodeGenerator(source_name, {"with_header": False})
+        for f in functions:
+            generator.add(f)
+        generator.generate(tmp + os.sep)
+        library = Path(tmp) / "lib.so"
+        command = [cc, optimisation, "-fPIC", "-shared", str(Path(tmp) / source_name), "-o", str(library), "-lm"]
+        result = subprocess.run(command, capture_output=True, text=True)
+        if result.returncode != 0:
+            warnings.warn(
+                f"compiling the simulator's generated code failed ({cc}: "
+                f"{result.stderr.strip().splitlines()[-1:] or ['?']}); running uncompiled (slower)",
+                stacklevel=2,
+            )
+            return {f.name(): f for f in functions}
+        os.replace(library, target)  # atomic: concurrent workers see a whole file or none
+    return {name: ca.external(name, str(target)) for name in names}

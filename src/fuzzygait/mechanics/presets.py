@@ -1,0 +1,173 @@
+"""The thesis' leg, material and scenario parameters (Tables 4.1–4.4).
+
+Units: SI (m, kg, s, Pa, rad).  Joint angles follow one sign convention: flexion is
+positive, so a hip *extension* of π/6 is stored as ``hip_angle = −π/6``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from fuzzygait.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class SegmentData:
+    """A rigid leg segment (thesis Table 4.1, from Chandler et al. 1975, [Cha75]).
+
+    Attributes:
+        name: segment name.
+        length: proximal-to-distal joint centre distance (m).
+        mass: kg.
+        inertia: principal moments of inertia ``(J1, J2, J3)`` about the centre of mass
+            in kg·m² (the thesis prints the unit as "kg/m²"; it is kg m²); J3 is the
+            moment about the segment's long axis, J1 and J2 about the transverse axes.
+        com_from_proximal: distance of the centre of mass from the proximal joint
+            centre along the long axis (m).
+    """
+
+    name: str
+    length: float
+    mass: float
+    inertia: tuple[float, float, float]
+    com_from_proximal: float
+
+
+#: Thigh, thesis Table 4.1.
+THIGH = SegmentData("thigh", 0.4582, 6.5233, (0.1137, 0.1158, 0.0225), 0.1779)
+#: Shank, thesis Table 4.1.
+SHANK = SegmentData("shank", 0.3753, 2.6857, (0.0391, 0.0393, 0.0029), 0.1943)
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic linear-elastic material with Kelvin–Voigt viscous damping.
+
+    Attributes:
+        youngs_modulus: E (Pa).
+        poisson: Poisson's ratio ν (−), in (−1, 0.5).
+        density: ρ (kg/m³).
+        damping: viscous damping parameter η = η_E = η_G of the thesis (Eq. 4.33),
+            multiplying the strain rates (the thesis uses 1.0 and gives no unit).
+
+    Raises:
+        ParameterError: impossible values, naming the parameter.
+    """
+
+    youngs_modulus: float
+    poisson: float
+    density: float
+    damping: float
+
+    def __post_init__(self) -> None:
+        checks = {
+            "youngs_modulus": (lambda v: v > 0, "must be > 0 Pa"),
+            "poisson": (lambda v: -1.0 < v < 0.5, "must lie in (-1, 0.5)"),
+            "density": (lambda v: v > 0, "must be > 0 kg/m^3"),
+            "damping": (lambda v: v >= 0, "must be >= 0"),
+        }
+        for name, (ok, rule) in checks.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ParameterError(f"material parameter {name} must be a number; got {value!r}")
+            value = float(value)
+            if not math.isfinite(value) or not ok(value):
+                raise ParameterError(f"material parameter {name} {rule}; got {value}")
+            object.__setattr__(self, name, value)
+
+    @property
+    def shear_modulus(self) -> float:
+        """``G = E / (2 (1 + ν))`` (Pa)."""
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson))
+
+
+#: Reverse-engineered prosthesis material, thesis Table 4.2 ([Soe19]).  The table prints
+#: E = 59958e6 Pa and G = E/(2(1+ν)) = 23.693e6 Pa; the two are inconsistent
+#: (59958e6 / 2.53 = 23.699e9 Pa).  E is kept as printed; G is always derived from E, ν.
+REVERSE_ENGINEERED = Material(youngs_modulus=59958e6, poisson=0.265, density=1.71e3, damping=1.0)
+
+#: Softened, heavier material of the swing scenario, thesis Table 4.3 (G = 23.69e4 Pa).
+SWING_SOFT = Material(youngs_modulus=59.95e4, poisson=0.265, density=8.55e3, damping=1.0)
+
+#: Material of the stance (squat under load) scenario, thesis Table 4.4 (G = 23.69e7 Pa).
+STANCE_MATERIAL = Material(youngs_modulus=59.958e7, poisson=0.265, density=8.55e3, damping=1.0)
+
+#: Alias of :data:`SWING_SOFT`, named like :data:`STANCE_MATERIAL`.
+SWING_MATERIAL = SWING_SOFT
+
+
+def material_with(material: Material, **overrides: float) -> Material:
+    """A copy of ``material`` with some parameters replaced.
+
+    Args:
+        material: the base material.
+        **overrides: any of ``youngs_modulus`` (Pa), ``poisson``, ``density`` (kg/m³),
+            ``damping``.
+
+    Raises:
+        ParameterError: an unknown parameter name or an impossible value, naming it.
+    """
+    names = [f.name for f in dataclasses.fields(Material)]
+    unknown = sorted(set(overrides) - set(names))
+    if unknown:
+        raise ParameterError(
+            f"unknown material parameter {unknown[0]!r}; use one of {', '.join(names)}"
+        )
+    return dataclasses.replace(material, **overrides)
+
+
+@dataclass(frozen=True)
+class ScenarioPreset:
+    """Initial pose, prosthesis material and time stepping of a thesis scenario.
+
+    Attributes:
+        name: scenario name.
+        material: prosthesis material.
+        hip_angle: initial hip angle (rad), flexion positive (extension negative).
+        knee_angle: initial knee flexion angle (rad), flexion positive.
+        dt: time step Δt (s).
+        duration: simulated time T (s).
+        shank_mass: shank mass (kg); raised in the stance scenario to represent body weight.
+    """
+
+    name: str
+    material: Material
+    hip_angle: float
+    knee_angle: float
+    dt: float
+    duration: float
+    shank_mass: float
+
+    def __post_init__(self) -> None:
+        for name in ("dt", "duration", "shank_mass"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ParameterError(f"scenario {self.name!r}: {name} must be > 0; got {value!r}")
+
+
+#: Pendulum swing, thesis Table 4.3: hip extension π/6, knee flexion π/3, Δt = 1 ms, T = 2 s;
+#: the shank keeps its Table 4.1 mass.
+SWING = ScenarioPreset(
+    name="swing",
+    material=SWING_SOFT,
+    hip_angle=-math.pi / 6,
+    knee_angle=math.pi / 3,
+    dt=0.001,
+    duration=2.0,
+    shank_mass=SHANK.mass,
+)
+
+#: Squat under load, thesis Table 4.4: hip flexion π/2 (thigh horizontal), knee flexion π/2
+#: (shank vertical), shank mass 107 kg, Δt = 1 ms, T = 2 s.
+STANCE = ScenarioPreset(
+    name="stance",
+    material=STANCE_MATERIAL,
+    hip_angle=math.pi / 2,
+    knee_angle=math.pi / 2,
+    dt=0.001,
+    duration=2.0,
+    shank_mass=107.0,
+)
