@@ -258,16 +258,18 @@ class SystemBuilder:
 class ElementGroup:
     """Two-node elements sharing one kernel (e.g. the elements of one beam).
 
-    The kernel maps one element's ``(q_e, v_e, c_e, p_e)`` — q_e, v_e (24,) the stacked
-    blocks of its two nodes, c_e its constants, p_e the parameters it uses — to the element
-    force ``∇W_e(q_e) − f_e(q_e, v_e)`` (24,) and its Jacobians with respect to q_e, v_e and
-    p_e; the energy kernel gives ``W_e``, the dissipation rate ``2 V_visc,e``, ``∇W_e`` and
-    ``∂W_e/∂p_e``.  Both are CasADi SX functions of a single element.
+    Each kernel is a CasADi SX function of one element's ``(q_e, v_e, c_e, p_e)`` — q_e, v_e
+    (24,) the stacked blocks of its two nodes, c_e its constants, p_e the parameters it uses:
+
+    * ``force``: the element force ``∇W_e(q_e) − f_e(q_e, v_e)`` (24,),
+    * ``tangent``: that force and its Jacobians with respect to q_e and v_e (24 × 24 each),
+    * ``parameters``: its Jacobian with respect to p_e (24 × n_pe),
+    * ``energy``: ``W_e``, the dissipation rate ``2 V_visc,e``, ``∇W_e`` and ``∂W_e/∂p_e``.
 
     Attributes:
         name: group name (e.g. "blade").
         kernel_name: identifies the element formulation in the structure key.
-        kernel, energy_kernel: the CasADi functions.
+        kernels: the CasADi functions by kind.
         node_offsets: (n_el, 2) offsets in ``q`` of the element's two node blocks.
         constants: (n_el, k) per-element constants.
         parameter_indices: indices in ``p`` of the kernel's parameters.
@@ -275,8 +277,7 @@ class ElementGroup:
 
     name: str
     kernel_name: str
-    kernel: ca.Function
-    energy_kernel: ca.Function
+    kernels: dict
     node_offsets: np.ndarray
     constants: np.ndarray
     parameter_indices: tuple[int, ...]

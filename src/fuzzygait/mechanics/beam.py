@@ -73,8 +73,9 @@ BEAM_KERNEL = "gebeam2-midpoint-v1"
 N_ELEMENT_CONSTANTS = 12  # L, A, I1, I2, J, κ, six reference strains
 
 
-def _beam_kernels() -> tuple[ca.Function, ca.Function]:
-    """Element kernels of the two-node beam element (see the module docstring)."""
+def _beam_kernels() -> dict[str, ca.Function]:
+    """Element kernels of the two-node beam element (see the module docstring and
+    :class:`~fuzzygait.mechanics.assembly.ElementGroup`)."""
     qe = ca.SX.sym("qe", 24)
     ve = ca.SX.sym("ve", 24)
     ce = ca.SX.sym("ce", N_ELEMENT_CONSTANTS)
@@ -98,18 +99,19 @@ def _beam_kernels() -> tuple[ca.Function, ca.Function]:
     dissipation = 0.5 * length * ca.sum1(viscosity * rate**2)
     # element force of the step equations: ∇W − f with the viscous force f = −∂V_visc/∂v
     force = ca.gradient(energy, qe) + ca.gradient(dissipation, ve)
-    kernel = ca.Function(
-        "beam_kernel",
-        [qe, ve, ce, pe],
-        [force, ca.densify(ca.jacobian(force, qe)), ca.densify(ca.jacobian(force, ve)),
-         ca.densify(ca.jacobian(force, pe))],
-    )
-    energy_kernel = ca.Function(
-        "beam_energy",
-        [qe, ve, ce, pe],
-        [energy, 2 * dissipation, ca.densify(ca.gradient(energy, qe)), ca.densify(ca.jacobian(energy, pe))],
-    )
-    return kernel, energy_kernel
+    args = [qe, ve, ce, pe]
+    return {
+        "force": ca.Function("beam_force", args, [force]),
+        "tangent": ca.Function(
+            "beam_tangent", args, [force, ca.densify(ca.jacobian(force, qe)), ca.densify(ca.jacobian(force, ve))]
+        ),
+        "parameters": ca.Function("beam_parameters", args, [ca.densify(ca.jacobian(force, pe))]),
+        "energy": ca.Function(
+            "beam_energy",
+            args,
+            [energy, 2 * dissipation, ca.densify(ca.gradient(energy, qe)), ca.densify(ca.jacobian(energy, pe))],
+        ),
+    }
 
 
 def add_beam(
@@ -151,14 +153,13 @@ def add_beam(
             reference_strains,
         ]
     )
-    kernel, energy_kernel = _beam_kernels()
+    kernels = _beam_kernels()
     names = list(builder.parameter_names)
     builder.add_element_group(
         ElementGroup(
             name=label,
             kernel_name=BEAM_KERNEL,
-            kernel=kernel,
-            energy_kernel=energy_kernel,
+            kernels=kernels,
             node_offsets=np.array([[nodes[e].offset, nodes[e + 1].offset] for e in range(n_el)]),
             constants=constants,
             parameter_indices=(names.index(modulus), names.index(poisson), names.index(damping)),

@@ -55,13 +55,13 @@ def _global_functions(builder: SystemBuilder) -> list[ca.Function]:
     ]
 
 
+KERNEL_KINDS = ("force", "tangent", "parameters", "energy")
+
+
 def _group_functions(group: ElementGroup) -> list[ca.Function]:
     n_el = len(group.node_offsets)
     # a map is generated as a loop over one element's code, not n_el inlined copies
-    return [
-        group.kernel.map(f"{group.name}_kernel", "serial", n_el, [], []),
-        group.energy_kernel.map(f"{group.name}_energy", "serial", n_el, [], []),
-    ]
+    return [group.kernels[kind].map(f"{group.name}_{kind}", "serial", n_el, [], []) for kind in KERNEL_KINDS]
 
 
 class _Buffered:
@@ -147,7 +147,7 @@ class DiscreteModel:
     def from_builder(cls, builder: SystemBuilder, compile: bool = True) -> "DiscreteModel":
         """Load the cached compiled library for this structure, or build (and compile) it."""
         key = builder.structure_key
-        names = list(GLOBAL_FUNCTIONS) + [f"{g.name}_{kind}" for g in builder.element_groups for kind in ("kernel", "energy")]
+        names = list(GLOBAL_FUNCTIONS) + [f"{g.name}_{kind}" for g in builder.element_groups for kind in KERNEL_KINDS]
         functions = load_cached(key, names) if compile else None
         compiled = functions is not None
         if functions is None:
@@ -177,115 +177,142 @@ class DiscreteModel:
 
 class _StepAssembler:
     """Residuals, Jacobians and sensitivity terms of the step equations, assembled from the
-    element kernels and the global functions (see the module docstring)."""
+    element kernels and the global functions (see the module docstring).
+
+    Per step, everything that depends only on the known ``q_j, q_{j−1}`` (the interval
+    ``[q_{j−1}, q_j]``, ``G(q_j)``) is evaluated once in :meth:`begin_step`; a Newton
+    iteration then evaluates only the new interval and the constraints at ``q_{j+1}``.
+    """
 
     def __init__(self, model: DiscreteModel, p: np.ndarray, h: float, sensitivities: bool) -> None:
         self.model, self.p, self.h = model, p, h
         n, m = model.ndof, model.nconstraints
+        self.n, self.m = n, m
         c = model.constants
         f = model.functions
-        self.mass_fn = _Buffered(f["mass"])
-        (mass_values,) = self.mass_fn(p, c)
-        self.mass_values = mass_values.copy()
-        self.mass = self.mass_fn.sparse(0, self.mass_values)
-        self.linear = _Buffered(f["linear"])
-        grad_linear, dgrad_dp = self.linear(np.zeros(n), p, c)
+        mass_fn = _Buffered(f["mass"])
+        self.mass_values = mass_fn(p, c)[0].copy()
+        self.mass = mass_fn.sparse(0, self.mass_values)
+        linear = _Buffered(f["linear"])
+        grad_linear, dgrad_dp = linear(np.zeros(n), p, c)
         self.grad_linear = grad_linear.copy()
         self.constraints = _Buffered(f["constraints"])
-        self.kernels = [_Buffered(f[f"{g.name}_kernel"]) for g in model.groups]
-        self.energy_kernels = [_Buffered(f[f"{g.name}_energy"]) for g in model.groups]
-        m_rows, m_cols = self.mass_fn.coordinates(0)
-        g_rows, g_cols = self.constraints.coordinates(1)
-        self.element_coords = []
+        self.g_rows, self.g_cols = self.constraints.coordinates(1)
+        self.groups = []
         for group in model.groups:
-            dofs = group.dofs  # (n_el, 24): buffer layout [e, col, row]
-            rows = np.broadcast_to(dofs[:, None, :], (len(dofs), 24, 24))
-            cols = np.broadcast_to(dofs[:, :, None], (len(dofs), 24, 24))
-            self.element_coords.append((rows, cols))
+            dofs = group.dofs
+            pe = np.repeat(p[list(group.parameter_indices)][:, None], len(dofs), axis=1)
+            self.groups.append(
+                dict(
+                    group=group,
+                    dofs=dofs,
+                    flat=dofs.ravel(),
+                    constants=np.ascontiguousarray(group.constants.T),
+                    pe=pe,
+                    kernels={kind: _Buffered(f[f"{group.name}_{kind}"]) for kind in KERNEL_KINDS},
+                    rows=np.broadcast_to(dofs[:, None, :], (len(dofs), 24, 24)),  # buffer layout [e, col, row]
+                    cols=np.broadcast_to(dofs[:, :, None], (len(dofs), 24, 24)),
+                )
+            )
+        m_rows, m_cols = mass_fn.coordinates(0)
+        element_coords = [(g["rows"], g["cols"]) for g in self.groups]
         self.jacobian_pattern = _Pattern(
             (n + m, n + m),
-            [(m_rows, m_cols)] + self.element_coords + [(g_cols, n + g_rows), (n + g_rows, g_cols)],
+            [(m_rows, m_cols)] + element_coords + [(self.g_cols, n + self.g_rows), (n + self.g_rows, self.g_cols)],
         )
-        self.sensitivities = sensitivities
         if sensitivities:
-            self.dgrad_dp = self.linear.sparse(1, dgrad_dp)
+            self.dgrad_dp = linear.sparse(1, dgrad_dp).toarray()
             self.mass_sens = _Buffered(f["mass_sens"])
             self.hessian = _Buffered(f["constraint_hessian"])
             h_rows, h_cols = self.hessian.coordinates(0)
-            self.state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + self.element_coords * 2 + [(h_rows, h_cols)])
-            self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + self.element_coords)
+            self.state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords * 2 + [(h_rows, h_cols)])
+            self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords)
 
-    def _element_terms(self, q_a, q_b, weight):
-        """Element forces and the blocks d/dq_b, d/dq_a for the interval [q_a, q_b]."""
-        out = []
-        for group, kernel in zip(self.model.groups, self.kernels):
-            force, dq, dv, dp = kernel(*self.model.group_inputs(group, q_a, q_b, self.h, self.p))
-            dq = dq.reshape(len(group.dofs), 24, 24)
-            dv = dv.reshape(len(group.dofs), 24, 24)
-            out.append((group, force.reshape(len(group.dofs), 24), weight * (0.5 * dq + dv / self.h),
-                        weight * (0.5 * dq - dv / self.h), weight * dp.reshape(len(group.dofs), 3, 24)))
+    # -- kernels --------------------------------------------------------------------------
+    def _inputs(self, g: dict, q_a: np.ndarray, q_b: np.ndarray):
+        mid = 0.5 * (q_a[g["dofs"]] + q_b[g["dofs"]]).T
+        vel = ((q_b[g["dofs"]] - q_a[g["dofs"]]) / self.h).T
+        return mid, vel, g["constants"], g["pe"]
+
+    def _forces(self, q_a, q_b, weight) -> np.ndarray:
+        out = np.zeros(self.n)
+        for g in self.groups:
+            (force,) = g["kernels"]["force"](*self._inputs(g, q_a, q_b))
+            out += np.bincount(g["flat"], weights=weight * force, minlength=self.n)
         return out
 
-    def residual_jacobian(self, x, q_cur, q_prev, first: bool, v0=None):
-        """Residual and Jacobian (CSC) of a step at the unknowns ``x = (q_next, λ)``."""
-        n, h = self.model.ndof, self.h
-        q_next, lam = x[:n], x[n:]
-        c = self.model.constants
-        if first:
-            acc = 2.0 * (q_next - q_cur - h * v0) / h**2
-            intervals = [(q_cur, q_next, 1.0)]
-            mass_scale = 2.0 / h**2
-        else:
-            acc = (q_next - 2.0 * q_cur + q_prev) / h**2
-            intervals = [(q_cur, q_next, 0.5), (q_prev, q_cur, 0.5)]
-            mass_scale = 1.0 / h**2
-        residual_q = self.mass @ acc + self.grad_linear
-        g_next, jac_next = (a.copy() for a in self.constraints(q_next, c))
-        _, jac_cur = self.constraints(q_cur, c)
-        rows, cols = self.constraints.coordinates(1)
-        residual_q += np.bincount(cols, weights=jac_cur * lam[rows], minlength=n)
-        jac_cur = jac_cur.copy()
-        element_values = []
-        for k, (q_a, q_b, weight) in enumerate(intervals):
-            for group, force, d_next, _, _ in self._element_terms(q_a, q_b, weight):
-                residual_q += np.bincount(group.dofs.ravel(), weights=weight * force.ravel(), minlength=n)
-                if k == 0:
-                    element_values.append(d_next)
-        jacobian = self.jacobian_pattern.matrix(
-            [self.mass_values * mass_scale] + element_values + [jac_cur, jac_next]
-        )
-        return np.concatenate([residual_q, g_next]), jacobian
+    def _tangents(self, q_a, q_b, weight):
+        """Per group: (d force/d q_b, d force/d q_a) blocks, weighted, layout [e, col, row]."""
+        out = []
+        for g in self.groups:
+            _, dq, dv = g["kernels"]["tangent"](*self._inputs(g, q_a, q_b))
+            dq = dq.reshape(-1, 24, 24)
+            dv = dv.reshape(-1, 24, 24)
+            out.append((weight * (0.5 * dq + dv / self.h), weight * (0.5 * dq - dv / self.h)))
+        return out
 
-    def sensitivity_rhs(self, x, q_cur, q_prev, s_cur, s_prev, first: bool, v0=None) -> np.ndarray:
-        """``∂R/∂q_j S_j + ∂R/∂q_{j−1} S_{j−1} + ∂R/∂p`` (n × n_p), top block only."""
-        n, h, p = self.model.ndof, self.h, self.p
-        q_next, lam = x[:n], x[n:]
-        c = self.model.constants
+    # -- step -----------------------------------------------------------------------------
+    def begin_step(self, q_cur, q_prev, first: bool, v0) -> None:
+        h, c = self.h, self.model.constants
+        self.q_cur, self.q_prev, self.first, self.v0 = q_cur, q_prev, first, v0
         if first:
-            acc = 2.0 * (q_next - q_cur - h * v0) / h**2
+            self.mass_scale, self.weight = 2.0 / h**2, 1.0
+            self.base = self.grad_linear - self.mass @ (2.0 * (q_cur + h * v0) / h**2)
+        else:
+            self.mass_scale, self.weight = 1.0 / h**2, 0.5
+            self.base = (
+                self.grad_linear
+                + self.mass @ ((q_prev - 2.0 * q_cur) / h**2)
+                + self._forces(q_prev, q_cur, 0.5)
+            )
+        self.jac_cur = self.constraints(q_cur, c)[1].copy()
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        n = self.n
+        q_next, lam = x[:n], x[n:]
+        g_next = self.constraints(q_next, self.model.constants)[0]
+        residual_q = (
+            self.base
+            + self.mass_scale * (self.mass @ q_next)
+            + np.bincount(self.g_cols, weights=self.jac_cur * lam[self.g_rows], minlength=n)
+            + self._forces(self.q_cur, q_next, self.weight)
+        )
+        return np.concatenate([residual_q, g_next])
+
+    def jacobian(self, x: np.ndarray) -> sp.csc_matrix:
+        q_next = x[: self.n]
+        jac_next = self.constraints(q_next, self.model.constants)[1].copy()
+        blocks = [t[0] for t in self._tangents(self.q_cur, q_next, self.weight)]
+        return self.jacobian_pattern.matrix([self.mass_values * self.mass_scale] + blocks + [self.jac_cur, jac_next])
+
+    def sensitivity_rhs(self, x, s_cur, s_prev) -> np.ndarray:
+        """``∂R/∂q_j S_j + ∂R/∂q_{j−1} S_{j−1} + ∂R/∂p`` (n × n_p), the rows of ``R_q``."""
+        n, h, p, c = self.n, self.h, self.p, self.model.constants
+        q_next, lam = x[:n], x[n:]
+        q_cur, q_prev = self.q_cur, self.q_prev
+        if self.first:
+            acc = 2.0 * (q_next - q_cur - h * self.v0) / h**2
             intervals = [(q_cur, q_next, 1.0)]
         else:
             acc = (q_next - 2.0 * q_cur + q_prev) / h**2
             intervals = [(q_cur, q_next, 0.5), (q_prev, q_cur, 0.5)]
-        (mass_sens,) = self.mass_sens(acc, p, c)
-        rhs = self.mass_sens.sparse(0, mass_sens).toarray() + self.dgrad_dp.toarray()
-        terms = [self._element_terms(q_a, q_b, w) for q_a, q_b, w in intervals]
-        for group_terms in terms:
-            for group, _, _, _, dp in group_terms:
-                for k, index in enumerate(group.parameter_indices):
-                    rhs[:, index] += np.bincount(group.dofs.ravel(), weights=dp[:, k, :].ravel(), minlength=n)
-        if first:
+        rhs = self.mass_sens.sparse(0, self.mass_sens(acc, p, c)[0]).toarray() + self.dgrad_dp
+        for q_a, q_b, weight in intervals:
+            for g in self.groups:
+                (dp,) = g["kernels"]["parameters"](*self._inputs(g, q_a, q_b))
+                dp = dp.reshape(-1, len(g["group"].parameter_indices), 24)
+                for k, index in enumerate(g["group"].parameter_indices):
+                    rhs[:, index] += np.bincount(g["flat"], weights=weight * dp[:, k, :].ravel(), minlength=n)
+        if self.first:  # S_0 = 0: the initial state does not depend on the parameters
             return rhs
+        plus = self._tangents(q_cur, q_next, 0.5)
+        minus = self._tangents(q_prev, q_cur, 0.5)
         (hess,) = self.hessian(q_cur, lam, c)
-        # q_cur enters as the end of the interval (q_prev, q_cur) and the start of (q_cur, q_next)
-        plus, minus = terms
+        # q_j is the start of [q_j, q_{j+1}] and the end of [q_{j−1}, q_j]
         d_cur = self.state_pattern.matrix(
-            [-2.0 * self.mass_values / h**2]
-            + [t[3] for t in plus]
-            + [t[2] for t in minus]
-            + [hess]
+            [-2.0 * self.mass_values / h**2] + [t[1] for t in plus] + [t[0] for t in minus] + [hess]
         )
-        d_prev = self.prev_pattern.matrix([self.mass_values / h**2] + [t[3] for t in minus])
+        d_prev = self.prev_pattern.matrix([self.mass_values / h**2] + [t[1] for t in minus])
         return rhs + d_cur @ s_cur + d_prev @ s_prev
 
 
@@ -357,11 +384,28 @@ def integrate(
     q = np.empty((n_steps + 1, n))
     lam = np.empty((n_steps, m))
     iterations = np.zeros(n_steps, dtype=int)
+    factorisations = 0
     sens = np.zeros((n_steps + 1, n, n_p)) if sensitivities else None
     q[0] = q0
     timings = {"evaluation": 0.0, "factorisation": 0.0, "solve": 0.0, "sensitivity": 0.0}
     x = np.concatenate([q0 + dt * v0, np.zeros(m)])
     clock = _time.perf_counter
+    lu = None
+
+    def factorise(at: np.ndarray):
+        nonlocal factorisations
+        t0 = clock()
+        jacobian = assembler.jacobian(at)
+        t1 = clock()
+        timings["evaluation"] += t1 - t0
+        try:
+            factor = splu(jacobian, permc_spec="COLAMD")
+        except RuntimeError:  # singular Jacobian
+            factor = None
+        timings["factorisation"] += clock() - t1
+        factorisations += 1
+        return factor
+
     for j in range(n_steps):
         first = j == 0
         q_cur = q[j]
@@ -369,32 +413,46 @@ def integrate(
         if not first:
             x[:n] = 2 * q[j] - q[j - 1]
             x[n:] = lam[j - 1]
-        lu = None
+        t0 = clock()
+        assembler.begin_step(q_cur, q_prev, first, v0)
+        timings["evaluation"] += clock() - t0
+        if lu is None or first:
+            lu = factorise(x)
+        # Newton with a kept factorisation: refresh it whenever the contraction is poor
         converged = False
-        small_update = False
+        fresh = first
+        previous = np.inf
         residual = np.full(n + m, np.nan)
-        for k in range(max_iterations + 1):
+        k = 0
+        while k < max_iterations and lu is not None:
             t0 = clock()
-            residual, jacobian = assembler.residual_jacobian(x, q_cur, q_prev, first, v0)
+            residual = assembler.residual(x)
             timings["evaluation"] += clock() - t0
             if not np.all(np.isfinite(residual)):
                 break
-            if small_update and np.max(np.abs(residual[n:]), initial=0.0) <= constraint_tolerance:
+            t0 = clock()
+            dx = lu.solve(residual)
+            timings["solve"] += clock() - t0
+            size = float(np.max(np.abs(dx[:n])))
+            if not np.isfinite(size):
+                break
+            x -= dx
+            k += 1
+            if size <= tolerance * (1.0 + float(np.max(np.abs(x[:n])))) and (
+                np.max(np.abs(residual[n:]), initial=0.0) <= constraint_tolerance or size == 0.0
+            ):
                 converged = True
                 break
-            if k == max_iterations:
-                break
-            t0 = clock()
-            try:
-                lu = splu(jacobian, permc_spec="COLAMD")
-            except RuntimeError:
-                break
-            t1 = clock()
-            dx = lu.solve(residual)
-            timings["factorisation"] += t1 - t0
-            timings["solve"] += clock() - t1
-            x -= dx
-            small_update = bool(np.max(np.abs(dx[:n])) <= tolerance * (1.0 + np.max(np.abs(x[:n]))))
+            if size > 0.25 * previous and not fresh:
+                lu = factorise(x)
+                fresh = True
+                previous = np.inf
+                continue
+            fresh = False if size < 0.25 * previous else fresh
+            previous = size
+        if converged:
+            g_check = assembler.residual(x)[n:]
+            converged = np.max(np.abs(g_check), initial=0.0) <= max(constraint_tolerance, 1e3 * tolerance)
         if not converged:
             norm = float(np.linalg.norm(residual)) if np.all(np.isfinite(residual)) else float("nan")
             raise SimulationError(
@@ -405,14 +463,17 @@ def integrate(
         q[j + 1] = x[:n]
         lam[j] = x[n:]
         iterations[j] = k
-        if sensitivities and lu is not None:
+        if sensitivities:
             t0 = clock()
+            exact = factorise(x)  # the Jacobian at the converged step
             s_prev = sens[j - 1] if j > 0 else sens[0]
-            rhs = assembler.sensitivity_rhs(x, q_cur, q_prev, sens[j], s_prev, first, v0)
-            sens[j + 1] = -lu.solve(np.vstack([rhs, np.zeros((m, n_p))]))[:n]
+            rhs = assembler.sensitivity_rhs(x, sens[j], s_prev)
+            sens[j + 1] = -exact.solve(np.vstack([rhs, np.zeros((m, n_p))]))[:n]
+            lu = exact
             timings["sensitivity"] += clock() - t0
         if progress is not None:
             progress(j + 1)
+    timings["factorisations"] = float(factorisations)
     return Trajectory(
         times=np.arange(n_steps + 1) * dt,
         q=q,

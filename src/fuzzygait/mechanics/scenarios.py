@@ -1,0 +1,230 @@
+"""Swing and stance scenarios of the leg + prosthesis model (thesis §4.2.4, Tables 4.3/4.4).
+
+:class:`LegSimulator` builds (or loads from the on-disk cache) the model of a scenario once
+and runs it for any parameter vector; :meth:`LegSimulator.run` returns an
+``xarray.Dataset`` with configurations, energies, joint angles and the target outputs of the
+thesis — total deformation energy (Eq. 5.1), maximum element energy (Eq. 5.2) and the last
+blade node's position — with their parameter sensitivities on request.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+import xarray as xr
+
+from fuzzygait.errors import ParameterError
+from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
+from fuzzygait.mechanics.integrator import DiscreteModel, integrate, trajectory_energies
+from fuzzygait.mechanics.leg import (
+    LEG_PARAMETERS,
+    PARAMETER_UNITS,
+    FootKind,
+    LegConfiguration,
+    build_leg,
+    default_parameters,
+)
+from fuzzygait.mechanics.presets import STANCE, SWING, ScenarioPreset
+
+SCENARIOS: dict[str, ScenarioPreset] = {"swing": SWING, "stance": STANCE}
+PARAMETER_ALIASES = {"E": "E", "nu": "nu", "rho": "rho", "eta": "eta"}
+
+
+def stance_anchors(blade: BladeGeometry, nodes: int) -> tuple[int, int]:
+    """The two blade nodes held on the ground in the stance scenario: the lowest node of the
+    heel bend (first 60 % of the blade) and the toe (last node)."""
+    mesh = blade.discretise(nodes)
+    heel_region = max(2, int(0.6 * nodes))
+    heel = int(np.argmin(mesh.positions[:heel_region, 2]))
+    return (heel, nodes - 1)
+
+
+class LegSimulator:
+    """A scenario's model, ready to run for many parameter vectors.
+
+    Args:
+        scenario: "swing" (Table 4.3) or "stance" (Table 4.4).
+        nodes: blade nodes (default 20, as in the thesis).
+        foot: "beam" (default), "rigid" (blade replaced by a rigid body) or "none".
+        blade: blade geometry (default: the packaged Vari-Flex-like file).
+        compile: compile the generated code (cached on disk) when a C compiler is available.
+    """
+
+    def __init__(
+        self,
+        scenario: str = "swing",
+        nodes: int = 20,
+        foot: FootKind = "beam",
+        blade: BladeGeometry | None = None,
+        compile: bool = True,
+    ) -> None:
+        if scenario not in SCENARIOS:
+            raise ParameterError(f"unknown scenario {scenario!r}; choose one of {', '.join(SCENARIOS)}")
+        self.scenario = scenario
+        self.preset = SCENARIOS[scenario]
+        blade = blade or default_blade()
+        anchors = stance_anchors(blade, nodes) if scenario == "stance" and foot == "beam" else ()
+        self.configuration = LegConfiguration(
+            hip_angle=self.preset.hip_angle,
+            knee_angle=self.preset.knee_angle,
+            nodes=nodes,
+            foot=foot,
+            anchored_nodes=anchors,
+            blade=blade,
+        )
+        self.leg = build_leg(self.configuration, rigid_foot_density=self.preset.material.density)
+        self.model = DiscreteModel.from_builder(self.leg.builder, compile=compile)
+        self.default_parameters = default_parameters(self.preset.material, shank_mass=self.preset.shank_mass)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return LEG_PARAMETERS
+
+    def parameters(self, **overrides: float) -> np.ndarray:
+        """The scenario's default parameter vector with named overrides (SI units)."""
+        p = self.default_parameters.copy()
+        for name, value in overrides.items():
+            if name not in LEG_PARAMETERS:
+                raise ParameterError(f"unknown parameter {name!r}; known: {', '.join(LEG_PARAMETERS)}")
+            p[LEG_PARAMETERS.index(name)] = float(value)
+        validate_parameters(p)
+        return p
+
+    def run(
+        self,
+        p: np.ndarray | None = None,
+        *,
+        dt: float | None = None,
+        duration: float | None = None,
+        sensitivities: bool = False,
+        progress: Callable[[int], None] | None = None,
+    ) -> xr.Dataset:
+        """Simulate and return the results (see the module docstring for the variables)."""
+        p = self.default_parameters.copy() if p is None else np.asarray(p, dtype=float).ravel()
+        validate_parameters(p)
+        dt = self.preset.dt if dt is None else float(dt)
+        duration = self.preset.duration if duration is None else float(duration)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ParameterError(f"dt must be > 0 s; got {dt}")
+        if not (np.isfinite(duration) and duration >= dt):
+            raise ParameterError(f"duration must be ≥ dt ({dt} s); got {duration}")
+        n_steps = int(round(duration / dt))
+        start = time.perf_counter()
+        trajectory = integrate(
+            self.model, self.leg.q0, p, dt, n_steps, sensitivities=sensitivities, progress=progress
+        )
+        wall = time.perf_counter() - start
+        return self._dataset(trajectory, p, dt, wall)
+
+    # -- results --------------------------------------------------------------------------
+    def _dataset(self, trajectory, p: np.ndarray, dt: float, wall: float) -> xr.Dataset:
+        names = list(self.leg.builder.body_names)
+        q = trajectory.q.reshape(len(trajectory.times), len(names), 12)
+        energies = trajectory_energies(self.model, trajectory, p)
+        time_coord = ("time", trajectory.times, {"units": "s"})
+        thigh_dir = -q[:, 0, 9:12]
+        shank_dir = -q[:, 1, 9:12]
+        hip = np.arctan2(thigh_dir[:, 0], -thigh_dir[:, 2])
+        shank_angle = np.arctan2(shank_dir[:, 0], -shank_dir[:, 2])
+        data = {
+            "position": (("time", "body", "xyz"), q[:, :, :3], {"units": "m", "long_name": "centre of mass / node position"}),
+            "directors": (("time", "body", "director", "xyz"), q[:, :, 3:].reshape(len(q), len(names), 3, 3), {"units": "1"}),
+            "hip_flexion": ("time", hip, {"units": "rad"}),
+            "knee_flexion": ("time", np.unwrap(hip - shank_angle), {"units": "rad"}),
+            "kinetic_energy": ("time", energies.kinetic, {"units": "J"}),
+            "gravitational_energy": ("time", energies.gravity, {"units": "J"}),
+            "internal_energy": ("time", energies.internal, {"units": "J"}),
+            "dissipated_energy": ("time", energies.dissipated, {"units": "J"}),
+            "total_energy": ("time", energies.total, {"units": "J", "long_name": "kinetic + gravitational + internal"}),
+            "newton_iterations": ("step", trajectory.iterations),
+        }
+        coords = {"time": time_coord, "body": names, "xyz": ["x", "y", "z"], "director": ["d1", "d2", "d3"],
+                  "parameter": list(LEG_PARAMETERS)}
+        if self.model.groups:
+            element = energies.element
+            data["element_energy"] = (("time", "element"), element, {"units": "J"})
+            data["total_deformation_energy"] = ("time", element.sum(axis=1), {"units": "J", "long_name": "Eq. 5.1"})
+            data["max_element_energy"] = ("time", element.max(axis=1), {"units": "J", "long_name": "Eq. 5.2"})
+            data["last_node_position"] = (("time", "xyz"), q[:, -1, :3], {"units": "m"})
+        data["parameter_value"] = ("parameter", p, {"units": [PARAMETER_UNITS[k] for k in LEG_PARAMETERS]})
+        if trajectory.sensitivities is not None:
+            s = trajectory.sensitivities
+            data["configuration_sensitivity"] = (("time", "dof", "parameter"), s, {"long_name": "dq/dp"})
+            if self.model.groups:
+                d_total, d_max = self._target_sensitivities(trajectory, p, energies.element)
+                data["total_deformation_energy_sensitivity"] = (("time", "parameter"), d_total, {"units": "J per parameter unit"})
+                data["max_element_energy_sensitivity"] = (("time", "parameter"), d_max, {"units": "J per parameter unit"})
+                data["last_node_position_sensitivity"] = (("time", "xyz", "parameter"), s[:, -12:-9, :], {"units": "m per parameter unit"})
+        ds = xr.Dataset(data, coords=coords)
+        ds.attrs.update(
+            scenario=self.scenario,
+            nodes=self.configuration.nodes if self.configuration.foot == "beam" else 0,
+            foot=self.configuration.foot,
+            dt=dt,
+            duration=float(trajectory.times[-1]),
+            wall_time_s=wall,
+            compiled=int(self.model.compiled),
+            blade=self.configuration.blade.name,
+            anchored_nodes=list(self.configuration.anchored_nodes),
+            factorisations=trajectory.timings.get("factorisations", 0.0),
+            **{f"time_{k}_s": v for k, v in trajectory.timings.items() if k != "factorisations"},
+        )
+        return ds
+
+    def _target_sensitivities(self, trajectory, p, element):
+        """d(Σ_e W_e)/dp and d(max_e W_e)/dp from ∇W_e · dq/dp + ∂W_e/∂p."""
+        model = self.model
+        from fuzzygait.mechanics.integrator import _Buffered  # noqa: PLC0415 (internal helper)
+
+        n_t = len(trajectory.times)
+        n_p = len(p)
+        d_total = np.zeros((n_t, n_p))
+        d_max = np.zeros((n_t, n_p))
+        h = float(trajectory.times[1] - trajectory.times[0])
+        start = 0
+        for group in model.groups:
+            kernel = _Buffered(model.functions[f"{group.name}_energy"])
+            dofs = group.dofs
+            pe = np.repeat(p[list(group.parameter_indices)][:, None], len(dofs), axis=1)
+            constants = group.constants.T
+            for j in range(n_t):
+                qj = trajectory.q[j]
+                _, _, grad, dpe = kernel(qj[dofs].T, np.zeros((24, len(dofs))), constants, pe)
+                grad = grad.reshape(len(dofs), 24)
+                dpe = dpe.reshape(len(dofs), len(group.parameter_indices))
+                per_element = np.einsum("ek,ekp->ep", grad, trajectory.sensitivities[j][dofs])
+                for k, index in enumerate(group.parameter_indices):
+                    per_element[:, index] += dpe[:, k]
+                d_total[j] += per_element.sum(axis=0)
+                e_max = int(np.argmax(element[j]))
+                if start <= e_max < start + len(dofs):
+                    d_max[j] = per_element[e_max - start]
+            start += len(dofs)
+        del h
+        return d_total, d_max
+
+
+def validate_parameters(p: np.ndarray) -> None:
+    """One clear error for an impossible leg parameter vector (order :data:`LEG_PARAMETERS`)."""
+    if p.size != len(LEG_PARAMETERS):
+        raise ParameterError(f"expected {len(LEG_PARAMETERS)} parameters ({', '.join(LEG_PARAMETERS)}), got {p.size}")
+    for name, value in zip(LEG_PARAMETERS, p):
+        if not np.isfinite(value):
+            raise ParameterError(f"parameter {name} must be finite; got {value}")
+        if name == "nu":
+            if not -1.0 < value < 0.5:
+                raise ParameterError(f"Poisson ratio nu must lie in (-1, 0.5); got {value}")
+        elif name == "eta":
+            if value < 0:
+                raise ParameterError(f"damping eta must be ≥ 0 Pa s; got {value}")
+        elif value <= 0:
+            raise ParameterError(f"parameter {name} must be > 0 {PARAMETER_UNITS[name]}; got {value}")
+    for prefix in ("thigh", "shank"):
+        j1, j2, j3 = (p[LEG_PARAMETERS.index(f"{prefix}_J{i}")] for i in (1, 2, 3))
+        if j1 > j2 + j3 or j2 > j3 + j1 or j3 > j1 + j2:
+            raise ParameterError(
+                f"{prefix} inertias J1={j1}, J2={j2}, J3={j3} kg m² violate the triangle inequality "
+                "(no real mass distribution has them)"
+            )
