@@ -1,1 +1,40 @@
-"""mechanics: see the issue tracker; filled in by later work."""
+"""mechanics: the leg + prosthesis simulator (thesis §4) and the ideal pendulum example.
+
+Modules, from the bottom up:
+
+* :mod:`.assembly` — bodies in director form, mass matrix, gravity, joints (Eqs. 4.1–4.10),
+* :mod:`.beam` — predeformed geometrically exact beam elements (Eqs. 4.30–4.33),
+* :mod:`.sections`, :mod:`.homogenisation` — cross-section stiffness, homogeneous and
+  three-layer (Eqs. 4.35–4.42),
+* :mod:`.geometry` — the blade centreline file and its discretisation,
+* :mod:`.presets` — Tables 4.1–4.4,
+* :mod:`.integrator` — the constrained forced variational integrator (Eqs. 4.16–4.29),
+  Newton with sparse LU, forward parameter sensitivities,
+* :mod:`.codegen` — compiled CasADi code cached on disk by model structure,
+* :mod:`.leg`, :mod:`.scenarios` — the leg model and the swing/stance scenarios,
+* :mod:`.cantilever` — the clamped straight beam used for verification,
+* :mod:`.pendulum` — the ideal pendulum of the uncertainty-engine examples.
+"""
+
+from fuzzygait.mechanics.cantilever import Cantilever, build_cantilever
+from fuzzygait.mechanics.geometry import BladeGeometry, default_blade, read_blade_geometry
+from fuzzygait.mechanics.integrator import DiscreteModel, Trajectory, integrate, trajectory_energies
+from fuzzygait.mechanics.leg import LEG_PARAMETERS, LegConfiguration, build_leg
+from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+
+__all__ = [
+    "BladeGeometry",
+    "Cantilever",
+    "DiscreteModel",
+    "LEG_PARAMETERS",
+    "LegConfiguration",
+    "LegSimulator",
+    "SCENARIOS",
+    "Trajectory",
+    "build_cantilever",
+    "build_leg",
+    "default_blade",
+    "integrate",
+    "read_blade_geometry",
+    "trajectory_energies",
+]

@@ -25,6 +25,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
+from fuzzygait.errors import ParameterError
 from fuzzygait.mechanics.assembly import Body, ElementGroup, SystemBuilder, dot3
 
 
@@ -70,29 +71,40 @@ class BeamSection:
 
 
 BEAM_KERNEL = "gebeam2-midpoint-v1"
-N_ELEMENT_CONSTANTS = 12  # L, A, I1, I2, J, κ, six reference strains
+# per element: L, A, I1, I2, J, κ, six reference strains, then (given stiffness only) the six
+# stiffnesses κGA-like A_1, A_2, A_3 (N) and C_1, C_2, C_3 (N m²) at the modulus E_ref, and E_ref
+N_ELEMENT_CONSTANTS = {"homogeneous": 12, "given": 19}
 
 
-def _beam_kernels() -> dict[str, ca.Function]:
+def _beam_kernels(law: str = "homogeneous") -> dict[str, ca.Function]:
     """Element kernels of the two-node beam element (see the module docstring and
-    :class:`~fuzzygait.mechanics.assembly.ElementGroup`)."""
+    :class:`~fuzzygait.mechanics.assembly.ElementGroup`).
+
+    ``law`` "homogeneous": ``D^Γ = diag(κGA, κGA, EA)``, ``D^K = diag(EI_1, EI_2, GJ)`` from
+    the parameters E, ν; "given": the element's effective stiffnesses (e.g. the homogenised
+    three-layer values of Eqs. 4.37–4.42) scaled by ``E / E_ref`` — the parameter E then
+    scales face and core moduli together (ν is not used).
+    """
     qe = ca.SX.sym("qe", 24)
     ve = ca.SX.sym("ve", 24)
-    ce = ca.SX.sym("ce", N_ELEMENT_CONSTANTS)
+    ce = ca.SX.sym("ce", N_ELEMENT_CONSTANTS[law])
     pe = ca.SX.sym("pe", 3)  # E (Pa), ν, η (Pa s)
     length, area, i1, i2, torsion, shear_factor = (ce[k] for k in range(6))
     modulus, poisson, damping = pe[0], pe[1], pe[2]
     shear_modulus = modulus / (2 * (1 + poisson))
     raw = ca.vertcat(*element_strains(qe[:12], qe[12:], length))
     strain = raw - ce[6:12]
-    stiffness = ca.vertcat(
-        shear_factor * shear_modulus * area,
-        shear_factor * shear_modulus * area,
-        modulus * area,
-        modulus * i1,
-        modulus * i2,
-        shear_modulus * torsion,
-    )
+    if law == "given":
+        stiffness = ce[12:18] * (modulus / ce[18])
+    else:
+        stiffness = ca.vertcat(
+            shear_factor * shear_modulus * area,
+            shear_factor * shear_modulus * area,
+            modulus * area,
+            modulus * i1,
+            modulus * i2,
+            shear_modulus * torsion,
+        )
     energy = 0.5 * length * ca.sum1(stiffness * strain**2)
     rate = ca.jtimes(raw, qe, ve)
     viscosity = damping * ca.vertcat(shear_factor * area, shear_factor * area, area, i1, i2, torsion)
@@ -126,6 +138,8 @@ def add_beam(
     poisson: str = "nu",
     density: str = "rho",
     damping: str = "eta",
+    stiffness=None,
+    reference_modulus: float | None = None,
 ) -> None:
     """Add a beam's elements, inertia and gravity to ``builder``.
 
@@ -136,6 +150,10 @@ def add_beam(
         section: per-element cross-section data.
         modulus, poisson, density, damping: names of the parameters E (Pa), ν, ρ (kg/m³) and
             η (Pa·s) in the builder's parameter vector.
+        stiffness: optional effective section stiffnesses per element (a
+            :class:`~fuzzygait.mechanics.homogenisation.SectionStiffness`, e.g. the standard or
+            coupled homogenisation of the three-layer blade) used as ``D^Γ``/``D^K`` instead of
+            the homogeneous formulas; they are scaled by ``E / reference_modulus``.
     """
     n_el = len(nodes) - 1
     element_length = np.asarray(element_length, float)
@@ -153,12 +171,22 @@ def add_beam(
             reference_strains,
         ]
     )
-    kernels = _beam_kernels()
+    law = "homogeneous"
+    if stiffness is not None:
+        if reference_modulus is None or reference_modulus <= 0:
+            raise ParameterError("given section stiffnesses need reference_modulus > 0 (the E they were computed for)")
+        law = "given"
+        values = np.column_stack(
+            [np.broadcast_to(np.asarray(getattr(stiffness, name), float), n_el) for name in
+             ("shear_1", "shear_2", "axial", "bending_1", "bending_2", "torsion")]
+        )
+        constants = np.column_stack([constants, values, np.full(n_el, float(reference_modulus))])
+    kernels = _beam_kernels(law)
     names = list(builder.parameter_names)
     builder.add_element_group(
         ElementGroup(
             name=label,
-            kernel_name=BEAM_KERNEL,
+            kernel_name=f"{BEAM_KERNEL}:{law}",
             kernels=kernels,
             node_offsets=np.array([[nodes[e].offset, nodes[e + 1].offset] for e in range(n_el)]),
             constants=constants,

@@ -34,6 +34,13 @@ from fuzzygait.errors import ParameterError, SimulationError
 from fuzzygait.mechanics.assembly import ElementGroup, SystemBuilder
 from fuzzygait.mechanics.codegen import compile_functions, load_cached
 
+# Newton keeps its LU factorisation across iterations and steps and refreshes it when an
+# update shrinks by less than this factor (linear convergence too slow to be worth it).
+REFRESH_CONTRACTION = 0.25
+# Largest Newton update of any coordinate per iteration (m for positions, 1 for directors);
+# a time step of a few ms never moves a coordinate this far, so larger updates are divergence.
+MAX_UPDATE = 0.05
+
 GLOBAL_FUNCTIONS = ("mass", "mass_sens", "linear", "constraints", "constraint_hessian", "potential")
 
 
@@ -64,7 +71,7 @@ def _group_functions(group: ElementGroup) -> list[ca.Function]:
     return [group.kernels[kind].map(f"{group.name}_{kind}", "serial", n_el, [], []) for kind in KERNEL_KINDS]
 
 
-class _Buffered:
+class BufferedFunction:
     """Zero-copy evaluation of a CasADi function into numpy buffers (nonzeros of each output)."""
 
     def __init__(self, function: ca.Function) -> None:
@@ -190,13 +197,13 @@ class _StepAssembler:
         self.n, self.m = n, m
         c = model.constants
         f = model.functions
-        mass_fn = _Buffered(f["mass"])
+        mass_fn = BufferedFunction(f["mass"])
         self.mass_values = mass_fn(p, c)[0].copy()
         self.mass = mass_fn.sparse(0, self.mass_values)
-        linear = _Buffered(f["linear"])
+        linear = BufferedFunction(f["linear"])
         grad_linear, dgrad_dp = linear(np.zeros(n), p, c)
         self.grad_linear = grad_linear.copy()
-        self.constraints = _Buffered(f["constraints"])
+        self.constraints = BufferedFunction(f["constraints"])
         self.g_rows, self.g_cols = self.constraints.coordinates(1)
         self.groups = []
         for group in model.groups:
@@ -209,7 +216,7 @@ class _StepAssembler:
                     flat=dofs.ravel(),
                     constants=np.ascontiguousarray(group.constants.T),
                     pe=pe,
-                    kernels={kind: _Buffered(f[f"{group.name}_{kind}"]) for kind in KERNEL_KINDS},
+                    kernels={kind: BufferedFunction(f[f"{group.name}_{kind}"]) for kind in KERNEL_KINDS},
                     rows=np.broadcast_to(dofs[:, None, :], (len(dofs), 24, 24)),  # buffer layout [e, col, row]
                     cols=np.broadcast_to(dofs[:, :, None], (len(dofs), 24, 24)),
                 )
@@ -222,8 +229,8 @@ class _StepAssembler:
         )
         if sensitivities:
             self.dgrad_dp = linear.sparse(1, dgrad_dp).toarray()
-            self.mass_sens = _Buffered(f["mass_sens"])
-            self.hessian = _Buffered(f["constraint_hessian"])
+            self.mass_sens = BufferedFunction(f["mass_sens"])
+            self.hessian = BufferedFunction(f["constraint_hessian"])
             h_rows, h_cols = self.hessian.coordinates(0)
             self.state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords * 2 + [(h_rows, h_cols)])
             self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords)
@@ -420,7 +427,6 @@ def integrate(
             lu = factorise(x)
         # Newton with a kept factorisation: refresh it whenever the contraction is poor
         converged = False
-        fresh = first
         previous = np.inf
         residual = np.full(n + m, np.nan)
         k = 0
@@ -436,6 +442,8 @@ def integrate(
             size = float(np.max(np.abs(dx[:n])))
             if not np.isfinite(size):
                 break
+            if size > MAX_UPDATE:  # damped Newton: never jump further than MAX_UPDATE per iteration
+                dx *= MAX_UPDATE / size
             x -= dx
             k += 1
             if size <= tolerance * (1.0 + float(np.max(np.abs(x[:n])))) and (
@@ -443,12 +451,10 @@ def integrate(
             ):
                 converged = True
                 break
-            if size > 0.25 * previous and not fresh:
-                lu = factorise(x)
-                fresh = True
+            if size > REFRESH_CONTRACTION * previous:
+                lu = factorise(x)  # poor contraction: a fresh Jacobian (full Newton when needed)
                 previous = np.inf
                 continue
-            fresh = False if size < 0.25 * previous else fresh
             previous = size
         if converged:
             g_check = assembler.residual(x)[n:]
@@ -522,10 +528,10 @@ def trajectory_energies(model: DiscreteModel, trajectory: Trajectory, p: np.ndar
         v[-1] = (3 * q[-1] - 4 * q[-2] + q[-3]) / (2 * h)
     elif n_nodes == 2:
         v[-1] = (q[-1] - q[-2]) / h
-    mass = _Buffered(model.functions["mass"])
+    mass = BufferedFunction(model.functions["mass"])
     m_matrix = mass.sparse(0, mass(p, c)[0])
     kinetic = 0.5 * np.einsum("ij,ij->i", v, (m_matrix @ v.T).T)
-    potential = _Buffered(model.functions["potential"])
+    potential = BufferedFunction(model.functions["potential"])
     gravity = np.empty(n_nodes)
     load = np.empty(n_nodes)
     for j in range(n_nodes):
@@ -536,7 +542,7 @@ def trajectory_energies(model: DiscreteModel, trajectory: Trajectory, p: np.ndar
     rate = np.zeros(max(n_nodes - 1, 0))
     start = 0
     for group in model.groups:
-        kernel = _Buffered(model.functions[f"{group.name}_energy"])
+        kernel = BufferedFunction(model.functions[f"{group.name}_energy"])
         size = len(group.node_offsets)
         for j in range(n_nodes):
             energy, _, _, _ = kernel(*model.group_inputs(group, q[j], q[j], h, p))

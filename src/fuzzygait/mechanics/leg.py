@@ -27,6 +27,7 @@ import numpy as np
 from fuzzygait.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration, euler_tensor_principal
 from fuzzygait.mechanics.beam import BeamSection, add_beam
+from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.geometry import BladeGeometry, BladeMesh, default_blade
 from fuzzygait.mechanics.presets import SHANK, THIGH, Material, SegmentData
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, RectangleSection
@@ -105,6 +106,11 @@ class LegConfiguration:
         blade: the blade geometry (default: the packaged Vari-Flex-like file).
         thigh, shank: segment data (Table 4.1).
         hip_position: inertial position of the hip joint centre (m).
+        section: "homogeneous" (one material on the whole section, the thesis' §4.2 model),
+            or the three-layer blade homogenised by the "standard" (Eq. 4.37) or "coupled"
+            (Eqs. 4.38–4.42) approach; these need ``layers`` and then the parameter E is the
+            face modulus (the core modulus scales with it).
+        layers: face/core materials for the layered sections.
     """
 
     hip_angle: float
@@ -116,8 +122,14 @@ class LegConfiguration:
     thigh: SegmentData = THIGH
     shank: SegmentData = SHANK
     hip_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    section: Literal["homogeneous", "standard", "coupled"] = "homogeneous"
+    layers: LayerMaterials | None = None
 
     def __post_init__(self) -> None:
+        if self.section not in ("homogeneous", "standard", "coupled"):
+            raise ParameterError(f"section must be 'homogeneous', 'standard' or 'coupled'; got {self.section!r}")
+        if self.section != "homogeneous" and self.layers is None:
+            raise ParameterError(f"the {self.section} homogenisation needs the face/core materials (layers=LayerMaterials(...))")
         if self.foot not in ("beam", "rigid", "none"):
             raise ParameterError(f"foot must be 'beam', 'rigid' or 'none'; got {self.foot!r}")
         if self.foot == "beam" and self.nodes < 2:
@@ -198,10 +210,17 @@ def build_leg(configuration: LegConfiguration, rigid_foot_density: float = 8.55e
         for node in nodes:
             b.add_internal_constraints(node)
         section = RectangleSection(width=mesh.width, height=mesh.total_thickness())
+        stiffness = None
+        if cfg.section != "homogeneous":
+            homogenise = standard_stiffness if cfg.section == "standard" else coupled_stiffness
+            stiffness = homogenise(cfg.layers, mesh.width, mesh.core_thickness, mesh.face_thickness,
+                                   shear_factor=SHEAR_CORRECTION_RECTANGLE)
         add_beam(
             b, "blade", nodes, reference, mesh.element_length,
             BeamSection(section.area, section.second_moment_1, section.second_moment_2,
                         section.torsion_constant, SHEAR_CORRECTION_RECTANGLE),
+            stiffness=stiffness,
+            reference_modulus=cfg.layers.face_modulus if cfg.layers is not None else None,
         )
         relative = frames[0] @ shank_frame.T  # relative[i, k] = d_i(node 0) · d_k(shank)
         b.add_rigid("ankle", shank, ankle_arm, nodes[0], (0.0, 0.0, 0.0), relative)

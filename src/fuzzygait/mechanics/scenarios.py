@@ -17,7 +17,8 @@ import xarray as xr
 
 from fuzzygait.errors import ParameterError
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
-from fuzzygait.mechanics.integrator import DiscreteModel, integrate, trajectory_energies
+from fuzzygait.mechanics.homogenisation import LayerMaterials
+from fuzzygait.mechanics.integrator import BufferedFunction, DiscreteModel, integrate, trajectory_energies
 from fuzzygait.mechanics.leg import (
     LEG_PARAMETERS,
     PARAMETER_UNITS,
@@ -50,6 +51,7 @@ class LegSimulator:
         foot: "beam" (default), "rigid" (blade replaced by a rigid body) or "none".
         blade: blade geometry (default: the packaged Vari-Flex-like file).
         compile: compile the generated code (cached on disk) when a C compiler is available.
+        section, layers: the blade's cross-section law (see :class:`LegConfiguration`).
     """
 
     def __init__(
@@ -59,6 +61,8 @@ class LegSimulator:
         foot: FootKind = "beam",
         blade: BladeGeometry | None = None,
         compile: bool = True,
+        section: str = "homogeneous",
+        layers: LayerMaterials | None = None,
     ) -> None:
         if scenario not in SCENARIOS:
             raise ParameterError(f"unknown scenario {scenario!r}; choose one of {', '.join(SCENARIOS)}")
@@ -73,6 +77,8 @@ class LegSimulator:
             foot=foot,
             anchored_nodes=anchors,
             blade=blade,
+            section=section,
+            layers=layers,
         )
         self.leg = build_leg(self.configuration, rigid_foot_density=self.preset.material.density)
         self.model = DiscreteModel.from_builder(self.leg.builder, compile=compile)
@@ -176,16 +182,14 @@ class LegSimulator:
     def _target_sensitivities(self, trajectory, p, element):
         """d(Σ_e W_e)/dp and d(max_e W_e)/dp from ∇W_e · dq/dp + ∂W_e/∂p."""
         model = self.model
-        from fuzzygait.mechanics.integrator import _Buffered  # noqa: PLC0415 (internal helper)
 
         n_t = len(trajectory.times)
         n_p = len(p)
         d_total = np.zeros((n_t, n_p))
         d_max = np.zeros((n_t, n_p))
-        h = float(trajectory.times[1] - trajectory.times[0])
         start = 0
         for group in model.groups:
-            kernel = _Buffered(model.functions[f"{group.name}_energy"])
+            kernel = BufferedFunction(model.functions[f"{group.name}_energy"])
             dofs = group.dofs
             pe = np.repeat(p[list(group.parameter_indices)][:, None], len(dofs), axis=1)
             constants = group.constants.T
@@ -202,7 +206,6 @@ class LegSimulator:
                 if start <= e_max < start + len(dofs):
                     d_max[j] = per_element[e_max - start]
             start += len(dofs)
-        del h
         return d_total, d_max
 
 
