@@ -481,6 +481,165 @@ def report(
         raise typer.Exit(EXIT_USER_ERROR)
 
 
+# --------------------------------------------------------------------------- simulate
+def _parse_overrides(texts: Sequence[str]) -> dict[str, float]:
+    """``["E=6e5,eta=2", "rho=1700"]`` -> ``{"E": 6e5, "eta": 2.0, "rho": 1700.0}``."""
+    from fuzzygait.mechanics.leg import LEG_PARAMETERS
+
+    values: dict[str, float] = {}
+    for text in texts:
+        for item in (part.strip() for part in text.split(",")):
+            if not item:
+                continue
+            name, sep, value = (s.strip() for s in item.partition("="))
+            if not sep or not name:
+                raise FuzzyGaitError(f"--set: expected name=value, got {item!r}")
+            if name not in LEG_PARAMETERS:
+                raise FuzzyGaitError(f"--set: unknown parameter {name!r}; known: {', '.join(LEG_PARAMETERS)}")
+            try:
+                number = float(value)
+            except ValueError:
+                raise FuzzyGaitError(f"--set: {name}={value!r} is not a number (SI units, e.g. {name}=1.5e6)") from None
+            if name in values:
+                raise FuzzyGaitError(f"--set: {name} is given twice")
+            values[name] = number
+    return values
+
+
+def _remove_output(path: Path) -> None:
+    import shutil
+
+    if path.is_dir():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Simulation results, .nc or .zarr.")],
+    nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's, 0.001.")] = None,
+    duration: Annotated[
+        float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's, 2.")
+    ] = None,
+    overrides: Annotated[
+        list[str] | None,
+        typer.Option("--set", metavar="NAME=VALUE,...", help="Parameter values in SI units, comma-separated "
+                     "or repeated, e.g. E=6e5,eta=2 (names: E, nu, rho, eta, thigh_mass, thigh_J1..3, "
+                     "shank_mass, shank_J1..3); default: the scenario's."),
+    ] = None,  # fmt: skip
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", help="Also plot the energies over time (.png, .svg or .pdf).")
+    ] = None,
+    sensitivities: Annotated[
+        bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities (slower).")
+    ] = False,
+) -> None:
+    """Simulate the leg with the prosthesis blade (swing or stance scenario) and save
+    positions, directors, joint angles and energies over time.
+
+    Nothing is written when the simulation fails, e.g. when Newton does not
+    converge; then try a smaller time step or more damping.
+    """
+    import numpy as np
+
+    from fuzzygait.mechanics.scenarios import SCENARIOS
+    from fuzzygait.uncertainty.storage import SUFFIXES, save_result
+
+    written: list[Path] = []
+    with _user_errors():
+        if scenario not in SCENARIOS:
+            raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
+        if out_file.suffix.lower() not in SUFFIXES:
+            raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
+        if rrd is not None and rrd.suffix.lower() != ".rrd":
+            raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+        if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
+            raise FuzzyGaitError(f"{plot}: --plot must end in .png, .svg or .pdf")
+        if nodes < 2:
+            raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
+        preset = SCENARIOS[scenario]
+        step = preset.dt if dt is None else dt
+        if not (np.isfinite(step) and step > 0):
+            raise FuzzyGaitError(f"--dt must be a time step > 0 s; got {dt:g}")
+        span = preset.duration if duration is None else duration
+        if not (np.isfinite(span) and span >= step):
+            raise FuzzyGaitError(f"--duration must be at least the time step ({step:g} s); got {span:g}")
+        values = _parse_overrides(overrides or [])
+        n_steps = int(round(span / step))
+
+        from fuzzygait.mechanics.scenarios import LegSimulator
+
+        bars = _progress_bars()
+        with bars:
+            building = bars.add_task(f"{scenario}: building the model", total=None)
+            sim = LegSimulator(scenario=scenario, nodes=nodes)
+            p = sim.parameters(**values)
+            bars.remove_task(building)
+            task = bars.add_task(f"{scenario}: time steps", total=n_steps)
+            # the integrator checks for non-finite values itself; numpy's overflow warnings
+            # on a diverging step would only add lines to its one-line error
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities,
+                             progress=lambda done: bars.update(task, completed=done))  # fmt: skip
+        config = sim.configuration
+        ds.attrs.update({f"{seg.name}_{key}_m": float(getattr(seg, key))
+                         for seg in (config.thigh, config.shank) for key in ("length", "com_from_proximal")})  # fmt: skip
+        try:
+            for path in (out_file, rrd, plot):
+                if path is not None:
+                    try:
+                        path.parent.mkdir(parents=True, exist_ok=True)
+                    except OSError as exc:
+                        raise FuzzyGaitError(f"{path}: cannot create its folder ({exc.strerror or exc})") from None
+            save_result(ds, out_file)
+            written.append(out_file)
+            if plot is not None:
+                from fuzzygait.viz.mechanics import write_energy_figure
+
+                write_energy_figure(ds, plot)
+                written.append(plot)
+            if rrd is not None:
+                from fuzzygait.viz.mechanics import write_simulation_recording
+
+                write_simulation_recording(ds, rrd, configuration=config)
+                written.append(rrd)
+        except BaseException:
+            for path in written:  # all outputs or none
+                _remove_output(path)
+            raise
+    _print_simulation_summary(ds)
+    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+
+
+def _print_simulation_summary(ds: object) -> None:
+    import numpy as np
+    import xarray as xr
+
+    from fuzzygait.viz.mechanics import energy_drift
+
+    assert isinstance(ds, xr.Dataset)
+    attrs = ds.attrs
+    iterations = np.asarray(ds["newton_iterations"].values)
+    n_steps = iterations.size
+    per_step = f"{iterations.mean():.2f} mean, {iterations.max()} max" if n_steps else "none"
+    nodes = int(attrs.get("nodes", 0))
+    out.print(
+        f"{attrs.get('scenario')}: {n_steps} steps of {float(attrs['dt']):g} s to t = {float(attrs['duration']):g} s"
+        + (f", {nodes} blade nodes" if nodes else "")
+        + f"; wall time {float(attrs.get('wall_time_s', np.nan)):.2f} s"
+        + ("" if int(attrs.get("compiled", 0)) else " (not compiled)"),
+        markup=False,
+    )
+    out.print(f"  Newton iterations per step: {per_step}", markup=False)
+    out.print(f"  max internal energy: {float(ds['internal_energy'].max()):.4g} J", markup=False)
+    drift = float(np.nanmax(np.abs(energy_drift(ds))))
+    out.print(f"  energy drift max |total + dissipated − initial| / |initial|: {drift:.3g}", markup=False)
+
+
 # --------------------------------------------------------------------------- sample data
 @app.command("sample-data")
 def sample_data(

@@ -110,9 +110,26 @@ def _beam_kernels(law: str = "homogeneous") -> dict[str, ca.Function]:
     viscosity = damping * ca.vertcat(shear_factor * area, shear_factor * area, area, i1, i2, torsion)
     dissipation = 0.5 * length * ca.sum1(viscosity * rate**2)
     # element force of the step equations: ∇W − f with the viscous force f = −∂V_visc/∂v
-    force = ca.gradient(energy, qe) + ca.gradient(dissipation, ve)
+    viscous = ca.gradient(dissipation, ve)
+    force = ca.gradient(energy, qe) + viscous
     args = [qe, ve, ce, pe]
+    # energy-momentum variant: the strains are quadratic in q, so with the interval midpoint
+    # q_m and velocity v, (Γ(q_a) + Γ(q_b))/2 = Γ(q_m) + h²/8 ∇²Γ[v, v] exactly and
+    # B(q_m)(q_b − q_a) = Γ(q_b) − Γ(q_a): the force B(q_m)ᵀ D (Γ_a + Γ_b)/2 does exactly the
+    # work W(q_b) − W(q_a) (discrete gradient, Betsch & Steinmann), and the viscous force
+    # B(q_m)ᵀ D^η B(q_m) v dissipates exactly h · 2 V_visc(q_m, v).
+    h = ca.SX.sym("h")
+    curvature = ca.jtimes(ca.jtimes(raw, qe, ve), qe, ve)  # ∇²Γ[v, v]
+    averaged = strain + h**2 / 8 * curvature
+    em_force = length * ca.mtimes(ca.jacobian(raw, qe).T, stiffness * averaged) + viscous
+    em_args = [qe, ve, ce, pe, h]
     return {
+        "em_force": ca.Function("beam_em_force", em_args, [em_force]),
+        "em_tangent": ca.Function(
+            "beam_em_tangent",
+            em_args,
+            [em_force, ca.densify(ca.jacobian(em_force, qe)), ca.densify(ca.jacobian(em_force, ve))],
+        ),
         "force": ca.Function("beam_force", args, [force]),
         "tangent": ca.Function(
             "beam_tangent", args, [force, ca.densify(ca.jacobian(force, qe)), ca.densify(ca.jacobian(force, ve))]

@@ -62,7 +62,8 @@ def _global_functions(builder: SystemBuilder) -> list[ca.Function]:
     ]
 
 
-KERNEL_KINDS = ("force", "tangent", "parameters", "energy")
+KERNEL_KINDS = ("force", "tangent", "parameters", "energy", "em_force", "em_tangent")
+SCHEMES = ("variational", "energy-momentum")
 
 
 def _group_functions(group: ElementGroup) -> list[ca.Function]:
@@ -191,8 +192,10 @@ class _StepAssembler:
     iteration then evaluates only the new interval and the constraints at ``q_{j+1}``.
     """
 
-    def __init__(self, model: DiscreteModel, p: np.ndarray, h: float, sensitivities: bool) -> None:
+    def __init__(self, model: DiscreteModel, p: np.ndarray, h: float, sensitivities: bool,
+                 scheme: str = "variational") -> None:
         self.model, self.p, self.h = model, p, h
+        self.energy_momentum = scheme == "energy-momentum"
         n, m = model.ndof, model.nconstraints
         self.n, self.m = n, m
         c = model.constants
@@ -223,15 +226,18 @@ class _StepAssembler:
             )
         m_rows, m_cols = mass_fn.coordinates(0)
         element_coords = [(g["rows"], g["cols"]) for g in self.groups]
+        self.hessian = BufferedFunction(f["constraint_hessian"])
+        h_rows, h_cols = self.hessian.coordinates(0)
+        for g in self.groups:
+            g["h"] = np.full(len(g["dofs"]), h)
         self.jacobian_pattern = _Pattern(
             (n + m, n + m),
-            [(m_rows, m_cols)] + element_coords + [(self.g_cols, n + self.g_rows), (n + self.g_rows, self.g_cols)],
+            [(m_rows, m_cols)] + element_coords + [(self.g_cols, n + self.g_rows), (n + self.g_rows, self.g_cols)]
+            + ([(h_rows, h_cols)] if self.energy_momentum else []),
         )
         if sensitivities:
             self.dgrad_dp = linear.sparse(1, dgrad_dp).toarray()
             self.mass_sens = BufferedFunction(f["mass_sens"])
-            self.hessian = BufferedFunction(f["constraint_hessian"])
-            h_rows, h_cols = self.hessian.coordinates(0)
             self.state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords * 2 + [(h_rows, h_cols)])
             self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords)
 
@@ -241,18 +247,24 @@ class _StepAssembler:
         vel = ((q_b[g["dofs"]] - q_a[g["dofs"]]) / self.h).T
         return mid, vel, g["constants"], g["pe"]
 
-    def _forces(self, q_a, q_b, weight) -> np.ndarray:
+    def _forces(self, q_a, q_b, weight, em: bool = False) -> np.ndarray:
         out = np.zeros(self.n)
         for g in self.groups:
-            (force,) = g["kernels"]["force"](*self._inputs(g, q_a, q_b))
+            if em:
+                (force,) = g["kernels"]["em_force"](*self._inputs(g, q_a, q_b), g["h"])
+            else:
+                (force,) = g["kernels"]["force"](*self._inputs(g, q_a, q_b))
             out += np.bincount(g["flat"], weights=weight * force, minlength=self.n)
         return out
 
-    def _tangents(self, q_a, q_b, weight):
+    def _tangents(self, q_a, q_b, weight, em: bool = False):
         """Per group: (d force/d q_b, d force/d q_a) blocks, weighted, layout [e, col, row]."""
         out = []
         for g in self.groups:
-            _, dq, dv = g["kernels"]["tangent"](*self._inputs(g, q_a, q_b))
+            if em:
+                _, dq, dv = g["kernels"]["em_tangent"](*self._inputs(g, q_a, q_b), g["h"])
+            else:
+                _, dq, dv = g["kernels"]["tangent"](*self._inputs(g, q_a, q_b))
             dq = dq.reshape(-1, 24, 24)
             dv = dv.reshape(-1, 24, 24)
             out.append((weight * (0.5 * dq + dv / self.h), weight * (0.5 * dq - dv / self.h)))
@@ -260,8 +272,14 @@ class _StepAssembler:
 
     # -- step -----------------------------------------------------------------------------
     def begin_step(self, q_cur, q_prev, first: bool, v0) -> None:
+        """Prepare step j → j+1; ``v0`` is the initial velocity (variational) or the current
+        velocity ``v_j`` (energy-momentum)."""
         h, c = self.h, self.model.constants
         self.q_cur, self.q_prev, self.first, self.v0 = q_cur, q_prev, first, v0
+        if self.energy_momentum:  # M (v_{j+1} − v_j)/h + ∇̄V + G(q_{j+½})ᵀλ = 0, v_{j+1} = 2Δq/h − v_j
+            self.mass_scale, self.weight = 2.0 / h**2, 1.0
+            self.base = self.grad_linear - self.mass @ (2.0 * (q_cur + h * v0) / h**2)
+            return
         if first:
             self.mass_scale, self.weight = 2.0 / h**2, 1.0
             self.base = self.grad_linear - self.mass @ (2.0 * (q_cur + h * v0) / h**2)
@@ -277,6 +295,17 @@ class _StepAssembler:
     def residual(self, x: np.ndarray) -> np.ndarray:
         n = self.n
         q_next, lam = x[:n], x[n:]
+        if self.energy_momentum:
+            jac_mid = self.constraints(0.5 * (self.q_cur + q_next), self.model.constants)[1]
+            constraint_force = np.bincount(self.g_cols, weights=jac_mid * lam[self.g_rows], minlength=n)
+            g_next = self.constraints(q_next, self.model.constants)[0]
+            residual_q = (
+                self.base
+                + self.mass_scale * (self.mass @ q_next)
+                + constraint_force
+                + self._forces(self.q_cur, q_next, 1.0, em=True)
+            )
+            return np.concatenate([residual_q, g_next])
         g_next = self.constraints(q_next, self.model.constants)[0]
         residual_q = (
             self.base
@@ -288,6 +317,16 @@ class _StepAssembler:
 
     def jacobian(self, x: np.ndarray) -> sp.csc_matrix:
         q_next = x[: self.n]
+        c = self.model.constants
+        if self.energy_momentum:
+            mid = 0.5 * (self.q_cur + q_next)
+            jac_mid = self.constraints(mid, c)[1].copy()
+            jac_next = self.constraints(q_next, c)[1].copy()
+            hess = 0.5 * self.hessian(mid, x[self.n :], c)[0]
+            blocks = [t[0] for t in self._tangents(self.q_cur, q_next, 1.0, em=True)]
+            return self.jacobian_pattern.matrix(
+                [self.mass_values * self.mass_scale] + blocks + [jac_mid, jac_next, hess]
+            )
         jac_next = self.constraints(q_next, self.model.constants)[1].copy()
         blocks = [t[0] for t in self._tangents(self.q_cur, q_next, self.weight)]
         return self.jacobian_pattern.matrix([self.mass_values * self.mass_scale] + blocks + [self.jac_cur, jac_next])
@@ -333,6 +372,9 @@ class Trajectory:
         multipliers: (N, nconstraints) λ_j of each step.
         iterations: (N,) Newton iterations per step.
         sensitivities: (N+1, ndof, n_p) dq/dp, or None.
+        velocities: (N+1, ndof) nodal velocities of the energy-momentum scheme (None for the
+            variational integrator, whose energies use central differences).
+        scheme: "variational" or "energy-momentum".
         timings: seconds spent in residual/Jacobian evaluation, LU factorisation and solves.
     """
 
@@ -342,6 +384,8 @@ class Trajectory:
     iterations: np.ndarray
     sensitivities: np.ndarray | None
     timings: dict[str, float]
+    velocities: np.ndarray | None = None
+    scheme: str = "variational"
 
 
 def _describe(parameter_names: Sequence[str], p: np.ndarray) -> str:
@@ -361,8 +405,14 @@ def integrate(
     constraint_tolerance: float = 1e-11,
     max_iterations: int = 25,
     progress: Callable[[int], None] | None = None,
+    scheme: str = "variational",
 ) -> Trajectory:
     """Integrate ``n_steps`` steps of size ``dt`` (s) from ``q0`` with velocity ``v0``.
+
+    ``scheme`` "variational" (default): the variational integrator of Eq. 4.26.
+    "energy-momentum": the one-step midpoint scheme with the discrete-gradient beam force and
+    ``G(q_{j+½})ᵀλ`` (Betsch & Steinmann): energy is conserved exactly without damping and
+    the damped balance ``E_0 = E_j + D_j`` holds to the Newton tolerance; no sensitivities.
 
     Newton stops when the last update is ≤ ``tolerance`` (m, unit directors) and the
     constraints hold to ``constraint_tolerance``.  Raises :class:`SimulationError` naming the
@@ -386,7 +436,15 @@ def integrate(
         raise ParameterError(
             f"initial configuration violates constraint {model.constraint_labels[worst]} by {g0[worst]:.3g}"
         )
-    assembler = _StepAssembler(model, p, dt, sensitivities)
+    if scheme not in SCHEMES:
+        raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}; got {scheme!r}")
+    energy_momentum = scheme == "energy-momentum"
+    if energy_momentum and sensitivities:
+        raise ParameterError("parameter sensitivities are available with the variational scheme only")
+    assembler = _StepAssembler(model, p, dt, sensitivities, scheme)
+    velocities = np.empty((n_steps + 1, n)) if energy_momentum else None
+    if velocities is not None:
+        velocities[0] = v0
     n_p = p.size
     q = np.empty((n_steps + 1, n))
     lam = np.empty((n_steps, m))
@@ -421,7 +479,7 @@ def integrate(
             x[:n] = 2 * q[j] - q[j - 1]
             x[n:] = lam[j - 1]
         t0 = clock()
-        assembler.begin_step(q_cur, q_prev, first, v0)
+        assembler.begin_step(q_cur, q_prev, first, velocities[j] if energy_momentum else v0)
         timings["evaluation"] += clock() - t0
         if lu is None or first:
             lu = factorise(x)
@@ -464,11 +522,13 @@ def integrate(
             raise SimulationError(
                 f"Newton did not converge at t = {(j + 1) * dt:.4f} s (step {j + 1}, dt = {dt:g} s): "
                 f"residual norm {norm:.3g} after {k} iterations; parameters {_describe(model.parameter_names, p)}; "
-                "try a smaller dt or more damping (eta)"
+                "try a smaller dt, more damping (eta) or the energy-momentum scheme"
             )
         q[j + 1] = x[:n]
         lam[j] = x[n:]
         iterations[j] = k
+        if velocities is not None:
+            velocities[j + 1] = 2.0 * (q[j + 1] - q[j]) / dt - velocities[j]
         if sensitivities:
             t0 = clock()
             exact = factorise(x)  # the Jacobian at the converged step
@@ -487,6 +547,8 @@ def integrate(
         iterations=iterations,
         sensitivities=sens,
         timings=timings,
+        velocities=velocities,
+        scheme=scheme,
     )
 
 
@@ -522,12 +584,14 @@ def trajectory_energies(model: DiscreteModel, trajectory: Trajectory, p: np.ndar
     p = np.asarray(p, float)
     c = model.constants
     v = np.empty_like(q)
-    v[1:-1] = (q[2:] - q[:-2]) / (2 * h)
+    v[1:-1] = (q[2:] - q[:-2]) / (2 * h) if n_nodes > 2 else v[1:-1]
     v[0] = 0.0 if v0 is None else v0
     if n_nodes > 2:  # second-order one-sided difference at the last node
         v[-1] = (3 * q[-1] - 4 * q[-2] + q[-3]) / (2 * h)
     elif n_nodes == 2:
         v[-1] = (q[-1] - q[-2]) / h
+    if trajectory.velocities is not None:  # energy-momentum: the scheme's own velocities
+        v = trajectory.velocities
     mass = BufferedFunction(model.functions["mass"])
     m_matrix = mass.sparse(0, mass(p, c)[0])
     kinetic = 0.5 * np.einsum("ij,ij->i", v, (m_matrix @ v.T).T)

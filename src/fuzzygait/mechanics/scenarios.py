@@ -106,8 +106,14 @@ class LegSimulator:
         duration: float | None = None,
         sensitivities: bool = False,
         progress: Callable[[int], None] | None = None,
+        scheme: str = "variational",
     ) -> xr.Dataset:
-        """Simulate and return the results (see the module docstring for the variables)."""
+        """Simulate and return the results (see the module docstring for the variables).
+
+        ``scheme``: "variational" (Eq. 4.26, with sensitivities) or "energy-momentum" (exact
+        energy balance, more robust for very flexible blades; no sensitivities) — see
+        :func:`fuzzygait.mechanics.integrator.integrate`.
+        """
         p = self.default_parameters.copy() if p is None else np.asarray(p, dtype=float).ravel()
         validate_parameters(p)
         dt = self.preset.dt if dt is None else float(dt)
@@ -119,7 +125,7 @@ class LegSimulator:
         n_steps = int(round(duration / dt))
         start = time.perf_counter()
         trajectory = integrate(
-            self.model, self.leg.q0, p, dt, n_steps, sensitivities=sensitivities, progress=progress
+            self.model, self.leg.q0, p, dt, n_steps, sensitivities=sensitivities, progress=progress, scheme=scheme
         )
         wall = time.perf_counter() - start
         return self._dataset(trajectory, p, dt, wall)
@@ -168,6 +174,8 @@ class LegSimulator:
             scenario=self.scenario,
             nodes=self.configuration.nodes if self.configuration.foot == "beam" else 0,
             foot=self.configuration.foot,
+            scheme=trajectory.scheme,
+            section=self.configuration.section,
             dt=dt,
             duration=float(trajectory.times[-1]),
             wall_time_s=wall,

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import os
 import uuid
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -148,6 +149,7 @@ def energy_figure(ds: xr.Dataset) -> Figure:
     ax_drift.plot(t, drift, color="tab:purple", lw=1.2)
     ax_drift.axhline(0.0, color="0.6", lw=0.6)
     ax_drift.set_ylabel("relative drift (−)", fontsize=9)
+    ax_drift.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
     ax_drift.set_xlabel("time (s)")
     ax_drift.grid(alpha=0.3)
     worst = float(np.nanmax(np.abs(drift))) if drift.size else 0.0
@@ -183,14 +185,21 @@ def segment_geometry(
 
     A segment's ``position`` is its centre of mass and its ``d3`` points proximally, so
     proximal = position + c·d3 and distal = position − (L − c)·d3 with the length ``L``
-    and centre-of-mass distance ``c`` from ``configuration`` (default: thesis Table 4.1).
+    and centre-of-mass distance ``c`` from ``configuration``; without it from the attributes
+    ``thigh_length_m``, ``thigh_com_from_proximal_m``, ... (written by ``fuzzygait simulate``)
+    when present, else thesis Table 4.1.
     """
     from fuzzygait.mechanics.presets import SHANK, THIGH
 
     _require(ds, "position", "directors")
-    segments = {"thigh": THIGH, "shank": SHANK}
+    segments: dict[str, Any] = {"thigh": THIGH, "shank": SHANK}
     if configuration is not None:
         segments = {"thigh": configuration.thigh, "shank": configuration.shank}
+    else:  # geometry saved by `fuzzygait simulate` in the attributes
+        for name, preset in list(segments.items()):
+            keys = (f"{name}_length_m", f"{name}_com_from_proximal_m")
+            if all(k in ds.attrs for k in keys):
+                segments[name] = _Segment(float(ds.attrs[keys[0]]), float(ds.attrs[keys[1]]))
     bodies = [str(b) for b in ds["body"].values]
     out = {}
     for name, data in segments.items():
@@ -200,6 +209,12 @@ def segment_geometry(
         d3 = ds["directors"].sel(body=name, director="d3").transpose("time", "xyz").values
         out[name] = (centre + data.com_from_proximal * d3, centre - (data.length - data.com_from_proximal) * d3)
     return out
+
+
+@dataclass(frozen=True)
+class _Segment:
+    length: float
+    com_from_proximal: float
 
 
 def _blade_bodies(ds: xr.Dataset) -> list[str]:
@@ -286,11 +301,15 @@ def write_simulation_recording(
             spacing = np.linalg.norm(np.diff(nodes[0], axis=0), axis=1)
             director_length = 0.4 * float(np.mean(spacing)) if spacing.size else 0.02
     rr, rrb = _import_rerun()
+    disabled = FuzzyGaitError(
+        f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN to write recordings"
+    )
+    # checked before a stream exists: rerun warns at exit about every disabled stream made
+    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
+        raise disabled
     rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
     if not rr.is_enabled(rec):
-        raise FuzzyGaitError(
-            f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN to write recordings"
-        )
+        raise disabled
     try:
         with atomic_output(path) as tmp:
             try:
