@@ -534,15 +534,19 @@ def simulate(
     plot: Annotated[
         Path | None, typer.Option("--plot", help="Also plot the energies over time (.png, .svg or .pdf).")
     ] = None,
+    scheme: Annotated[
+        str, typer.Option(help="Time integrator: variational (thesis Eq. 4.26) or energy-momentum "
+                          "(exact energy balance, more robust for very flexible blades; no sensitivities).")
+    ] = "variational",
     sensitivities: Annotated[
-        bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities (slower).")
+        bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities "
+                           "(slower; variational scheme only).")
     ] = False,
 ) -> None:
     """Simulate the leg with the prosthesis blade (swing or stance scenario) and save
     positions, directors, joint angles and energies over time.
 
-    Nothing is written when the simulation fails, e.g. when Newton does not
-    converge; then try a smaller time step or more damping.
+    Nothing is written when the simulation fails: try a smaller --dt or more damping then.
     """
     import numpy as np
 
@@ -568,6 +572,12 @@ def simulate(
         span = preset.duration if duration is None else duration
         if not (np.isfinite(span) and span >= step):
             raise FuzzyGaitError(f"--duration must be at least the time step ({step:g} s); got {span:g}")
+        from fuzzygait.mechanics.integrator import SCHEMES
+
+        if scheme not in SCHEMES:
+            raise FuzzyGaitError(f"--scheme must be {' or '.join(SCHEMES)}; got {scheme!r}")
+        if sensitivities and scheme != "variational":
+            raise FuzzyGaitError("--sensitivities needs --scheme variational")
         values = _parse_overrides(overrides or [])
         n_steps = int(round(span / step))
 
@@ -583,7 +593,7 @@ def simulate(
             # the integrator checks for non-finite values itself; numpy's overflow warnings
             # on a diverging step would only add lines to its one-line error
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-                ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities,
+                ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities, scheme=scheme,
                              progress=lambda done: bars.update(task, completed=done))  # fmt: skip
         config = sim.configuration
         ds.attrs.update({f"{seg.name}_{key}_m": float(getattr(seg, key))
@@ -630,6 +640,7 @@ def _print_simulation_summary(ds: object) -> None:
     out.print(
         f"{attrs.get('scenario')}: {n_steps} steps of {float(attrs['dt']):g} s to t = {float(attrs['duration']):g} s"
         + (f", {nodes} blade nodes" if nodes else "")
+        + (f", {attrs['scheme']} scheme" if "scheme" in attrs else "")
         + f"; wall time {float(attrs.get('wall_time_s', np.nan)):.2f} s"
         + ("" if int(attrs.get("compiled", 0)) else " (not compiled)"),
         markup=False,
