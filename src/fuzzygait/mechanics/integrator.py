@@ -39,7 +39,7 @@ from fuzzygait.mechanics.codegen import compile_functions, load_cached
 REFRESH_CONTRACTION = 0.25
 # Largest Newton update of any coordinate per iteration (m for positions, 1 for directors);
 # a time step of a few ms never moves a coordinate this far, so larger updates are divergence.
-MAX_UPDATE = 0.05
+MAX_UPDATE = 0.2
 
 GLOBAL_FUNCTIONS = ("mass", "mass_sens", "linear", "constraints", "constraint_hessian", "potential")
 
@@ -504,36 +504,46 @@ def integrate(
         timings["evaluation"] += clock() - t0
         if lu is None or first:
             lu = factorise(x)
-        # Newton with a kept factorisation: refresh it whenever the contraction is poor
+        # Newton with a kept factorisation (a chord step while it contracts well).  When an
+        # update shrinks by less than REFRESH_CONTRACTION: if the previous update came from a
+        # stale factorisation, undo it and refactorise there; otherwise refactorise here
+        # (full Newton from then on, as long as needed).
         converged = False
         previous = np.inf
         residual = np.full(n + m, np.nan)
+        fresh_here = first  # the factorisation was computed at the current x
+        last_dx: np.ndarray | None = None
+        last_stale = False
         k = 0
         while k < max_iterations and lu is not None:
             t0 = clock()
             residual = assembler.residual(x)
             timings["evaluation"] += clock() - t0
-            if not np.all(np.isfinite(residual)):
-                break
-            t0 = clock()
-            dx = lu.solve(residual)
-            timings["solve"] += clock() - t0
-            size = float(np.max(np.abs(dx[:n])))
-            if not np.isfinite(size):
-                break
+            finite = bool(np.all(np.isfinite(residual)))
+            if finite:
+                t0 = clock()
+                dx = lu.solve(residual)
+                timings["solve"] += clock() - t0
+                size = float(np.max(np.abs(dx[:n])))
+                finite = np.isfinite(size)
+            if not finite or size > REFRESH_CONTRACTION * previous:
+                if last_stale and last_dx is not None:
+                    x += last_dx  # undo the chord step that went astray
+                elif fresh_here or not finite:
+                    break  # a fresh Newton step diverged or left the domain
+                lu = factorise(x)
+                fresh_here, last_dx, last_stale, previous = True, None, False, np.inf
+                continue
             if size > MAX_UPDATE:  # damped Newton: never jump further than MAX_UPDATE per iteration
                 dx *= MAX_UPDATE / size
             x -= dx
             k += 1
+            last_dx, last_stale, fresh_here = dx, not fresh_here, False
             if size <= tolerance * (1.0 + float(np.max(np.abs(x[:n])))) and (
                 np.max(np.abs(residual[n:]), initial=0.0) <= constraint_tolerance or size == 0.0
             ):
                 converged = True
                 break
-            if size > REFRESH_CONTRACTION * previous:
-                lu = factorise(x)  # poor contraction: a fresh Jacobian (full Newton when needed)
-                previous = np.inf
-                continue
             previous = size
         if converged:
             g_check = assembler.residual(x)[n:]
