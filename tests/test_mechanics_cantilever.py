@@ -22,7 +22,6 @@ Measured (20 nodes, compile=False):
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 

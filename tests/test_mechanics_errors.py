@@ -7,7 +7,6 @@ parameter (and, for a failed step, the time, the residual and the parameter valu
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from fuzzygait.errors import FuzzyGaitError, ParameterError, SimulationError
