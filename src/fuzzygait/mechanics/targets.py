@@ -1,0 +1,98 @@
+"""The leg simulator as a model of the uncertainty engine (``f(p) -> target(t)``).
+
+:class:`LegTargetModel` exposes one target output of a scenario — total deformation energy
+(Eq. 5.1), maximum element energy (Eq. 5.2) or a coordinate of the last blade node — as a
+function of a chosen subset of the leg parameters, with sensitivities from the
+integrator's forward sensitivity analysis, so the Graph Follower algorithm can linearise
+it (thesis OP-III).  Every ``evaluate`` is one forward simulation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from fuzzygait.errors import ParameterError
+from fuzzygait.mechanics.leg import LEG_PARAMETERS
+from fuzzygait.mechanics.scenarios import LegSimulator
+
+TARGETS = (
+    "total_deformation_energy",
+    "max_element_energy",
+    "last_node_x",
+    "last_node_y",
+    "last_node_z",
+)
+
+
+@dataclass
+class LegTargetModel:
+    """One target output of a scenario as a function of some leg parameters.
+
+    Args:
+        simulator: the scenario (built once; its compiled library is reused).
+        target: one of :data:`TARGETS` (J for the energies, m for the node coordinates).
+        names: the varying parameters (names of :data:`~fuzzygait.mechanics.leg.LEG_PARAMETERS`),
+            in the order of the engine's parameter vector.
+        base: the full parameter vector the others are fixed at (default: the scenario's).
+        dt, duration: time step and simulated time (s; default: the scenario's).
+        scheme: time stepping scheme; sensitivities need "variational".
+    """
+
+    simulator: LegSimulator
+    target: str = "total_deformation_energy"
+    names: Sequence[str] = ("E",)
+    base: np.ndarray | None = None
+    dt: float | None = None
+    duration: float | None = None
+    scheme: str = "variational"
+    runs: int = field(default=0, init=False)
+
+    def __post_init__(self) -> None:
+        if self.target not in TARGETS:
+            raise ParameterError(f"unknown target {self.target!r}; choose one of {', '.join(TARGETS)}")
+        unknown = [n for n in self.names if n not in LEG_PARAMETERS]
+        if unknown:
+            raise ParameterError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(LEG_PARAMETERS)}")
+        self.names = tuple(self.names)
+        self.base = self.simulator.default_parameters.copy() if self.base is None else np.asarray(self.base, float)
+        self.dt = self.simulator.preset.dt if self.dt is None else float(self.dt)
+        self.duration = self.simulator.preset.duration if self.duration is None else float(self.duration)
+        n_steps = int(round(self.duration / self.dt))
+        self.times = np.arange(n_steps + 1) * self.dt
+        self._index = [LEG_PARAMETERS.index(n) for n in self.names]
+
+    def full_parameters(self, p: np.ndarray) -> np.ndarray:
+        """The full leg parameter vector with the varying entries set to ``p``."""
+        full = self.base.copy()
+        full[self._index] = np.asarray(p, float).ravel()
+        return full
+
+    def _run(self, p: np.ndarray, sensitivities: bool):
+        self.runs += 1
+        return self.simulator.run(
+            self.full_parameters(p), dt=self.dt, duration=self.duration,
+            sensitivities=sensitivities, scheme=self.scheme,
+        )
+
+    def _select(self, ds, sensitivities: bool):
+        if self.target.startswith("last_node_"):
+            axis = self.target[-1]
+            value = ds["last_node_position"].sel(xyz=axis).values
+            sens = ds["last_node_position_sensitivity"].sel(xyz=axis).values if sensitivities else None
+        else:
+            value = ds[self.target].values
+            sens = ds[f"{self.target}_sensitivity"].values if sensitivities else None
+        return value, (sens[:, self._index] if sens is not None else None)
+
+    def evaluate(self, p: np.ndarray) -> np.ndarray:
+        """Target output at :attr:`times` for the varying parameters ``p`` (one simulation)."""
+        value, _ = self._select(self._run(p, False), False)
+        return value
+
+    def evaluate_with_sensitivities(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Target output and its derivatives ``(n_time,), (n_time, n_p)`` in one simulation."""
+        value, sens = self._select(self._run(p, True), True)
+        return value, sens
