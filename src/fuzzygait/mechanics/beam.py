@@ -130,6 +130,7 @@ def _beam_kernels(law: str = "homogeneous") -> dict[str, ca.Function]:
             em_args,
             [em_force, ca.densify(ca.jacobian(em_force, qe)), ca.densify(ca.jacobian(em_force, ve))],
         ),
+        "em_parameters": ca.Function("beam_em_parameters", em_args, [ca.densify(ca.jacobian(em_force, pe))]),
         "force": ca.Function("beam_force", args, [force]),
         "tangent": ca.Function(
             "beam_tangent", args, [force, ca.densify(ca.jacobian(force, qe)), ca.densify(ca.jacobian(force, ve))]

@@ -62,7 +62,7 @@ def _global_functions(builder: SystemBuilder) -> list[ca.Function]:
     ]
 
 
-KERNEL_KINDS = ("force", "tangent", "parameters", "energy", "em_force", "em_tangent")
+KERNEL_KINDS = ("force", "tangent", "parameters", "energy", "em_force", "em_tangent", "em_parameters")
 SCHEMES = ("variational", "energy-momentum")
 
 
@@ -239,6 +239,7 @@ class _StepAssembler:
             self.dgrad_dp = linear.sparse(1, dgrad_dp).toarray()
             self.mass_sens = BufferedFunction(f["mass_sens"])
             self.state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords * 2 + [(h_rows, h_cols)])
+            self.em_state_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords + [(h_rows, h_cols)])
             self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords)
 
     # -- kernels --------------------------------------------------------------------------
@@ -332,10 +333,26 @@ class _StepAssembler:
         return self.jacobian_pattern.matrix([self.mass_values * self.mass_scale] + blocks + [self.jac_cur, jac_next])
 
     def sensitivity_rhs(self, x, s_cur, s_prev) -> np.ndarray:
-        """``∂R/∂q_j S_j + ∂R/∂q_{j−1} S_{j−1} + ∂R/∂p`` (n × n_p), the rows of ``R_q``."""
+        """``∂R/∂q_j S_j + ∂R/∂q_{j−1} S_{j−1} + ∂R/∂p`` (n × n_p), the rows of ``R_q``.
+
+        Energy-momentum: ``s_prev`` is the velocity sensitivity ``dv_j/dp`` and the terms are
+        ``∂R/∂q_j S_j + ∂R/∂v_j dv_j/dp + ∂R/∂p``.
+        """
         n, h, p, c = self.n, self.h, self.p, self.model.constants
         q_next, lam = x[:n], x[n:]
         q_cur, q_prev = self.q_cur, self.q_prev
+        if self.energy_momentum:
+            acc = 2.0 * (q_next - q_cur - h * self.v0) / h**2
+            rhs = self.mass_sens.sparse(0, self.mass_sens(acc, p, c)[0]).toarray() + self.dgrad_dp
+            for g in self.groups:
+                (dp,) = g["kernels"]["em_parameters"](*self._inputs(g, q_cur, q_next), g["h"])
+                dp = dp.reshape(-1, len(g["group"].parameter_indices), 24)
+                for k, index in enumerate(g["group"].parameter_indices):
+                    rhs[:, index] += np.bincount(g["flat"], weights=dp[:, k, :].ravel(), minlength=n)
+            blocks = self._tangents(q_cur, q_next, 1.0, em=True)
+            hess = 0.5 * self.hessian(0.5 * (q_cur + q_next), lam, c)[0]
+            d_cur = self.em_state_pattern.matrix([-2.0 * self.mass_values / h**2] + [t[1] for t in blocks] + [hess])
+            return rhs + d_cur @ s_cur - (2.0 / h) * (self.mass @ s_prev)
         if self.first:
             acc = 2.0 * (q_next - q_cur - h * self.v0) / h**2
             intervals = [(q_cur, q_next, 1.0)]
@@ -433,7 +450,8 @@ def integrate(
     ``scheme`` "variational" (default): the variational integrator of Eq. 4.26.
     "energy-momentum": the one-step midpoint scheme with the discrete-gradient beam force and
     ``G(q_{j+½})ᵀλ`` (Betsch & Steinmann): energy is conserved exactly without damping and
-    the damped balance ``E_0 = E_j + D_j`` holds to the Newton tolerance; no sensitivities.
+    the damped balance ``E_0 = E_j + D_j`` holds to the Newton tolerance.  Both give
+    sensitivities.
 
     Newton stops when the last update is ≤ ``tolerance`` (m, unit directors) and the
     constraints hold to ``constraint_tolerance``.  Raises :class:`SimulationError` naming the
@@ -460,8 +478,6 @@ def integrate(
     if scheme not in SCHEMES:
         raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}; got {scheme!r}")
     energy_momentum = scheme == "energy-momentum"
-    if energy_momentum and sensitivities:
-        raise ParameterError("parameter sensitivities are available with the variational scheme only")
     assembler = _StepAssembler(model, p, dt, sensitivities, scheme)
     velocities = np.empty((n_steps + 1, n)) if energy_momentum else None
     if velocities is not None:
@@ -472,6 +488,7 @@ def integrate(
     iterations = np.zeros(n_steps, dtype=int)
     factorisations = 0
     sens = np.zeros((n_steps + 1, n, n_p)) if sensitivities else None
+    sens_v = np.zeros((n, n_p))  # dv_j/dp of the energy-momentum scheme (v_0 is given)
     q[0] = q0
     timings = {"evaluation": 0.0, "factorisation": 0.0, "solve": 0.0, "sensitivity": 0.0}
     x = np.concatenate([q0 + dt * v0, np.zeros(m)])
@@ -565,9 +582,14 @@ def integrate(
         if sensitivities:
             t0 = clock()
             exact = factorise(x)  # the Jacobian at the converged step
-            s_prev = sens[j - 1] if j > 0 else sens[0]
+            if energy_momentum:  # velocity sensitivities dv_j/dp ride along
+                s_prev = sens_v
+            else:
+                s_prev = sens[j - 1] if j > 0 else sens[0]
             rhs = assembler.sensitivity_rhs(x, sens[j], s_prev)
             sens[j + 1] = -exact.solve(np.vstack([rhs, np.zeros((m, n_p))]))[:n]
+            if energy_momentum:
+                sens_v = 2.0 * (sens[j + 1] - sens[j]) / dt - sens_v
             # the Newton path keeps its own factorisation: trajectories are bit-identical with and without sensitivities
             timings["sensitivity"] += clock() - t0
         if progress is not None:

@@ -111,7 +111,7 @@ class LegSimulator:
         """Simulate and return the results (see the module docstring for the variables).
 
         ``scheme``: "variational" (Eq. 4.26, with sensitivities) or "energy-momentum" (exact
-        energy balance, more robust for very flexible blades; no sensitivities) — see
+        energy balance, more robust for very flexible and stiff blades; also with sensitivities) — see
         :func:`fuzzygait.mechanics.integrator.integrate`.
         """
         p = self.default_parameters.copy() if p is None else np.asarray(p, dtype=float).ravel()
