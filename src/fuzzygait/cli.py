@@ -623,6 +623,99 @@ def simulate(
     out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
 
 
+@app.command("fuzzy-sim")
+def fuzzy_sim(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
+    fuzzy: Annotated[
+        list[str], typer.Option("--fuzzy", metavar="NAME=SPREAD,...",
+                                help="Triangular fuzzy parameters as ± relative spreads, e.g. E=10% (repeatable).")
+    ],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy result, .zarr or .nc.")],
+    target: Annotated[
+        str | None, typer.Option(help="total_deformation_energy (swing default), max_element_energy (stance "
+                                 "default), last_node_x|y|z.")
+    ] = None,  # fmt: skip
+    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.5,1",
+    stride: Annotated[int, typer.Option(help="Optimise every STRIDE-th time node (thesis: 100).")] = 100,
+    novelty: Annotated[float, typer.Option(help="Novelty tolerance, relative (thesis: 0.01 % = 1e-4).")] = 1e-4,
+    nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's.")] = None,
+    duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's.")] = None,
+    overrides: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE,...", help="Fixed parameter values (SI units).")
+    ] = None,
+    scheme: Annotated[str, typer.Option(help="variational or energy-momentum.")] = "variational",
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write the hulls as a Rerun recording.")] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Also plot the hulls (.png, .svg, .pdf).")] = None,
+    parameter_plot: Annotated[
+        Path | None, typer.Option("--parameter-plot", help="Also plot the extremising parameter sets (Fig. 5.6).")
+    ] = None,
+) -> None:
+    """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
+    (Graph Follower algorithm, linearised with the simulator's sensitivities)."""
+    import numpy as np
+
+    from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics, parse_fuzzy
+    from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+    from fuzzygait.uncertainty.storage import SUFFIXES, save_result
+
+    written: list[Path] = []
+    with _user_errors():
+        if scenario not in SCENARIOS:
+            raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
+        if out_file.suffix.lower() not in SUFFIXES:
+            raise FuzzyGaitError(f"{out_file}: --out must end in .zarr or .nc")
+        spreads = parse_fuzzy(fuzzy)
+        levels = _parse_alphas(alphas)
+        values = _parse_overrides(overrides or [])
+        if stride < 1:
+            raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
+        bars = _progress_bars()
+        with bars:
+            building = bars.add_task(f"{scenario}: building the model", total=None)
+            sim = LegSimulator(scenario=scenario, nodes=nodes)
+            base = sim.parameters(**values)
+            bars.remove_task(building)
+            task = bars.add_task(f"{scenario}: α-level optimisations", total=None)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                result = fuzzy_forward_dynamics(
+                    sim, spreads, target=target, base=base, alphas=levels, stride=stride, novelty_tol=novelty,
+                    dt=dt, duration=duration, scheme=scheme,
+                    progress=lambda done, total: bars.update(task, completed=done, total=total),
+                )  # fmt: skip
+        try:
+            for path in (out_file, rrd, plot, parameter_plot):
+                if path is not None:
+                    path.parent.mkdir(parents=True, exist_ok=True)
+            save_result(result, out_file)
+            written.append(out_file)
+            from fuzzygait.viz.fuzzy_dynamics import (
+                extremiser_figure,
+                hull_figure,
+                write_figure,
+                write_fuzzy_recording,
+            )
+
+            if plot is not None:
+                written.append(write_figure(hull_figure(result), plot))
+            if parameter_plot is not None:
+                written.append(write_figure(extremiser_figure(result), parameter_plot))
+            if rrd is not None:
+                written.append(write_fuzzy_recording(result, rrd))
+        except BaseException:
+            for path in written:  # all outputs or none
+                _remove_output(path)
+            raise
+    attrs = result.attrs
+    out.print(
+        f"{scenario}: {attrs['target']} with fuzzy {', '.join(f'{n} ±{100 * s:g} %' for n, s in spreads.items())}; "
+        f"{attrs['model_evaluations']} forward simulations, {attrs['optimisations']} optimisations, "
+        f"wall time {attrs['wall_time_s']:.1f} s",
+        markup=False,
+    )
+    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+
+
 def _print_simulation_summary(ds: object) -> None:
     import numpy as np
     import xarray as xr

@@ -68,7 +68,7 @@ def extremiser_figure(result: xr.Dataset, alpha: float = 0.0) -> Figure:
         ax.set_yticks(range(len(names)), names, fontsize=8)
         ax.set_title(f"{bound} hull, α = {alpha:g}: extremising parameter within its α-cut", fontsize=9)
     axes[-1].set_xlabel("time (s)")
-    fig.colorbar(image, ax=axes, label="position in α-cut (−1 left … +1 right)", shrink=0.8)
+    fig.colorbar(image, ax=axes, label="position in α-cut", shrink=0.8)
     fig.suptitle(_title(result), fontsize=10)
     return fig
 
@@ -79,4 +79,38 @@ def write_figure(fig: Figure, path: str | os.PathLike[str]) -> Path:
     with atomic_output(path) as tmp:
         fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or "png", dpi=120)
     plt.close(fig)
+    return path
+
+
+def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
+                          recording_name: str = "fuzzygait-fuzzy-dynamics") -> Path:
+    """Write the hulls as Rerun time series (rerun-sdk 0.41): ``<target>/alpha_<α>/lower|upper``
+    and ``<target>/deterministic`` on the timeline ``time`` (s), in the target's unit."""
+    import uuid
+
+    from fuzzygait.errors import FuzzyGaitError, ParameterError
+    from fuzzygait.viz.rerun_log import _import_rerun, _log_series
+
+    path = Path(path)
+    if path.suffix.lower() != ".rrd":
+        raise ParameterError(f"{path}: a Rerun recording must end in .rrd")
+    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
+        raise FuzzyGaitError(f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN")
+    rr, _ = _import_rerun()
+    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
+    target = f"{result.attrs.get('target', 'target')}_{result.attrs.get('target_units', '')}".rstrip("_")
+    times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
+    cmap = plt.get_cmap("Blues")
+    with atomic_output(path) as tmp:
+        rec.save(tmp)
+        for alpha in sorted(float(a) for a in result["alpha"].values if a < 1):
+            colour = tuple(int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
+            for bound in ("lower", "upper"):
+                values = result["hull"].sel(alpha=alpha, bound=bound).values
+                _log_series(rec, rr, f"{target}/alpha_{alpha:g}/{bound}", times, values,
+                            f"α = {alpha:g} {bound}", colour, 1.5)  # fmt: skip
+        _log_series(rec, rr, f"{target}/deterministic", times, result["deterministic"].values,
+                    "deterministic", (0, 0, 0), 2.0)  # fmt: skip
+        rec.flush()
+        rec.disconnect()
     return path
