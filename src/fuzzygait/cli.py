@@ -716,6 +716,75 @@ def fuzzy_sim(
     out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
 
 
+@app.command("frv-sim")
+def frv_sim(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="stance (thesis §5.7) or swing.")],
+    out_store: Annotated[Path, typer.Option("--out", "-o", help="FRV study, a .zarr directory; an existing "
+                                            "study is extended with --samples more samples.")],
+    parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter.")] = "E",
+    value: Annotated[
+        float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the scenario's.")
+    ] = None,
+    samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
+    disc: Annotated[int, typer.Option(help="Grouping grid points N_p-disc.")] = 100,
+    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
+    distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
+    seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
+    target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
+    overrides: Annotated[
+        list[str] | None, typer.Option("--set", metavar="NAME=VALUE,...", help="Fixed parameter values (SI units).")
+    ] = None,
+    nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s).")] = None,
+    duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s).")] = None,
+    scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",
+    workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations.")] = 2,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Address of an existing Dask scheduler (e.g. tcp://host:8786).")
+    ] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists.")] = False,
+) -> None:
+    """FRV-GFA (thesis §2.7, §5.7): a leg parameter as a fuzzy random variable, grouped
+    samples, Graph Follower hulls on the occurring intervals only, output samples and
+    their counts in a chunked zarr store."""
+    from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
+    from fuzzygait.mechanics.leg import LEG_PARAMETERS
+    from fuzzygait.mechanics.scenarios import SCENARIOS
+    from fuzzygait.uncertainty.frv import FRVSpec
+
+    with _user_errors():
+        if scenario not in SCENARIOS:
+            raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
+        if out_store.suffix.lower() != ".zarr":
+            raise FuzzyGaitError(f"{out_store}: --out must be a .zarr directory")
+        if parameter not in LEG_PARAMETERS:
+            raise FuzzyGaitError(f"--frv {parameter!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
+        values = _parse_overrides(overrides or [])
+        levels = _parse_alphas(alphas)
+        if value is not None:
+            values[parameter] = value
+        from fuzzygait.mechanics.leg import default_parameters
+
+        preset = SCENARIOS[scenario]
+        p_det = values.get(parameter, float(default_parameters(preset.material, shank_mass=preset.shank_mass)[
+            LEG_PARAMETERS.index(parameter)]))  # fmt: skip
+        spec = FRVSpec(parameter, p_det, alphas=levels, distribution=distribution)
+        out_store.parent.mkdir(parents=True, exist_ok=True)
+        with _progress_bars() as bars:
+            bars.add_task(f"{scenario}: FRV-GFA ({samples} samples)", total=None)
+            study = leg_frv_study(scenario, spec, samples, out_store, target=target, base_overrides=values,
+                                  n_disc=disc, seed=seed, nodes=nodes, dt=dt, duration=duration, scheme=scheme,
+                                  workers=workers, scheduler=scheduler, overwrite=overwrite)  # fmt: skip
+    counts = study.counts
+    out.print(
+        f"{scenario}: {counts.get('samples')} samples; occurring intervals {counts.get('occurring_intervals')} of "
+        f"{counts.get('possible_intervals')} possible; forward simulations {counts.get('forward_simulations')}; "
+        f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s",
+        markup=False,
+    )
+    out.print(f"wrote {out_store}", markup=False)
+
+
 def _print_simulation_summary(ds: object) -> None:
     import numpy as np
     import xarray as xr

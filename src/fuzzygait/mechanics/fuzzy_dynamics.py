@@ -127,3 +127,57 @@ def dense_reference(model: LegTargetModel, low: float, high: float, count: int =
     if evaluator is not None:
         return np.asarray(evaluator(grid))
     return np.array([model.evaluate(p) for p in grid])
+
+
+def leg_frv_study(
+    scenario: str,
+    spec,
+    n_samples: int,
+    store,
+    *,
+    target: str | None = None,
+    base_overrides: Mapping[str, float] | None = None,
+    n_disc: int = 100,
+    seed: int = 0,
+    nodes: int = 20,
+    dt: float | None = None,
+    duration: float | None = None,
+    scheme: str = "energy-momentum",
+    workers: int = 1,
+    scheduler: str | None = None,
+    sensitivities: bool = True,
+    chunk: int = 256,
+    overwrite: bool = False,
+):
+    """Run (or extend) the FRV-GFA of a leg scenario (thesis §5.7) into a zarr ``store``.
+
+    ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
+    parameter; the other parameters are the scenario's with ``base_overrides``.  Forward
+    simulations run through :class:`~fuzzygait.uncertainty.parallel.BatchEvaluator`
+    (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
+    compiled simulator library from the on-disk cache.  An existing store is extended with
+    ``n_samples`` more samples (every stored library trajectory and interval hull reused)
+    unless ``overwrite``.  Returns the :class:`~fuzzygait.uncertainty.frv.FRVStudy`.
+    """
+    from pathlib import Path
+
+    from fuzzygait.uncertainty.frv import FRVStudy
+    from fuzzygait.uncertainty.parallel import BatchEvaluator, LegModelRecipe
+
+    if spec.name not in LEG_PARAMETERS:
+        raise ParameterError(f"FRV parameter {spec.name!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
+    simulator = LegSimulator(scenario, nodes=nodes)
+    base = simulator.parameters(**dict(base_overrides or {}))
+    target = target or DEFAULT_TARGET[scenario]
+    model = LegTargetModel(simulator, target, (spec.name,), base=base, dt=dt, duration=duration, scheme=scheme)
+    recipe = LegModelRecipe(scenario, target, (spec.name,), tuple(float(v) for v in base), nodes=nodes,
+                            dt=model.dt, duration=model.duration, scheme=scheme)  # fmt: skip
+    path = Path(store)
+    with BatchEvaluator(recipe, scheduler=scheduler, workers=workers, sensitivities=sensitivities) as evaluator:
+        if path.exists() and not overwrite:
+            study = FRVStudy.open(path, model, evaluator=evaluator)
+            study.add_samples(n_samples)
+        else:
+            study = FRVStudy.create(model, spec, n_samples, n_disc=n_disc, seed=seed, store=path,
+                                    evaluator=evaluator, chunk=chunk, overwrite=overwrite)  # fmt: skip
+    return study
