@@ -16,7 +16,7 @@ import numpy as np
 from fuzzygait.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration
 from fuzzygait.mechanics.beam import BeamSection, add_beam
-from fuzzygait.mechanics.geometry import straight_beam
+from fuzzygait.mechanics.geometry import BladeMesh, straight_beam
 from fuzzygait.mechanics.integrator import DiscreteModel, Trajectory, integrate
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, RectangleSection
 
@@ -61,6 +61,41 @@ class Cantilever:
         return integrate(self.model, self.q0, p, dt, n_steps, **kwargs)
 
 
+def build_clamped_beam(
+    mesh: BladeMesh,
+    tip_force: tuple[float, float, float],
+    gravity: float = 0.0,
+    compile: bool = True,
+    stiffness=None,
+    reference_modulus: float | None = None,
+) -> tuple[DiscreteModel, np.ndarray]:
+    """A beam on ``mesh`` (attachment frame = inertial frame) clamped at node 0 (position and
+    orientation, Eq. 4.10) with a constant force (N) on its last node.  Optional effective
+    section ``stiffness`` (e.g. the homogenised three-layer blade) as in
+    :func:`~fuzzygait.mechanics.beam.add_beam`.  Returns the model (parameters
+    :data:`BEAM_PARAMETERS`) and the reference configuration."""
+    nodes = mesh.n_nodes
+    names = [f"node{k:03d}" for k in range(nodes)]
+    builder = SystemBuilder(names, BEAM_PARAMETERS, gravity=gravity)
+    builder.key_parts.append(f"clamped-beam:gravity={gravity != 0}")
+    reference = np.array([director_configuration(x, d) for x, d in zip(mesh.positions, mesh.directors)])
+    bodies = [builder.body(name) for name in names]
+    for body in bodies:
+        builder.add_internal_constraints(body)
+    section = RectangleSection(width=mesh.width, height=mesh.total_thickness())
+    add_beam(
+        builder, "beam", bodies, reference, mesh.element_length,
+        BeamSection(section.area, section.second_moment_1, section.second_moment_2,
+                    section.torsion_constant, SHEAR_CORRECTION_RECTANGLE),
+        stiffness=stiffness, reference_modulus=reference_modulus,
+    )
+    builder.add_clamp("clamp", bodies[0], mesh.positions[0], mesh.directors[0])
+    force = builder.constant("tip_force", tip_force)
+    tip = bodies[-1].position(builder.q)
+    builder.add_load_potential(-(force[0] * tip[0] + force[1] * tip[1] + force[2] * tip[2]))
+    return DiscreteModel.from_builder(builder, compile=compile), reference.ravel()
+
+
 def build_cantilever(
     length: float,
     width: float,
@@ -77,23 +112,6 @@ def build_cantilever(
     if nodes < 2:
         raise ParameterError(f"a cantilever needs at least 2 nodes; got {nodes}")
     mesh = straight_beam(length, width, thickness, nodes)
-    names = [f"node{k:03d}" for k in range(nodes)]
-    builder = SystemBuilder(names, BEAM_PARAMETERS, gravity=gravity)
-    builder.key_parts.append(f"cantilever:gravity={gravity != 0}")
-    reference = np.array([director_configuration(x, d) for x, d in zip(mesh.positions, mesh.directors)])
-    bodies = [builder.body(name) for name in names]
-    for body in bodies:
-        builder.add_internal_constraints(body)
-    section = RectangleSection(width=mesh.width, height=mesh.total_thickness())
-    add_beam(
-        builder, "beam", bodies, reference, mesh.element_length,
-        BeamSection(section.area, section.second_moment_1, section.second_moment_2,
-                    section.torsion_constant, SHEAR_CORRECTION_RECTANGLE),
-    )
-    builder.add_clamp("clamp", bodies[0], mesh.positions[0], mesh.directors[0])
-    force = builder.constant("tip_force", tip_force)
-    tip = bodies[-1].position(builder.q)
-    builder.add_load_potential(-(force[0] * tip[0] + force[1] * tip[1] + force[2] * tip[2]))
-    model = DiscreteModel.from_builder(builder, compile=compile)
+    model, q0 = build_clamped_beam(mesh, tip_force, gravity=gravity, compile=compile)
     single = RectangleSection(width=np.float64(width), height=np.float64(thickness))
-    return Cantilever(model, reference.ravel(), length, width, thickness, single, nodes)
+    return Cantilever(model, q0, length, width, thickness, single, nodes)
