@@ -95,6 +95,8 @@ def test_notebook_runs(path: Path, kernel_dir: Path, tmp_path: Path) -> None:
 
     if path.name == "01_graph_follower_pendulum.ipynb":
         check_pendulum(text)
+    if path.name == "03_frv_stance.ipynb":
+        check_frv_stance(text)
 
 
 def check_pendulum(text: str) -> None:
@@ -106,3 +108,15 @@ def check_pendulum(text: str) -> None:
     assert counts, "the notebook no longer prints its evaluation counts"
     assert int(counts.group(1)) < int(counts.group(2))
     assert "loaded result equals the computed one" in text
+
+
+def check_frv_stance(text: str) -> None:
+    """The FRV-GFA study needs far fewer intervals than possible and adding samples to the
+    stored study needs (almost) no new forward simulations; the Monte Carlo check ran."""
+    intervals = re.search(r"possible intervals \(Eq. 2.32\): (\d+)\n\s+occurring intervals: (\d+)", text)
+    assert intervals, "the notebook no longer prints its interval counts"
+    assert int(intervals.group(2)) < int(intervals.group(1))
+    added = re.search(r"new forward simulations when adding 1000 samples: (\d+) \(first run: (\d+)\)", text)
+    assert added, "the notebook no longer prints the forward simulations of the added samples"
+    assert int(added.group(1)) <= 2 < int(added.group(2))
+    assert len(re.findall(r"KS statistic [0-9.]+, p = [0-9.]+", text)) == 8

@@ -120,7 +120,7 @@ def _pdf(fit, a: int, b: int, node: int, xs: np.ndarray) -> np.ndarray:
 
 def _column(store: Store, node: int, data: str) -> np.ndarray:
     """All samples' values at one output time node: ``(n, n_alpha, 2)``, streamed."""
-    return np.concatenate([block[..., node] for block in iter_hull_blocks(store, data)])
+    return np.concatenate([block[..., node].copy() for block in iter_hull_blocks(store, data)])  # copies: blocks freed
 
 
 def output_distribution_figure(store: Store, node: int, data: str = "hulls", kind: str = "normal",
