@@ -748,7 +748,7 @@ class FRVStudy:
         for a, b in _blocks(start, stop, self.chunk):  # pass 3
             cuts = generate_samples(self.spec, b - a, self.seed, a)
             bins = group(cuts, self.grid)
-            hull, changed = self._assemble(bins)
+            hull, changed = self._assemble(bins, cuts[:, -1, 0])
             repaired += changed
             ds = xr.Dataset({"hull": (("sample", "alpha", "bound", "time"), hull),
                              "cut": (("sample", "alpha", "bound"), cuts), "bin": (("sample", "alpha", "bound"), bins)},
@@ -762,6 +762,11 @@ class FRVStudy:
                            wall_time=self.counts["wall_time"] + elapsed, last_forward_simulations=simulations,
                            last_new_intervals=int(new_keys.size), last_wall_time=elapsed)  # fmt: skip
         self._write_meta()
+
+    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
+        slopes = self._lib_slopes[..., 0] if self._lib_slopes.ndim == 3 else self._lib_slopes
+        first = float(self.grid.centres(self._lib_first))
+        return _hermite_rows(self._lib_values, slopes, first, self.grid.spacing, peaks)
 
     def _extend_library(self, bin_lo: int, bin_hi: int) -> int:
         """Simulate the bin centres of ``bin_lo … bin_hi`` not yet in the library (one
@@ -821,15 +826,36 @@ class FRVStudy:
         self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
         self._write_meta()
 
-    def _assemble(self, bins: np.ndarray) -> tuple[np.ndarray, int]:
-        """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped samples, nesting-repaired."""
+    def _assemble(self, bins: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, int]:
+        """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped samples, nesting-repaired.
+
+        α = 1 is the model at the sample's own peak: with sensitivities, the cubic Hermite
+        interpolant of the library (values and slopes at the two neighbouring grid points,
+        O(spacing⁴)) — so the α = 1 output keeps the peak distribution instead of the
+        grid's staircase; without sensitivities, the value at the peak's bin centre."""
         idx = np.searchsorted(self._keys, _encode(bins[:, :-1, 0], bins[:, :-1, 1]))
         hull = np.empty((bins.shape[0], bins.shape[1], 2, self.nodes.size))
         hull[:, :-1, 0] = self._int_lower[idx]
         hull[:, :-1, 1] = self._int_upper[idx]
-        hull[:, -1, :] = self._lib_values[bins[:, -1, 0] - self._lib_first][:, None, :]
+        if self.refine and self._lib_slopes is not None and self._lib_values.shape[0] >= 2:
+            hull[:, -1, :] = self._peak_values(peaks)[:, None, :]
+        else:
+            hull[:, -1, :] = self._lib_values[bins[:, -1, 0] - self._lib_first][:, None, :]
         repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
         return repaired, int(np.count_nonzero(repaired != hull))
+
+
+def _hermite_rows(values: np.ndarray, slopes: np.ndarray, first_centre: float, spacing: float,
+                  x: np.ndarray) -> np.ndarray:
+    """Cubic Hermite interpolation of library rows (grid points ``first_centre + k·spacing``)
+    at the parameter values ``x``: ``(len(x), n_nodes)``."""
+    u = (np.asarray(x, float) - first_centre) / spacing
+    i = np.clip(np.floor(u).astype(np.int64), 0, values.shape[0] - 2)
+    t = (u - i)[:, None]
+    h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+    h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+    return (h00 * values[i] + h10 * spacing * slopes[i]
+            + h01 * values[i + 1] + h11 * spacing * slopes[i + 1])  # fmt: skip
 
 
 def _sample_range(spec: FRVSpec, seed: int, start: int, n: int, chunk: int) -> tuple[float, float]:
