@@ -881,6 +881,11 @@ def _store_path(store: FRVStudy | str | os.PathLike[str]) -> Path:
     return store.path if isinstance(store, FRVStudy) else Path(store)
 
 
+def stored_samples(store: FRVStudy | str | os.PathLike[str]) -> int:
+    """Number of samples in a stored study."""
+    return int(_read_meta(_store_path(store))["n_samples"])
+
+
 def iter_hull_blocks(store: FRVStudy | str | os.PathLike[str], data: str = "hulls") -> Iterator[np.ndarray]:
     """The stored output block by block (one zarr chunk of samples at a time):
     ``(nb, n_alpha, 2, n_time)`` hulls, or their l_α r_α-increments
