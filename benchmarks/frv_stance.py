@@ -104,17 +104,17 @@ def main() -> None:
             output_distribution_figure,
             temporal_evolution_figure,
         )
-        from fuzzygait.viz.fuzzy_dynamics import write_figure
+        from fuzzygait.viz.figures import save_figure
 
         FIGURES.mkdir(exist_ok=True)
         node = int(np.argmin(np.abs(times - 1.0)))
-        write_figure(input_samples_figure(spec, n_samples=args.samples), FIGURES / "frv_5_14_input_samples.png")
-        write_figure(grouping_figure(spec, n_samples=args.samples, n_disc=args.disc), FIGURES / "frv_5_15_grouping.png")
-        write_figure(output_distribution_figure(args.store, node), FIGURES / "frv_5_16_output_hulls.png")
-        write_figure(output_distribution_figure(args.store, node, data="increments"),
+        save_figure(input_samples_figure(spec, n_samples=args.samples), FIGURES / "frv_5_14_input_samples.png")
+        save_figure(grouping_figure(spec, n_samples=args.samples, n_disc=args.disc), FIGURES / "frv_5_15_grouping.png")
+        save_figure(output_distribution_figure(args.store, node), FIGURES / "frv_5_16_output_hulls.png")
+        save_figure(output_distribution_figure(args.store, node, data="increments"),
                      FIGURES / "frv_5_17_output_increments.png")  # fmt: skip
-        write_figure(temporal_evolution_figure(args.store), FIGURES / "frv_5_18_temporal.png")
-        write_figure(fuzzy_random_output_figure(args.store, node), FIGURES / "frv_5_19_output_frv.png")
+        save_figure(temporal_evolution_figure(args.store), FIGURES / "frv_5_18_temporal.png")
+        save_figure(fuzzy_random_output_figure(args.store, node), FIGURES / "frv_5_19_output_frv.png")
         print(f"figures in {FIGURES}")
 
 

@@ -34,7 +34,8 @@ import numpy as np  # noqa: E402
 from fuzzygait.mechanics.fuzzy_dynamics import ELEVEN_PARAMETERS, dense_reference, fuzzy_forward_dynamics  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.targets import LegTargetModel  # noqa: E402
-from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_figure  # noqa: E402
+from fuzzygait.viz.figures import save_figure  # noqa: E402
+from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure  # noqa: E402
 
 FIGURES = Path(__file__).parent / "figures"
 SWING_DAMPING = 1e5  # Pa s
@@ -79,7 +80,7 @@ def swing_one_parameter(duration: float, workers: int) -> None:
           f"wider by at most {max(np.max(upper - dense.max(0)), np.max(dense.min(0) - lower)):.3e} J")  # fmt: skip
     print(f"   α = 1 hull equals the deterministic run bit for bit: {exact}")
     FIGURES.mkdir(exist_ok=True)
-    write_figure(hull_figure(result), FIGURES / "fuzzy_swing_E.png")
+    save_figure(hull_figure(result), FIGURES / "fuzzy_swing_E.png")
     if evaluator is not None:
         evaluator.close()
 
@@ -95,8 +96,8 @@ def swing_eleven_parameters(duration: float) -> None:
               f"{r.attrs['optimisations']} optimisations, library {r.attrs['library_size']}")  # fmt: skip
     print(f"   ratio 11/1: wall {result.attrs['wall_time_s'] / one.attrs['wall_time_s']:.2f}×, "
           f"simulations {result.attrs['model_evaluations'] / one.attrs['model_evaluations']:.2f}×")  # fmt: skip
-    write_figure(extremiser_figure(result), FIGURES / "fuzzy_swing_11_parameter_sets.png")
-    write_figure(hull_figure(result), FIGURES / "fuzzy_swing_11.png")
+    save_figure(extremiser_figure(result), FIGURES / "fuzzy_swing_11_parameter_sets.png")
+    save_figure(hull_figure(result), FIGURES / "fuzzy_swing_11.png")
 
 
 def stance_one_parameter(duration: float) -> None:
@@ -107,7 +108,7 @@ def stance_one_parameter(duration: float) -> None:
           f"{duration:g} s (energy-momentum)")
     print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, {result.attrs['model_evaluations']} forward simulations, "
           f"{result.attrs['optimisations']} optimisations")  # fmt: skip
-    write_figure(hull_figure(result), FIGURES / "fuzzy_stance_E.png")
+    save_figure(hull_figure(result), FIGURES / "fuzzy_stance_E.png")
 
 
 def layered_blade(duration: float) -> None:
@@ -128,7 +129,7 @@ def layered_blade(duration: float) -> None:
         print(f"   {target}: {wall:.1f} s wall, {result.attrs['model_evaluations']} forward simulations; at "
               f"t = {model.times[-1]:g} s α = 0 hull [{float(end.sel(alpha=0.0, bound='lower')):.5g}, "
               f"{float(end.sel(alpha=0.0, bound='upper')):.5g}], deterministic {float(result['deterministic'][-1]):.5g}")  # fmt: skip
-        write_figure(hull_figure(result), FIGURES / name)
+        save_figure(hull_figure(result), FIGURES / name)
 
 
 def main() -> None:

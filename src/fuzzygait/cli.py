@@ -689,17 +689,13 @@ def fuzzy_sim(
                     path.parent.mkdir(parents=True, exist_ok=True)
             save_result(result, out_file)
             written.append(out_file)
-            from fuzzygait.viz.fuzzy_dynamics import (
-                extremiser_figure,
-                hull_figure,
-                write_figure,
-                write_fuzzy_recording,
-            )
+            from fuzzygait.viz.figures import save_figure
+            from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
 
             if plot is not None:
-                written.append(write_figure(hull_figure(result), plot))
+                written.append(save_figure(hull_figure(result), plot))
             if parameter_plot is not None:
-                written.append(write_figure(extremiser_figure(result), parameter_plot))
+                written.append(save_figure(extremiser_figure(result), parameter_plot))
             if rrd is not None:
                 written.append(write_fuzzy_recording(result, rrd))
         except BaseException:

@@ -12,6 +12,7 @@ matplotlib.use("Agg")  # files only; never needs a display
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from fuzzygait.errors import FuzzyGaitError, ParameterError  # noqa: E402
 from fuzzygait.io.atomic import atomic_output  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
@@ -65,7 +66,27 @@ def plot_gait_cycles(
         fig.legend(handles, labels, loc="upper right", fontsize=8)
     fig.suptitle(title or "Joint angles over the gait cycle (mean ± 1 SD)")
     fig.tight_layout(rect=(0, 0, 1, 0.97))
-    with atomic_output(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=path.suffix.lstrip(".") or "png")
-    plt.close(fig)
+    return save_figure(fig, path)
+
+
+FIGURE_SUFFIXES = ("png", "svg", "pdf")
+
+
+def save_figure(fig, path: str | os.PathLike[str], dpi: int = 110) -> Path:
+    """Write ``fig`` atomically as PNG, SVG or PDF (by the suffix of ``path``) and close it.
+
+    Raises :class:`ParameterError` for another suffix and :class:`FuzzyGaitError` naming
+    ``path`` when it cannot be written; nothing is left at ``path`` then.
+    """
+    path = Path(path)
+    kind = path.suffix.lower().lstrip(".")
+    try:
+        if kind not in FIGURE_SUFFIXES:
+            raise ParameterError(f"{path}: a plot must end in .png, .svg or .pdf")
+        with atomic_output(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=kind)
+    except OSError as exc:
+        raise FuzzyGaitError(f"{path}: cannot write the plot ({exc.strerror or exc})") from exc
+    finally:
+        plt.close(fig)
     return path

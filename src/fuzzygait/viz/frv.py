@@ -18,7 +18,7 @@ the stored hulls are streamed, never loaded whole):
   mean (full colour) to one σ (almost transparent).
 
 All return a :class:`matplotlib.figure.Figure` (no pyplot state; save with
-``fig.savefig`` or :func:`fuzzygait.viz.fuzzy_dynamics.write_figure`).
+``fig.savefig`` or :func:`fuzzygait.viz.figures.save_figure`).
 """
 
 from __future__ import annotations

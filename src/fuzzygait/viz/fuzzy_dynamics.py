@@ -19,7 +19,6 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from fuzzygait.io.atomic import atomic_output  # noqa: E402
 
 
 def _title(result: xr.Dataset) -> str:
@@ -73,36 +72,20 @@ def extremiser_figure(result: xr.Dataset, alpha: float = 0.0) -> Figure:
     return fig
 
 
-def write_figure(fig: Figure, path: str | os.PathLike[str]) -> Path:
-    """Save ``fig`` atomically (format from the suffix) and close it."""
-    path = Path(path)
-    with atomic_output(path) as tmp:
-        fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or "png", dpi=120)
-    plt.close(fig)
-    return path
-
-
 def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
                           recording_name: str = "fuzzygait-fuzzy-dynamics") -> Path:
     """Write the hulls as Rerun time series (rerun-sdk 0.41): ``<target>/alpha_<α>/lower|upper``
     and ``<target>/deterministic`` on the timeline ``time`` (s), in the target's unit."""
-    import uuid
-
-    from fuzzygait.errors import FuzzyGaitError, ParameterError
-    from fuzzygait.viz.rerun_log import _import_rerun, _log_series
+    from fuzzygait.errors import ParameterError
+    from fuzzygait.viz.rerun_log import _log_series, recording_file
 
     path = Path(path)
     if path.suffix.lower() != ".rrd":
         raise ParameterError(f"{path}: a Rerun recording must end in .rrd")
-    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
-        raise FuzzyGaitError(f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN")
-    rr, _ = _import_rerun()
-    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
     target = f"{result.attrs.get('target', 'target')}_{result.attrs.get('target_units', '')}".rstrip("_")
-    times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
     cmap = plt.get_cmap("Blues")
-    with atomic_output(path) as tmp:
-        rec.save(tmp)
+    with recording_file(path, recording_name, _title(result)) as (rec, rr):
+        times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
         for alpha in sorted(float(a) for a in result["alpha"].values if a < 1):
             colour = tuple(int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
             for bound in ("lower", "upper"):
@@ -111,6 +94,4 @@ def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
                             f"α = {alpha:g} {bound}", colour, 1.5)  # fmt: skip
         _log_series(rec, rr, f"{target}/deterministic", times, result["deterministic"].values,
                     "deterministic", (0, 0, 0), 2.0)  # fmt: skip
-        rec.flush()
-        rec.disconnect()
     return path

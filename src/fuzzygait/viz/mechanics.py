@@ -34,7 +34,6 @@ series at every step.  Everything is sent column-wise (``send_columns``), so a
 from __future__ import annotations
 
 import os
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -45,8 +44,8 @@ matplotlib.use("Agg")  # files only; never needs a display
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError  # noqa: E402
-from fuzzygait.io.atomic import atomic_output  # noqa: E402
+from fuzzygait.errors import ParameterError  # noqa: E402
+from fuzzygait.viz.figures import save_figure  # noqa: E402
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -162,19 +161,7 @@ def energy_figure(ds: xr.Dataset) -> Figure:
 
 def write_energy_figure(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
     """:func:`energy_figure` written atomically to a PNG, SVG or PDF file (by suffix)."""
-    path = Path(path)
-    kind = path.suffix.lower().lstrip(".")
-    if kind not in ("png", "svg", "pdf"):
-        raise ParameterError(f"{path}: the energy plot must end in .png, .svg or .pdf")
-    fig = energy_figure(ds)
-    try:
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, dpi=110, format=kind)
-    except OSError as exc:
-        raise FuzzyGaitError(f"{path}: cannot write the plot ({exc.strerror or exc})") from exc
-    finally:
-        plt.close(fig)
-    return path
+    return save_figure(energy_figure(ds), path)
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -277,7 +264,7 @@ def write_simulation_recording(
         ParameterError: a bad ``path`` suffix or ``stride``, or ``ds`` is not a simulation.
         FuzzyGaitError: the file cannot be written, Rerun is disabled or not installed.
     """
-    from fuzzygait.viz.rerun_log import _import_rerun, _log_series, _send_instances
+    from fuzzygait.viz.rerun_log import _log_series, _send_instances, recording_file
 
     path = Path(path)
     if path.suffix.lower() != ".rrd":
@@ -300,78 +287,54 @@ def write_simulation_recording(
         if director_length is None:
             spacing = np.linalg.norm(np.diff(nodes[0], axis=0), axis=1)
             director_length = 0.4 * float(np.mean(spacing)) if spacing.size else 0.02
-    rr, rrb = _import_rerun()
-    disabled = FuzzyGaitError(
-        f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN to write recordings"
-    )
-    # checked before a stream exists: rerun warns at exit about every disabled stream made
-    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
-        raise disabled
-    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
-    if not rr.is_enabled(rec):
-        raise disabled
-    try:
-        with atomic_output(path) as tmp:
-            try:
-                rec.save(tmp, default_blueprint=_blueprint(rrb, bool(blade)))
-                rec.send_recording_name(simulation_title(ds))
-                all_steps = [rr.TimeColumn("time", duration=times)]
-                sampled = [rr.TimeColumn("time", duration=times[rows])]
-                rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True, strict=True)
-                joints: list[np.ndarray] = []
-                labels: list[str] = []
-                for name, (proximal, distal) in segments.items():
-                    strips = np.stack([proximal[rows], distal[rows]], axis=1)
-                    _log_strips(rec, rr, f"world/leg/{name}", sampled, strips, _SEGMENT_COLOURS[name],
-                                _SEGMENT_RADIUS_M)  # fmt: skip
-                    if not joints:
-                        joints.append(proximal[rows])
-                        labels.append("hip")
-                    joints.append(distal[rows])
-                    labels.append({"thigh": "knee", "shank": "ankle"}[name])
-                if joints:
-                    points = np.stack(joints, axis=1)
-                    rec.log("world/leg/joints", rr.Points3D.from_fields(radii=[_JOINT_RADIUS_M], colors=[(90, 90, 90)]),
-                            static=True, strict=True)  # fmt: skip
-                    names = np.broadcast_to(np.array(labels, dtype=object), points.shape[:2])
-                    _send_instances(rec, "world/leg/joints", sampled, rr.Points3D.columns,
-                                    {"positions": points, "labels": names}, np.all(np.isfinite(points), axis=2))  # fmt: skip
-                if blade:
-                    _log_strips(rec, rr, "world/blade/centreline", sampled, nodes, _BLADE_COLOUR, _BLADE_RADIUS_M)
-                    ok = np.all(np.isfinite(nodes), axis=2) & np.all(np.isfinite(frames), axis=(2, 3))
-                    for k, director in enumerate(("d1", "d2", "d3")):
-                        entity = f"world/blade/directors/{director}"
-                        rec.log(entity, rr.Arrows3D.from_fields(radii=[_ARROW_RADIUS_M],
-                                colors=[_DIRECTOR_COLOURS[director]]), static=True, strict=True)  # fmt: skip
-                        _send_instances(rec, entity, sampled, rr.Arrows3D.columns,
-                                        {"origins": nodes, "vectors": director_length * frames[:, :, k]}, ok)  # fmt: skip
-                series = {
-                    "kinetic": ds.get("kinetic_energy"), "gravitational": ds.get("gravitational_energy"),
-                    "internal": ds.get("internal_energy"), "dissipated": ds["dissipated_energy"],
-                    "total": ds["total_energy"],
-                }  # fmt: skip
-                for key, values in series.items():
-                    if values is not None:
-                        _log_series(rec, rr, f"energy_J/{key}", all_steps, values.values, f"{key} (J)",
-                                    _SERIES_COLOURS[key], 1.5)  # fmt: skip
-                balance = ds["total_energy"].values + ds["dissipated_energy"].values
-                _log_series(rec, rr, "energy_J/total_plus_dissipated", all_steps, balance,
-                            "total + dissipated (J)", _SERIES_COLOURS["total_plus_dissipated"], 1.5)  # fmt: skip
-                _log_series(rec, rr, "energy_drift/relative", all_steps, energy_drift(ds),
-                            "(total + dissipated − initial) / |initial|", (148, 103, 189), 1.5)  # fmt: skip
-                for key, colour in (("hip_flexion", (70, 130, 200)), ("knee_flexion", (230, 140, 40))):
-                    if key in ds:
-                        _log_series(rec, rr, f"angles_deg/{key}", all_steps, np.degrees(ds[key].values),
-                                    f"{key.replace('_', ' ')} (deg)", colour, 1.5)  # fmt: skip
-                rec.flush()
-            finally:
-                rec.disconnect()  # closes the file sink and writes the footer
-            if tmp.stat().st_size == 0:
-                raise FuzzyGaitError(f"{path}: Rerun wrote nothing; check the free disk space")
-    except FuzzyGaitError:
-        raise
-    except OSError as exc:
-        raise FuzzyGaitError(f"{path}: cannot write the Rerun recording ({exc.strerror or exc})") from exc
-    except (RuntimeError, ValueError) as exc:
-        raise FuzzyGaitError(f"{path}: Rerun could not write the recording ({exc})") from exc
+    title = simulation_title(ds)
+    with recording_file(path, recording_name, title, lambda rrb: _blueprint(rrb, bool(blade))) as (rec, rr):
+        all_steps = [rr.TimeColumn("time", duration=times)]
+        sampled = [rr.TimeColumn("time", duration=times[rows])]
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True, strict=True)
+        joints: list[np.ndarray] = []
+        labels: list[str] = []
+        for name, (proximal, distal) in segments.items():
+            strips = np.stack([proximal[rows], distal[rows]], axis=1)
+            _log_strips(rec, rr, f"world/leg/{name}", sampled, strips, _SEGMENT_COLOURS[name],
+                        _SEGMENT_RADIUS_M)  # fmt: skip
+            if not joints:
+                joints.append(proximal[rows])
+                labels.append("hip")
+            joints.append(distal[rows])
+            labels.append({"thigh": "knee", "shank": "ankle"}[name])
+        if joints:
+            points = np.stack(joints, axis=1)
+            rec.log("world/leg/joints", rr.Points3D.from_fields(radii=[_JOINT_RADIUS_M], colors=[(90, 90, 90)]),
+                    static=True, strict=True)  # fmt: skip
+            names = np.broadcast_to(np.array(labels, dtype=object), points.shape[:2])
+            _send_instances(rec, "world/leg/joints", sampled, rr.Points3D.columns,
+                            {"positions": points, "labels": names}, np.all(np.isfinite(points), axis=2))  # fmt: skip
+        if blade:
+            _log_strips(rec, rr, "world/blade/centreline", sampled, nodes, _BLADE_COLOUR, _BLADE_RADIUS_M)
+            ok = np.all(np.isfinite(nodes), axis=2) & np.all(np.isfinite(frames), axis=(2, 3))
+            for k, director in enumerate(("d1", "d2", "d3")):
+                entity = f"world/blade/directors/{director}"
+                rec.log(entity, rr.Arrows3D.from_fields(radii=[_ARROW_RADIUS_M],
+                        colors=[_DIRECTOR_COLOURS[director]]), static=True, strict=True)  # fmt: skip
+                _send_instances(rec, entity, sampled, rr.Arrows3D.columns,
+                                {"origins": nodes, "vectors": director_length * frames[:, :, k]}, ok)  # fmt: skip
+        series = {
+            "kinetic": ds.get("kinetic_energy"), "gravitational": ds.get("gravitational_energy"),
+            "internal": ds.get("internal_energy"), "dissipated": ds["dissipated_energy"],
+            "total": ds["total_energy"],
+        }  # fmt: skip
+        for key, values in series.items():
+            if values is not None:
+                _log_series(rec, rr, f"energy_J/{key}", all_steps, values.values, f"{key} (J)",
+                            _SERIES_COLOURS[key], 1.5)  # fmt: skip
+        balance = ds["total_energy"].values + ds["dissipated_energy"].values
+        _log_series(rec, rr, "energy_J/total_plus_dissipated", all_steps, balance,
+                    "total + dissipated (J)", _SERIES_COLOURS["total_plus_dissipated"], 1.5)  # fmt: skip
+        _log_series(rec, rr, "energy_drift/relative", all_steps, energy_drift(ds),
+                    "(total + dissipated − initial) / |initial|", (148, 103, 189), 1.5)  # fmt: skip
+        for key, colour in (("hip_flexion", (70, 130, 200)), ("knee_flexion", (230, 140, 40))):
+            if key in ds:
+                _log_series(rec, rr, f"angles_deg/{key}", all_steps, np.degrees(ds[key].values),
+                            f"{key.replace('_', ' ')} (deg)", colour, 1.5)  # fmt: skip
     return path

@@ -55,7 +55,8 @@ from __future__ import annotations
 
 import os
 import uuid
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -358,6 +359,45 @@ def _blueprint(rrb: Any, result: CGMResult) -> Any:
 
 
 # ----------------------------------------------------------------------------- public
+@contextmanager
+def recording_file(
+    path: Path, recording_name: str, title: str, blueprint: Callable[[Any], Any] | None = None
+) -> Iterator[tuple[Any, Any]]:
+    """Open a Rerun recording stream saving to ``path`` atomically; yields ``(rec, rr)``.
+
+    ``blueprint(rrb)`` builds the default blueprint.  Raises one :class:`FuzzyGaitError`
+    naming ``path`` when Rerun is disabled (``RERUN=off``), the file cannot be written or
+    Rerun fails; nothing is left at ``path`` then.
+    """
+    rr, rrb = _import_rerun()
+    disabled = FuzzyGaitError(
+        f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN to write recordings"
+    )
+    # checked before a stream exists: rerun warns at exit about every disabled stream made
+    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
+        raise disabled
+    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
+    if not rr.is_enabled(rec):
+        raise disabled
+    try:
+        with atomic_output(path) as tmp:
+            try:
+                rec.save(tmp, default_blueprint=blueprint(rrb) if blueprint is not None else None)
+                rec.send_recording_name(title)
+                yield rec, rr
+                rec.flush()
+            finally:
+                rec.disconnect()  # closes the file sink and writes the footer
+            if tmp.stat().st_size == 0:
+                raise FuzzyGaitError(f"{path}: Rerun wrote nothing; check the free disk space")
+    except FuzzyGaitError:
+        raise
+    except OSError as exc:
+        raise FuzzyGaitError(f"{path}: cannot write the Rerun recording ({exc.strerror or exc})") from exc
+    except (RuntimeError, ValueError) as exc:
+        raise FuzzyGaitError(f"{path}: Rerun could not write the recording ({exc})") from exc
+
+
 def write_recording(
     path: str | os.PathLike[str],
     trial: Trial,
@@ -403,35 +443,11 @@ def write_recording(
     _check_shapes(trial, result)
     if fuzzy is not None:
         _fuzzy_parts(fuzzy, trial, alphas_to_show)  # validate before touching the disk
-    rr, rrb = _import_rerun()
-
-    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
-    if not rr.is_enabled(rec):
-        raise FuzzyGaitError(
-            f"{path}: Rerun logging is disabled in this environment (RERUN=off?); "
-            "unset RERUN to write recordings"
-        )
-    blueprint = _blueprint(rrb, result)
-    try:
-        with atomic_output(path) as tmp:
-            try:
-                rec.save(tmp, default_blueprint=blueprint)
-                rec.send_recording_name(trial.name)
-                indexes = [
-                    rr.TimeColumn("frame", sequence=trial.frames.astype(np.int64)),
-                    rr.TimeColumn("time", duration=np.asarray(trial.times, dtype=float)),
-                ]
-                _log_world(rec, rr, trial, result, fuzzy, indexes)
-                _log_angles(rec, rr, trial, result, fuzzy, alphas_to_show, indexes)
-                rec.flush()
-            finally:
-                rec.disconnect()  # closes the file sink and writes the footer
-            if tmp.stat().st_size == 0:
-                raise FuzzyGaitError(f"{path}: Rerun wrote nothing; check the free disk space")
-    except FuzzyGaitError:
-        raise
-    except OSError as exc:
-        raise FuzzyGaitError(f"{path}: cannot write the Rerun recording ({exc.strerror or exc})") from exc
-    except (RuntimeError, ValueError) as exc:
-        raise FuzzyGaitError(f"{path}: Rerun could not write the recording ({exc})") from exc
+    with recording_file(path, recording_name, trial.name, lambda rrb: _blueprint(rrb, result)) as (rec, rr):
+        indexes = [
+            rr.TimeColumn("frame", sequence=trial.frames.astype(np.int64)),
+            rr.TimeColumn("time", duration=np.asarray(trial.times, dtype=float)),
+        ]
+        _log_world(rec, rr, trial, result, fuzzy, indexes)
+        _log_angles(rec, rr, trial, result, fuzzy, alphas_to_show, indexes)
     return path
