@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, TypeVar
@@ -515,6 +515,42 @@ def _remove_output(path: Path) -> None:
         path.unlink(missing_ok=True)
 
 
+def _check_output_suffixes(out_file: Path, rrd: Path | None, plots: dict[str, Path | None]) -> None:
+    """One clear error, before any work, for an output path with the wrong suffix."""
+    from fuzzygait.uncertainty.storage import SUFFIXES
+    from fuzzygait.viz.figures import FIGURE_SUFFIXES
+
+    if out_file.suffix.lower() not in SUFFIXES:
+        raise FuzzyGaitError(f"{out_file}: --out must end in {' or '.join(SUFFIXES)}")
+    if rrd is not None and rrd.suffix.lower() != ".rrd":
+        raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+    for option, plot in plots.items():
+        if plot is not None and plot.suffix.lower().lstrip(".") not in FIGURE_SUFFIXES:
+            raise FuzzyGaitError(f"{plot}: {option} must end in .png, .svg or .pdf")
+
+
+def _write_all_or_none(writers: Sequence[tuple[Path | None, Callable[[Path], object]]]) -> list[Path]:
+    """Run ``writer(path)`` for every given path (folders created first); on any failure
+    remove what was already written and re-raise: all outputs or none."""
+    written: list[Path] = []
+    try:
+        for path, _ in writers:
+            if path is not None:
+                try:
+                    path.parent.mkdir(parents=True, exist_ok=True)
+                except OSError as exc:
+                    raise FuzzyGaitError(f"{path}: cannot create its folder ({exc.strerror or exc})") from None
+        for path, write in writers:
+            if path is not None:
+                write(path)
+                written.append(path)
+    except BaseException:
+        for path in written:
+            _remove_output(path)
+        raise
+    return written
+
+
 @app.command()
 def simulate(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
@@ -551,18 +587,12 @@ def simulate(
     import numpy as np
 
     from fuzzygait.mechanics.scenarios import SCENARIOS
-    from fuzzygait.uncertainty.storage import SUFFIXES, save_result
+    from fuzzygait.uncertainty.storage import save_result
 
-    written: list[Path] = []
     with _user_errors():
         if scenario not in SCENARIOS:
             raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
-        if out_file.suffix.lower() not in SUFFIXES:
-            raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
-        if rrd is not None and rrd.suffix.lower() != ".rrd":
-            raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
-        if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
-            raise FuzzyGaitError(f"{plot}: --plot must end in .png, .svg or .pdf")
+        _check_output_suffixes(out_file, rrd, {"--plot": plot})
         if nodes < 2:
             raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
         preset = SCENARIOS[scenario]
@@ -596,29 +626,13 @@ def simulate(
         config = sim.configuration
         ds.attrs.update({f"{seg.name}_{key}_m": float(getattr(seg, key))
                          for seg in (config.thigh, config.shank) for key in ("length", "com_from_proximal")})  # fmt: skip
-        try:
-            for path in (out_file, rrd, plot):
-                if path is not None:
-                    try:
-                        path.parent.mkdir(parents=True, exist_ok=True)
-                    except OSError as exc:
-                        raise FuzzyGaitError(f"{path}: cannot create its folder ({exc.strerror or exc})") from None
-            save_result(ds, out_file)
-            written.append(out_file)
-            if plot is not None:
-                from fuzzygait.viz.mechanics import write_energy_figure
+        from fuzzygait.viz.mechanics import write_energy_figure, write_simulation_recording
 
-                write_energy_figure(ds, plot)
-                written.append(plot)
-            if rrd is not None:
-                from fuzzygait.viz.mechanics import write_simulation_recording
-
-                write_simulation_recording(ds, rrd, configuration=config)
-                written.append(rrd)
-        except BaseException:
-            for path in written:  # all outputs or none
-                _remove_output(path)
-            raise
+        written = _write_all_or_none([
+            (out_file, lambda path: save_result(ds, path)),
+            (plot, lambda path: write_energy_figure(ds, path)),
+            (rrd, lambda path: write_simulation_recording(ds, path, configuration=config)),
+        ])  # fmt: skip
     _print_simulation_summary(ds)
     out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
 
@@ -657,14 +671,12 @@ def fuzzy_sim(
 
     from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics, parse_fuzzy
     from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
-    from fuzzygait.uncertainty.storage import SUFFIXES, save_result
+    from fuzzygait.uncertainty.storage import save_result
 
-    written: list[Path] = []
     with _user_errors():
         if scenario not in SCENARIOS:
             raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
-        if out_file.suffix.lower() not in SUFFIXES:
-            raise FuzzyGaitError(f"{out_file}: --out must end in .zarr or .nc")
+        _check_output_suffixes(out_file, rrd, {"--plot": plot, "--parameter-plot": parameter_plot})
         spreads = parse_fuzzy(fuzzy)
         levels = _parse_alphas(alphas)
         values = _parse_overrides(overrides or [])
@@ -683,25 +695,15 @@ def fuzzy_sim(
                     dt=dt, duration=duration, scheme=scheme,
                     progress=lambda done, total: bars.update(task, completed=done, total=total),
                 )  # fmt: skip
-        try:
-            for path in (out_file, rrd, plot, parameter_plot):
-                if path is not None:
-                    path.parent.mkdir(parents=True, exist_ok=True)
-            save_result(result, out_file)
-            written.append(out_file)
-            from fuzzygait.viz.figures import save_figure
-            from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
+        from fuzzygait.viz.figures import save_figure
+        from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
 
-            if plot is not None:
-                written.append(save_figure(hull_figure(result), plot))
-            if parameter_plot is not None:
-                written.append(save_figure(extremiser_figure(result), parameter_plot))
-            if rrd is not None:
-                written.append(write_fuzzy_recording(result, rrd))
-        except BaseException:
-            for path in written:  # all outputs or none
-                _remove_output(path)
-            raise
+        written = _write_all_or_none([
+            (out_file, lambda path: save_result(result, path)),
+            (plot, lambda path: save_figure(hull_figure(result), path)),
+            (parameter_plot, lambda path: save_figure(extremiser_figure(result), path)),
+            (rrd, lambda path: write_fuzzy_recording(result, path)),
+        ])  # fmt: skip
     attrs = result.attrs
     out.print(
         f"{scenario}: {attrs['target']} with fuzzy {', '.join(f'{n} ±{100 * s:g} %' for n, s in spreads.items())}; "
