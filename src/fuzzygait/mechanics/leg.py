@@ -152,7 +152,7 @@ def default_parameters(material: Material, thigh: SegmentData = THIGH, shank: Se
 
 @dataclass
 class LegModel:
-    """The assembled leg: symbolic system, reference configuration and index helpers."""
+    """The assembled leg: symbolic system, reference configuration, blade mesh and body names."""
 
     configuration: LegConfiguration
     builder: SystemBuilder
@@ -160,17 +160,12 @@ class LegModel:
     mesh: BladeMesh | None
     blade_bodies: list[str]
     rigid_foot: RigidFoot | None
-    density_for_rigid_foot: float | None = None
-
-    def body_slice(self, name: str) -> slice:
-        offset = self.builder.body(name).offset
-        return slice(offset, offset + 12)
 
 
 def build_leg(configuration: LegConfiguration, rigid_foot_density: float = 8.55e3) -> LegModel:
     """Assemble the leg model (symbolic) and its consistent initial configuration."""
     cfg = configuration
-    mesh = cfg.blade.discretise(cfg.nodes) if cfg.foot == "beam" else cfg.blade.discretise(max(cfg.nodes, 2))
+    mesh = cfg.blade.discretise(max(cfg.nodes, 2))
     blade_bodies = [f"blade{k:03d}" for k in range(cfg.nodes)] if cfg.foot == "beam" else []
     names = ["thigh", "shank"] + blade_bodies + (["foot"] if cfg.foot == "rigid" else [])
     b = SystemBuilder(names, LEG_PARAMETERS)

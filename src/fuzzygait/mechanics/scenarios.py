@@ -30,7 +30,6 @@ from fuzzygait.mechanics.leg import (
 from fuzzygait.mechanics.presets import STANCE, SWING, ScenarioPreset
 
 SCENARIOS: dict[str, ScenarioPreset] = {"swing": SWING, "stance": STANCE}
-PARAMETER_ALIASES = {"E": "E", "nu": "nu", "rho": "rho", "eta": "eta"}
 
 
 def stance_anchors(blade: BladeGeometry, nodes: int) -> tuple[int, int]:
