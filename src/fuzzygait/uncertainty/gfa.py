@@ -123,7 +123,7 @@ class _Follower:
             best = self.simulate(library.parameters[best])
         p0, f0 = library.parameters[best], library.trajectories[best, node]
         g0 = sense * library.gradient(best, node)
-        step = domain.linear_argmax(g0) - p0  # the thesis' step: the linear model's optimum
+        step = self._linear_step(domain, g0, p0)  # the thesis' step: the linear model's optimum
         for _ in range(self.max_iterations):
             size = float(np.max(np.abs(step) / self.scale)) if step.size else 0.0
             if size <= self.novelty_tol or float(g0 @ step) <= self.gain_tol:
@@ -136,10 +136,26 @@ class _Follower:
             g1 = sense * library.gradient(index, node)
             if sense * f1 > sense * f0:  # improvement: continue from there
                 p0, f0, g0 = library.parameters[index], f1, g1
-                step = domain.linear_argmax(g0) - p0
+                step = self._linear_step(domain, g0, p0)
                 continue
             step = self._shortened(domain, step, g0, g1)
         return p0
+
+    def _linear_step(self, domain: BoxDomain | BallsDomain, g0: np.ndarray, p0: np.ndarray) -> np.ndarray:
+        """Step from ``p0`` to the linear model's optimum over the α-level set.
+
+        In a box, coordinates whose own predicted gain ``g_i · Δp_i`` is at most
+        ``gain_tol / n_p`` stay where they are: a parameter with (numerically) no effect
+        at this node — an inert inertia in a planar motion, or one whose sensitivity is
+        passing through zero — would otherwise flip to the opposite vertex on the sign of
+        round-off and make an otherwise known parameter set "new". Together the skipped
+        coordinates give up at most ``gain_tol`` of predicted output.
+        """
+        step = domain.linear_argmax(g0) - p0
+        if isinstance(domain, BoxDomain) and step.size:
+            gains = g0 * step
+            step = np.where(gains > self.gain_tol / step.size, step, 0.0)
+        return step
 
     @staticmethod
     def _shortened(domain: BoxDomain | BallsDomain, step: np.ndarray, g0: np.ndarray,
