@@ -19,6 +19,7 @@ from fuzzygait.uncertainty import (
     load_result,
     repair_nesting,
     save_result,
+    sufficient_runs,
     triangular,
 )
 
@@ -233,3 +234,27 @@ def test_storage_rejects_unknown_suffixes(small_result, tmp_path, name) -> None:
 def test_loading_a_missing_result_names_it(tmp_path) -> None:
     with pytest.raises(FuzzyGaitError, match="missing.nc"):
         load_result(tmp_path / "missing.nc")
+
+
+# --------------------------------------------------------------------- sufficient runs
+def test_sufficient_runs_counts_the_vertices_a_monotone_hull_needs() -> None:
+    """Increasing in a, decreasing in b: each hull is one box vertex per α-level, so the
+    hulls need exactly the 4 vertices (lower/upper × α = 0, 0.5); a tolerance as wide as
+    the hull lets one vector of the inner α-level set (also inside the outer one) do."""
+    times = np.linspace(0.0, 1.0, 11)
+    params = FuzzyVector((triangular(1.0, 2.0, 2.5, "a"), triangular(-1.0, -0.5, 0.5, "b")))
+
+    def model(p: np.ndarray) -> np.ndarray:
+        return p[0] * (1.0 + times) - np.exp(p[1]) * times + p[0] ** 3
+
+    result = graph_follower(FunctionModel(model, times), params, (0.0, 0.5))
+    vertices = set()
+    for alpha in (0.0, 0.5):
+        (a_lo, a_hi), (b_lo, b_hi) = (n.alpha_cut(alpha) for n in params.numbers)
+        vertices |= {(a_lo, b_hi), (a_hi, b_lo)}
+    distinct, sufficient = sufficient_runs(result, params, model, tolerance=0.0)
+    assert len(vertices) == 4 and sufficient == 4
+    assert distinct >= sufficient  # at t = 0 the output ignores b: ties add extremisers
+    assert sufficient_runs(result, params, model, tolerance=0.999)[1] == 1
+    with pytest.raises(ParameterError, match="tolerance"):
+        sufficient_runs(result, params, model, tolerance=1.5)

@@ -8,7 +8,7 @@ from fuzzygait.uncertainty.fuzzy import FuzzyNumber, from_increments, triangular
 from fuzzygait.uncertainty.gfa import graph_follower, optimisation_nodes
 from fuzzygait.uncertainty.model import CountedModel, FunctionModel, Model
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
-from fuzzygait.uncertainty.postprocess import combined_envelope, failure_probability, repair_nesting
+from fuzzygait.uncertainty.postprocess import combined_envelope, failure_probability, repair_nesting, sufficient_runs
 from fuzzygait.uncertainty.storage import load_result, save_result
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "optimisation_nodes",
     "repair_nesting",
     "save_result",
+    "sufficient_runs",
     "triangular",
     "triangular_relative",
 ]

@@ -95,3 +95,51 @@ def _area_left_of(xs: np.ndarray, mu: np.ndarray, cut: np.ndarray) -> np.ndarray
             m_right = np.where(width > 0, m_lo + (m_hi - m_lo) * (right - lo) / width, m_lo)
         area += 0.5 * (m_lo + m_right) * (right - lo)
     return area
+
+
+def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
+                    tolerance: float = 0.01) -> tuple[int, int]:  # fmt: skip
+    """How many forward runs a Graph Follower result's hulls actually need.
+
+    The hulls (α < 1, both bounds) are attained by a set of distinct parameter vectors
+    (``result.extremiser``). A greedy set cover picks as few of them as keep every hull
+    value within ``tolerance`` × that α-level's largest hull width, each vector counting
+    only for the α-levels whose set contains it. The count is the number of runs that
+    would have sufficed had one known the right parameter sets in advance (greedy covers
+    are within a factor 1 + ln(covered values) of the true minimum) — the yardstick for
+    how much of a run's cost the model itself imposes.
+
+    Args:
+        result: a :func:`~fuzzygait.uncertainty.graph_follower` result.
+        params: the fuzzy parameters of that run (``domain(alpha)`` gives the α-level set).
+        evaluate: maps one parameter vector ``(n_p,)`` to its trajectory ``(n_time,)``
+            (same units as the hull), e.g. ``model.evaluate``.
+        tolerance: allowed shortfall as a fraction of the hull width (default 1 %).
+
+    Returns:
+        ``(distinct, sufficient)``: the distinct extremising vectors and the cover size.
+        Hull values that no recorded extremiser attains (possible after the nesting
+        repair) are left out of the cover.
+    """
+    if not 0.0 <= tolerance < 1.0:
+        raise ParameterError(f"tolerance must be a fraction in [0, 1); got {tolerance!r}")
+    alphas = [float(a) for a in result["alpha"].values if a < 1.0]
+    if not alphas:
+        return 0, 0
+    extremisers = result["extremiser"].sel(alpha=alphas).to_numpy()
+    points = np.unique(extremisers.reshape(-1, extremisers.shape[-1]), axis=0)
+    values = np.array([np.asarray(evaluate(p), dtype=float) for p in points])
+    covers = []  # per point: which (α, bound, node) hull values it attains within tolerance
+    for alpha in alphas:
+        hull = result["hull"].sel(alpha=alpha).to_numpy()  # (bound, time): lower, upper
+        slack = tolerance * float(np.max(hull[1] - hull[0]))
+        inside = params.domain(alpha).contains(points, tol=1e-12 * float(np.max(np.abs(points))))
+        covers.append(inside[:, None] & (values <= hull[0] + slack))
+        covers.append(inside[:, None] & (values >= hull[1] - slack))
+    cover = np.concatenate(covers, axis=1)
+    uncovered, chosen = cover.any(axis=0), 0  # every hull value is attained by its extremiser
+    while uncovered.any():
+        best = int(np.argmax((cover & uncovered).sum(axis=1)))
+        uncovered &= ~cover[best]
+        chosen += 1
+    return points.shape[0], chosen
