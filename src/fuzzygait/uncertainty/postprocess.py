@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from scipy.optimize import linprog
 
 from fuzzygait.errors import ParameterError
 
@@ -98,16 +99,17 @@ def _area_left_of(xs: np.ndarray, mu: np.ndarray, cut: np.ndarray) -> np.ndarray
 
 
 def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
-                    tolerance: float = 0.01) -> tuple[int, int]:  # fmt: skip
+                    tolerance: float = 0.01) -> tuple[int, int, int]:  # fmt: skip
     """How many forward runs a Graph Follower result's hulls actually need.
 
     The hulls (α < 1, both bounds) are attained by a set of distinct parameter vectors
-    (``result.extremiser``). A greedy set cover picks as few of them as keep every hull
-    value within ``tolerance`` × that α-level's largest hull width, each vector counting
-    only for the α-levels whose set contains it. The count is the number of runs that
-    would have sufficed had one known the right parameter sets in advance (greedy covers
-    are within a factor 1 + ln(covered values) of the true minimum) — the yardstick for
-    how much of a run's cost the model itself imposes.
+    (``result.extremiser``). Which of them are needed to keep every hull value within
+    ``tolerance`` × that α-level's largest hull width, each vector counting only for the
+    α-levels whose set contains it, is a set-cover problem: a greedy cover gives an
+    achievable count, the linear-programming relaxation a lower bound (no subset of these
+    vectors smaller than it will do). Between them lies the number of runs that would have
+    sufficed had one known the right parameter sets in advance — the yardstick for how much
+    of a run's cost the model itself imposes.
 
     Args:
         result: a :func:`~fuzzygait.uncertainty.graph_follower` result.
@@ -117,15 +119,15 @@ def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
         tolerance: allowed shortfall as a fraction of the hull width (default 1 %).
 
     Returns:
-        ``(distinct, sufficient)``: the distinct extremising vectors and the cover size.
-        Hull values that no recorded extremiser attains (possible after the nesting
-        repair) are left out of the cover.
+        ``(distinct, lower_bound, greedy)``: the distinct extremising vectors, the LP lower
+        bound (rounded up) and the greedy cover size. Hull values that no recorded
+        extremiser attains (possible after the nesting repair) are left out.
     """
     if not 0.0 <= tolerance < 1.0:
         raise ParameterError(f"tolerance must be a fraction in [0, 1); got {tolerance!r}")
     alphas = [float(a) for a in result["alpha"].values if a < 1.0]
     if not alphas:
-        return 0, 0
+        return 0, 0, 0
     extremisers = result["extremiser"].sel(alpha=alphas).to_numpy()
     points = np.unique(extremisers.reshape(-1, extremisers.shape[-1]), axis=0)
     values = np.array([np.asarray(evaluate(p), dtype=float) for p in points])
@@ -137,9 +139,13 @@ def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
         covers.append(inside[:, None] & (values <= hull[0] + slack))
         covers.append(inside[:, None] & (values >= hull[1] - slack))
     cover = np.concatenate(covers, axis=1)
-    uncovered, chosen = cover.any(axis=0), 0  # every hull value is attained by its extremiser
+    cover = np.unique(cover[:, cover.any(axis=0)], axis=1)  # attained values; identical columns once
+    uncovered, greedy = np.ones(cover.shape[1], dtype=bool), 0
     while uncovered.any():
         best = int(np.argmax((cover & uncovered).sum(axis=1)))
         uncovered &= ~cover[best]
-        chosen += 1
-    return points.shape[0], chosen
+        greedy += 1
+    relaxed = linprog(np.ones(points.shape[0]), A_ub=-cover.T.astype(float), b_ub=-np.ones(cover.shape[1]),
+                      bounds=(0.0, 1.0), method="highs")  # fmt: skip
+    bound = int(np.ceil(relaxed.fun - 1e-9)) if relaxed.status == 0 else 1
+    return points.shape[0], bound, greedy
