@@ -2,12 +2,17 @@
 
 Run:  .venv/bin/python benchmarks/preprocess.py
 
-1. Accuracy: gaps of 1..10 frames are cut into every complete marker of the Vicon
-   walking trials in ../shared/data/vicon (120 Hz and 50 Hz) and filled with
-   ``fuzzygait.mocap.fill_gaps``; RMS and max error (mm) against the cut samples.
+1. Accuracy: gaps of 1..10 frames (every 25 valid frames) are cut into the complete
+   markers of the Vicon walking trials in ../shared/data/vicon (120 Hz and 50 Hz) and
+   refilled with ``fuzzygait.mocap.fill_gaps`` by each method (spline, pattern, auto);
+   RMS and max error (mm) against the cut samples.  Two cut protocols:
+
+   (i)  every complete marker cut at the same frames: no donor is visible during a gap,
+        so pattern and auto fall back to the spline (the worst case for them);
+   (ii) one marker at a time, the others intact: the realistic single occlusion.
 2. Speed: a 10-minute, 120 Hz, 60-marker trial with ~2,400 gaps; windowed spline fill
-   against a baseline global-spline fill run in the same process, and the zero-lag
-   Butterworth.
+   against a baseline global-spline fill run in the same process, the pattern and auto
+   methods, and the zero-lag Butterworth.
 """
 
 from __future__ import annotations
@@ -25,33 +30,73 @@ from fuzzygait.mocap import butterworth_lowpass, fill_gaps
 VICON = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vicon"
 
 
-def cut(markers: np.ndarray, length: int, spacing: int = 25) -> np.ndarray:
+METHODS = ("spline", "pattern", "auto")
+LENGTHS = (1, 2, 3, 5, 7, 10)
+TRIALS = ("Movement_trial.c3d", "gait-pig.c3d", "gait-raw.c3d")
+
+
+def gap_starts(n_frames: int, length: int, spacing: int = 25) -> range:
+    """Starts of gaps of ``length`` frames, ``spacing`` valid frames apart."""
+    return range(15, n_frames - length - 15, length + spacing)
+
+
+def cut(markers: np.ndarray, length: int, columns: list[int]) -> np.ndarray:
+    """Copy of ``markers`` with gaps of ``length`` frames cut into ``columns``."""
     out = markers.copy()
-    for start in range(15, markers.shape[0] - length - 15, length + spacing):
-        out[start : start + length] = np.nan
+    for start in gap_starts(markers.shape[0], length):
+        out[start : start + length, columns] = np.nan
     return out
 
 
+def refill_errors(
+    markers: np.ndarray, labels: list[str], length: int, method: str, one_at_a_time: bool
+) -> tuple[np.ndarray, int, int]:
+    """Errors (mm) at the cut samples, and how many gaps the pattern filled of all."""
+    cuts = [[m] for m in range(markers.shape[1])] if one_at_a_time else [
+        list(range(markers.shape[1]))
+    ]
+    errors, by_pattern, n_gaps = [], 0, 0
+    for columns in cuts:
+        holes = cut(markers, length, columns)
+        filled, gaps = fill_gaps(holes, labels, max_gap=10, method=method)
+        missing = np.isnan(holes[..., 0])
+        errors.append(np.linalg.norm(filled[missing] - markers[missing], axis=1))
+        by_pattern += sum(g.method == "pattern" for g in gaps)
+        n_gaps += len(gaps)
+    return np.concatenate(errors), by_pattern, n_gaps
+
+
 def accuracy() -> None:
-    print("## Gap-filling accuracy (cubic spline, gaps cut into complete markers)")
     if not VICON.is_dir():
-        print(f"skipped: {VICON} is absent")
+        print(f"## Gap-filling accuracy\nskipped: {VICON} is absent")
         return
-    print("| trial | rate Hz | gap frames | RMS mm | max mm | samples |")
-    print("|---|---|---|---|---|---|")
-    for name in ("Movement_trial.c3d", "gait-pig.c3d", "gait-raw.c3d"):
+    trials = {}
+    for name in TRIALS:
         trial = read_c3d(VICON / name)
         complete = [m for m in trial.marker_labels if np.isfinite(trial.marker(m)).all()]
-        markers = trial.select_markers(complete).markers
-        for length in (1, 2, 3, 5, 7, 10):
-            holes_cut = cut(markers, length)
-            filled, _ = fill_gaps(holes_cut, complete, max_gap=10)
-            holes = np.isnan(holes_cut[..., 0])
-            err = np.linalg.norm(filled[holes] - markers[holes], axis=1)
-            print(
-                f"| {name} | {trial.rate:g} | {length} | {np.sqrt(np.mean(err**2)):.3f} "
-                f"| {err.max():.3f} | {holes.sum()} |"
-            )
+        trials[name] = (trial.rate, trial.select_markers(complete).markers, complete)
+    for title, one_at_a_time in (
+        ("(i) every complete marker cut at the same frames (no donors)", False),
+        ("(ii) one marker at a time, the other complete markers intact", True),
+    ):
+        print(f"\n### Gap-filling accuracy, protocol {title}")
+        print(
+            "| trial | rate Hz | gap frames | samples | RMS spline | RMS pattern | RMS auto "
+            "| max spline | max pattern | max auto | auto: gaps by pattern |"
+        )
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
+        for name, (rate, markers, labels) in trials.items():
+            for length in LENGTHS:
+                results = {
+                    m: refill_errors(markers, labels, length, m, one_at_a_time) for m in METHODS
+                }
+                rms = " | ".join(f"{np.sqrt(np.mean(r[0] ** 2)):.3f}" for r in results.values())
+                peak = " | ".join(f"{r[0].max():.3f}" for r in results.values())
+                _, by_pattern, n_gaps = results["auto"]
+                print(
+                    f"| {name} | {rate:g} | {length} | {results['spline'][0].size} | {rms} "
+                    f"| {peak} | {by_pattern} of {n_gaps} |"
+                )
 
 
 def global_spline_fill(markers: np.ndarray, max_gap: int) -> np.ndarray:
@@ -78,7 +123,9 @@ def speed() -> None:
     timings = {}
     for label, func in (
         ("baseline global spline fill", lambda: global_spline_fill(markers, 10)),
-        ("fuzzygait windowed spline fill", lambda: fill_gaps(markers, labels, 10)),
+        ("fuzzygait windowed spline fill", lambda: fill_gaps(markers, labels, 10, "spline")),
+        ("fuzzygait pattern fill", lambda: fill_gaps(markers, labels, 10, "pattern")),
+        ("fuzzygait auto fill (default)", lambda: fill_gaps(markers, labels, 10, "auto")),
     ):
         start = time.perf_counter()
         func()
@@ -86,7 +133,7 @@ def speed() -> None:
         print(f"{label}: {timings[label]:.2f} s")
     ratio = timings["fuzzygait windowed spline fill"] / timings["baseline global spline fill"]
     print(f"ratio windowed / global: {ratio:.2f}")
-    filled, _ = fill_gaps(markers, labels, 10)
+    filled, _ = fill_gaps(markers, labels, 10, "spline")
     start = time.perf_counter()
     with warnings.catch_warnings():  # a few gaps > 10 frames leave short runs: expected
         warnings.simplefilter("ignore")

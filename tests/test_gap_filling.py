@@ -140,9 +140,9 @@ def test_edge_and_long_gaps_are_reported_not_filled():
     assert gaps == [
         Gap("LASI", 0, 5, False, "at start of trial"),
         Gap("LASI", 200, 11, False, "longer than max_gap=10"),
-        Gap("LASI", 300, 10, True, ""),
+        Gap("LASI", 300, 10, True, "", "spline"),
         Gap("LASI", n - 7, 7, False, "at end of trial"),
-        Gap("RASI", 250, 3, True, ""),
+        Gap("RASI", 250, 3, True, "", "spline"),
     ]
     assert np.all(np.isnan(filled[:5, 0]))
     assert np.all(np.isnan(filled[200:211, 0]))
@@ -165,7 +165,9 @@ def test_report_matches_random_cuts_exactly():
     ]
     assert [g.filled for g in gaps] == [length <= 12 for _, _, length in cuts]
     table = gap_report_table(gaps)
-    assert list(table.columns) == ["marker", "start", "length", "filled", "reason"]
+    assert list(table.columns) == [
+        "marker", "start", "length", "filled", "reason", "method", "note"
+    ]
     assert table["length"].tolist() == [length for _, _, length in cuts]
     assert table.loc[~table["filled"], "reason"].eq("longer than max_gap=12").all()
 
@@ -173,7 +175,9 @@ def test_report_matches_random_cuts_exactly():
 def test_empty_report_table_has_columns():
     table = gap_report_table([])
     assert isinstance(table, pd.DataFrame) and table.empty
-    assert list(table.columns) == ["marker", "start", "length", "filled", "reason"]
+    assert list(table.columns) == [
+        "marker", "start", "length", "filled", "reason", "method", "note"
+    ]
 
 
 def test_max_gap_zero_fills_nothing():
@@ -233,7 +237,7 @@ def test_partially_missing_sample_counts_as_missing():
     holes[150, 0, 1] = np.nan  # only y missing
     holes[151, 0, 2] = np.inf  # a non-finite z counts as missing too
     filled, gaps = fill_gaps(holes, ["M"])
-    assert gaps == [Gap("M", 150, 2, True, "")]
+    assert gaps == [Gap("M", 150, 2, True, "", "spline")]
     assert np.array_equal(filled, fill_gaps(cut(truth, [(0, 150, 2)]), ["M"])[0])
     # unfilled partial samples come back NaN in all three coordinates
     filled, _ = fill_gaps(holes, ["M"], max_gap=1)
@@ -286,7 +290,7 @@ def test_fill_trial_gaps_returns_new_trial_with_note():
     new, gaps = fill_trial_gaps(trial, max_gap=10)
     assert new is not trial and new.notes == [
         "read",
-        "gap filling: 1 of 3 gaps filled (max_gap=10 frames)",
+        "gap filling: 1 of 3 gaps filled (max_gap=10 frames, method=auto: 1 spline)",
     ]
     assert trial.notes == ["read"] and np.array_equal(trial.markers, holes, equal_nan=True)
     assert np.array_equal(new.markers, fill_gaps(holes, ["LHEE", "RHEE"])[0], equal_nan=True)

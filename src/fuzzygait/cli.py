@@ -174,30 +174,42 @@ def info(
 def preprocess(
     input_file: Annotated[Path, typer.Argument(metavar="IN.c3d", help="Trial to clean.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Output C3D file.")],
-    max_gap: Annotated[
-        int, typer.Option(help="Longest gap (frames) to fill by cubic spline; 0 fills none.")
-    ] = 10,
+    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill; 0 fills none.")] = 10,
+    fill_method: Annotated[
+        str,
+        typer.Option(
+            "--fill-method",
+            help="auto (per gap, whichever refills nearby pseudo-gaps better), spline "
+            "(cubic spline through the marker's own samples) or pattern (regression on "
+            "the other markers visible, spline where there are too few).",
+        ),
+    ] = "auto",
     cutoff: Annotated[
         float, typer.Option(help="Low-pass cutoff (Hz) of the 4th-order zero-lag Butterworth.")
     ] = 6.0,
     no_filter: Annotated[bool, typer.Option("--no-filter", help="Fill gaps only.")] = False,
 ) -> None:
-    """Fill marker gaps with cubic splines and low-pass filter (Butterworth, zero lag)."""
+    """Fill marker gaps (spline or inter-marker pattern) and low-pass filter (Butterworth, zero lag)."""
     from fuzzygait.io import read_c3d, write_c3d
     from fuzzygait.mocap import fill_trial_gaps, filter_trial
+    from fuzzygait.mocap.gaps import METHODS, methods_used
 
     with _user_errors():
         if out_file.suffix.lower() != ".c3d":
             raise FuzzyGaitError(f"{out_file}: --out must name a .c3d file")
+        if fill_method not in METHODS:
+            raise FuzzyGaitError(f"--fill-method must be one of {', '.join(METHODS)}; got {fill_method!r}")
         trial = read_c3d(input_file)
-        filled, gaps = fill_trial_gaps(trial, max_gap=max_gap)
+        filled, gaps = fill_trial_gaps(trial, max_gap=max_gap, method=fill_method)  # type: ignore[arg-type]
         cleaned = filled if no_filter else filter_trial(filled, cutoff=cutoff)
         out_file.parent.mkdir(parents=True, exist_ok=True)
         write_c3d(cleaned, out_file)
     n_filled = sum(g.filled for g in gaps)
     left = [g for g in gaps if not g.filled]
+    by_method = methods_used(gaps)
     out.print(
         f"{input_file.name}: filled {n_filled} of {len(gaps)} gaps"
+        + (f" ({by_method})" if by_method else "")
         + ("" if no_filter else f", low-pass {cutoff:g} Hz")
         + f" -> {out_file}",
         markup=False,

@@ -30,6 +30,7 @@ from fuzzygait.mocap.gaps import (
     fill_trial_gaps,
     find_gaps,
     gap_report_table,
+    methods_used,
 )
 
 __all__ = [
@@ -54,5 +55,6 @@ __all__ = [
     "filter_trial",
     "find_gaps",
     "gap_report_table",
+    "methods_used",
     "min_run_length",
 ]

@@ -21,6 +21,7 @@ from rich.console import Console
 
 from fuzzygait.io.tables import write_table
 from fuzzygait.markererror.analysis import analyse_trial
+from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.pipeline import AnglesRun, run_angles
 from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, write_report
@@ -88,7 +89,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
         "",
         f"- input: `{data / 'walking_noisy.c3d'}` ({run.trial.n_frames} frames at {run.trial.rate:g} Hz, "
         f"{run.trial.n_markers} markers), noise 0.5 mm and gaps",
-        f"- gaps: {filled} of {len(run.gaps)} filled by cubic spline (max 10 frames); "
+        f"- gaps: {filled} of {len(run.gaps)} filled ({methods_used(run.gaps) or 'none'}; max 10 frames); "
         "low-pass 6 Hz, 4th-order zero-lag Butterworth",
         f"- static offsets from `static.c3d`: plantarflexion L {np.degrees(run.subject.left.static_plant_flex):.3f}°, "
         f"R {np.degrees(run.subject.right.static_plant_flex):.3f}°; rotation L "

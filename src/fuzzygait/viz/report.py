@@ -59,6 +59,7 @@ from matplotlib.patches import Patch  # noqa: E402
 from fuzzygait import __version__  # noqa: E402
 from fuzzygait.errors import FuzzyGaitError  # noqa: E402
 from fuzzygait.mocap.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points  # noqa: E402
+from fuzzygait.mocap.gaps import methods_used  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
 if TYPE_CHECKING:
@@ -618,14 +619,14 @@ def _quality_section(analysis: MarkerErrorAnalysis, data: _TrialData) -> str:
     else:
         filled = sum(g.filled for g in run.gaps)
         parts.append(
-            f"<p>{filled} of {len(run.gaps)} gaps filled by cubic spline; frames of gaps "
+            f"<p>{filled} of {len(run.gaps)} gaps filled ({_esc(methods_used(run.gaps)) or 'none'}); frames of gaps "
             "left open have no angle (and no band) for the joints that use the marker.</p>"
         )
         rows = []
         classes = []
         for gap in sorted(run.gaps, key=lambda g: (g.marker, g.start)):
             first = trial.first_frame + gap.start
-            status = "filled" if gap.filled else f"not filled: {gap.reason}"
+            status = f"filled by {gap.method}" if gap.filled else f"not filled: {gap.reason}"
             span = f"{first}–{first + gap.length - 1}" if gap.length > 1 else f"{first}"
             rows.append([(_esc(gap.marker), False), (span, True),
                          (str(gap.length), True), (_esc(status), False)])  # fmt: skip
