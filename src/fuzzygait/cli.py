@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import TYPE_CHECKING, Annotated, TypeVar
 
 import typer
 from rich.console import Console
@@ -20,6 +20,11 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from fuzzygait import __version__
 from fuzzygait.errors import FuzzyGaitError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from fuzzygait.mechanics.scenarios import LegSimulator
 
 app = typer.Typer(
     name="fuzzygait",
@@ -69,6 +74,18 @@ def _progress_bars() -> Progress:
     """Progress bars on stderr (removed when done; silent when stderr is not a terminal)."""
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
+
+
+def _build_simulator(bars: Progress, scenario: str, nodes: int, values: dict[str, float]) -> tuple[LegSimulator, np.ndarray]:
+    """The scenario's simulator (built, or its compiled code loaded, under a spinner) and
+    its full parameter vector with ``values`` (SI units) set."""
+    from fuzzygait.mechanics.scenarios import LegSimulator
+
+    building = bars.add_task(f"{scenario}: building the model", total=None)
+    sim = LegSimulator(scenario=scenario, nodes=nodes)
+    parameters = sim.parameters(**values)
+    bars.remove_task(building)
+    return sim, parameters
 
 
 def progress_over(items: Sequence[T], description: str) -> Iterator[T]:
@@ -621,14 +638,9 @@ def simulate(
         values = _parse_overrides(overrides or [])
         n_steps = int(round(span / step))
 
-        from fuzzygait.mechanics.scenarios import LegSimulator
-
         bars = _progress_bars()
         with bars:
-            building = bars.add_task(f"{scenario}: building the model", total=None)
-            sim = LegSimulator(scenario=scenario, nodes=nodes)
-            p = sim.parameters(**values)
-            bars.remove_task(building)
+            sim, p = _build_simulator(bars, scenario, nodes, values)
             task = bars.add_task(f"{scenario}: time steps", total=n_steps)
             # the integrator checks for non-finite values itself; numpy's overflow warnings
             # on a diverging step would only add lines to its one-line error
@@ -682,7 +694,7 @@ def fuzzy_sim(
     import numpy as np
 
     from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics, parse_fuzzy
-    from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+    from fuzzygait.mechanics.scenarios import SCENARIOS
     from fuzzygait.uncertainty.storage import save_result
 
     with _user_errors():
@@ -696,10 +708,7 @@ def fuzzy_sim(
             raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
         bars = _progress_bars()
         with bars:
-            building = bars.add_task(f"{scenario}: building the model", total=None)
-            sim = LegSimulator(scenario=scenario, nodes=nodes)
-            base = sim.parameters(**values)
-            bars.remove_task(building)
+            sim, base = _build_simulator(bars, scenario, nodes, values)
             task = bars.add_task(f"{scenario}: α-level optimisations", total=None)
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 result = fuzzy_forward_dynamics(
