@@ -104,13 +104,7 @@ def swing_eleven_parameters(duration: float) -> None:
         names = r.attrs["fuzzy_parameters"]
         model = LegTargetModel(sim, r.attrs["target"], names, base=base, duration=duration)
         params = FuzzyVector([triangular_relative(model.base[LEG_PARAMETERS.index(n)], 0.1, n) for n in names])
-        runs: dict[bytes, np.ndarray] = {}  # each distinct set simulated once for both tolerances
-
-        def evaluate(p: np.ndarray) -> np.ndarray:
-            return runs[p.tobytes()] if p.tobytes() in runs else runs.setdefault(p.tobytes(), model.evaluate(p))
-
-        distinct, lp1, greedy1 = sufficient_runs(r, params, evaluate, 0.01)
-        _, lp01, greedy01 = sufficient_runs(r, params, evaluate, 0.001)
+        distinct, [(lp1, greedy1), (lp01, greedy01)] = sufficient_runs(r, params, model.evaluate, (0.01, 0.001))
         print(f"   {label}: the hulls are attained by {distinct} distinct parameter sets; {lp1}-{greedy1} of them keep "
               f"every hull within 1 % of its width, {lp01}-{greedy01} within 0.1 % (LP lower bound - greedy cover)")  # fmt: skip
     save_figure(extremiser_figure(result), FIGURES / "fuzzy_swing_11_parameter_sets.png")

@@ -278,8 +278,7 @@ def main() -> None:
         for stride in (100, 1):
             r = results[2000, stride][case.label][2]
             model, params = Oscillators(times), Case(case.label, case.fuzzy).params()
-            distinct, one_lp, one = sufficient_runs(r, params, model.evaluate, 0.01)
-            _, tenth_lp, tenth = sufficient_runs(r, params, model.evaluate, 0.001)
+            distinct, [(one_lp, one), (tenth_lp, tenth)] = sufficient_runs(r, params, model.evaluate, (0.01, 0.001))
             needed[case.label, stride] = (one_lp, one)
             print(f"| {case.label} | {stride} | {r.attrs['model_evaluations']} | {distinct} | {one_lp}-{one} "
                   f"| {tenth_lp}-{tenth} |")  # fmt: skip

@@ -252,9 +252,9 @@ def test_sufficient_runs_counts_the_vertices_a_monotone_hull_needs() -> None:
     for alpha in (0.0, 0.5):
         (a_lo, a_hi), (b_lo, b_hi) = (n.alpha_cut(alpha) for n in params.numbers)
         vertices |= {(a_lo, b_hi), (a_hi, b_lo)}
-    distinct, lower_bound, greedy = sufficient_runs(result, params, model, tolerance=0.0)
+    distinct, [(lower_bound, greedy), wide] = sufficient_runs(result, params, model, tolerances=(0.0, 0.999))
     assert len(vertices) == 4 and lower_bound == greedy == 4
     assert distinct >= greedy  # at t = 0 the output ignores b: ties add extremisers
-    assert sufficient_runs(result, params, model, tolerance=0.999)[1:] == (1, 1)
+    assert wide == (1, 1)
     with pytest.raises(ParameterError, match="tolerance"):
-        sufficient_runs(result, params, model, tolerance=1.5)
+        sufficient_runs(result, params, model, tolerances=(1.5,))

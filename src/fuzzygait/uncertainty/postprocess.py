@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import xarray as xr
 from scipy.optimize import linprog
@@ -99,12 +101,12 @@ def _area_left_of(xs: np.ndarray, mu: np.ndarray, cut: np.ndarray) -> np.ndarray
 
 
 def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
-                    tolerance: float = 0.01) -> tuple[int, int, int]:  # fmt: skip
+                    tolerances: Sequence[float] = (0.01,)) -> tuple[int, list[tuple[int, int]]]:  # fmt: skip
     """How many forward runs a Graph Follower result's hulls actually need.
 
     The hulls (α < 1, both bounds) are attained by a set of distinct parameter vectors
-    (``result.extremiser``). Which of them are needed to keep every hull value within
-    ``tolerance`` × that α-level's largest hull width, each vector counting only for the
+    (``result.extremiser``). Which of them are needed to keep every hull value within a
+    tolerance × that α-level's largest hull width, each vector counting only for the
     α-levels whose set contains it, is a set-cover problem: a greedy cover gives an
     achievable count, the linear-programming relaxation a lower bound (no subset of these
     vectors smaller than it will do). Between them lies the number of runs that would have
@@ -115,37 +117,49 @@ def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
         result: a :func:`~fuzzygait.uncertainty.graph_follower` result.
         params: the fuzzy parameters of that run (``domain(alpha)`` gives the α-level set).
         evaluate: maps one parameter vector ``(n_p,)`` to its trajectory ``(n_time,)``
-            (same units as the hull), e.g. ``model.evaluate``.
-        tolerance: allowed shortfall as a fraction of the hull width (default 1 %).
+            (same units as the hull), e.g. ``model.evaluate``; called once per distinct
+            extremiser, whatever the number of tolerances.
+        tolerances: allowed shortfalls as fractions of the hull width (default 1 %).
 
     Returns:
-        ``(distinct, lower_bound, greedy)``: the distinct extremising vectors, the LP lower
-        bound (rounded up) and the greedy cover size. Hull values that no recorded
-        extremiser attains (possible after the nesting repair) are left out.
+        ``(distinct, [(lower_bound, greedy) per tolerance])``: the distinct extremising
+        vectors, and per tolerance the LP lower bound (rounded up) and the greedy cover
+        size. Hull values that no recorded extremiser attains (possible after the nesting
+        repair) are left out.
     """
-    if not 0.0 <= tolerance < 1.0:
-        raise ParameterError(f"tolerance must be a fraction in [0, 1); got {tolerance!r}")
+    tolerances = [float(t) for t in tolerances]
+    bad = [t for t in tolerances if not 0.0 <= t < 1.0]
+    if bad or not tolerances:
+        raise ParameterError(f"tolerances must be fractions in [0, 1); got {tolerances!r}")
     alphas = [float(a) for a in result["alpha"].values if a < 1.0]
     if not alphas:
-        return 0, 0, 0
+        return 0, [(0, 0)] * len(tolerances)
     extremisers = result["extremiser"].sel(alpha=alphas).to_numpy()
     points = np.unique(extremisers.reshape(-1, extremisers.shape[-1]), axis=0)
     values = np.array([np.asarray(evaluate(p), dtype=float) for p in points])
-    covers = []  # per point: which (α, bound, node) hull values it attains within tolerance
-    for alpha in alphas:
-        hull = result["hull"].sel(alpha=alpha).to_numpy()  # (bound, time): lower, upper
-        slack = tolerance * float(np.max(hull[1] - hull[0]))
-        inside = params.domain(alpha).contains(points, tol=1e-12 * float(np.max(np.abs(points))))
-        covers.append(inside[:, None] & (values <= hull[0] + slack))
-        covers.append(inside[:, None] & (values >= hull[1] - slack))
-    cover = np.concatenate(covers, axis=1)
-    cover = np.unique(cover[:, cover.any(axis=0)], axis=1)  # attained values; identical columns once
+    hulls = [result["hull"].sel(alpha=alpha).to_numpy() for alpha in alphas]  # (bound, time) each
+    inside = [params.domain(alpha).contains(points, tol=1e-12 * float(np.max(np.abs(points)))) for alpha in alphas]
+    sizes = []
+    for tolerance in tolerances:
+        covers = []  # per point: which (α, bound, node) hull values it attains within tolerance
+        for hull, admissible in zip(hulls, inside, strict=True):
+            slack = tolerance * float(np.max(hull[1] - hull[0]))
+            covers.append(admissible[:, None] & (values <= hull[0] + slack))
+            covers.append(admissible[:, None] & (values >= hull[1] - slack))
+        sizes.append(_cover_sizes(np.concatenate(covers, axis=1)))
+    return points.shape[0], sizes
+
+
+def _cover_sizes(cover: np.ndarray) -> tuple[int, int]:
+    """LP lower bound and greedy size of a set cover; ``cover[i, j]``: set i covers item j
+    (items no set covers are ignored)."""
+    cover = np.unique(cover[:, cover.any(axis=0)], axis=1)  # coverable items; identical columns once
     uncovered, greedy = np.ones(cover.shape[1], dtype=bool), 0
     while uncovered.any():
         best = int(np.argmax((cover & uncovered).sum(axis=1)))
         uncovered &= ~cover[best]
         greedy += 1
-    relaxed = linprog(np.ones(points.shape[0]), A_ub=-cover.T.astype(float), b_ub=-np.ones(cover.shape[1]),
+    relaxed = linprog(np.ones(cover.shape[0]), A_ub=-cover.T.astype(float), b_ub=-np.ones(cover.shape[1]),
                       bounds=(0.0, 1.0), method="highs")  # fmt: skip
     bound = int(np.ceil(relaxed.fun - 1e-9)) if relaxed.status == 0 else 1
-    return points.shape[0], bound, greedy
+    return bound, greedy
