@@ -26,7 +26,7 @@ import numpy as np  # noqa: E402
 
 from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing  # noqa: E402
-from fuzzygait.io.trial import Trial  # noqa: E402
+from fuzzygait.core.trial import Trial  # noqa: E402
 from fuzzygait.kinematics import ANGLE_NAMES, compute_lower_body  # noqa: E402
 from fuzzygait.kinematics.angles import joint_angles  # noqa: E402
 from fuzzygait.kinematics.joint_centres import chord_joint_centre, davis_hjc_local  # noqa: E402

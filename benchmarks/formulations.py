@@ -18,7 +18,7 @@ import numpy as np
 
 from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
 from fuzzygait.markererror.sources import ErrorModel
-from fuzzygait.pipeline import run_angles
+from fuzzygait.workflows.angles import run_angles
 from fuzzygait.uncertainty import FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 
 

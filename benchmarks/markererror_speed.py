@@ -35,7 +35,7 @@ from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, fixed_subject  # noqa: E402
 from fuzzygait.markererror.comparison import monte_carlo_timed  # noqa: E402
 from fuzzygait.markererror.sources import ErrorModel  # noqa: E402
-from fuzzygait.pipeline import run_angles  # noqa: E402
+from fuzzygait.workflows.angles import run_angles  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "sample_data"

@@ -66,7 +66,7 @@ import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from fuzzygait.errors import SimulationError  # noqa: E402
+from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.cantilever import build_cantilever  # noqa: E402
 from fuzzygait.mechanics.leg import segment_frame  # noqa: E402
 from fuzzygait.mechanics.presets import REVERSE_ENGINEERED, SHANK, SWING, THIGH  # noqa: E402

@@ -51,7 +51,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from fuzzygait.errors import SimulationError  # noqa: E402
+from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import (
     ShortRunWarning,
     butterworth_lowpass,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import C3D_FORMATS, SHARED_DATA, needs_shared, shared_file
 
-from fuzzygait.errors import C3DError
+from fuzzygait.core.errors import C3DError
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.c3d_backends import _decode_c3d, _decode_ezc3d
 

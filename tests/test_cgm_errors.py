@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from conftest import SAMPLE_DATA
-from fuzzygait.errors import MarkerError, ParameterError
+from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import ANGLE_NAMES, compute_lower_body, static_calibration
 
 

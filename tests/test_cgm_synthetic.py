@@ -19,7 +19,7 @@ import pytest
 from conftest import SAMPLE_DATA
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import (
     ANGLE_NAMES,
     angles_from_virtual_markers,

@@ -16,9 +16,9 @@ import pandas as pd
 import pytest
 
 from conftest import SAMPLE_DATA, shared_file
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import Trial, read_c3d
-from fuzzygait.mocap.cycles import (
+from fuzzygait.gait.cycles import (
     GaitCycle,
     cycle_statistics,
     gait_cycles,

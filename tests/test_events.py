@@ -28,9 +28,9 @@ import numpy as np
 import pytest
 
 from conftest import SAMPLE_DATA, shared_file
-from fuzzygait.errors import MarkerError
+from fuzzygait.core.errors import MarkerError
 from fuzzygait.io import Event, Trial, read_c3d
-from fuzzygait.mocap.events import (
+from fuzzygait.gait.events import (
     SOURCE_DETECTED,
     SOURCE_FILE,
     detect_gait_events,

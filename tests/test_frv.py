@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty import (
     FRVSpec,
     FRVStudy,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from conftest import assert_one_line_error, run
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.fuzzy_dynamics import dense_reference, fuzzy_forward_dynamics, parse_fuzzy
 from fuzzygait.mechanics.scenarios import LegSimulator
 from fuzzygait.mechanics.targets import LegTargetModel

@@ -17,8 +17,8 @@ import pandas as pd
 import pytest
 from scipy.interpolate import CubicSpline
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import Gap, GapRun, fill_gaps, fill_trial_gaps, find_gaps, gap_report_table
 from fuzzygait.mocap.gaps import WINDOW_VALID_SAMPLES
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.pendulum import Pendulum
 from fuzzygait.uncertainty import (
     CountedModel,

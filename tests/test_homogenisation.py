@@ -23,7 +23,7 @@ import scipy.sparse as sparse
 from scipy.integrate import quad
 from scipy.sparse.linalg import spsolve
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.homogenisation import (
     LayerMaterials,
     SectionStiffness,

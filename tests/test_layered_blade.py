@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.layered_blade import LayeredBladeModel
 from fuzzygait.uncertainty import FuzzyVector, graph_follower, triangular_relative
 

@@ -16,8 +16,8 @@ import pytest
 import xarray as xr
 
 from conftest import SAMPLE_DATA
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles, relative_envelope_width
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, fixed_subject
 from fuzzygait.markererror.comparison import (
@@ -28,7 +28,7 @@ from fuzzygait.markererror.comparison import (
     random_deviation_curves,
 )
 from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
-from fuzzygait.pipeline import AnglesRun, run_angles
+from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.uncertainty import FuzzyBalls, graph_follower
 
 JOINTS = ("Hip", "Knee", "Ankle")

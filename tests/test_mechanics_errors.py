@@ -1,7 +1,7 @@
 """Bad input to the mechanics simulators gives one clear error naming what is wrong.
 
-Every case raises :class:`fuzzygait.errors.ParameterError` (a ``ValueError``) or
-:class:`~fuzzygait.errors.SimulationError` with a one-line message that names the
+Every case raises :class:`fuzzygait.core.errors.ParameterError` (a ``ValueError``) or
+:class:`~fuzzygait.core.errors.SimulationError` with a one-line message that names the
 parameter (and, for a failed step, the time, the residual and the parameter values).
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError, SimulationError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError, SimulationError
 from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import LEG_PARAMETERS

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.homogenisation import LayerMaterials
 from fuzzygait.mechanics.scenarios import LegSimulator
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fuzzygait.errors import SimulationError
+from fuzzygait.core.errors import SimulationError
 from fuzzygait.mechanics.integrator import integrate, trajectory_energies
 from fuzzygait.mechanics.scenarios import LegSimulator
 

@@ -14,7 +14,7 @@ import pytest
 
 distributed = pytest.importorskip("distributed")
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError  # noqa: E402
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError  # noqa: E402
 from fuzzygait.uncertainty import FuzzyVector, graph_follower, triangular  # noqa: E402
 from fuzzygait.uncertainty.parallel import (  # noqa: E402
     AnalyticRecipe,

@@ -16,9 +16,9 @@ from conftest import SAMPLE_DATA, assert_one_line_error, run, shared_file
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import read_c3d, write_c3d
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import fill_gaps, fill_trial_gaps, gap_report_table
 from fuzzygait.mocap import pattern_fill
 from fuzzygait.mocap.gaps import WINDOW_VALID_SAMPLES

@@ -22,7 +22,7 @@ import pytest
 import xarray as xr
 from conftest import SAMPLE_DATA, assert_one_line_error, run
 
-from fuzzygait.pipeline import AnglesRun, run_angles
+from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.viz.report import ReportItem, component_label, cycle_bands, write_report
 
 ALPHAS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
@@ -148,7 +148,7 @@ def check_html(path: Path) -> _Checker:
 
 
 def test_bands_are_the_mean_of_the_normalised_hulls(noisy_run: AnglesRun) -> None:
-    from fuzzygait.mocap.cycles import gait_cycles, normalise_cycles
+    from fuzzygait.gait.cycles import gait_cycles, normalise_cycles
 
     cycles = gait_cycles(noisy_run.trial, noisy_run.events, "L")
     knee = noisy_run.result.angles["LKneeAngles"][:, 0]

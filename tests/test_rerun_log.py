@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from conftest import SAMPLE_DATA
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.kinematics.model import CGMResult
 
 rr = pytest.importorskip("rerun")
@@ -29,7 +29,7 @@ ALPHAS = np.array([0.0, 0.25, 0.5, 1.0])
 
 @pytest.fixture(scope="module")
 def run():
-    from fuzzygait.pipeline import run_angles
+    from fuzzygait.workflows.angles import run_angles
 
     return run_angles(
         SAMPLE_DATA / "walking.c3d",

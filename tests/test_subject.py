@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from conftest import SAMPLE_DATA, needs_shared, shared_file
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import (
     asis_trochanter_regression,

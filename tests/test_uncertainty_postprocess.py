@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty import (
     FunctionModel,
     FuzzyBalls,

@@ -12,7 +12,7 @@ Sub-packages mirror the architecture:
 * :mod:`fuzzygait.synthetic` -- deterministic synthetic trials with known angles
 """
 
-from fuzzygait.errors import C3DError, FuzzyGaitError, MarkerError, ParameterError
+from fuzzygait.core.errors import C3DError, FuzzyGaitError, MarkerError, ParameterError
 
 __version__ = "0.1.0"
 

@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from fuzzygait import __version__
-from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -262,7 +262,7 @@ def angles(
     """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
     from fuzzygait.io import write_c3d
     from fuzzygait.io.tables import check_table_path, write_table
-    from fuzzygait.pipeline import Preprocessing, model_output_trial, run_angles
+    from fuzzygait.workflows.angles import Preprocessing, model_output_trial, run_angles
 
     with _user_errors():
         for path, option in ((out_table, "--out"), (cycles, "--cycles")):
@@ -295,7 +295,7 @@ def angles(
 
 
 def _print_run_summary(run: object) -> None:
-    from fuzzygait.pipeline import AnglesRun
+    from fuzzygait.workflows.angles import AnglesRun
 
     assert isinstance(run, AnglesRun)
     trial = run.trial
@@ -323,7 +323,7 @@ def demo(
     ] = Path("sample_data"),
 ) -> None:
     """The main job on the bundled sample: angles, gait cycles, a plot and a summary."""
-    from fuzzygait.viz.demo import run_demo
+    from fuzzygait.workflows.demo import run_demo
 
     with _user_errors():
         summary = run_demo(data, out_dir, progress=err)
@@ -351,7 +351,7 @@ def uncertainty(
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
     every angle component over all marker deviations inside the α-level balls."""
     from fuzzygait.markererror.analysis import analyse_trial
-    from fuzzygait.pipeline import Preprocessing
+    from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.uncertainty.storage import SUFFIXES, save_result
 
     with _user_errors():
@@ -448,7 +448,7 @@ def report(
     A trial that fails is listed in the index with its error; the others are still
     reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
-    from fuzzygait.pipeline import Preprocessing
+    from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.viz.report import ReportItem, ReportWriter
 
     debug = _state["debug"]

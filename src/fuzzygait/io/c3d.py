@@ -1,16 +1,16 @@
 """Read and write C3D trials.
 
-:func:`read_c3d` gives a :class:`~fuzzygait.io.trial.Trial` with markers in mm (NaN for
+:func:`read_c3d` gives a :class:`~fuzzygait.core.trial.Trial` with markers in mm (NaN for
 missing samples), subject prefixes removed from the labels, model outputs (Plug-in Gait
 angles, forces, moments, powers, modelled and segment-frame virtual markers) kept apart
-from the markers, the ``EVENT`` group as :class:`~fuzzygait.io.trial.Event` objects and the
+from the markers, the ``EVENT`` group as :class:`~fuzzygait.core.trial.Event` objects and the
 ``PROCESSING`` group as subject parameters.
 
 :func:`write_c3d` writes a trial back as a float C3D that Vicon Nexus, Mokka and ezc3d
 open: markers, model outputs (with Vicon's ``POINT:ANGLES`` etc. type lists), events,
 subject parameters and the subject prefix.
 
-Every problem with a file raises one :class:`~fuzzygait.errors.C3DError` whose message
+Every problem with a file raises one :class:`~fuzzygait.core.errors.C3DError` whose message
 names the file and the cause.
 """
 
@@ -22,10 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzygait.errors import C3DError, FuzzyGaitError
+from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
-from fuzzygait.io.trial import OUTPUT_UNITS, Event, Trial
+from fuzzygait.core.trial import OUTPUT_UNITS, Event, Trial
 
 #: Length units the reader understands, as factors to millimetres.
 LENGTH_UNITS_TO_MM = {"mm": 1.0, "millimeter": 1.0, "millimetre": 1.0, "cm": 10.0, "m": 1000.0}

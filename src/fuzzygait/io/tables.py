@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io.atomic import atomic_output
 
 TABLE_SUFFIXES = (".csv", ".parquet")

@@ -7,7 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 
 def load_toml(path: str | os.PathLike[str], kind: str) -> dict[str, Any]:

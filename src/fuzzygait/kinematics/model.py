@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
 from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 #: Horizontal travel of the pelvis (mm) below which a trial counts as static.
 MIN_TRAVEL_MM = 200.0

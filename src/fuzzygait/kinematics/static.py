@@ -18,9 +18,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from fuzzygait.errors import MarkerError, ParameterError
+from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.segments import foot_offsets

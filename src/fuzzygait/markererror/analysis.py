@@ -33,13 +33,13 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
-from fuzzygait.pipeline import AnglesRun, Preprocessing, run_angles
+from fuzzygait.workflows.angles import AnglesRun, Preprocessing, run_angles
 from fuzzygait.uncertainty import FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 
 DEFAULT_ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -248,7 +248,7 @@ def analyse_trial(
     workers: int | None = None,
     progress: Progress | None = None,
 ) -> MarkerErrorAnalysis:
-    """The pipeline of :func:`fuzzygait.pipeline.run_angles` followed by the fuzzy
+    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` followed by the fuzzy
     marker-error analysis of every computed angle (or ``angles``)."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
     error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()

@@ -37,7 +37,7 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 import xarray as xr
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 #: The fixed-deviation direction of Fig. 5.11 (a): the unit diagonal of the lab frame.
 DIAGONAL = np.ones(3) / np.sqrt(3.0)

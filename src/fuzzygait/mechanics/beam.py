@@ -25,7 +25,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import Body, ElementGroup, SystemBuilder, dot3
 
 

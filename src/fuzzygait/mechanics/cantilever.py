@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration
 from fuzzygait.mechanics.beam import BeamSection, add_beam
 from fuzzygait.mechanics.geometry import BladeMesh, straight_beam

@@ -16,7 +16,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, PARAMETER_UNITS
 from fuzzygait.mechanics.scenarios import LegSimulator
 from fuzzygait.mechanics.targets import TARGETS, LegTargetModel

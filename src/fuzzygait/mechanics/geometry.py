@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.tomlfile import load_toml
 
 #: Packaged default blade, relative to the ``fuzzygait.mechanics`` package.

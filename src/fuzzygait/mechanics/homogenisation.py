@@ -86,7 +86,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import zeta
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 __all__ = [
     "LayerMaterials",

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from fuzzygait.errors import ParameterError, SimulationError
+from fuzzygait.core.errors import ParameterError, SimulationError
 from fuzzygait.mechanics.assembly import ElementGroup, SystemBuilder
 from fuzzygait.mechanics.codegen import compile_functions, load_cached
 

@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.cantilever import build_clamped_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness

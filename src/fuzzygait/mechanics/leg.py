@@ -24,7 +24,7 @@ from typing import Literal
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration, euler_tensor_principal
 from fuzzygait.mechanics.beam import BeamSection, add_beam
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 GRAVITY = 9.81  # m/s²
 

@@ -10,7 +10,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 
 @dataclass(frozen=True)

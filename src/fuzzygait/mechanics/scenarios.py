@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials
 from fuzzygait.mechanics.integrator import BufferedFunction, DiscreteModel, integrate, trajectory_energies

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 #: Timoshenko shear correction factor of a rectangle, κ = 5/6 (the classical value from
 #: the parabolic shear-stress distribution).  Cowper (1966) gives the Poisson-dependent

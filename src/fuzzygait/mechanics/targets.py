@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
 

@@ -1,20 +1,7 @@
-"""Motion-capture pre-processing (gap filling, zero-lag low-pass), gait events and
-gait-cycle normalisation."""
+"""Motion-capture pre-processing of marker signals: gap filling and zero-lag low-pass.
 
-from fuzzygait.mocap.cycles import (
-    GaitCycle,
-    cycle_statistics,
-    gait_cycles,
-    mean_sd_table,
-    normalise_cycles,
-    normalised_angle_table,
-)
-from fuzzygait.mocap.events import (
-    SOURCE_DETECTED,
-    SOURCE_FILE,
-    detect_gait_events,
-    trial_gait_events,
-)
+Gait events and cycles are in :mod:`fuzzygait.gait` (they need the kinematics)."""
+
 from fuzzygait.mocap.filtering import (
     ShortRunWarning,
     butterworth_lowpass,
@@ -34,16 +21,6 @@ from fuzzygait.mocap.gaps import (
 )
 
 __all__ = [
-    "SOURCE_DETECTED",
-    "SOURCE_FILE",
-    "GaitCycle",
-    "cycle_statistics",
-    "detect_gait_events",
-    "gait_cycles",
-    "mean_sd_table",
-    "normalise_cycles",
-    "normalised_angle_table",
-    "trial_gait_events",
     "Gap",
     "GapRun",
     "ShortRunWarning",

@@ -47,8 +47,8 @@ from collections import defaultdict
 import numpy as np
 from scipy import signal
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
 
 #: Combined gain of the zero-lag filter at the cutoff: 20 log10(1/sqrt(2)) dB.
 GAIN_AT_CUTOFF_DB = 20.0 * np.log10(np.sqrt(0.5))

@@ -62,8 +62,8 @@ import numpy as np
 import pandas as pd
 from scipy.interpolate import CubicSpline
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
 from fuzzygait.mocap.pattern_fill import (
     PatternModel,
     PatternUnavailable,

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Event, Trial
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Event, Trial
 from fuzzygait.synthetic.gait_curves import (
     FOOT_OFF_PHASE,
     JOINTS,

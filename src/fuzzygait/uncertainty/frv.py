@@ -50,7 +50,7 @@ import xarray as xr
 import zarr
 from scipy import stats
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty.fuzzy import _as_levels
 from fuzzygait.uncertainty.gfa import BOUNDS, optimisation_nodes
 from fuzzygait.uncertainty.model import CountedModel, has_sensitivities

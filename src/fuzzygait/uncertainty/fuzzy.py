@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 
 def _as_levels(alphas: Sequence[float] | np.ndarray) -> np.ndarray:

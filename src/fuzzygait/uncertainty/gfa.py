@@ -33,7 +33,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import batched
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 from fuzzygait.uncertainty.library import Library

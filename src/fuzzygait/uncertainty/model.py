@@ -24,7 +24,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 
 @runtime_checkable

@@ -35,7 +35,7 @@ rows of ``P (k, n_p)`` — on a pool of processes::
   ``OPENBLAS_NUM_THREADS=OMP_NUM_THREADS=MKL_NUM_THREADS=1``; set the same in the driver
   for the serial path — the test suite does).
 * **One error.** A row whose evaluation raises is reported as one
-  :class:`ParallelEvaluationError` (a :class:`~fuzzygait.errors.FuzzyGaitError`) naming the
+  :class:`ParallelEvaluationError` (a :class:`~fuzzygait.core.errors.FuzzyGaitError`) naming the
   row, its parameters and the original error type and message — no remote traceback. An
   unreachable scheduler address is one such error too.
 
@@ -63,7 +63,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 
 #: Environment of the local cluster's worker processes: one BLAS/OpenMP thread each (the
 #: workers are the parallelism; nested threads only oversubscribe the cores).
@@ -228,7 +228,7 @@ class AnalyticRecipe:
     ``f(t) = Σ_i p_i²·t^(i+1)``, on ``n_time`` nodes of ``[0, t_end]``, with exact
     sensitivities. ``offset`` (a :class:`SharedArray` of shape ``(n_time,)``) is added to
     the output; ``fail_above`` makes evaluation raise
-    :class:`~fuzzygait.errors.ParameterError` when ``p[0] > fail_above`` (to test errors).
+    :class:`~fuzzygait.core.errors.ParameterError` when ``p[0] > fail_above`` (to test errors).
     """
 
     kind: str = "sin"

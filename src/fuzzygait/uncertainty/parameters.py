@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 from fuzzygait.uncertainty.fuzzy import FuzzyNumber
 

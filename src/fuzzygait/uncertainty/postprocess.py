@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import linprog
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 
 
 def repair_nesting(hull: np.ndarray) -> np.ndarray:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io.atomic import atomic_output
 
 SUFFIXES = (".nc", ".zarr")

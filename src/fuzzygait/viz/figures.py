@@ -12,7 +12,7 @@ matplotlib.use("Agg")  # files only; never needs a display
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError  # noqa: E402
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError  # noqa: E402
 from fuzzygait.io.atomic import atomic_output  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
@@ -27,7 +27,7 @@ def plot_gait_cycles(
     """Write the classic gait-report grid (joints x planes; mean ± 1 SD per side).
 
     Args:
-        stats: output of :func:`fuzzygait.mocap.cycles.mean_sd_table` (columns
+        stats: output of :func:`fuzzygait.gait.cycles.mean_sd_table` (columns
             ``angle`` like ``LKneeAngles_X``, ``percent``, ``mean``, ``sd``,
             ``n_cycles``); degrees.
         path: PNG, SVG or PDF file, by suffix.

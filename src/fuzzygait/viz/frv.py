@@ -30,7 +30,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats
 
-from fuzzygait.errors import ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.frv import (
     FRVSpec,
     FRVStudy,

@@ -76,7 +76,7 @@ def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
                           recording_name: str = "fuzzygait-fuzzy-dynamics") -> Path:
     """Write the hulls as Rerun time series (rerun-sdk 0.41): ``<target>/alpha_<α>/lower|upper``
     and ``<target>/deterministic`` on the timeline ``time`` (s), in the target's unit."""
-    from fuzzygait.errors import ParameterError
+    from fuzzygait.core.errors import ParameterError
     from fuzzygait.viz.rerun_log import _log_series, recording_file
 
     path = Path(path)

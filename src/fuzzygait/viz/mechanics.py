@@ -44,7 +44,7 @@ matplotlib.use("Agg")  # files only; never needs a display
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from fuzzygait.errors import ParameterError  # noqa: E402
+from fuzzygait.core.errors import ParameterError  # noqa: E402
 from fuzzygait.viz.figures import save_figure  # noqa: E402
 
 if TYPE_CHECKING:

@@ -15,7 +15,7 @@ Gait-cycle bands
 ----------------
 The fuzzy analysis gives, for every α-level, a lower and an upper hull of each angle at
 every frame.  Each hull is time-normalised with the *same* gait cycles as the angle
-(:func:`fuzzygait.mocap.cycles.normalise_cycles`), and the band drawn is the **mean
+(:func:`fuzzygait.gait.cycles.normalise_cycles`), and the band drawn is the **mean
 over cycles** of the normalised lower hulls and of the normalised upper hulls, around
 the mean over cycles of the measured angle.  Because the mean is linear and every
 cycle's hulls enclose every angle curve the marker errors allow, this band encloses
@@ -57,8 +57,8 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from fuzzygait import __version__  # noqa: E402
-from fuzzygait.errors import FuzzyGaitError  # noqa: E402
-from fuzzygait.mocap.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points  # noqa: E402
+from fuzzygait.core.errors import FuzzyGaitError  # noqa: E402
+from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points  # noqa: E402
 from fuzzygait.mocap.gaps import methods_used  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
@@ -66,7 +66,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
     from fuzzygait.markererror.analysis import MarkerErrorAnalysis
-    from fuzzygait.pipeline import AnglesRun
+    from fuzzygait.workflows.angles import AnglesRun
 
 __all__ = [
     "ReportItem",

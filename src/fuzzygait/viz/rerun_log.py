@@ -62,9 +62,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fuzzygait.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.io.atomic import atomic_output
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.model import CGMResult
 
 if TYPE_CHECKING:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections import Counter
 
-from fuzzygait.io.trial import Trial
+from fuzzygait.core.trial import Trial
 from fuzzygait.mocap.gaps import find_gaps
 
 _MAX_LISTED = 12  # markers listed by name before "... and N more"

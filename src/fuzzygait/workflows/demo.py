@@ -22,7 +22,7 @@ from rich.console import Console
 from fuzzygait.io.tables import write_table
 from fuzzygait.markererror.analysis import analyse_trial
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.pipeline import AnglesRun, run_angles
+from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, write_report
 

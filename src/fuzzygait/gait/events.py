@@ -68,8 +68,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import find_peaks
 
-from fuzzygait.errors import MarkerError
-from fuzzygait.io.trial import Event, Trial
+from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.trial import Event, Trial
 from fuzzygait.kinematics.progression import progression_frame
 from fuzzygait.mocap.filtering import ShortRunWarning, butterworth_lowpass
 

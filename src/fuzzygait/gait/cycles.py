@@ -36,9 +36,9 @@ import numpy as np
 import pandas as pd
 from scipy.interpolate import CubicSpline
 
-from fuzzygait.errors import ParameterError
-from fuzzygait.io.trial import Event, Trial
-from fuzzygait.mocap.events import FOOT_OFF, FOOT_STRIKE, SIDE_CONTEXTS
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Event, Trial
+from fuzzygait.gait.events import FOOT_OFF, FOOT_STRIKE, SIDE_CONTEXTS
 
 #: Extra visible samples used on either side of a cycle by the interpolating spline.
 SPLINE_MARGIN = 3
@@ -142,7 +142,7 @@ def gait_cycles(trial: Trial, events: Sequence[Event], side: str) -> list[GaitCy
     Args:
         trial: gives the rate and the sample index of each event time.
         events: e.g. ``trial.events`` or the first element of
-            :func:`fuzzygait.mocap.events.trial_gait_events`; only ``"Foot Strike"`` /
+            :func:`fuzzygait.gait.events.trial_gait_events`; only ``"Foot Strike"`` /
             ``"Foot Off"`` events of the side's context (``"Left"``/``"Right"``) are used.
         side: ``"L"``/``"Left"`` or ``"R"``/``"Right"``.
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzygait.errors import MarkerError, ParameterError
+from fuzzygait.core.errors import MarkerError, ParameterError
 
 #: Kinds of model-output points, after the ``POINT`` group's type lists of Vicon files.
 OUTPUT_KINDS = ("angle", "force", "moment", "power", "scalar", "modeled_marker", "segment_frame")

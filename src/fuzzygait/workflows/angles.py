@@ -13,13 +13,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fuzzygait.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io import Event, Trial, read_c3d
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
 from fuzzygait.mocap import fill_trial_gaps, filter_trial
-from fuzzygait.mocap.cycles import mean_sd_table, normalised_angle_table
-from fuzzygait.mocap.events import trial_gait_events
+from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
+from fuzzygait.gait.events import trial_gait_events
 from fuzzygait.mocap.gaps import Gap
 
 AXES = ("X", "Y", "Z")
