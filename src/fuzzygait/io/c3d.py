@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
+from fuzzygait.core.trial import OUTPUT_UNITS, Event, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
-from fuzzygait.core.trial import OUTPUT_UNITS, Event, Trial
 
 #: Length units the reader understands, as factors to millimetres.
 LENGTH_UNITS_TO_MM = {"mm": 1.0, "millimeter": 1.0, "millimetre": 1.0, "cm": 10.0, "m": 1000.0}
@@ -92,9 +92,9 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
     try:
         raw = decode(path)
     except BackendError as exc:
-        raise _fail(path, f"cannot be read as C3D: {exc}; the file is corrupt or not C3D")
+        raise _fail(path, f"cannot be read as C3D: {exc}; the file is corrupt or not C3D") from exc
     except OSError as exc:
-        raise _fail(path, f"cannot be opened ({exc.strerror or exc})")
+        raise _fail(path, f"cannot be opened ({exc.strerror or exc})") from exc
     return _interpret(path, raw)
 
 

@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.joint_centres import chord_joint_centre, davis_hjc_local
 from fuzzygait.kinematics.pelvis import inter_asis_distance, pelvis_frame
 from fuzzygait.kinematics.segments import (

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
 from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers

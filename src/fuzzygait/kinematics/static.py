@@ -19,8 +19,8 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError, ParameterError
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.segments import foot_offsets

@@ -22,8 +22,8 @@ compiled library.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import casadi as ca
 import numpy as np
@@ -159,7 +159,7 @@ class SystemBuilder:
         """Gravity plus constant loads (J), linear in ``q``."""
         return self.gravity_energy + self.load_potential
 
-    def add_element_group(self, group: "ElementGroup") -> None:
+    def add_element_group(self, group: ElementGroup) -> None:
         self.element_groups.append(group)
         self.key_parts.append(f"elements:{group.name}:{group.kernel_name}:{len(group.node_offsets)}")
 

@@ -19,8 +19,8 @@ spread of mass along d1 — and ρI_1 on d2; d3 carries none).  Gravity acts on 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import casadi as ca
 import numpy as np

@@ -22,8 +22,8 @@ Jacobian, so one extra back-substitution per step.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 import casadi as ca
 import numpy as np
@@ -152,7 +152,7 @@ class DiscreteModel:
     structure_key: str
 
     @classmethod
-    def from_builder(cls, builder: SystemBuilder, compile: bool = True) -> "DiscreteModel":
+    def from_builder(cls, builder: SystemBuilder, compile: bool = True) -> DiscreteModel:
         """Load the cached compiled library for this structure, or build (and compile) it."""
         key = builder.structure_key
         names = list(GLOBAL_FUNCTIONS) + [f"{g.name}_{kind}" for g in builder.element_groups for kind in KERNEL_KINDS]
@@ -462,7 +462,9 @@ def integrate(
     n, m = model.ndof, model.nconstraints
     p = np.asarray(p, dtype=float).ravel()
     if p.size != len(model.parameter_names):
-        raise ParameterError(f"expected {len(model.parameter_names)} parameters ({', '.join(model.parameter_names)}), got {p.size}")
+        raise ParameterError(
+            f"expected {len(model.parameter_names)} parameters ({', '.join(model.parameter_names)}), got {p.size}"
+        )
     if not (np.isfinite(dt) and dt > 0):
         raise ParameterError(f"time step dt must be > 0 s; got {dt}")
     q0 = np.asarray(q0, dtype=float).ravel()
@@ -631,7 +633,9 @@ class Energies:
         return self.kinetic + self.gravity + self.internal + self.load
 
 
-def trajectory_energies(model: DiscreteModel, trajectory: Trajectory, p: np.ndarray, v0: np.ndarray | None = None) -> Energies:
+def trajectory_energies(
+    model: DiscreteModel, trajectory: Trajectory, p: np.ndarray, v0: np.ndarray | None = None
+) -> Energies:
     """Kinetic, gravitational, internal, load and dissipated energy along a trajectory."""
     q = trajectory.q
     n_nodes = len(q)

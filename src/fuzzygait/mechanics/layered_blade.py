@@ -12,8 +12,8 @@ parameters change only the constant inputs).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Sequence
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from fuzzygait.mechanics.cantilever import build_clamped_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.integrator import integrate, trajectory_energies
+from fuzzygait.uncertainty.protocol import Evaluation, Output
 
 LAYER_PARAMETERS: tuple[str, ...] = ("face_modulus", "core_modulus", "face_thickness")
 LAYER_UNITS = {"face_modulus": "Pa", "core_modulus": "Pa", "face_thickness": "m"}
@@ -67,7 +68,9 @@ class LayeredBladeModel:
             raise ParameterError(f"homogenisation must be 'coupled' or 'standard'; got {self.homogenisation!r}")
         unknown = [n for n in self.names if n not in LAYER_PARAMETERS]
         if unknown:
-            raise ParameterError(f"unknown layer parameter(s) {', '.join(unknown)}; known: {', '.join(LAYER_PARAMETERS)}")
+            raise ParameterError(
+                f"unknown layer parameter(s) {', '.join(unknown)}; known: {', '.join(LAYER_PARAMETERS)}"
+            )
         self.names = tuple(self.names)
         self.times = np.arange(int(round(self.duration / self.dt)) + 1) * self.dt
 
@@ -75,8 +78,23 @@ class LayeredBladeModel:
     def base(self) -> np.ndarray:
         return np.array([getattr(self, n) for n in self.names], dtype=float)
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
-        """One forward simulation for the varying layer parameters ``p`` (order ``names``)."""
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(self.names)
+
+    @property
+    def output(self) -> Output:
+        units = "J" if self.target == "total_deformation_energy" else "m"
+        return Output(self.target, units)
+
+    capabilities = frozenset[str]()  # none: the engine uses finite differences
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """One forward simulation for the varying layer parameters ``p`` (order ``names``);
+        no sensitivities (the engine uses finite differences)."""
+        return Evaluation(self._simulate(p))
+
+    def _simulate(self, p: np.ndarray) -> np.ndarray:
         values = {n: getattr(self, n) for n in LAYER_PARAMETERS}
         values.update(zip(self.names, np.asarray(p, float).ravel()))
         for name, value in values.items():

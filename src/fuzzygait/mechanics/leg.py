@@ -27,8 +27,8 @@ import numpy as np
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration, euler_tensor_principal
 from fuzzygait.mechanics.beam import BeamSection, add_beam
-from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.geometry import BladeGeometry, BladeMesh, default_blade
+from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.presets import SHANK, THIGH, Material, SegmentData
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, RectangleSection
 
@@ -80,7 +80,7 @@ class RigidFoot:
     inertia: tuple[float, float, float]
 
     @classmethod
-    def from_mesh(cls, mesh: BladeMesh, density: float) -> "RigidFoot":
+    def from_mesh(cls, mesh: BladeMesh, density: float) -> RigidFoot:
         """Mass and centre of the blade; inertia = diagonal of its inertia tensor about that
         centre in the attachment frame, elements as point masses plus their own rod inertia
         (products of inertia are neglected — the rigid foot is a test stand-in)."""
@@ -129,7 +129,9 @@ class LegConfiguration:
         if self.section not in ("homogeneous", "standard", "coupled"):
             raise ParameterError(f"section must be 'homogeneous', 'standard' or 'coupled'; got {self.section!r}")
         if self.section != "homogeneous" and self.layers is None:
-            raise ParameterError(f"the {self.section} homogenisation needs the face/core materials (layers=LayerMaterials(...))")
+            raise ParameterError(
+                f"the {self.section} homogenisation needs the face/core materials (layers=LayerMaterials(...))"
+            )
         if self.foot not in ("beam", "rigid", "none"):
             raise ParameterError(f"foot must be 'beam', 'rigid' or 'none'; got {self.foot!r}")
         if self.foot == "beam" and self.nodes < 2:

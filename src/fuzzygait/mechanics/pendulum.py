@@ -14,6 +14,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.protocol import SENSITIVITIES, Evaluation, Output
 
 GRAVITY = 9.81  # m/s²
 
@@ -33,6 +34,10 @@ class Pendulum:
     theta0: float = 0.5
     gravity: float = GRAVITY
     rtol: float = 1e-10
+
+    parameter_names = ("L",)
+    output = Output("theta", "rad", "pendulum angle")
+    capabilities = frozenset({SENSITIVITIES})
 
     def _solve(self, p: np.ndarray, sensitivities: bool) -> np.ndarray:
         length = float(np.ravel(p)[0])
@@ -56,11 +61,8 @@ class Pendulum:
             raise ParameterError(f"pendulum integration failed for L={length} m: {solution.message}")
         return solution.y
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
-        """θ(t) in rad at the time nodes."""
-        return self._solve(p, sensitivities=False)[0]
-
-    def evaluate_with_sensitivities(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """θ(t) and ∂θ/∂L ``(n_time, 1)``."""
-        y = self._solve(p, sensitivities=True)
-        return y[0], y[2][:, None]
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """θ(t) in rad at the time nodes; with ``sensitivities`` also ∂θ/∂L ``(n_time, 1)``
+        in rad/m (integrated together with the motion: one simulation)."""
+        y = self._solve(p, sensitivities=sensitivities)
+        return Evaluation(y[0], y[2][:, None] if sensitivities else None)

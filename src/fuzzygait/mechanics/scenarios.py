@@ -10,7 +10,7 @@ blade node's position — with their parameter sensitivities on request.
 from __future__ import annotations
 
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 import xarray as xr
@@ -140,8 +140,12 @@ class LegSimulator:
         hip = np.arctan2(thigh_dir[:, 0], -thigh_dir[:, 2])
         shank_angle = np.arctan2(shank_dir[:, 0], -shank_dir[:, 2])
         data = {
-            "position": (("time", "body", "xyz"), q[:, :, :3], {"units": "m", "long_name": "centre of mass / node position"}),
-            "directors": (("time", "body", "director", "xyz"), q[:, :, 3:].reshape(len(q), len(names), 3, 3), {"units": "1"}),
+            "position": (
+                ("time", "body", "xyz"), q[:, :, :3], {"units": "m", "long_name": "centre of mass / node position"}
+            ),
+            "directors": (
+                ("time", "body", "director", "xyz"), q[:, :, 3:].reshape(len(q), len(names), 3, 3), {"units": "1"}
+            ),
             "hip_flexion": ("time", hip, {"units": "rad"}),
             "knee_flexion": ("time", np.unwrap(hip - shank_angle), {"units": "rad"}),
             "kinetic_energy": ("time", energies.kinetic, {"units": "J"}),
@@ -165,9 +169,14 @@ class LegSimulator:
             data["configuration_sensitivity"] = (("time", "dof", "parameter"), s, {"long_name": "dq/dp"})
             if self.model.groups:
                 d_total, d_max = self._target_sensitivities(trajectory, p, energies.element)
-                data["total_deformation_energy_sensitivity"] = (("time", "parameter"), d_total, {"units": "J per parameter unit"})
-                data["max_element_energy_sensitivity"] = (("time", "parameter"), d_max, {"units": "J per parameter unit"})
-                data["last_node_position_sensitivity"] = (("time", "xyz", "parameter"), s[:, -12:-9, :], {"units": "m per parameter unit"})
+                per_unit = "per parameter unit"
+                data["total_deformation_energy_sensitivity"] = (
+                    ("time", "parameter"), d_total, {"units": f"J {per_unit}"}
+                )
+                data["max_element_energy_sensitivity"] = (("time", "parameter"), d_max, {"units": f"J {per_unit}"})
+                data["last_node_position_sensitivity"] = (
+                    ("time", "xyz", "parameter"), s[:, -12:-9, :], {"units": f"m {per_unit}"}
+                )
         ds = xr.Dataset(data, coords=coords)
         ds.attrs.update(
             scenario=self.scenario,

@@ -429,13 +429,21 @@ Synthetic subject "Synthetic", Plug-in Gait / CGM 1.0 lower-body marker set.
 
 | file | content |
 |---|---|
-| `static.c3d` | standing trial, {rate:g} Hz, 2 s, every frame identical; all joint and pelvis angles 0, pelvis level, feet parallel along +X, soles on the floor (ASIS midpoint at X=Y=0, Z={standing:.3f} mm). Markers: LASI RASI LPSI RPSI LTHI LKNE LTIB LANK LHEE LTOE RTHI RKNE RTIB RANK RHEE RTOE + medial LKNM RKNM LMED RMED. No events. |
-| `walking.c3d` | clean walking trial, {rate:g} Hz, {n_frames} frames (0 .. {duration:.2f} s), 4 complete gait cycles per side, the 16 dynamic markers. Events: {events}. |
-| `walking_noisy.c3d` | `walking.c3d` + Gaussian noise (sigma = {noise} mm per coordinate, seed {seed}) + the gaps of `walking_noisy_gaps.csv`; same events. |
+| `static.c3d` | standing trial, {rate:g} Hz, 2 s, every frame identical; all joint and pelvis angles 0, pelvis \
+level, feet parallel along +X, soles on the floor (ASIS midpoint at X=Y=0, Z={standing:.3f} mm). Markers: LASI RASI \
+LPSI RPSI LTHI LKNE LTIB LANK LHEE LTOE RTHI RKNE RTIB RANK RHEE RTOE + medial LKNM RKNM LMED RMED. No events. |
+| `walking.c3d` | clean walking trial, {rate:g} Hz, {n_frames} frames (0 .. {duration:.2f} s), 4 complete gait cycles \
+per side, the 16 dynamic markers. Events: {events}. |
+| `walking_noisy.c3d` | `walking.c3d` + Gaussian noise (sigma = {noise} mm per coordinate, seed {seed}) + the gaps of \
+`walking_noisy_gaps.csv`; same events. |
 | `subject.toml` | subject parameters (Vicon `PROCESSING` names; mm, rad, kg), also stored in every C3D. |
-| `walking_truth_angles.csv` | exact joint angles of `walking.c3d`: `frame` (1-based C3D frame), `time_s`, `LPelvisAngles_X/Y/Z`, `LHipAngles_*`, `LKneeAngles_*`, `LAnkleAngles_*`, then the same for R; degrees; X = sagittal, Y = frontal, Z = transverse. |
-| `walking_truth_joint_centres.csv` | exact joint centres of `walking.c3d`: `frame`, `time_s`, `LHJC_X/Y/Z`, `LKJC_*`, `LAJC_*`, `RHJC_*`, `RKJC_*`, `RAJC_*`, mm, lab frame. |
-| `walking_noisy_gaps.csv` | the gaps cut in `walking_noisy.c3d`: `marker`, `start_frame` (1-based C3D frame), `length` (frames). |
+| `walking_truth_angles.csv` | exact joint angles of `walking.c3d`: `frame` (1-based C3D frame), `time_s`, \
+`LPelvisAngles_X/Y/Z`, `LHipAngles_*`, `LKneeAngles_*`, `LAnkleAngles_*`, then the same for R; degrees; X = sagittal, \
+Y = frontal, Z = transverse. |
+| `walking_truth_joint_centres.csv` | exact joint centres of `walking.c3d`: `frame`, `time_s`, `LHJC_X/Y/Z`, \
+`LKJC_*`, `LAJC_*`, `RHJC_*`, `RKJC_*`, `RAJC_*`, mm, lab frame. |
+| `walking_noisy_gaps.csv` | the gaps cut in `walking_noisy.c3d`: `marker`, `start_frame` (1-based C3D frame), \
+`length` (frames). |
 
 The C3D files store float32, so markers read back differ from the exact values by up to
 ~2e-4 mm; the CSVs carry 9 (angles) and 6 (positions) decimals.
@@ -458,9 +466,11 @@ The C3D files store float32, so markers read back differ from the exact values b
 | joint | fs | as L / R | rs L / R | + X | + Y | + Z |
 |---|---|---|---|---|---|---|
 | Pelvis | +1 | +1 / -1 | -1 / +1 | anterior tilt (ASIS below PSIS) | own side up | own ASIS forward |
-| Hip | -1 | -1 / +1 | -1 / +1 | flexion (knee anterior) | adduction (knee medial) | internal rotation (lateral knee marker turns anterior) |
+| Hip | -1 | -1 / +1 | -1 / +1 | flexion (knee anterior) | adduction (knee medial) | internal rotation (lateral knee \
+marker turns anterior) |
 | Knee | +1 | -1 / +1 | -1 / +1 | flexion (ankle posterior) | varus (ankle medial) | internal rotation |
-| Ankle | -1 | +1 / -1 | -1 / +1 | dorsiflexion (toe up) | Plug-in Gait "inversion" (see below) | internal rotation (toe medial) |
+| Ankle | -1 | +1 / -1 | -1 / +1 | dorsiflexion (toe up) | Plug-in Gait "inversion" (see below) | internal rotation \
+(toe medial) |
 
   Ankle Y: Vicon labels it inversion/adduction, but as Nexus computes it a positive
   value turns the foot about its long axis so that the lateral border rises (the sole
