@@ -220,7 +220,7 @@ def test_failed_item_is_listed_with_its_error(report_dir: Path) -> None:
 def test_rerun_replaces_pages_and_keeps_folder_intact_on_error(
     report_dir: Path, noisy_run: AnglesRun, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from fuzzygait.viz import report
+    from fuzzygait.viz.report import writer as report
 
     def quick_figure(data: object, stem: Path, title: str) -> None:  # figures are tested above
         for suffix in (".png", ".svg"):

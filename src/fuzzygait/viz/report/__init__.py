@@ -1,0 +1,53 @@
+"""Clinicians' batch report: one HTML page per trial plus an ``index.html``.
+
+Layout of the output folder::
+
+    OUT/index.html                     every trial: status, key numbers, error line
+    OUT/<trial>.html                   one page per successful trial
+    OUT/<trial>_files/cycles.png|svg   angles over the gait cycle with fuzzy α-bands
+    OUT/<trial>_files/time_series.png|svg   the whole trial with its α-bands
+
+The pages are plain HTML5 with inline CSS: no JavaScript, no external resources; the
+figures are referenced by relative paths, so the folder can be zipped, mailed or opened
+from a USB stick.
+
+Gait-cycle bands
+----------------
+The fuzzy analysis gives, for every α-level, a lower and an upper hull of each angle at
+every frame.  Each hull is time-normalised with the *same* gait cycles as the angle
+(:func:`fuzzygait.gait.cycles.normalise_cycles`), and the band drawn is the **mean
+over cycles** of the normalised lower hulls and of the normalised upper hulls, around
+the mean over cycles of the measured angle.  Because the mean is linear and every
+cycle's hulls enclose every angle curve the marker errors allow, this band encloses
+every *mean* curve the marker errors allow: it is the uncertainty of the curve that is
+drawn, and it keeps the α-levels nested.  Min/max over cycles would mix the stride-to-
+stride variability (the SD of the classic report) into the measurement uncertainty.  At
+each percentage only cycles where the angle and every hull are available are used.
+
+Atomicity
+---------
+Everything is written into a hidden staging folder beside ``OUT`` and moved into place
+when the report is complete: pages first, ``index.html`` last.  On an error (or Ctrl-C)
+the staging folder is removed and ``OUT`` is untouched.  Pages of trials from earlier
+runs that are not part of this batch stay in ``OUT`` but are not linked.
+
+Modules: :mod:`~fuzzygait.viz.report.bands` (the numbers: cycle bands, ΔΦ table, summary
+numbers), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.pages` (HTML
+and CSS) and :mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
+"""
+
+from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry, component_label, cycle_bands
+from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
+from fuzzygait.viz.report.writer import ReportItem, ReportWriter, write_report
+
+__all__ = [
+    "ReportItem",
+    "ReportWriter",
+    "TrialAnalysis",
+    "TrialEntry",
+    "component_label",
+    "cycle_bands",
+    "plot_cycle_bands",
+    "plot_time_series",
+    "write_report",
+]

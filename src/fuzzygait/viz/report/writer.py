@@ -1,0 +1,192 @@
+"""Staged, atomic writing of the report folder: every page and figure goes into a hidden
+staging folder beside ``OUT`` and is moved into place when the report is complete (pages
+first, ``index.html`` last); on an error (or Ctrl-C) ``OUT`` is left as it was."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+
+import matplotlib.pyplot as plt
+
+from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.viz.report.bands import TrialAnalysis, TrialData, TrialEntry, delta_phi_table
+from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
+from fuzzygait.viz.report.pages import index_page, trial_page
+
+__all__ = ["ReportItem", "ReportWriter", "write_report"]
+
+
+@dataclass
+class ReportItem:
+    """One trial of the batch: its analysis, or the one-line error that stopped it."""
+
+    source: Path
+    analysis: TrialAnalysis | None = None
+    error: str | None = None
+
+
+def _one_line(text: str) -> str:
+    """An error message on one line."""
+    lines = [line.strip() for line in str(text).splitlines() if line.strip()]
+    return " ".join(lines) if lines else "unknown error"
+
+
+def _slug(stem: str) -> str:
+    """A file name stem safe in URLs and on every file system."""
+    slug = re.sub(r"[^A-Za-z0-9._-]+", "_", stem).strip("._-")
+    return slug or "trial"
+
+
+class ReportWriter:
+    """Writes the report trial by trial into a staging folder; :meth:`finish` moves it
+    into ``out_dir`` (pages first, index last).  Use as a context manager: on an
+    exception the staging folder is removed and ``out_dir`` is left as it was.
+
+    Args:
+        out_dir: the report folder (created; existing pages of the same names replaced).
+        strict: re-raise errors while drawing a page instead of listing the trial as
+            failed (for debugging).
+    """
+
+    def __init__(self, out_dir: str | os.PathLike[str], *, strict: bool = False) -> None:
+        self.out_dir = Path(out_dir)
+        self.strict = strict
+        self.entries: list[TrialEntry] = []
+        self._names: set[str] = {"index"}
+        self._alphas: set[float] = set()
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            raise FuzzyGaitError(f"{self.out_dir}: --out must be a folder, not a file")
+        parent = self.out_dir.resolve().parent
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            staging = Path(tempfile.mkdtemp(prefix=f".{self.out_dir.name}.", suffix=".tmp", dir=parent))
+        except OSError as exc:
+            raise FuzzyGaitError(f"{self.out_dir}: cannot create the report folder ({exc.strerror})") from None
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(staging, 0o777 & ~umask)
+        self._staging: Path | None = staging
+
+    # -- context manager
+    def __enter__(self) -> ReportWriter:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:  # fmt: skip
+        self.abort()
+
+    def abort(self) -> None:
+        """Remove the staging folder (no-op after :meth:`finish`)."""
+        if self._staging is not None:
+            shutil.rmtree(self._staging, ignore_errors=True)
+            self._staging = None
+
+    # -- trials
+    def _unique_name(self, source: Path) -> str:
+        """A page name for ``source`` not used yet in this report (case-insensitive)."""
+        base = _slug(source.stem)
+        name, k = base, 2
+        while name.lower() in self._names:
+            name, k = f"{base}-{k}", k + 1
+        self._names.add(name.lower())
+        return name
+
+    def add(self, item: ReportItem) -> TrialEntry:
+        """Write the page of one trial (or record its failure); returns its index entry."""
+        if self._staging is None:
+            raise RuntimeError("the report is already finished")
+        source = Path(item.source)
+        if item.analysis is None or item.error is not None:
+            entry = TrialEntry(source, None, _one_line(item.error or "no analysis result"))
+            self.entries.append(entry)
+            return entry
+        name = self._unique_name(source)
+        files = f"{name}_files"
+        try:
+            entry = self._write_trial(item.analysis, source, name, files)
+        except Exception as exc:
+            if self.strict:
+                raise
+            shutil.rmtree(self._staging / files, ignore_errors=True)
+            (self._staging / f"{name}.html").unlink(missing_ok=True)
+            message = str(exc) if isinstance(exc, FuzzyGaitError) else f"{type(exc).__name__}: {exc}"
+            entry = TrialEntry(source, None, _one_line(f"could not draw the report page: {message}"))
+        finally:
+            plt.close("all")
+        self.entries.append(entry)
+        return entry
+
+    def _write_trial(self, analysis: TrialAnalysis, source: Path, name: str, files: str) -> TrialEntry:
+        """Figures and page of one trial into the staging folder; returns its entry."""
+        assert self._staging is not None
+        data = TrialData.of(analysis)
+        self._alphas.update(float(a) for a in data.alphas)
+        folder = self._staging / files
+        folder.mkdir()
+        title = f"{source.name}: joint angles with fuzzy α-bands"
+        plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)")
+        plot_time_series(data, folder / "time_series", title + " (whole trial)")
+        table = delta_phi_table(analysis, data)
+        entry = TrialEntry.of(source, f"{name}.html", data, table)
+        page = trial_page(analysis, data, entry, table, files, source)
+        (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
+        return entry
+
+    # -- the end
+    def finish(self) -> Path:
+        """Write ``index.html`` and move everything into ``out_dir``; returns the index."""
+        if self._staging is None:
+            raise RuntimeError("the report is already finished")
+        staging = self._staging
+        index_html = index_page(self.entries, sorted(self._alphas))
+        (staging / "index.html").write_text(index_html, encoding="utf-8")
+        try:
+            if not self.out_dir.exists():
+                os.rename(staging, self.out_dir)
+            else:
+                entries = sorted(staging.iterdir(), key=lambda p: p.name == "index.html")
+                for path in entries:  # index.html last
+                    _replace(path, self.out_dir / path.name)
+                staging.rmdir()
+        except OSError as exc:
+            raise FuzzyGaitError(f"{self.out_dir}: cannot write the report ({exc.strerror or exc})") from None
+        self._staging = None
+        return self.out_dir / "index.html"
+
+
+def _replace(new: Path, target: Path) -> None:
+    """Move ``new`` onto ``target`` (a file or a folder), replacing it."""
+    if target.is_dir() and not target.is_symlink():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        os.rename(target, old)
+        os.rename(new, target)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(new, target)
+
+
+def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str]) -> Path:
+    """Write the batch report: one page per trial and ``index.html``.
+
+    Args:
+        items: the trials, in index order; may be a generator (each analysis is drawn
+            and can be freed before the next one is computed).  An item with an
+            ``error`` (or no analysis) is listed as failed with that one-line error.
+        out_dir: report folder; created, or updated in place (same-named pages are
+            replaced).  Nothing is changed in it if writing fails.
+
+    Returns:
+        Path of ``index.html``.  A trial whose page cannot be drawn is listed as failed
+        with the reason; the other trials are still written.
+    """
+    with ReportWriter(out_dir) as writer:
+        for item in items:
+            writer.add(item)
+        return writer.finish()
