@@ -348,13 +348,13 @@ def test_open_from_disk_gives_identical_results(tmp_path) -> None:
 
 def test_hulls_are_written_block_by_block_in_chunks(tmp_path, monkeypatch) -> None:
     writes: list[tuple[str, int]] = []
-    original = frv._append
+    original = frv.study._append
 
     def spy(path, name, ds, dim, encoding=None):
         writes.append((name, ds.sizes[dim]))
         original(path, name, ds, dim, encoding)
 
-    monkeypatch.setattr(frv, "_append", spy)
+    monkeypatch.setattr(frv.study, "_append", spy)
     times = np.linspace(0.0, 1.0, 400)  # 1000 samples x 5 α x 2 x 400 nodes = 32 MB; blocks of 64
     model = FunctionModel(lambda p: np.cos(p[0] * times), times)
     study = FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS5), 1000, n_disc=30, store=tmp_path / "s.zarr", chunk=64)

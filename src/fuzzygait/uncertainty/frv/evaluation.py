@@ -1,0 +1,46 @@
+"""Batch evaluation of the model at parameter rows for the FRV-GFA library: the
+``evaluator`` interface ``P (k, n_p) -> F (k, n_time)`` or ``(F, J (k, n_time, n_p))``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.counting import CountedModel, has_sensitivities
+from fuzzygait.uncertainty.protocol import FuzzyModel
+
+Evaluator = Callable[[np.ndarray], "np.ndarray | tuple[np.ndarray, np.ndarray]"]
+
+
+def serial_evaluator(model: FuzzyModel) -> Evaluator:
+    """The default batch evaluator: ``P (k, n_p) -> F (k, n_time)`` by a loop over
+    ``model.evaluate``, or ``(F, J (k, n_time, n_p))`` over
+    ``model.evaluate_with_sensitivities`` when the model offers sensitivities."""
+    counted = CountedModel(model, scale=np.ones(1))
+    with_sensitivities = has_sensitivities(model)
+
+    def evaluate(P: np.ndarray) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+        if with_sensitivities:
+            pairs = [counted.trajectory_and_sensitivities(p) for p in P]
+            return np.stack([f for f, _ in pairs]), np.stack([j for _, j in pairs])
+        return np.stack([counted.trajectory(p) for p in P])
+
+    return evaluate
+
+
+def _run_evaluator(evaluator: Evaluator, P: np.ndarray, n_time: int) -> tuple[np.ndarray, np.ndarray | None]:
+    out = evaluator(P)
+    F, J = (out[0], out[1]) if isinstance(out, tuple) else (out, None)
+    F = np.asarray(F, dtype=float)
+    k = P.shape[0]
+    if F.shape != (k, n_time):
+        raise ParameterError(f"the evaluator returned shape {F.shape} for {k} parameters and {n_time} time nodes")
+    if not np.all(np.isfinite(F)):
+        bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
+        raise ParameterError(f"the model returned non-finite outputs for parameters {P[bad, 0].tolist()}")
+    if J is not None:
+        J = np.asarray(J, dtype=float).reshape(k, n_time, -1)[..., 0]
+    return F, J

@@ -1,0 +1,380 @@
+"""The persistent FRV-GFA study (thesis §2.7.4 steps 1–7): :class:`FRVStudy` runs the
+steps into a chunked zarr store, block by block, and extends it by samples."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any, cast
+
+import numpy as np
+import xarray as xr
+import zarr
+
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.schema import BOUNDS
+from fuzzygait.uncertainty.counting import CountedModel
+from fuzzygait.uncertainty.frv.evaluation import Evaluator, _run_evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
+from fuzzygait.uncertainty.frv.hulls import _hermite_rows, interval_hulls
+from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, generate_samples
+from fuzzygait.uncertainty.gfa import optimisation_nodes
+from fuzzygait.uncertainty.postprocess import repair_nesting
+from fuzzygait.uncertainty.protocol import FuzzyModel
+
+STORE_FORMAT = "fuzzygait-frv-1"
+
+
+def _single_spec(spec: FRVSpec | Sequence[FRVSpec]) -> FRVSpec:
+    if isinstance(spec, FRVSpec):
+        return spec
+    specs = list(spec)
+    if len(specs) == 1 and isinstance(specs[0], FRVSpec):
+        return specs[0]
+    raise ParameterError(
+        f"FRV-GFA grouping supports one FRV parameter; got {len(specs)}. Several would need "
+        "tensor grids (their worst case is the product of Eq. 2.33 per parameter) — not implemented"
+    )
+
+
+def _blocks(start: int, stop: int, chunk: int) -> Iterator[tuple[int, int]]:
+    """Sample ranges aligned to multiples of ``chunk`` (so appends fill zarr chunks)."""
+    a = start
+    while a < stop:
+        b = min(stop, (a // chunk + 1) * chunk)
+        yield a, b
+        a = b
+
+
+def _open_group(path: Path, name: str) -> xr.Dataset:
+    """Group ``name`` lazily: slices are read on access, nothing is cached."""
+    return xr.open_dataset(path, engine="zarr", group=name, consolidated=False, chunks=None, cache=False)
+
+
+def _append(path: Path, name: str, ds: xr.Dataset, dim: str, encoding: dict[str, Any] | None = None) -> None:
+    """Write ``ds`` to group ``name``: create it, or append along ``dim``."""
+    root = zarr.open_group(path, mode="r")
+    if name in root:
+        ds.to_zarr(path, group=name, append_dim=dim, consolidated=False, zarr_format=2)
+    else:
+        ds.to_zarr(path, group=name, mode="w-", consolidated=False, zarr_format=2, encoding=encoding)
+
+
+def _new_counts() -> dict[str, Any]:
+    return {"samples": 0, "forward_simulations": 0, "interval_optimisations": 0, "occurring_intervals": 0,
+            "occurring_proper_intervals": 0, "possible_intervals": 0, "worst_case_optimisations": 0,
+            "time_nodes": 0, "repaired_values": 0, "wall_time": 0.0, "last_forward_simulations": 0,
+            "last_new_intervals": 0, "last_wall_time": 0.0}  # fmt: skip
+
+
+class FRVStudy:
+    """An FRV-GFA study persisted in a zarr store (directory), extendable by samples.
+
+    Store layout (zarr v2 groups, written through xarray):
+
+    * root attributes: ``spec``, ``seed``, ``grid``, ``n_disc``, ``time_stride``,
+      ``refine``, ``chunk``, ``n_time`` (the model's), ``n_samples`` and ``counts``;
+    * ``library``: ``value (bin, time)`` the model at each bin centre (``slope`` = df/dp
+      when refining), ``centre (bin)``; rows in order of computation;
+    * ``intervals``: ``left``, ``right (interval)`` bins and ``lower``, ``upper
+      (interval, time)`` hulls — the dictionary of occurring intervals;
+    * ``samples``: ``hull (sample, alpha, bound, time)`` chunked ``(chunk, all, 2, all)``
+      with the raw α-cuts ``cut (sample, alpha, bound)`` and their ``bin``, written block
+      by block (one append along ``sample`` per block of ``chunk`` samples).
+
+    Only the output time nodes ``optimisation_nodes(n_time, time_stride)`` are kept (the
+    library too). Use :meth:`create`, :meth:`open`, :meth:`add_samples`; read with
+    :meth:`hulls`, :meth:`samples`, :meth:`library`, :meth:`intervals`, :attr:`counts`.
+    """
+
+    def __init__(self, path: Path, model: FuzzyModel, spec: FRVSpec, meta: dict[str, Any],
+                 evaluator: Evaluator | None) -> None:  # fmt: skip
+        self.path, self.model, self.spec = path, model, spec
+        self.seed: int = meta["seed"]
+        self.grid = Grid(**meta["grid"])
+        self.n_disc: int = meta["n_disc"]
+        self.time_stride: int = meta["time_stride"]
+        self.refine: bool | None = meta["refine"]
+        self.chunk: int = meta["chunk"]
+        self.n_time: int = meta["n_time"]
+        self.n_samples: int = meta["n_samples"]
+        self.counts: dict[str, Any] = dict(meta["counts"])
+        self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
+        times = np.asarray(model.times, dtype=float)
+        if times.ndim != 1 or times.size != self.n_time:
+            raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
+        self.nodes = optimisation_nodes(self.n_time, self.time_stride)
+        self.times = times[self.nodes]
+        # library: contiguous bins lib_first … lib_first + m − 1
+        self._lib_first = 0
+        self._lib_values = np.empty((0, self.nodes.size))
+        self._lib_slopes: np.ndarray | None = None
+        # interval dictionary, sorted by key
+        self._keys = np.empty(0, dtype=np.int64)
+        self._int_lower = np.empty((0, self.nodes.size))
+        self._int_upper = np.empty((0, self.nodes.size))
+
+    # ------------------------------------------------------------------ create / open
+    @classmethod
+    def create(cls, model: FuzzyModel, spec: FRVSpec | Sequence[FRVSpec], n_samples: int, n_disc: int = 100,
+               seed: int = 0, store: str | os.PathLike[str] | None = None, evaluator: Evaluator | None = None,
+               time_stride: int = 1, refine: bool | None = None, chunk: int = 256,
+               overwrite: bool = False) -> FRVStudy:  # fmt: skip
+        """Run the FRV-GFA for ``n_samples`` samples into a new store.
+
+        Args:
+            model: ``times`` and ``evaluate(p)`` (``p`` of shape ``(1,)``), optionally
+                ``evaluate_with_sensitivities``.
+            spec: the FRV parameter (one; a sequence of several raises ParameterError).
+            n_samples: ``N_s``.
+            n_disc: ``N_p-disc`` grid points over the first batch's range.
+            seed: seed of the sample streams.
+            store: the zarr directory to create.
+            evaluator: batch evaluator ``P (k, 1) -> (k, n_time)`` or ``((k, n_time),
+                (k, n_time, 1))`` with sensitivities; default :func:`serial_evaluator`.
+            time_stride: keep every ``time_stride``-th time node (and the last).
+            refine: Hermite refinement between library entries; default: when the
+                evaluator returns sensitivities.
+            chunk: samples per zarr chunk and per processing block.
+            overwrite: replace an existing store.
+        """
+        t0 = time.perf_counter()
+        spec = _single_spec(spec)
+        n_samples = _whole(n_samples, "n_samples", 1)
+        seed, chunk = _whole(seed, "seed"), _whole(chunk, "chunk", 1)
+        time_stride, n_disc = _whole(time_stride, "time_stride", 1), _whole(n_disc, "n_disc", 2)
+        if store is None:
+            raise ParameterError("store: give the path of the zarr directory to create")
+        path = Path(store)
+        if path.exists():
+            if not overwrite:
+                raise FuzzyGaitError(f"{path}: already exists; open it with FRVStudy.open or pass overwrite=True")
+            shutil.rmtree(path)
+        if not path.parent.exists():
+            raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
+        n_time = CountedModel(model, scale=np.ones(1)).n_time
+        low, high = _sample_range(spec, seed, 0, n_samples, chunk)
+        meta: dict[str, Any] = {"seed": seed, "grid": Grid.from_range(low, high, n_disc).to_dict(), "n_disc": n_disc,
+                "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
+                "n_samples": 0, "counts": _new_counts()}  # fmt: skip
+        attrs = {"format": STORE_FORMAT, "spec": spec.to_dict(), **meta}
+        zarr.open_group(path, mode="w-", zarr_format=2).attrs.update(attrs)
+        study = cls(path, model, spec, meta, evaluator)
+        study._ingest(0, n_samples, t0)
+        return study
+
+    @classmethod
+    def open(cls, path: str | os.PathLike[str], model: FuzzyModel, evaluator: Evaluator | None = None) -> FRVStudy:
+        """Open a study written by :meth:`create` (the model must be the same one)."""
+        path = Path(path)
+        meta = _read_meta(path)
+        study = cls(path, model, FRVSpec.from_dict(meta["spec"]), meta, evaluator)
+        study._truncate()
+        root = zarr.open_group(path, mode="r")
+        if "library" in root:
+            lib = _open_group(path, "library").sortby("bin")
+            study._lib_first = int(lib["bin"][0]) if lib.sizes["bin"] else 0
+            study._lib_values = lib["value"].to_numpy()
+            study._lib_slopes = lib["slope"].to_numpy() if "slope" in lib else None
+        if "intervals" in root:
+            table = _open_group(path, "intervals")
+            keys = _encode(table["left"].to_numpy(), table["right"].to_numpy())
+            order = np.argsort(keys)
+            study._keys = keys[order]
+            study._int_lower = table["lower"].to_numpy()[order]
+            study._int_upper = table["upper"].to_numpy()[order]
+        return study
+
+    # ------------------------------------------------------------------ public
+    def add_samples(self, n: int) -> FRVStudy:
+        """Add samples ``n_samples … n_samples + n − 1``: group them on the stored grid
+        (extended by whole bins if they leave it), simulate only bin centres not yet in
+        the library, compute only intervals not yet in the dictionary, and append the new
+        samples' hulls. Earlier samples' hulls are not touched."""
+        t0 = time.perf_counter()
+        n = _whole(n, "n")
+        if n:
+            self._truncate()
+            low, high = _sample_range(self.spec, self.seed, self.n_samples, n, self.chunk)
+            self.grid = self.grid.extended(np.array([low, high]))
+            self._write_meta()
+            self._ingest(self.n_samples, n, t0)
+        return self
+
+    def hulls(self) -> xr.Dataset:
+        """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
+        with the counts as attributes."""
+        ds = _open_group(self.path, "samples")[["hull"]].isel(sample=slice(0, self.n_samples))
+        ds.attrs.update(self.counts)
+        return ds
+
+    def samples(self) -> xr.Dataset:
+        """The raw α-cuts ``cut`` and their ``bin`` (lazily)."""
+        return _open_group(self.path, "samples")[["cut", "bin"]].isel(sample=slice(0, self.n_samples))
+
+    def library(self) -> xr.Dataset:
+        """The library: ``value (bin, time)`` at bin ``centre`` (and ``slope``), sorted."""
+        return _open_group(self.path, "library").sortby("bin")
+
+    def intervals(self) -> xr.Dataset:
+        """The interval dictionary: ``left``, ``right`` bins, ``lower``, ``upper`` hulls."""
+        return _open_group(self.path, "intervals")
+
+    # ------------------------------------------------------------------ internals
+    def _write_meta(self) -> None:
+        self.counts["possible_intervals"] = self.grid.possible_intervals
+        self.counts["time_nodes"] = int(self.nodes.size)
+        self.counts["worst_case_optimisations"] = 2 * int(self.nodes.size) * self.grid.possible_intervals  # Eq. 2.33
+        zarr.open_group(self.path, mode="a").attrs.update(
+            {"grid": self.grid.to_dict(), "refine": self.refine, "n_samples": self.n_samples, "counts": self.counts}
+        )
+
+    def _truncate(self) -> None:
+        """Drop sample rows beyond ``n_samples`` (left by an interrupted add)."""
+        root = zarr.open_group(self.path, mode="a")
+        samples = root["samples"] if "samples" in root else None
+        if isinstance(samples, zarr.Group):
+            for _, array in samples.arrays():
+                dims = cast("list[str]", array.attrs.get("_ARRAY_DIMENSIONS", []))
+                if dims and dims[0] == "sample" and array.shape[0] > self.n_samples:
+                    array.resize((self.n_samples, *array.shape[1:]))
+
+    def _ingest(self, start: int, n: int, t0: float) -> None:
+        """Steps 2–7 for samples ``start … start+n−1`` on the current grid: pass 2 finds
+        their bins and occurring intervals; the library and the interval dictionary are
+        completed; pass 3 draws and groups the samples again (a pure function of the
+        sample index) and appends their hulls block by block."""
+        stop = start + n
+        keys = np.empty(0, dtype=np.int64)
+        bin_lo, bin_hi = self.grid.last_bin, self.grid.first_bin
+        for a, b in _blocks(start, stop, self.chunk):  # pass 2
+            bins = group(generate_samples(self.spec, b - a, self.seed, a), self.grid)
+            keys = np.union1d(keys, _interval_keys(bins))
+            bin_lo, bin_hi = min(bin_lo, int(bins.min())), max(bin_hi, int(bins.max()))
+        simulations = self._extend_library(bin_lo, bin_hi)
+        new_keys = np.setdiff1d(keys, self._keys)
+        self._add_intervals(new_keys)
+        repaired, n_alpha = 0, len(self.spec.alphas)
+        chunks = {"chunks": (self.chunk, n_alpha, 2)}
+        encoding = {"hull": {"chunks": (self.chunk, n_alpha, 2, self.nodes.size)}, "cut": chunks, "bin": chunks}
+        for a, b in _blocks(start, stop, self.chunk):  # pass 3
+            cuts = generate_samples(self.spec, b - a, self.seed, a)
+            bins = group(cuts, self.grid)
+            hull, changed = self._assemble(bins, cuts[:, -1, 0])
+            repaired += changed
+            ds = xr.Dataset({"hull": (("sample", "alpha", "bound", "time"), hull),
+                             "cut": (("sample", "alpha", "bound"), cuts), "bin": (("sample", "alpha", "bound"), bins)},
+                            coords={"sample": np.arange(a, b)})  # fmt: skip
+            if a == 0:  # the creating write carries the other coordinates
+                ds = ds.assign_coords(alpha=list(self.spec.alphas), bound=list(BOUNDS), time=self.times)
+            _append(self.path, "samples", ds, "sample", encoding)
+        elapsed = time.perf_counter() - t0
+        self.n_samples = stop
+        self.counts.update(samples=stop, repaired_values=self.counts["repaired_values"] + repaired,
+                           wall_time=self.counts["wall_time"] + elapsed, last_forward_simulations=simulations,
+                           last_new_intervals=int(new_keys.size), last_wall_time=elapsed)  # fmt: skip
+        self._write_meta()
+
+    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
+        assert self._lib_slopes is not None  # only called when refining with a library of slopes
+        slopes = self._lib_slopes[..., 0] if self._lib_slopes.ndim == 3 else self._lib_slopes
+        first = float(self.grid.centres(self._lib_first))
+        return _hermite_rows(self._lib_values, slopes, first, self.grid.spacing, peaks)
+
+    def _extend_library(self, bin_lo: int, bin_hi: int) -> int:
+        """Simulate the bin centres of ``bin_lo … bin_hi`` not yet in the library (one
+        evaluator call); returns the number of forward simulations."""
+        m = self._lib_values.shape[0]
+        have_lo, have_hi = self._lib_first, self._lib_first + m - 1
+        if m:
+            bin_lo, bin_hi = min(bin_lo, have_lo), max(bin_hi, have_hi)
+            missing = np.concatenate([np.arange(bin_lo, have_lo), np.arange(have_hi + 1, bin_hi + 1)])
+        else:
+            missing = np.arange(bin_lo, bin_hi + 1)
+        if not missing.size:
+            return 0
+        centres = self.grid.centres(missing)
+        F, J = _run_evaluator(self.evaluator, centres[:, None], self.n_time)
+        if self.refine is None:
+            self.refine = J is not None
+        if self.refine and J is None:
+            raise ParameterError("this study refines hulls with sensitivities; the evaluator returned none")
+        values = F[:, self.nodes]
+        slopes = J[:, self.nodes] if self.refine and J is not None else None
+        ds = xr.Dataset({"value": (("bin", "time"), values)},
+                        coords={"bin": missing, "centre": ("bin", centres), "time": self.times})
+        if slopes is not None:
+            ds["slope"] = (("bin", "time"), slopes)
+        _append(self.path, "library", ds, "bin")
+        # merge into the contiguous in-memory library
+        below = missing < have_lo if m else np.ones(missing.size, dtype=bool)
+        self._lib_values = np.concatenate([values[below], self._lib_values, values[~below]])
+        if slopes is not None:
+            old = self._lib_slopes if self._lib_slopes is not None else np.empty((0, self.nodes.size))
+            self._lib_slopes = np.concatenate([slopes[below], old, slopes[~below]])
+        self._lib_first = bin_lo
+        self.counts["forward_simulations"] += int(missing.size)
+        self._write_meta()
+        return int(missing.size)
+
+    def _add_intervals(self, keys: np.ndarray) -> None:
+        """Hulls of new intervals (sorted ``keys``) from the library; store them."""
+        if not keys.size:
+            return
+        left, right = _decode(keys)
+        rows_l, rows_r = left - self._lib_first, right - self._lib_first
+        slopes = self._lib_slopes if self.refine else None
+        lower, upper = interval_hulls(self._lib_values, rows_l, rows_r, slopes=slopes, spacing=self.grid.spacing)
+        ds = xr.Dataset({"left": ("interval", left), "right": ("interval", right),
+                         "lower": (("interval", "time"), lower), "upper": (("interval", "time"), upper)},
+                        coords={"time": self.times})  # fmt: skip
+        _append(self.path, "intervals", ds, "interval")
+        all_keys = np.concatenate([self._keys, keys])
+        order = np.argsort(all_keys, kind="stable")
+        self._keys = all_keys[order]
+        self._int_lower = np.concatenate([self._int_lower, lower])[order]
+        self._int_upper = np.concatenate([self._int_upper, upper])[order]
+        proper = int(np.count_nonzero(right > left))
+        self.counts["occurring_intervals"] = int(self._keys.size)
+        self.counts["occurring_proper_intervals"] += proper
+        self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
+        self._write_meta()
+
+    def _assemble(self, bins: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, int]:
+        """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped samples, nesting-repaired.
+
+        α = 1 is the model at the sample's own peak: with sensitivities, the cubic Hermite
+        interpolant of the library (values and slopes at the two neighbouring grid points,
+        O(spacing⁴)) — so the α = 1 output keeps the peak distribution instead of the
+        grid's staircase; without sensitivities, the value at the peak's bin centre."""
+        idx = np.searchsorted(self._keys, _encode(bins[:, :-1, 0], bins[:, :-1, 1]))
+        hull = np.empty((bins.shape[0], bins.shape[1], 2, self.nodes.size))
+        hull[:, :-1, 0] = self._int_lower[idx]
+        hull[:, :-1, 1] = self._int_upper[idx]
+        if self.refine and self._lib_slopes is not None and self._lib_values.shape[0] >= 2:
+            hull[:, -1, :] = self._peak_values(peaks)[:, None, :]
+        else:
+            hull[:, -1, :] = self._lib_values[bins[:, -1, 0] - self._lib_first][:, None, :]
+        repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
+        return repaired, int(np.count_nonzero(repaired != hull))
+
+
+def _sample_range(spec: FRVSpec, seed: int, start: int, n: int, chunk: int) -> tuple[float, float]:
+    """Smallest and largest α-cut end of samples ``start … start+n−1`` (pass 1)."""
+    low, high = np.inf, -np.inf
+    for a, b in _blocks(start, start + n, max(chunk, BLOCK)):
+        cuts = generate_samples(spec, b - a, seed, a)
+        low, high = min(low, float(cuts[:, 0, 0].min())), max(high, float(cuts[:, 0, 1].max()))
+    return low, high
+
+
+def _read_meta(path: Path) -> dict[str, Any]:
+    if not path.is_dir():
+        raise FuzzyGaitError(f"{path}: no such FRV study; check the path")
+    attrs = dict(zarr.open_group(path, mode="r").attrs)
+    if attrs.get("format") != STORE_FORMAT:
+        raise FuzzyGaitError(f"{path}: not an FRV study store (format {attrs.get('format')!r})")
+    return attrs
