@@ -4,20 +4,22 @@ For every joint-angle component, frame and α-level the largest and smallest ang
 all marker deviations inside the α-level balls is found by the Graph Follower algorithm
 in direct mode (all frames side by side, see :mod:`fuzzygait.uncertainty.batched`).
 
-Result layout (an ``xarray.Dataset``):
+Result layout (an ``xarray.Dataset``; read it through :mod:`fuzzygait.markererror.result`):
+the fuzzy results (:mod:`fuzzygait.core.schema`) of every angle component stacked along
+a ``component`` dimension, on the trial's frames:
 
-* dims ``alpha`` (ascending, includes 1 = the measured angle), ``bound`` (``lower``,
+* dims ``component`` (``LKneeAngles_X`` …; coordinates ``angle`` and ``axis`` along it),
+  ``alpha`` (ascending, includes 1 = the measured angle), ``bound`` (``lower``,
   ``upper``), ``frame`` (1-based C3D frame numbers; coordinate ``time`` in s),
   ``marker``;
-* one variable per angle component named like the angle table columns, e.g.
-  ``LKneeAngles_X`` ``(alpha, bound, frame)`` in degrees; NaN on frames where a needed
+* ``hull (component, alpha, bound, frame)`` in degrees; NaN on frames where a needed
   marker is missing;
-* ``<name>__deviation`` ``(alpha, bound, frame, marker)``: Euclidean norm (mm) of each
+* ``deviation (component, alpha, bound, frame, marker)``: Euclidean norm (mm) of each
   marker's deviation that produces the hull value (Fig. 5.12); NaN for markers the
-  angle does not use;
-* ``ball_radius`` ``(marker)``: α = 0 ball radius Σ (mm);
-* attributes: ``trial``, ``sources``, ``method``, ``model_evaluations`` (node
-  evaluations in total), ``seconds``.
+  component does not use;
+* ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
+* attributes: ``trial``, ``sources``, ``method``, ``starts``, ``output``, ``units``,
+  ``strategy``, ``forward_simulations``, ``node_evaluations`` (in total), ``seconds``.
 """
 
 from __future__ import annotations
@@ -25,7 +27,6 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +41,9 @@ from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.workflows.angles import AnglesRun, Preprocessing, run_angles
-from fuzzygait.uncertainty import FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
+from fuzzygait.markererror.result import angle_components, component_hull
+from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
+from fuzzygait.uncertainty.execution import Evaluator
 
 DEFAULT_ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
 METHODS = ("cartesian", "spherical")
@@ -61,7 +64,8 @@ class FuzzyAngleOptions:
         starts: multistart points per frame (deterministic, higher α-level's optimum,
             then random).
         iterations: optimiser iterations per start at most.
-        workers: processes for the angle components (1: in this process).
+        workers: processes for the angle components (1: in this process), when no
+            :class:`~fuzzygait.uncertainty.execution.Evaluator` is given.
         seed: seed of the random starting points.
     """
 
@@ -75,8 +79,8 @@ class FuzzyAngleOptions:
     seed: int = 0
 
 
-def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, int]:
-    """One angle component: hull (alpha, bound, n_valid) and deviation norms."""
+def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
+    """One angle component: hull (alpha, bound, n_valid), deviation norms and counts."""
     trial, subject, progression, name, axis, frames, markers, radii, options = args
     model = JointAngleModel(trial, subject, progression, name, axis, frames, markers)
     if options.method == "cartesian":
@@ -91,14 +95,15 @@ def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, int]:
                 FuzzyNumber(np.array([0.0, 1.0]), np.array([-np.pi, -np.pi]), np.array([np.pi, np.pi]), f"{label}_phi"),
             ]
         params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(model)
-    result = graph_follower(fuzzy_model, params, options.alphas, mode="direct", starts=options.starts,
-                            batch_iterations=options.iterations, seed=options.seed)  # fmt: skip
+    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed)
+    result = graph_follower(fuzzy_model, params, options.alphas, strategy=strategy)
     extremiser = result["extremiser"].to_numpy().reshape(*result["hull"].shape, len(markers), 3)
     if options.method == "spherical":
         norms = np.abs(extremiser[..., 0])
     else:
         norms = np.linalg.norm(extremiser, axis=-1)
-    return f"{name}_{AXES[axis]}", result["hull"].to_numpy(), norms, int(result.attrs["node_evaluations"])
+    counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations")}
+    return f"{name}_{AXES[axis]}", result["hull"].to_numpy(), norms, counts
 
 
 def fuzzy_joint_angles(
@@ -108,6 +113,7 @@ def fuzzy_joint_angles(
     options: FuzzyAngleOptions = FuzzyAngleOptions(),
     angles: Sequence[str] | None = None,
     progress: Progress | None = None,
+    evaluator: Evaluator | None = None,
 ) -> xr.Dataset:
     """Fuzzy joint angles of a trial (see the module docstring for the layout).
 
@@ -118,6 +124,8 @@ def fuzzy_joint_angles(
         options: α-levels, error sources, method, optimiser settings.
         angles: angle names (default: every angle ``result`` holds).
         progress: called as ``progress(done, total)`` per angle component.
+        evaluator: where the components are computed (default: serial, or a local pool
+            of ``options.workers`` processes); the hulls are the same either way.
     """
     if options.method not in METHODS:
         raise ParameterError(f"method must be one of {METHODS}; got {options.method!r}")
@@ -140,51 +148,44 @@ def fuzzy_joint_angles(
             tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options))
 
     start = time.perf_counter()
-    outputs = _run_tasks(tasks, options.workers, progress)
+    if evaluator is None:
+        with Evaluator(workers=max(1, int(options.workers))) as own:
+            outputs = own.map(_component_task, tasks, progress)
+    else:
+        outputs = evaluator.map(_component_task, tasks, progress)
     return _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
-
-
-def _run_tasks(tasks: list[tuple], workers: int, progress: Progress | None) -> list[tuple]:
-    outputs = []
-    if workers <= 1:
-        for i, task in enumerate(tasks):
-            outputs.append(_component_task(task))
-            if progress is not None:
-                progress(i + 1, len(tasks))
-        return outputs
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        for i, out in enumerate(pool.map(_component_task, tasks)):
-            outputs.append(out)
-            if progress is not None:
-                progress(i + 1, len(tasks))
-    return outputs
 
 
 def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: list[str],
               alphas: np.ndarray, options: FuzzyAngleOptions, sources: Sequence[str],
               seconds: float) -> xr.Dataset:  # fmt: skip
-    n_frames = trial.n_frames
-    data: dict[str, tuple] = {}
-    evaluations = 0
-    radius = {m: options.error_model.radius(m, sources) for m in markers}
-    for task, (column, hull, norms, count) in zip(tasks, outputs):
+    n_frames, n_components = trial.n_frames, len(tasks)
+    hull = np.full((n_components, alphas.size, 2, n_frames), np.nan)
+    deviation = np.full((n_components, alphas.size, 2, n_frames, len(markers)), np.nan)
+    components, totals = [], {"forward_simulations": 0, "node_evaluations": 0}
+    for c, (task, (column, values, norms, counts)) in enumerate(zip(tasks, outputs, strict=True)):
         frames, used = task[5], task[6]
-        full = np.full((alphas.size, 2, n_frames), np.nan)
-        full[:, :, frames] = hull
-        deviation = np.full((alphas.size, 2, n_frames, len(markers)), np.nan)
-        columns = [markers.index(m) for m in used]
-        deviation[:, :, frames[:, None], np.asarray(columns)[None, :]] = norms
-        data[column] = (("alpha", "bound", "frame"), full)
-        data[f"{column}__deviation"] = (("alpha", "bound", "frame", "marker"), deviation)
-        evaluations += count
-    data["ball_radius"] = (("marker",), np.array([radius[m] for m in markers]))
+        hull[c][:, :, frames] = values
+        columns = np.asarray([markers.index(m) for m in used])
+        deviation[c][:, :, frames[:, None], columns[None, :]] = norms
+        components.append(column)
+        for key in totals:
+            totals[key] += counts[key]
+    radii = np.array([options.error_model.radius(m, sources) for m in markers])
     return xr.Dataset(
-        data,
+        {
+            "hull": (("component", "alpha", "bound", "frame"), hull, {"units": "deg"}),
+            "deviation": (("component", "alpha", "bound", "frame", "marker"), deviation, {"units": "mm"}),
+            "ball_radius": (("marker",), radii, {"units": "mm"}),
+        },
         coords={
+            "component": components,
+            "angle": ("component", [c.rsplit("_", 1)[0] for c in components]),
+            "axis": ("component", [c.rsplit("_", 1)[1] for c in components]),
             "alpha": alphas,
             "bound": ["lower", "upper"],
             "frame": trial.frames,
-            "time": ("frame", trial.times),
+            "time": ("frame", trial.times, {"units": "s"}),
             "marker": markers,
         },
         attrs={
@@ -192,16 +193,13 @@ def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: l
             "sources": ",".join(sources),
             "method": options.method,
             "starts": options.starts,
-            "model_evaluations": evaluations,
+            "output": "joint angle",
+            "units": "deg",
+            "strategy": BatchedDirect.name,
+            **totals,
             "seconds": round(seconds, 3),
-            "units": "angles deg, deviations and radii mm",
         },
     )
-
-
-def angle_components(fuzzy: xr.Dataset) -> list[str]:
-    """Names of the angle-component variables (``LKneeAngles_X`` ...)."""
-    return [v for v in fuzzy.data_vars if "__" not in v and v != "ball_radius"]
 
 
 def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
@@ -213,7 +211,7 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     """
     rows = {}
     for name in angle_components(fuzzy):
-        hull = fuzzy[name]
+        hull = component_hull(fuzzy, name)
         measured = hull.sel(alpha=1.0, bound="upper")
         reference = float(np.nanmax(np.abs(measured)))
         width = (hull.sel(bound="upper") - hull.sel(bound="lower")).max("frame", skipna=True)

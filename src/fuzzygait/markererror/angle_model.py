@@ -24,6 +24,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.chain import LowerBodyChain
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance
+from fuzzygait.uncertainty.protocol import NODES, Evaluation, Output
 
 AXES = ("X", "Y", "Z")
 
@@ -70,6 +71,17 @@ class JointAngleModel:
     def n_parameters(self) -> int:
         return 3 * len(self.markers)
 
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """``<marker>_x``, ``<marker>_y``, ``<marker>_z`` (mm, lab frame) per marker."""
+        return tuple(f"{m}_{c}" for m in self.markers for c in "xyz")
+
+    @property
+    def output(self) -> Output:
+        return Output(f"{self.name}_{AXES[self.axis]}", "deg")
+
+    capabilities = frozenset({NODES})
+
     def angles_of(self, positions: np.ndarray) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``."""
         rows = Trial(markers=positions, marker_labels=list(self.markers), rate=self.trial.rate)
@@ -81,10 +93,11 @@ class JointAngleModel:
         positions = self._base[nodes] + np.asarray(P, dtype=float).reshape(len(nodes), -1, 3)
         return self.angles_of(positions)[:, self.axis]
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
-        """The angle component over all time nodes with one deviation ``p`` (n_p,)."""
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """The angle component over all time nodes with one deviation ``p`` (n_p,); no
+        sensitivities (the engine's direct strategies use finite differences)."""
         nodes = np.arange(self.frames.size)
-        return self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
 
 
 def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:
@@ -103,12 +116,23 @@ class SphericalDeviationModel:
 
     cartesian: JointAngleModel
 
+    capabilities = frozenset({NODES})
+
     @property
     def times(self) -> np.ndarray:
         return self.cartesian.times
 
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """``<marker>_r`` (mm), ``<marker>_theta``, ``<marker>_phi`` (rad) per marker."""
+        return tuple(f"{m}_{c}" for m in self.cartesian.markers for c in ("r", "theta", "phi"))
+
+    @property
+    def output(self) -> Output:
+        return self.cartesian.output
+
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         return self.cartesian.evaluate_nodes(spherical_to_cartesian(P), nodes)
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         return self.cartesian.evaluate(spherical_to_cartesian(p))

@@ -38,6 +38,7 @@ import numpy as np
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.markererror.result import angle_components, component_deviation
 
 #: The fixed-deviation direction of Fig. 5.11 (a): the unit diagonal of the lab frame.
 DIAGONAL = np.ones(3) / np.sqrt(3.0)
@@ -87,9 +88,9 @@ def fixed_deviation_curves(model: object, radii: Sequence[float] | np.ndarray) -
     r = _radii(model, radii)
     shift = (r[:, None] * DIAGONAL[None, :]).ravel()
     return {
-        "none": np.asarray(model.evaluate(np.zeros_like(shift)), dtype=float),
-        "positive": np.asarray(model.evaluate(shift), dtype=float),
-        "negative": np.asarray(model.evaluate(-shift), dtype=float),
+        "none": np.asarray(model.evaluate(np.zeros_like(shift)).values, dtype=float),
+        "positive": np.asarray(model.evaluate(shift).values, dtype=float),
+        "negative": np.asarray(model.evaluate(-shift).values, dtype=float),
     }
 
 
@@ -238,10 +239,11 @@ def deviation_norms(fuzzy: xr.Dataset, name: str, markers: Sequence[str] | None 
         ParameterError: ``name`` is not an angle component of ``fuzzy``, or a requested
             marker is not used by that angle.
     """
-    key = f"{name}__deviation"
-    if key not in fuzzy:
-        raise ParameterError(f"no deviations for {name!r} in the result; it holds {_components(fuzzy)}")
-    norms = fuzzy[key]
+    components = angle_components(fuzzy)
+    found = component_deviation(fuzzy, name) if name in components else None
+    if found is None:
+        raise ParameterError(f"no deviations for {name!r} in the result; it holds {components}")
+    norms = found
     used = [str(m) for m in norms["marker"].to_numpy() if bool(norms.sel(marker=m).notnull().any())]
     if markers is not None:
         unknown = [m for m in markers if m not in used]
@@ -252,6 +254,3 @@ def deviation_norms(fuzzy: xr.Dataset, name: str, markers: Sequence[str] | None 
     norms.attrs["units"] = "mm"
     return norms
 
-
-def _components(fuzzy: xr.Dataset) -> list[str]:
-    return [str(v) for v in fuzzy.data_vars if "__" not in str(v) and v != "ball_radius"]

@@ -19,8 +19,9 @@ import xarray as xr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, PARAMETER_UNITS
 from fuzzygait.mechanics.scenarios import LegSimulator
-from fuzzygait.mechanics.targets import TARGETS, LegTargetModel
-from fuzzygait.uncertainty import FuzzyVector, graph_follower, triangular_relative
+from fuzzygait.mechanics.targets import TARGETS, LegModelRecipe, LegTargetModel
+from fuzzygait.uncertainty import FuzzyVector, Linearised, graph_follower, triangular_relative
+from fuzzygait.uncertainty.execution import Evaluator
 
 DEFAULT_TARGET = {"swing": "total_deformation_energy", "stance": "max_element_energy"}
 ELEVEN_PARAMETERS: tuple[str, ...] = tuple(n for n in LEG_PARAMETERS if n != "eta")  # §5.3
@@ -70,6 +71,7 @@ def fuzzy_forward_dynamics(
     duration: float | None = None,
     scheme: str = "variational",
     progress: Callable[[int, int], None] | None = None,
+    evaluator: Evaluator | None = None,
 ) -> xr.Dataset:
     """Fuzzy target output of a scenario for triangular fuzzy parameters.
 
@@ -82,6 +84,8 @@ def fuzzy_forward_dynamics(
         base: full parameter vector (default: the scenario's).
         alphas, stride, novelty_tol, max_iterations: Graph Follower settings.
         dt, duration, scheme: simulation settings.
+        evaluator: runs the forward simulations on its workers (default: in this
+            process); the hulls are bit-identical either way.
 
     Returns:
         The Graph Follower result (``hull (alpha, bound, time)``, ``deterministic``,
@@ -95,10 +99,9 @@ def fuzzy_forward_dynamics(
     model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
     numbers = [triangular_relative(model.base[LEG_PARAMETERS.index(n)], spreads[n], n) for n in names]
     start = time.perf_counter()
-    result = graph_follower(
-        model, FuzzyVector(numbers), alphas, mode="linearised", stride=stride,
-        novelty_tol=novelty_tol, max_iterations=max_iterations, progress=progress,
-    )
+    strategy = Linearised(stride=stride, novelty_tol=novelty_tol, max_iterations=max_iterations)
+    engine_model = model if evaluator is None else evaluator.model(_recipe_of(model), sensitivities=True)
+    result = graph_follower(engine_model, FuzzyVector(numbers), alphas, strategy=strategy, progress=progress)
     result.attrs.update(
         scenario=simulator.scenario,
         target=target,
@@ -118,6 +121,14 @@ def fuzzy_forward_dynamics(
     return result
 
 
+def _recipe_of(model: LegTargetModel) -> LegModelRecipe:
+    """The recipe that rebuilds ``model`` in a worker process."""
+    simulator = model.simulator
+    return LegModelRecipe(simulator.scenario, model.target, tuple(model.names), tuple(float(v) for v in model.base),
+                          nodes=simulator.configuration.nodes, dt=model.dt, duration=model.duration,
+                          scheme=model.scheme, foot=simulator.configuration.foot)  # fmt: skip
+
+
 def dense_reference(model: LegTargetModel, low: float, high: float, count: int = 41,
                     evaluator: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Target trajectories at ``count`` equally spaced values of a single fuzzy parameter
@@ -126,7 +137,7 @@ def dense_reference(model: LegTargetModel, low: float, high: float, count: int =
     grid = np.linspace(low, high, count)[:, None]
     if evaluator is not None:
         return np.asarray(evaluator(grid))
-    return np.array([model.evaluate(p) for p in grid])
+    return np.array([model.evaluate(p).values for p in grid])
 
 
 def leg_frv_study(
@@ -153,7 +164,7 @@ def leg_frv_study(
 
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
     parameter; the other parameters are the scenario's with ``base_overrides``.  Forward
-    simulations run through :class:`~fuzzygait.uncertainty.parallel.BatchEvaluator`
+    simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
     compiled simulator library from the on-disk cache.  An existing store is extended with
     ``n_samples`` more samples (every stored library trajectory and interval hull reused)
@@ -162,7 +173,6 @@ def leg_frv_study(
     from pathlib import Path
 
     from fuzzygait.uncertainty.frv import FRVStudy
-    from fuzzygait.uncertainty.parallel import BatchEvaluator, LegModelRecipe
 
     if spec.name not in LEG_PARAMETERS:
         raise ParameterError(f"FRV parameter {spec.name!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
@@ -170,10 +180,9 @@ def leg_frv_study(
     base = simulator.parameters(**dict(base_overrides or {}))
     target = target or DEFAULT_TARGET[scenario]
     model = LegTargetModel(simulator, target, (spec.name,), base=base, dt=dt, duration=duration, scheme=scheme)
-    recipe = LegModelRecipe(scenario, target, (spec.name,), tuple(float(v) for v in base), nodes=nodes,
-                            dt=model.dt, duration=model.duration, scheme=scheme)  # fmt: skip
     path = Path(store)
-    with BatchEvaluator(recipe, scheduler=scheduler, workers=workers, sensitivities=sensitivities) as evaluator:
+    with Evaluator(workers=workers, scheduler=scheduler) as pool:
+        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities)
         if path.exists() and not overwrite:
             study = FRVStudy.open(path, model, evaluator=evaluator)
             study.add_samples(n_samples)

@@ -9,14 +9,15 @@ it (thesis OP-III).  Every ``evaluate`` is one forward simulation.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Sequence
+from collections.abc import Hashable, Sequence
+from dataclasses import astuple, dataclass, field
 
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.uncertainty.protocol import SENSITIVITIES, Evaluation, Output
 
 TARGETS = (
     "total_deformation_energy",
@@ -38,7 +39,7 @@ class LegTargetModel:
             in the order of the engine's parameter vector.
         base: the full parameter vector the others are fixed at (default: the scenario's).
         dt, duration: time step and simulated time (s; default: the scenario's).
-        scheme: time stepping scheme; sensitivities need "variational".
+        scheme: time stepping scheme, "variational" or "energy-momentum" (both give sensitivities).
     """
 
     simulator: LegSimulator
@@ -87,12 +88,66 @@ class LegTargetModel:
             sens = ds[f"{self.target}_sensitivity"].values if sensitivities else None
         return value, (sens[:, self._index] if sens is not None else None)
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
-        """Target output at :attr:`times` for the varying parameters ``p`` (one simulation)."""
-        value, _ = self._select(self._run(p, False), False)
-        return value
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(self.names)
 
-    def evaluate_with_sensitivities(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Target output and its derivatives ``(n_time,), (n_time, n_p)`` in one simulation."""
-        value, sens = self._select(self._run(p, True), True)
-        return value, sens
+    @property
+    def output(self) -> Output:
+        return Output(self.target, "m" if self.target.startswith("last_node_") else "J")
+
+    @property
+    def capabilities(self) -> frozenset[str]:
+        """Sensitivities from the integrator's forward sensitivity analysis (both schemes)."""
+        return frozenset({SENSITIVITIES})
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """Target output at :attr:`times` for the varying parameters ``p`` and, with
+        ``sensitivities``, its derivatives ``(n_time, n_p)``: one simulation either way."""
+        value, sens = self._select(self._run(p, sensitivities), sensitivities)
+        return Evaluation(value, sens)
+
+
+@dataclass(frozen=True)
+class LegModelRecipe:
+    """Recipe of :class:`LegTargetModel` for the engine's :class:`~fuzzygait.uncertainty.execution.Evaluator`: one target output of
+    a leg scenario as a function of the named parameters.
+
+    Args:
+        scenario: "swing" or "stance".
+        target: see :data:`fuzzygait.mechanics.targets.TARGETS`.
+        names: the varying parameters, in the order of the columns of ``P``.
+        base: the full leg parameter vector the others are fixed at (None: the scenario's).
+        nodes: blade nodes.
+        dt, duration: time step and simulated time (s; None: the scenario's).
+        scheme: time stepping scheme ("variational" or "energy-momentum").
+        foot: "beam", "rigid" or "none".
+    """
+
+    scenario: str = "swing"
+    target: str = "total_deformation_energy"
+    names: tuple[str, ...] = ("E",)
+    base: tuple[float, ...] | None = None
+    nodes: int = 20
+    dt: float | None = None
+    duration: float | None = None
+    scheme: str = "variational"
+    foot: str = "beam"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(str(n) for n in self.names))
+        if self.base is not None:
+            object.__setattr__(self, "base", tuple(float(v) for v in np.asarray(self.base, float).ravel()))
+        object.__setattr__(self, "nodes", int(self.nodes))
+        for name in ("dt", "duration"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
+
+    @property
+    def key(self) -> Hashable:
+        return ("LegModelRecipe", *astuple(self))
+
+    def build(self) -> LegTargetModel:
+        simulator = LegSimulator(self.scenario, nodes=self.nodes, foot=self.foot)  # type: ignore[arg-type]
+        base = None if self.base is None else np.asarray(self.base, dtype=float)
+        return LegTargetModel(simulator, self.target, self.names, base, self.dt, self.duration, self.scheme)

@@ -30,6 +30,11 @@ class FuzzyVector:
         return [n.name or f"p{i}" for i, n in enumerate(self.numbers)]
 
     @property
+    def named(self) -> list[bool]:
+        """Whether each parameter was given a name (the others are called ``p<i>``)."""
+        return [bool(n.name) for n in self.numbers]
+
+    @property
     def dim(self) -> int:
         return len(self.numbers)
 
@@ -82,6 +87,11 @@ class FuzzyBalls:
         base = list(self.names_) or [f"ball{k}" for k in range(self.centres.shape[0])]
         axes = "xyz" if self.centres.shape[1] <= 3 else [str(i) for i in range(self.centres.shape[1])]
         return [f"{b}_{axes[i]}" for b in base for i in range(self.centres.shape[1])]
+
+    @property
+    def named(self) -> list[bool]:
+        """Whether each coordinate's ball was given a name."""
+        return [bool(self.names_)] * (self.centres.shape[0] * self.centres.shape[1])
 
     @property
     def dim(self) -> int:

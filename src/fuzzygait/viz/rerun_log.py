@@ -66,6 +66,7 @@ from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.model import CGMResult
+from fuzzygait.markererror.result import angle_components, ball_radius, component_hull
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -158,11 +159,7 @@ def _fuzzy_parts(
             if match[0] not in alphas:
                 alphas.append(match[0])
         alphas.sort()
-    variables = [
-        str(v)
-        for v, da in fuzzy.data_vars.items()
-        if "__" not in str(v) and set(da.dims) == {"alpha", "bound", "frame"}
-    ]
+    variables = angle_components(fuzzy)
     frames = np.asarray(fuzzy["frame"].values, dtype=np.int64)
     if "time" in fuzzy.coords:
         times = np.asarray(fuzzy["time"].values, dtype=float)
@@ -237,11 +234,9 @@ def _log_world(
     valid = np.all(np.isfinite(markers), axis=2)
     _log_points(rec, rr, "world/markers", indexes, markers, trial.marker_labels, _MARKER_RADIUS_MM, _MARKER_COLOUR)
 
-    if fuzzy is not None and "ball_radius" in fuzzy.data_vars:
-        radius_of = {
-            str(label): float(r)
-            for label, r in zip(fuzzy["ball_radius"]["marker"].values, fuzzy["ball_radius"].values, strict=True)
-        }
+    balls = ball_radius(fuzzy) if fuzzy is not None else None
+    if balls is not None:
+        radius_of = {str(label): float(r) for label, r in zip(balls["marker"].values, balls.values, strict=True)}
         radii = np.array([radius_of.get(label, np.nan) for label in trial.marker_labels])
         has_ball = np.isfinite(radii) & (radii > 0)
         if has_ball.any():
@@ -319,7 +314,7 @@ def _log_angles(
         if not angle:
             continue
         side_name, colour = _side_style(angle)
-        data = fuzzy[variable]
+        data = component_hull(fuzzy, variable)
         for alpha in alphas:
             cut = data.sel(alpha=alpha)
             envelope_colour = _envelope_colour(colour, alpha)
@@ -417,10 +412,9 @@ def write_recording(
         path: the ``.rrd`` file to write (its folder must exist).
         trial: the (pre-processed) trial the model ran on; markers in mm.
         result: :func:`~fuzzygait.kinematics.compute_lower_body` output for ``trial``.
-        fuzzy: fuzzy joint-angle result (dims ``alpha``, ``bound``, ``frame``,
-            ``marker``; variables ``<Angle>_<X|Y|Z>`` in degrees and ``ball_radius`` in
-            mm); adds the alpha-cut envelope series and the marker balls.  Its
-            ``<name>__deviation`` variables are not logged.
+        fuzzy: fuzzy joint-angle result (:mod:`fuzzygait.markererror.analysis`: hulls in
+            degrees per angle component, ball radii in mm); adds the alpha-cut envelope
+            series and the marker balls. The deviation norms are not logged.
         alphas_to_show: alpha levels of ``fuzzy`` whose envelopes are logged; None for
             every level below 1 (alpha = 1 is the deterministic series, always logged;
             ignored without ``fuzzy``).

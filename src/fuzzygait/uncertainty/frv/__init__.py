@@ -34,7 +34,7 @@ samples later, simulating only new bin centres and computing only new intervals
 Only one FRV parameter is supported (the Table 5.3 case); see :class:`FRVStudy`.
 """
 
-from fuzzygait.uncertainty.frv.evaluation import Evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, serial_evaluator
 from fuzzygait.uncertainty.frv.fit import fit_distributions, iter_hull_blocks, stored_samples
 from fuzzygait.uncertainty.frv.grouping import EDGE_TOL, KEY_BASE, KEY_BIAS, Grid, group, occurring_intervals
 from fuzzygait.uncertainty.frv.hulls import hermite_segment_extrema, interval_hulls, range_extrema
@@ -48,7 +48,7 @@ __all__ = [
     "KEY_BASE",
     "KEY_BIAS",
     "STORE_FORMAT",
-    "Evaluator",
+    "BatchFunction",
     "FRVSpec",
     "FRVStudy",
     "Grid",

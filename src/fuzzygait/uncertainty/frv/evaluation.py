@@ -11,13 +11,16 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.counting import CountedModel, has_sensitivities
 from fuzzygait.uncertainty.protocol import FuzzyModel
 
-Evaluator = Callable[[np.ndarray], "np.ndarray | tuple[np.ndarray, np.ndarray]"]
+#: ``P (k, n_p) -> F (k, n_time)`` or ``(F, J (k, n_time, n_p))``: a serial loop
+#: (:func:`serial_evaluator`) or an engine batch on workers
+#: (:meth:`fuzzygait.uncertainty.execution.Evaluator.batch`).
+BatchFunction = Callable[[np.ndarray], "np.ndarray | tuple[np.ndarray, np.ndarray]"]
 
 
-def serial_evaluator(model: FuzzyModel) -> Evaluator:
-    """The default batch evaluator: ``P (k, n_p) -> F (k, n_time)`` by a loop over
-    ``model.evaluate``, or ``(F, J (k, n_time, n_p))`` over
-    ``model.evaluate_with_sensitivities`` when the model offers sensitivities."""
+def serial_evaluator(model: FuzzyModel) -> BatchFunction:
+    """The default batch function: ``P (k, n_p) -> F (k, n_time)`` by a loop over
+    ``model.evaluate``, or ``(F, J (k, n_time, n_p))`` when the model declares the
+    ``"sensitivities"`` capability."""
     counted = CountedModel(model, scale=np.ones(1))
     with_sensitivities = has_sensitivities(model)
 
@@ -31,7 +34,7 @@ def serial_evaluator(model: FuzzyModel) -> Evaluator:
     return evaluate
 
 
-def _run_evaluator(evaluator: Evaluator, P: np.ndarray, n_time: int) -> tuple[np.ndarray, np.ndarray | None]:
+def _run_evaluator(evaluator: BatchFunction, P: np.ndarray, n_time: int) -> tuple[np.ndarray, np.ndarray | None]:
     out = evaluator(P)
     F, J = (out[0], out[1]) if isinstance(out, tuple) else (out, None)
     F = np.asarray(F, dtype=float)

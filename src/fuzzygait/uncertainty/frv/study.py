@@ -17,7 +17,7 @@ import zarr
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
 from fuzzygait.uncertainty.counting import CountedModel
-from fuzzygait.uncertainty.frv.evaluation import Evaluator, _run_evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, serial_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
 from fuzzygait.uncertainty.frv.hulls import _hermite_rows, interval_hulls
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, generate_samples
@@ -91,7 +91,7 @@ class FRVStudy:
     """
 
     def __init__(self, path: Path, model: FuzzyModel, spec: FRVSpec, meta: dict[str, Any],
-                 evaluator: Evaluator | None) -> None:  # fmt: skip
+                 evaluator: BatchFunction | None) -> None:  # fmt: skip
         self.path, self.model, self.spec = path, model, spec
         self.seed: int = meta["seed"]
         self.grid = Grid(**meta["grid"])
@@ -120,14 +120,14 @@ class FRVStudy:
     # ------------------------------------------------------------------ create / open
     @classmethod
     def create(cls, model: FuzzyModel, spec: FRVSpec | Sequence[FRVSpec], n_samples: int, n_disc: int = 100,
-               seed: int = 0, store: str | os.PathLike[str] | None = None, evaluator: Evaluator | None = None,
+               seed: int = 0, store: str | os.PathLike[str] | None = None, evaluator: BatchFunction | None = None,
                time_stride: int = 1, refine: bool | None = None, chunk: int = 256,
                overwrite: bool = False) -> FRVStudy:  # fmt: skip
         """Run the FRV-GFA for ``n_samples`` samples into a new store.
 
         Args:
-            model: ``times`` and ``evaluate(p)`` (``p`` of shape ``(1,)``), optionally
-                ``evaluate_with_sensitivities``.
+            model: a :class:`~fuzzygait.uncertainty.protocol.FuzzyModel` of one
+                parameter (``p`` of shape ``(1,)``); sensitivities used when declared.
             spec: the FRV parameter (one; a sequence of several raises ParameterError).
             n_samples: ``N_s``.
             n_disc: ``N_p-disc`` grid points over the first batch's range.
@@ -167,7 +167,7 @@ class FRVStudy:
         return study
 
     @classmethod
-    def open(cls, path: str | os.PathLike[str], model: FuzzyModel, evaluator: Evaluator | None = None) -> FRVStudy:
+    def open(cls, path: str | os.PathLike[str], model: FuzzyModel, evaluator: BatchFunction | None = None) -> FRVStudy:
         """Open a study written by :meth:`create` (the model must be the same one)."""
         path = Path(path)
         meta = _read_meta(path)

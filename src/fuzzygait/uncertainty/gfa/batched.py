@@ -26,7 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fuzzygait.core.schema import BOUNDS, SENSES
+from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
+from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
+from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
 
 STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
@@ -44,13 +48,13 @@ class BatchCounts:
 class BatchedObjective:
     """``sense · f(P, nodes)`` with counting and forward-difference gradients."""
 
-    def __init__(self, model: object, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts):
+    def __init__(self, model: CountedModel, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts):
         self.model, self.sense, self.counts = model, sense, counts
         self.h = fd_step * np.asarray(scale, dtype=float)
 
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         self.counts.node_evaluations += int(P.shape[0])
-        out = np.asarray(self.model.evaluate_nodes(P, nodes), dtype=float)
+        out = np.asarray(self.model.model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
         return self.sense * out
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,3 +161,53 @@ def screened_starts(objective: BatchedObjective, domain: BoxDomain | BallsDomain
 
 
 Progress = Callable[[int, int], None]
+
+
+def optimisation_nodes(n_time: int, stride: int) -> np.ndarray:
+    """Every ``stride``-th time node, plus the last one."""
+    return np.unique(np.append(np.arange(0, n_time, stride), n_time - 1))
+
+
+def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
+                strategy: BatchedDirect, progress: Progress | None) -> dict[str, object]:  # fmt: skip
+    """The :class:`BatchedDirect` strategy: hulls ``(alpha, bound, time)`` (before the
+    nesting repair), extremisers, the deterministic trajectory and the counts."""
+    deterministic = model.trajectory(params.deterministic)
+    n_time, rng = model.n_time, np.random.default_rng(strategy.seed)
+    nodes = optimisation_nodes(n_time, strategy.stride)
+    others = np.setdiff1d(np.arange(n_time), nodes)
+    counts = BatchCounts()
+    hull = np.empty((levels.size, 2, n_time))
+    extremiser = np.empty((levels.size, 2, n_time, params.dim))
+    hull[-1], extremiser[-1] = deterministic, params.deterministic
+    tolerance = 1e-7 * max(float(np.max(np.abs(deterministic))), 1.0)
+    previous: dict[str, np.ndarray] = {}
+    previous_domain = params.domain(1.0)
+    below_one = np.arange(levels.size - 1)[::-1]
+    for step, a in enumerate(below_one):
+        domain = params.domain(float(levels[a]))
+        for b, bound in enumerate(BOUNDS):
+            objective = BatchedObjective(model, SENSES[bound], params.scale, 1e-6, counts)
+            first = [np.tile(params.deterministic, (nodes.size, 1))]
+            if bound in previous:  # the higher level's optimum, as it is and scaled out
+                first += [previous[bound], domain.rescale_from(previous_domain, previous[bound])]  # type: ignore[arg-type]
+            extra = screened_starts(objective, domain, nodes, rng, max(0, strategy.starts - len(first)),
+                                    strategy.screen)  # fmt: skip
+            points, values = maximise(objective, domain, nodes, first + extra, strategy.iterations, tolerance)
+            points, values = neighbour_pass(objective, nodes, points, values, strategy.window)
+            previous[bound] = points
+            hull[a, b, nodes], extremiser[a, b, nodes] = SENSES[bound] * values, points
+            if others.size:  # nodes between optimisation nodes: the bracketing optima
+                right = np.minimum(np.searchsorted(nodes, others), nodes.size - 1)
+                left = np.maximum(right - 1, 0)
+                v_left = objective.values(points[left], others)
+                v_right = objective.values(points[right], others)
+                use_right = v_right > v_left
+                hull[a, b, others] = SENSES[bound] * np.where(use_right, v_right, v_left)
+                extremiser[a, b, others] = np.where(use_right[:, None], points[right], points[left])
+            if progress is not None:
+                progress(2 * step + b + 1, 2 * below_one.size)
+        previous_domain = domain
+    model.node_evaluations += counts.node_evaluations
+    attrs = {"optimisations": int(2 * below_one.size * nodes.size), "solver_iterations": counts.iterations}
+    return {"hull": hull, "extremiser": extremiser, "deterministic": deterministic, "attrs": attrs}

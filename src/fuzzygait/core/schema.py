@@ -1,0 +1,76 @@
+"""The one result schema of every fuzzy analysis (``FuzzyResult``).
+
+A fuzzy result is an :class:`xarray.Dataset` with
+
+* ``hull (alpha, bound, time)``: the lower and upper hull of the output at each
+  α-level (ascending; α = 1 is the deterministic run), in the output's units;
+* ``deterministic (time)``: the output for the peak values of the fuzzy parameters;
+* ``extremiser (alpha, bound, time, parameter)``: the parameter vector that gives each
+  hull value;
+* attributes ``output`` and ``units`` (what the hull is), ``strategy`` (the algorithm
+  and its options as further attributes), ``forward_simulations`` (whole-trajectory
+  model evaluations, finite-difference runs included) and ``node_evaluations``
+  (single-node evaluations), plus strategy-specific counts.
+
+Analyses of several outputs (the marker-error analysis: one per angle component) stack
+such results along a ``component`` dimension.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+BOUNDS = ("lower", "upper")
+#: Sign that turns each bound's search into a maximisation.
+SENSES = {"lower": -1.0, "upper": 1.0}
+RESULT_VARIABLES = ("hull", "deterministic", "extremiser")
+REQUIRED_ATTRIBUTES = ("output", "units", "strategy", "forward_simulations", "node_evaluations")
+
+
+def fuzzy_result(
+    *,
+    alphas: NDArray[np.float64],
+    times: NDArray[np.float64],
+    parameter_names: Sequence[str],
+    hull: NDArray[np.float64],
+    deterministic: NDArray[np.float64],
+    extremiser: NDArray[np.float64],
+    output: str,
+    units: str,
+    strategy: str,
+    forward_simulations: int,
+    node_evaluations: int,
+    attrs: Mapping[str, object] | None = None,
+) -> xr.Dataset:
+    """Build a fuzzy result (see the module docstring for the layout)."""
+    return xr.Dataset(
+        {
+            "hull": (("alpha", "bound", "time"), hull, {"units": units}),
+            "deterministic": (("time",), deterministic, {"units": units}),
+            "extremiser": (("alpha", "bound", "time", "parameter"), extremiser),
+        },
+        coords={"alpha": alphas, "bound": list(BOUNDS), "time": times, "parameter": list(parameter_names)},
+        attrs={
+            "output": output,
+            "units": units,
+            "strategy": strategy,
+            "forward_simulations": int(forward_simulations),
+            "node_evaluations": int(node_evaluations),
+            **dict(attrs or {}),
+        },
+    )
+
+
+def schema_problems(result: xr.Dataset) -> list[str]:
+    """What keeps ``result`` from being a fuzzy result (empty when it is one)."""
+    problems = [f"variable {v!r} missing" for v in RESULT_VARIABLES if v not in result.data_vars]
+    problems += [f"attribute {a!r} missing" for a in REQUIRED_ATTRIBUTES if a not in result.attrs]
+    if "hull" in result.data_vars and result["hull"].dims[-3:] != ("alpha", "bound", "time"):
+        problems.append(f"hull has dims {result['hull'].dims}, expected (..., alpha, bound, time)")
+    if "bound" in result.coords and [str(b) for b in result["bound"].values] != list(BOUNDS):
+        problems.append(f"bound must be {list(BOUNDS)}")
+    return problems

@@ -1,0 +1,407 @@
+"""The engine's one ``Evaluator``: serial, a local Dask process pool, or a Dask scheduler.
+
+    with Evaluator(workers=2) as evaluator:                 # local pool of 2 processes
+        outputs = evaluator.map(task, items)                # any picklable function, in order
+        batch = evaluator.batch(recipe)                     # parameter rows of a model
+        trajectories = batch(P)                             # (k, n_time)
+        model = evaluator.model(recipe)                     # a FuzzyModel evaluated on the pool
+
+    Evaluator(scheduler="tcp://10.0.0.5:8786")              # an existing cluster
+
+* **No set-up.** ``workers=1`` (the default) runs everything in this process through the
+  *same* task functions. Otherwise a local Dask cluster of ``workers`` single-threaded
+  processes is started on first use, reused by every later call and shut down by
+  :meth:`Evaluator.close`, the ``with`` block, or at interpreter exit. ``scheduler`` may
+  be the address of a running scheduler or a ``distributed.Client`` you already have.
+* **Recipes, not models** for parameter rows (:mod:`.workers`): each process builds the
+  model once from a small recipe.
+* **Results through a memory-mapped store.** Each row task writes its rows at their
+  byte offset in a ``.npy`` file and returns a small status, so trajectories never travel
+  through the scheduler; rows come back in input order whatever the completion order. A
+  worker that cannot see the store (a remote machine without a shared file system)
+  returns its rows with the status instead.
+* **Deterministic.** Each row or item is computed independently by the same function, so
+  1 worker and N workers give bit-identical results, as long as the processes use the
+  same BLAS threading (the local cluster's workers run with one BLAS thread; set the
+  same in the driver for the serial path — the test suite does).
+* **One error.** A failing row or item is one :class:`ParallelEvaluationError` naming it
+  and the original error type and message — no remote traceback. An unreachable
+  scheduler address is one such error too.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import shutil
+import tempfile
+import threading
+import uuid
+import weakref
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.uncertainty.execution.workers import WORKER_ENV, ModelRecipe, Slot, evaluate_rows, map_task, probe
+from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Evaluation, Output
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class ParallelEvaluationError(FuzzyGaitError):
+    """A parallel evaluation failed.
+
+    Attributes:
+        row: index of the failing parameter row or item (None when no row is to blame,
+            e.g. an unreachable scheduler).
+        parameters: that row's parameter vector (list of floats) or None.
+        error_type: name of the original exception type (e.g. ``"SimulationError"``).
+    """
+
+    def __init__(self, message: str, row: int | None = None, parameters: list[float] | None = None,
+                 error_type: str | None = None) -> None:  # fmt: skip
+        super().__init__(message)
+        self.row, self.parameters, self.error_type = row, parameters, error_type
+
+
+@dataclass
+class _Resources:
+    """What an evaluator owns and must release (kept apart so ``weakref.finalize`` does not
+    hold the evaluator alive)."""
+
+    client: Any = None
+    cluster: Any = None
+    owns_client: bool = False
+    tmpdir: str | None = None
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def release(self) -> None:
+        with self.lock:
+            client, cluster, tmpdir = self.client, self.cluster, self.tmpdir
+            self.client = self.cluster = self.tmpdir = None
+            for owned, thing in ((self.owns_client, client), (True, cluster)):
+                if thing is not None and owned:
+                    try:
+                        thing.close()
+                    except Exception:  # noqa: BLE001 - best effort at shutdown
+                        pass
+            if tmpdir is not None:
+                shutil.rmtree(tmpdir, ignore_errors=True)
+
+
+class Evaluator:
+    """Where the engine's work runs (see the module docstring).
+
+    Args:
+        workers: processes of the local pool (1, the default: serial in this process).
+            Ignored with ``scheduler``.
+        scheduler: None, the address of a running Dask scheduler (``"tcp://host:8786"``),
+            or a ``distributed.Client``.
+        connect_timeout: seconds to wait for a scheduler address to answer.
+    """
+
+    def __init__(self, workers: int = 1, scheduler: str | Any | None = None, connect_timeout: float = 10.0) -> None:
+        if isinstance(workers, bool) or int(workers) != workers or workers < 1:
+            raise ParameterError(f"workers must be a positive integer; got {workers}")
+        self.workers = int(workers)
+        self.scheduler = scheduler
+        self.connect_timeout = float(connect_timeout)
+        self._resources = _Resources()
+        self._finalizer = weakref.finalize(self, self._resources.release)
+
+    def __repr__(self) -> str:
+        where = f"scheduler={self.scheduler!r}" if self.scheduler is not None else f"workers={self.workers}"
+        return f"Evaluator({where})"
+
+    # -- life cycle -----------------------------------------------------------------------
+    @property
+    def serial(self) -> bool:
+        """Whether work runs in this process (no scheduler and one worker)."""
+        return self.scheduler is None and self.workers == 1
+
+    @property
+    def client(self) -> Any:
+        """The ``distributed.Client`` (the local cluster is started, or the scheduler
+        connected, on first use); None when serial."""
+        if self.serial:
+            return None
+        res = self._resources
+        with res.lock:
+            if res.client is None:
+                self._connect(res)
+            return res.client
+
+    def _connect(self, res: _Resources) -> None:
+        from distributed import Client, LocalCluster
+
+        if self.scheduler is None:
+            try:
+                cluster = LocalCluster(
+                    n_workers=self.workers, threads_per_worker=1, processes=True,
+                    silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
+                    # no dashboard; the scheduler's health endpoint on a free local port
+                    scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                )  # fmt: skip
+            except Exception as err:  # noqa: BLE001
+                raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}") from None
+            res.cluster, res.client, res.owns_client = cluster, Client(cluster, set_as_default=False), True
+        elif isinstance(self.scheduler, str):
+            try:
+                res.client = Client(self.scheduler, timeout=self.connect_timeout, set_as_default=False)
+            except Exception as err:  # noqa: BLE001
+                raise ParallelEvaluationError(
+                    f"cannot reach the Dask scheduler at {self.scheduler!r} within "
+                    f"{self.connect_timeout:g} s ({type(err).__name__}: {err}); is it running "
+                    "and is the address right?"
+                ) from None
+            res.owns_client = True
+        else:
+            res.client, res.owns_client = self.scheduler, False
+
+    def n_workers(self) -> int:
+        """Worker processes available (1 when serial)."""
+        if self.serial:
+            return 1
+        return max(1, len(self.client.scheduler_info().get("workers", {})) or self.workers)
+
+    def tmpdir(self) -> Path:
+        """A private temporary directory, removed by :meth:`close`."""
+        res = self._resources
+        with res.lock:
+            if res.tmpdir is None:
+                res.tmpdir = tempfile.mkdtemp(prefix="fuzzygait-parallel-")
+            return Path(res.tmpdir)
+
+    def close(self) -> None:
+        """Shut down the local cluster (or disconnect from the scheduler) and remove the
+        temporary store. The evaluator starts afresh if used again."""
+        self._resources.release()
+
+    def __enter__(self) -> Evaluator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- generic tasks --------------------------------------------------------------------
+    def submit_all(self, function: Callable[..., Any], argument_lists: Sequence[tuple[Any, ...]],
+                   label: str = "task") -> list[Any]:  # fmt: skip
+        """``[function(*args) for args in argument_lists]``, in order, on the workers."""
+        client = self.client
+        if client is None:
+            return [function(*args) for args in argument_lists]
+        token = uuid.uuid4().hex[:12]
+        futures = [client.submit(function, *args, key=f"fuzzygait-{label}-{token}-{i}", pure=False)
+                   for i, args in enumerate(argument_lists)]  # fmt: skip
+        try:
+            return list(client.gather(futures))
+        except Exception as err:  # noqa: BLE001 - worker death, lost connection
+            raise ParallelEvaluationError(
+                f"the Dask cluster failed while evaluating ({type(err).__name__}: {err})"
+            ) from None
+        finally:
+            for future in futures:
+                future.release()
+
+    def map(self, function: Callable[[T], R], items: Sequence[T],
+            progress: Callable[[int, int], None] | None = None) -> list[R]:  # fmt: skip
+        """``[function(item) for item in items]`` in input order; ``function`` and the items
+        must be picklable for a pool. A failing item is one
+        :class:`ParallelEvaluationError` naming its index."""
+        if self.serial:
+            statuses = []
+            for i, item in enumerate(items):
+                statuses.append(map_task(function, i, item))
+                if progress is not None:
+                    progress(i + 1, len(items))
+        else:
+            statuses = self.submit_all(map_task, [(function, i, item) for i, item in enumerate(items)], "map")
+            if progress is not None:
+                progress(len(items), len(items))
+        failed = [s for s in statuses if "error" in s]
+        if failed:
+            first = failed[0]
+            raise ParallelEvaluationError(f"item {first['index']} failed: {first['error']}", row=int(first["index"]),
+                                          error_type=first["error_type"])  # fmt: skip
+        return [s["value"] for s in statuses]
+
+    # -- models -----------------------------------------------------------------------------
+    def batch(self, recipe: ModelRecipe, *, sensitivities: bool = False,
+              store: str | os.PathLike[str] | None = None, chunk: int | None = 1) -> RecipeBatch:  # fmt: skip
+        """A callable ``P (k, n_p) -> (k, n_time)`` (and ``(k, n_time, n_p)``
+        sensitivities) evaluating ``recipe``'s model on this evaluator's workers."""
+        return RecipeBatch(self, recipe, sensitivities=sensitivities, store=store, chunk=chunk)
+
+    def model(self, recipe: ModelRecipe, *, sensitivities: bool = False, chunk: int | None = 1) -> EvaluatedModel:
+        """``recipe``'s model as a :class:`~fuzzygait.uncertainty.protocol.FuzzyModel`
+        whose forward simulations run on this evaluator's workers."""
+        return EvaluatedModel(self.batch(recipe, sensitivities=sensitivities, chunk=chunk))
+
+
+class RecipeBatch:
+    """Parameter rows of one recipe's model on an :class:`Evaluator`.
+
+    Args:
+        evaluator: where the rows run.
+        recipe: a :class:`~fuzzygait.uncertainty.execution.workers.ModelRecipe`.
+        sensitivities: return ``(values, sensitivities)`` — ``(k, n_time)`` and
+            ``(k, n_time, n_p)``.
+        store: directory of the result files. None: a private temporary directory, and
+            results are returned as in-memory arrays. A directory: each call's results stay
+            there (``batch-NNNNN-values.npy``, ``…-sensitivities.npy``) and are returned as
+            read-only memory maps. For a remote cluster it must be on a shared file system.
+        chunk: parameter rows per task (None: about four tasks per worker).
+
+    :attr:`last_statistics` lists, per task of the last call, the rows, the worker process
+    and host, and the seconds spent building the model (0 when cached) and evaluating;
+    :attr:`builds` lists every model build this batch caused (one per process at most).
+    """
+
+    def __init__(self, evaluator: Evaluator, recipe: ModelRecipe, *, sensitivities: bool = False,
+                 store: str | os.PathLike[str] | None = None, chunk: int | None = 1) -> None:  # fmt: skip
+        if not callable(getattr(recipe, "build", None)) or not hasattr(recipe, "key"):
+            raise ParameterError("recipe must have build() and a hashable key (see ModelRecipe)")
+        try:
+            hash(recipe.key)
+        except TypeError:
+            raise ParameterError(f"the recipe's key must be hashable; got {recipe.key!r}") from None
+        if chunk is not None and (int(chunk) != chunk or chunk < 1):
+            raise ParameterError(f"chunk must be a positive integer or None; got {chunk}")
+        self.evaluator, self.recipe = evaluator, recipe
+        self.sensitivities = bool(sensitivities)
+        self.store = None if store is None else Path(store)
+        self.chunk = None if chunk is None else int(chunk)
+        self.last_statistics: list[dict[str, Any]] = []
+        self.builds: list[dict[str, Any]] = []
+        self._info: dict[str, Any] | None = None
+        self._calls = 0
+
+    def _describe(self) -> dict[str, Any]:
+        if self._info is None:
+            info = self.evaluator.submit_all(probe, [(self.recipe, self.sensitivities)], "probe")[0]
+            if "error" in info:
+                raise ParallelEvaluationError(f"building the model failed: {info['error']}",
+                                              error_type=info["error_type"])  # fmt: skip
+            if info["build_seconds"]:
+                self.builds.append({key: info[key] for key in ("pid", "host", "build_seconds")})
+            if self.sensitivities and not info["sensitivities"]:
+                raise ParameterError("the model has no sensitivities; use sensitivities=False")
+            self._info = info
+        return self._info
+
+    @property
+    def times(self) -> np.ndarray:
+        """The model's time nodes (a worker builds the model on first access)."""
+        return np.asarray(self._describe()["times"])
+
+    @property
+    def description(self) -> dict[str, Any]:
+        """The model's parameter names, output and capabilities, as a worker reports them."""
+        return self._describe()
+
+    def _directory(self) -> Path:
+        if self.store is not None:
+            self.store.mkdir(parents=True, exist_ok=True)
+            return self.store
+        return self.evaluator.tmpdir()
+
+    def _blocks(self, k: int) -> list[tuple[int, int]]:
+        size = self.chunk if self.chunk is not None else max(1, math.ceil(k / (4 * self.evaluator.n_workers())))
+        return [(s, min(s + size, k)) for s in range(0, k, size)]
+
+    def __call__(self, P: np.ndarray) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        P = np.asarray(P, dtype=float)
+        if P.ndim != 2:
+            raise ParameterError(f"P must be a 2-D array (rows = parameter vectors); got shape {P.shape}")
+        if not np.all(np.isfinite(P)):
+            bad = int(np.flatnonzero(~np.all(np.isfinite(P), axis=1))[0])
+            raise ParameterError(f"parameter row {bad} is not finite: {P[bad].tolist()}")
+        k, n_p = P.shape
+        n_time = self.times.size
+        directory = self._directory()
+        self._calls += 1
+        stem = f"batch-{self._calls:05d}-{uuid.uuid4().hex[:8]}" if self.store is None else f"batch-{self._calls:05d}"
+        values = Slot.allocate(directory / f"{stem}-values.npy", (k, n_time))
+        sens = Slot.allocate(directory / f"{stem}-sensitivities.npy", (k, n_time, n_p)) if self.sensitivities else None
+        try:
+            arguments = [(self.recipe, a, P[a:b], values, sens) for a, b in self._blocks(k)]
+            statuses = sorted(self.evaluator.submit_all(evaluate_rows, arguments, "rows"), key=lambda s: s["start"])
+            self._raise_first_error(statuses, P)
+            out_values = self._read(values, statuses, "values")
+            out_sens = self._read(sens, statuses, "sensitivities") if sens is not None else None
+        finally:
+            if self.store is None:
+                for slot in (values, sens):
+                    if slot is not None:
+                        Path(slot.path).unlink(missing_ok=True)
+        self.last_statistics = [
+            {key: s[key] for key in ("start", "stop", "pid", "host", "build_seconds", "seconds")} for s in statuses
+        ]
+        self.builds += [
+            {key: s[key] for key in ("pid", "host", "build_seconds")} for s in statuses if s["build_seconds"]
+        ]
+        return (out_values, out_sens) if out_sens is not None else out_values
+
+    @staticmethod
+    def _raise_first_error(statuses: Sequence[dict[str, Any]], P: np.ndarray) -> None:
+        failed = [s for s in statuses if "error" in s]
+        if not failed:
+            return
+        first = min(failed, key=lambda s: s["row"])
+        row = int(first["row"])
+        others = len(failed) - 1
+        more = f" ({others} other task(s) failed too)" if others else ""
+        raise ParallelEvaluationError(
+            f"evaluating parameter row {row} {P[row].tolist()} failed: {first['error']}{more}",
+            row=row, parameters=P[row].tolist(), error_type=first["error_type"],
+        )  # fmt: skip
+
+    def _read(self, slot: Slot, statuses: Sequence[dict[str, Any]], name: str) -> np.ndarray:
+        returned = any(s.get(name) is not None for s in statuses)
+        stored = np.load(slot.path, mmap_mode="r+" if returned else "r")
+        for s in statuses:
+            if s.get(name) is not None:  # a worker that could not see the store
+                stored[s["start"]:s["stop"]] = s[name]
+        if isinstance(stored, np.memmap) and stored.mode == "r+":
+            stored.flush()
+        if self.store is not None:
+            return np.load(slot.path, mmap_mode="r")
+        return np.array(stored)
+
+
+class EvaluatedModel:
+    """A :class:`RecipeBatch` as a :class:`~fuzzygait.uncertainty.protocol.FuzzyModel`:
+    every forward simulation runs on the evaluator's workers. Offers ``evaluate``,
+    ``evaluate_many(P)`` and ``evaluate_nodes(P, nodes)`` (the batched direct strategy
+    then evaluates each iteration's points in parallel; duplicate rows are simulated
+    once)."""
+
+    def __init__(self, batch: RecipeBatch) -> None:
+        self.batch = batch
+        info = batch.description
+        self.times = np.asarray(info["times"], dtype=float)
+        self.parameter_names: tuple[str, ...] = tuple(info["parameter_names"])
+        self.output = Output(*info["output"])
+        self.capabilities = frozenset({NODES} | ({SENSITIVITIES} if batch.sensitivities else set()))
+
+    def evaluate_many(self, P: np.ndarray) -> np.ndarray:
+        out = self.batch(np.atleast_2d(np.asarray(P, dtype=float)))
+        return out[0] if isinstance(out, tuple) else out
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        out = self.batch(np.asarray(p, dtype=float).reshape(1, -1))
+        if isinstance(out, tuple):
+            return Evaluation(out[0][0], out[1][0] if sensitivities else None)
+        return Evaluation(out[0])
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+        unique, inverse = np.unique(P, axis=0, return_inverse=True)
+        trajectories = self.evaluate_many(unique)
+        return trajectories[inverse.ravel(), np.asarray(nodes, dtype=int).ravel()]

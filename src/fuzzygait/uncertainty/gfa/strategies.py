@@ -1,0 +1,132 @@
+"""The α-level optimisation strategies of the Graph Follower algorithm, each with its
+own options (thesis §2.6, §2.6.2).
+
+* :class:`Linearised` (thesis OP-III): the model is replaced by its first-order Taylor
+  expansion about the library entry that currently gives the extreme at a node; the
+  linear model's optimum over the α-level set is closed form (a box vertex, a point on
+  the ball surfaces). When that step does not improve the node, a secant step on the
+  directional derivatives finds interior extrema (at most ``max_iterations`` steps per
+  node; 1 = the thesis' single step).
+* :class:`Direct` (thesis OP-II, cheap models): multistart L-BFGS-B/SLSQP on the model
+  itself at each node, warm-started from the previous node.
+* :class:`BatchedDirect` (OP-II for models with the ``"nodes"`` capability, e.g. joint
+  angles from markers): all optimisation nodes side by side, first-order steps with a
+  line search (see :mod:`fuzzygait.uncertainty.gfa.batched`).
+
+Linearised and Direct keep a library of whole trajectories and take the hulls from it
+(post-processing, step 5 of the algorithm); BatchedDirect evaluates single nodes only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from fuzzygait.core.errors import ParameterError
+
+
+def _whole(name: str, value: object, minimum: int) -> None:
+    if not isinstance(value, int) or isinstance(value, bool) or value < minimum:
+        raise ParameterError(f"{name} must be a whole number >= {minimum}; got {value!r}")
+
+
+def _non_negative(name: str, value: float) -> None:
+    if not value >= 0:
+        raise ParameterError(f"{name} must be >= 0; got {value!r}")
+
+
+@dataclass(frozen=True)
+class Linearised:
+    """Linearised α-level optimisation (OP-III).
+
+    Attributes:
+        stride: optimise at every ``stride``-th time node (and the last).
+        novelty_tol: relative parameter difference below which no new simulation is
+            run (default 1e-4 = 0.01 %, Eq. 2.24).
+        max_iterations: linearised steps per node at most (1 = the thesis' single step).
+        gain_tol: a step is not simulated when the linear model predicts a gain below
+            ``gain_tol`` times the largest deterministic output magnitude.
+    """
+
+    stride: int = 1
+    novelty_tol: float = 1e-4
+    max_iterations: int = 4
+    gain_tol: float = 1e-7
+
+    name = "linearised"
+
+    def __post_init__(self) -> None:
+        _whole("stride", self.stride, 1)
+        _whole("max_iterations", self.max_iterations, 1)
+        _non_negative("novelty_tol", self.novelty_tol)
+        _non_negative("gain_tol", self.gain_tol)
+
+    def options(self) -> dict[str, object]:
+        """The options, for the result's attributes."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Direct:
+    """Multistart optimisation of the model itself at each node (OP-II).
+
+    Attributes:
+        stride: optimise at every ``stride``-th time node (and the last).
+        novelty_tol: as in :class:`Linearised`.
+        starts: starting points per node (the library's best entry, the previous node's
+            optimum, then seeded random points).
+        seed: seed of the random starting points.
+    """
+
+    stride: int = 1
+    novelty_tol: float = 1e-4
+    starts: int = 10
+    seed: int = 0
+
+    name = "direct"
+
+    def __post_init__(self) -> None:
+        _whole("stride", self.stride, 1)
+        _whole("starts", self.starts, 1)
+        _non_negative("novelty_tol", self.novelty_tol)
+
+    def options(self) -> dict[str, object]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class BatchedDirect:
+    """All optimisation nodes solved side by side (needs the ``"nodes"`` capability).
+
+    Attributes:
+        stride: optimise at every ``stride``-th time node (and the last); the nodes in
+            between take the better of the two bracketing optima.
+        starts: starting points per node (the deterministic parameters, the higher
+            α-level's optimum as it is and scaled out, then screened random points).
+        iterations: first-order iterations at most.
+        window: neighbouring nodes (each side) at which each node's optimum is
+            re-evaluated.
+        screen: random points per node screened for the random starts.
+        seed: seed of the random points.
+    """
+
+    stride: int = 1
+    starts: int = 10
+    iterations: int = 25
+    window: int = 2
+    screen: int = 64
+    seed: int = 0
+
+    name = "batched-direct"
+
+    def __post_init__(self) -> None:
+        _whole("stride", self.stride, 1)
+        _whole("starts", self.starts, 1)
+        _whole("iterations", self.iterations, 1)
+        _whole("window", self.window, 0)
+        _whole("screen", self.screen, 1)
+
+    def options(self) -> dict[str, object]:
+        return asdict(self)
+
+
+Strategy = Linearised | Direct | BatchedDirect

@@ -1,0 +1,179 @@
+"""The model protocol of the uncertainty engine.
+
+The engine knows nothing of markers or beams. A model maps a parameter vector ``p``
+(shape ``(n_p,)``, in the order of :attr:`FuzzyModel.parameter_names`) to the trajectory
+of one scalar output over its time nodes, and declares what else it can do::
+
+    model.times              (n_time,)  time of each node (any unit, e.g. s)
+    model.parameter_names    tuple of n_p names (checked against the FuzzyVector)
+    model.output             Output(name, units)
+    model.capabilities       frozenset, a subset of {"sensitivities", "nodes"}
+    model.evaluate(p, sensitivities=False) -> Evaluation(values (n_time,), jacobian (n_time, n_p) | None)
+    model.evaluate_nodes(P, nodes) -> (k,)      only with "nodes": output of row P[i] at node nodes[i]
+
+One call of ``evaluate`` is one forward simulation. Without ``"sensitivities"`` the
+engine uses forward finite differences (``1 + n_p`` forward simulations, all counted).
+``"nodes"`` lets the direct strategies evaluate single time nodes without a whole
+trajectory (a joint angle at one frame, say).
+
+A plain function ``p -> (n_time,)`` becomes a model with :class:`FunctionModel`, or
+implicitly by :func:`as_model` (which :func:`~fuzzygait.uncertainty.graph_follower`
+calls).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fuzzygait.core.errors import ParameterError
+
+Array = NDArray[np.float64]
+
+SENSITIVITIES = "sensitivities"
+NODES = "nodes"
+CAPABILITIES = frozenset({SENSITIVITIES, NODES})
+
+
+@dataclass(frozen=True)
+class Output:
+    """What a model's output is.
+
+    Attributes:
+        name: short name (e.g. ``"LKneeAngles_X"``, ``"total_deformation_energy"``).
+        units: physical units (e.g. ``"deg"``, ``"J"``, ``"m"``); empty if dimensionless.
+        description: one line for plots and reports.
+    """
+
+    name: str = "output"
+    units: str = ""
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One forward simulation: ``values (n_time,)`` and, when asked for and available,
+    ``jacobian (n_time, n_p)`` = d values / d p."""
+
+    values: Array
+    jacobian: Array | None = None
+
+
+@runtime_checkable
+class FuzzyModel(Protocol):
+    """What the Graph Follower algorithm, the FRV-GFA and the checks need of a model
+    (see the module docstring)."""
+
+    times: Array
+    parameter_names: tuple[str, ...]
+    output: Output
+    capabilities: frozenset[str]
+
+    def evaluate(self, p: Array, *, sensitivities: bool = False) -> Evaluation: ...
+
+
+@runtime_checkable
+class NodeModel(FuzzyModel, Protocol):
+    """A :class:`FuzzyModel` with the ``"nodes"`` capability."""
+
+    def evaluate_nodes(self, P: Array, nodes: NDArray[np.int_]) -> Array: ...
+
+
+@dataclass
+class FunctionModel:
+    """A model from plain functions.
+
+    Args:
+        function: ``p -> (n_time,)`` trajectory.
+        times: the time nodes ``(n_time,)``.
+        jacobian: optional ``p -> (n_time, n_p)`` sensitivities.
+        parameter_names: names of the entries of ``p``; empty: taken from the fuzzy
+            parameters the model is first run with.
+        output: name and units of the output.
+    """
+
+    function: Callable[[Array], Array]
+    times: Array
+    jacobian: Callable[[Array], Array] | None = None
+    parameter_names: tuple[str, ...] = ()
+    output: Output = field(default_factory=Output)
+
+    def __post_init__(self) -> None:
+        if not callable(self.function):
+            raise ParameterError("FunctionModel: function must be callable as function(p) -> (n_time,) values")
+        self.times = np.asarray(self.times, dtype=float)
+        self.parameter_names = tuple(self.parameter_names)
+
+    @property
+    def capabilities(self) -> frozenset[str]:
+        return frozenset({SENSITIVITIES}) if self.jacobian is not None else frozenset()
+
+    def evaluate(self, p: Array, *, sensitivities: bool = False) -> Evaluation:
+        values = np.asarray(self.function(p), dtype=float)
+        if sensitivities and self.jacobian is not None:
+            return Evaluation(values, np.asarray(self.jacobian(p), dtype=float))
+        return Evaluation(values)
+
+
+def model_problem(model: object) -> str | None:
+    """Why ``model`` is not a :class:`FuzzyModel` (one sentence), or None."""
+    if callable(model) and not hasattr(model, "evaluate"):
+        return ("got a plain function: pass times=... as well (graph_follower(f, params, times=t)) "
+                "or wrap it as FunctionModel(f, times)")  # fmt: skip
+    missing = [a for a in ("times", "parameter_names", "output", "capabilities", "evaluate") if not hasattr(model, a)]
+    if missing:
+        return (f"{type(model).__name__} lacks {', '.join(missing)}; a model needs times, parameter_names, "
+                "output, capabilities and evaluate(p, sensitivities=False) -> Evaluation "
+                "(see fuzzygait.uncertainty.protocol), or use FunctionModel(f, times)")  # fmt: skip
+    times = np.asarray(getattr(model, "times"))
+    if times.ndim != 1 or times.size == 0:
+        return f"{type(model).__name__}.times must be a non-empty 1-D array of time nodes; got shape {times.shape}"
+    unknown = set(getattr(model, "capabilities")) - CAPABILITIES
+    if unknown:
+        return f"{type(model).__name__} declares unknown capabilities {sorted(unknown)}; known: {sorted(CAPABILITIES)}"
+    if NODES in model.capabilities and not callable(getattr(model, "evaluate_nodes", None)):  # type: ignore[attr-defined]
+        return f"{type(model).__name__} declares 'nodes' but has no evaluate_nodes(P, nodes)"
+    return None
+
+
+def as_model(model: object, times: Sequence[float] | Array | None = None) -> FuzzyModel:
+    """``model`` itself when it is a :class:`FuzzyModel`; a plain callable with ``times``
+    becomes a :class:`FunctionModel`. Anything else is one :class:`ParameterError` that
+    says what to pass."""
+    if times is not None:
+        if isinstance(model, FuzzyModel):
+            raise ParameterError("times= is only for plain functions; this model has its own times")
+        if not callable(model):
+            raise ParameterError(f"the model must be a FuzzyModel or a function p -> values; got {type(model).__name__}")
+        return FunctionModel(model, np.asarray(times, dtype=float))  # type: ignore[arg-type]
+    problem = model_problem(model)
+    if problem is not None:
+        raise ParameterError(f"not a model: {problem}")
+    return model  # type: ignore[return-value]
+
+
+def check_parameter_names(model: FuzzyModel, names: Sequence[str], named: Sequence[bool] | None = None) -> None:
+    """The model's declared parameter names must be the fuzzy parameters' names, in
+    order (``named[i]`` False: parameter ``i`` was given no name, only its position is
+    checked). A model that declares no names (a :class:`FunctionModel` without them)
+    takes any parameters."""
+    names = tuple(names)
+    named = tuple(named) if named is not None else (True,) * len(names)
+    declared = tuple(model.parameter_names)
+    if not declared:
+        return
+    if len(declared) != len(names):
+        raise ParameterError(
+            f"the model {type(model).__name__} takes {len(declared)} parameters {list(declared)} "
+            f"but {len(names)} fuzzy parameters were given"
+        )
+    wrong = [(given, want) for given, want, has in zip(names, declared, named, strict=True) if has and given != want]
+    if wrong:
+        raise ParameterError(
+            f"the fuzzy parameters are named {list(names)} but the model {type(model).__name__} takes "
+            f"{list(declared)}: build the FuzzyVector with those names, in that order"
+        )
