@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -26,6 +28,15 @@ from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.trial import OUTPUT_UNITS, Event, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
+
+
+class _EzC3D(Protocol):
+    """The part of ``ezc3d.c3d`` (untyped) that the writer uses."""
+
+    def __getitem__(self, key: str) -> Any: ...
+
+    def add_parameter(self, group: str, name: str, value: object) -> None: ...
+
 
 #: Length units the reader understands, as factors to millimetres.
 LENGTH_UNITS_TO_MM = {"mm": 1.0, "millimeter": 1.0, "millimetre": 1.0, "cm": 10.0, "m": 1000.0}
@@ -335,7 +346,7 @@ def write_c3d(trial: Trial, path: str | os.PathLike[str]) -> None:
     _atomic_write(path, c.write)
 
 
-def _write_output_lists(c: object, trial: Trial) -> None:
+def _write_output_lists(c: _EzC3D, trial: Trial) -> None:
     by_kind: dict[str, list[str]] = {}
     for name, kind in trial.output_kinds.items():
         by_kind.setdefault(kind, []).append(trial.label_prefix + name)
@@ -349,7 +360,7 @@ def _write_output_lists(c: object, trial: Trial) -> None:
         c.add_parameter("POINT", "TYPE_GROUPS", type_groups)
 
 
-def _write_subject(c: object, trial: Trial) -> None:
+def _write_subject(c: _EzC3D, trial: Trial) -> None:
     for name, value in trial.parameters.items():
         c.add_parameter("PROCESSING", name, np.array([float(value)]))
     if trial.subject or trial.label_prefix:
@@ -359,7 +370,7 @@ def _write_subject(c: object, trial: Trial) -> None:
         c.add_parameter("SUBJECTS", "USES_PREFIXES", 1 if trial.label_prefix else 0)
 
 
-def _write_trial_frames(c: object, trial: Trial) -> None:
+def _write_trial_frames(c: _EzC3D, trial: Trial) -> None:
     """Record the first frame number in the header (ezc3d counts from 0 there).
 
     Vicon's ``TRIAL:ACTUAL_START_FIELD`` is not written: ezc3d's Python API can only
@@ -368,10 +379,10 @@ def _write_trial_frames(c: object, trial: Trial) -> None:
     c["header"]["points"]["first_frame"] = int(trial.first_frame) - 1
 
 
-def _atomic_write(path: Path, write: object) -> None:
+def _atomic_write(path: Path, write: Callable[[str], object]) -> None:
     try:
         with atomic_output(path) as tmp:
-            write(str(tmp))  # type: ignore[operator]
+            write(str(tmp))
     except FuzzyGaitError as exc:
         raise _fail(path, str(exc).removeprefix(f"{path}: ")) from None
     except Exception as exc:

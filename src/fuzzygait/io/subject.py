@@ -123,8 +123,8 @@ class SubjectParameters:
 
     def with_side(self, side: str, **changes: float) -> SubjectParameters:
         """A copy with fields of one side replaced (e.g. static offsets)."""
-        key = "left" if side == "L" else "right"
-        return replace(self, **{key: replace(self.side(side), **changes)})
+        changed = replace(self.side(side), **changes)
+        return replace(self, left=changed) if side == "L" else replace(self, right=changed)
 
     def to_processing(self) -> dict[str, float]:
         """The parameters under Vicon ``PROCESSING`` names (for C3D output and TOML)."""

@@ -80,7 +80,7 @@ def joint_angles(proximal: np.ndarray, distal: np.ndarray, joint: str, side: str
             ``"Ankle"``, ``"FootProgress"``).
         side: ``"L"`` or ``"R"``.
     """
-    order, signs, offsets = ANGLE_TABLE[joint]
-    signs = np.asarray(signs) * (LEFT_MIRROR if side == "L" else 1.0)
+    order, table_signs, offsets = ANGLE_TABLE[joint]
+    signs = np.asarray(table_signs) * (LEFT_MIRROR if side == "L" else 1.0)
     components = cardan_yxz(relative_rotation(proximal, distal))
     return wrap_degrees(components[:, list(order)] * signs + np.asarray(offsets))

@@ -113,5 +113,5 @@ def build_cantilever(
         raise ParameterError(f"a cantilever needs at least 2 nodes; got {nodes}")
     mesh = straight_beam(length, width, thickness, nodes)
     model, q0 = build_clamped_beam(mesh, tip_force, gravity=gravity, compile=compile)
-    single = RectangleSection(width=np.float64(width), height=np.float64(thickness))
+    single = RectangleSection(width=np.asarray(width, dtype=float), height=np.asarray(thickness, dtype=float))
     return Cantilever(model, q0, length, width, thickness, single, nodes)

@@ -39,7 +39,8 @@ def compiler() -> str | None:
 
 
 def library_key(structure_key: str, names: Sequence[str]) -> str:
-    text = "|".join([CODE_VERSION, ca.__version__, structure_key, *names])
+    version = ca.__version__  # type: ignore[attr-defined]  # set at import, absent from casadi's stub
+    text = "|".join([CODE_VERSION, version, structure_key, *names])
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

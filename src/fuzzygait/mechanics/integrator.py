@@ -81,7 +81,7 @@ class BufferedFunction:
         self.results = []
         for i in range(function.n_out()):
             out = np.zeros(function.sparsity_out(i).nnz())
-            self.buffer.set_res(i, memoryview(out))
+            self.buffer.set_res(i, out.data)  # type: ignore[call-arg]  # stub lists the byte size the binding derives
             self.results.append(out)
         self._args: list[np.ndarray] = [np.zeros(0)] * function.n_in()
 
@@ -89,7 +89,7 @@ class BufferedFunction:
         for i, value in enumerate(args):
             array = np.ascontiguousarray(value, dtype=float).ravel(order="F")
             self._args[i] = array  # keep alive while the buffer points at it
-            self.buffer.set_arg(i, memoryview(array))
+            self.buffer.set_arg(i, array.data)  # type: ignore[call-arg]  # as set_res
         self._evaluate()
         return self.results
 
@@ -183,6 +183,21 @@ class DiscreteModel:
         return mid, vel, group.constants.T, pe
 
 
+@dataclass
+class _GroupBuffers:
+    """One element group's kernels, index arrays and per-element inputs in a step assembler."""
+
+    group: ElementGroup
+    dofs: np.ndarray
+    flat: np.ndarray
+    constants: np.ndarray
+    pe: np.ndarray
+    kernels: dict[str, BufferedFunction]
+    rows: np.ndarray
+    cols: np.ndarray
+    h: np.ndarray
+
+
 class _StepAssembler:
     """Residuals, Jacobians and sensitivity terms of the step equations, assembled from the
     element kernels and the global functions (see the module docstring).
@@ -208,12 +223,12 @@ class _StepAssembler:
         self.grad_linear = grad_linear.copy()
         self.constraints = BufferedFunction(f["constraints"])
         self.g_rows, self.g_cols = self.constraints.coordinates(1)
-        self.groups = []
+        self.groups: list[_GroupBuffers] = []
         for group in model.groups:
             dofs = group.dofs
             pe = np.repeat(p[list(group.parameter_indices)][:, None], len(dofs), axis=1)
             self.groups.append(
-                dict(
+                _GroupBuffers(
                     group=group,
                     dofs=dofs,
                     flat=dofs.ravel(),
@@ -222,14 +237,13 @@ class _StepAssembler:
                     kernels={kind: BufferedFunction(f[f"{group.name}_{kind}"]) for kind in KERNEL_KINDS},
                     rows=np.broadcast_to(dofs[:, None, :], (len(dofs), 24, 24)),  # buffer layout [e, col, row]
                     cols=np.broadcast_to(dofs[:, :, None], (len(dofs), 24, 24)),
+                    h=np.full(len(dofs), h),
                 )
             )
         m_rows, m_cols = mass_fn.coordinates(0)
-        element_coords = [(g["rows"], g["cols"]) for g in self.groups]
+        element_coords = [(g.rows, g.cols) for g in self.groups]
         self.hessian = BufferedFunction(f["constraint_hessian"])
         h_rows, h_cols = self.hessian.coordinates(0)
-        for g in self.groups:
-            g["h"] = np.full(len(g["dofs"]), h)
         self.jacobian_pattern = _Pattern(
             (n + m, n + m),
             [(m_rows, m_cols)] + element_coords + [(self.g_cols, n + self.g_rows), (n + self.g_rows, self.g_cols)]
@@ -243,19 +257,19 @@ class _StepAssembler:
             self.prev_pattern = _Pattern((n, n), [(m_rows, m_cols)] + element_coords)
 
     # -- kernels --------------------------------------------------------------------------
-    def _inputs(self, g: dict, q_a: np.ndarray, q_b: np.ndarray):
-        mid = 0.5 * (q_a[g["dofs"]] + q_b[g["dofs"]]).T
-        vel = ((q_b[g["dofs"]] - q_a[g["dofs"]]) / self.h).T
-        return mid, vel, g["constants"], g["pe"]
+    def _inputs(self, g: _GroupBuffers, q_a: np.ndarray, q_b: np.ndarray):
+        mid = 0.5 * (q_a[g.dofs] + q_b[g.dofs]).T
+        vel = ((q_b[g.dofs] - q_a[g.dofs]) / self.h).T
+        return mid, vel, g.constants, g.pe
 
     def _forces(self, q_a, q_b, weight, em: bool = False) -> np.ndarray:
         out = np.zeros(self.n)
         for g in self.groups:
             if em:
-                (force,) = g["kernels"]["em_force"](*self._inputs(g, q_a, q_b), g["h"])
+                (force,) = g.kernels["em_force"](*self._inputs(g, q_a, q_b), g.h)
             else:
-                (force,) = g["kernels"]["force"](*self._inputs(g, q_a, q_b))
-            out += np.bincount(g["flat"], weights=weight * force, minlength=self.n)
+                (force,) = g.kernels["force"](*self._inputs(g, q_a, q_b))
+            out += np.bincount(g.flat, weights=weight * force, minlength=self.n)
         return out
 
     def _tangents(self, q_a, q_b, weight, em: bool = False):
@@ -263,9 +277,9 @@ class _StepAssembler:
         out = []
         for g in self.groups:
             if em:
-                _, dq, dv = g["kernels"]["em_tangent"](*self._inputs(g, q_a, q_b), g["h"])
+                _, dq, dv = g.kernels["em_tangent"](*self._inputs(g, q_a, q_b), g.h)
             else:
-                _, dq, dv = g["kernels"]["tangent"](*self._inputs(g, q_a, q_b))
+                _, dq, dv = g.kernels["tangent"](*self._inputs(g, q_a, q_b))
             dq = dq.reshape(-1, 24, 24)
             dv = dv.reshape(-1, 24, 24)
             out.append((weight * (0.5 * dq + dv / self.h), weight * (0.5 * dq - dv / self.h)))
@@ -345,10 +359,10 @@ class _StepAssembler:
             acc = 2.0 * (q_next - q_cur - h * self.v0) / h**2
             rhs = self.mass_sens.sparse(0, self.mass_sens(acc, p, c)[0]).toarray() + self.dgrad_dp
             for g in self.groups:
-                (dp,) = g["kernels"]["em_parameters"](*self._inputs(g, q_cur, q_next), g["h"])
-                dp = dp.reshape(-1, len(g["group"].parameter_indices), 24)
-                for k, index in enumerate(g["group"].parameter_indices):
-                    rhs[:, index] += np.bincount(g["flat"], weights=dp[:, k, :].ravel(), minlength=n)
+                (dp,) = g.kernels["em_parameters"](*self._inputs(g, q_cur, q_next), g.h)
+                dp = dp.reshape(-1, len(g.group.parameter_indices), 24)
+                for k, index in enumerate(g.group.parameter_indices):
+                    rhs[:, index] += np.bincount(g.flat, weights=dp[:, k, :].ravel(), minlength=n)
             blocks = self._tangents(q_cur, q_next, 1.0, em=True)
             hess = 0.5 * self.hessian(0.5 * (q_cur + q_next), lam, c)[0]
             d_cur = self.em_state_pattern.matrix([-2.0 * self.mass_values / h**2] + [t[1] for t in blocks] + [hess])
@@ -362,10 +376,10 @@ class _StepAssembler:
         rhs = self.mass_sens.sparse(0, self.mass_sens(acc, p, c)[0]).toarray() + self.dgrad_dp
         for q_a, q_b, weight in intervals:
             for g in self.groups:
-                (dp,) = g["kernels"]["parameters"](*self._inputs(g, q_a, q_b))
-                dp = dp.reshape(-1, len(g["group"].parameter_indices), 24)
-                for k, index in enumerate(g["group"].parameter_indices):
-                    rhs[:, index] += np.bincount(g["flat"], weights=weight * dp[:, k, :].ravel(), minlength=n)
+                (dp,) = g.kernels["parameters"](*self._inputs(g, q_a, q_b))
+                dp = dp.reshape(-1, len(g.group.parameter_indices), 24)
+                for k, index in enumerate(g.group.parameter_indices):
+                    rhs[:, index] += np.bincount(g.flat, weights=weight * dp[:, k, :].ravel(), minlength=n)
         if self.first:  # S_0 = 0: the initial state does not depend on the parameters
             return rhs
         plus = self._tangents(q_cur, q_next, 0.5)
@@ -519,7 +533,7 @@ def integrate(
             x[:n] = 2 * q[j] - q[j - 1]
             x[n:] = lam[j - 1]
         t0 = clock()
-        assembler.begin_step(q_cur, q_prev, first, velocities[j] if energy_momentum else v0)
+        assembler.begin_step(q_cur, q_prev, first, velocities[j] if velocities is not None else v0)
         timings["evaluation"] += clock() - t0
         if lu is None or first:
             lu = factorise(x)
@@ -581,7 +595,7 @@ def integrate(
         _check_folding(model, q[j + 1], (j + 1) * dt, p)
         if velocities is not None:
             velocities[j + 1] = 2.0 * (q[j + 1] - q[j]) / dt - velocities[j]
-        if sensitivities:
+        if sens is not None:
             t0 = clock()
             exact = factorise(x)  # the Jacobian at the converged step
             if energy_momentum:  # velocity sensitivities dv_j/dp ride along

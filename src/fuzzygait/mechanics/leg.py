@@ -52,6 +52,7 @@ PARAMETER_UNITS = {
     "shank_mass": "kg", "shank_J1": "kg m^2", "shank_J2": "kg m^2", "shank_J3": "kg m^2",
 }
 FootKind = Literal["beam", "rigid", "none"]
+SectionKind = Literal["homogeneous", "standard", "coupled"]
 
 
 def segment_frame(direction_distal: np.ndarray) -> np.ndarray:
@@ -122,7 +123,7 @@ class LegConfiguration:
     thigh: SegmentData = THIGH
     shank: SegmentData = SHANK
     hip_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    section: Literal["homogeneous", "standard", "coupled"] = "homogeneous"
+    section: SectionKind = "homogeneous"
     layers: LayerMaterials | None = None
 
     def __post_init__(self) -> None:
@@ -209,6 +210,7 @@ def build_leg(configuration: LegConfiguration, rigid_foot_density: float = 8.55e
         section = RectangleSection(width=mesh.width, height=mesh.total_thickness())
         stiffness = None
         if cfg.section != "homogeneous":
+            assert cfg.layers is not None  # LegConfiguration requires layers for these sections
             homogenise = standard_stiffness if cfg.section == "standard" else coupled_stiffness
             stiffness = homogenise(cfg.layers, mesh.width, mesh.core_thickness, mesh.face_thickness,
                                    shear_factor=SHEAR_CORRECTION_RECTANGLE)

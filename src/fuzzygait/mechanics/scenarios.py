@@ -24,6 +24,7 @@ from fuzzygait.mechanics.leg import (
     PARAMETER_UNITS,
     FootKind,
     LegConfiguration,
+    SectionKind,
     build_leg,
     default_parameters,
 )
@@ -60,7 +61,7 @@ class LegSimulator:
         foot: FootKind = "beam",
         blade: BladeGeometry | None = None,
         compile: bool = True,
-        section: str = "homogeneous",
+        section: SectionKind = "homogeneous",
         layers: LayerMaterials | None = None,
     ) -> None:
         if scenario not in SCENARIOS:

@@ -97,7 +97,7 @@ def _check_rate_cutoff(rate: float, cutoff: float) -> tuple[float, float]:
     return rate, cutoff
 
 
-def _tan_ratio(freq: np.ndarray, rate: float, cutoff: float, order: int) -> np.ndarray:
+def _tan_ratio(freq: float | np.ndarray, rate: float, cutoff: float, order: int) -> np.ndarray:
     """tan(pi f / fs) / tan(pi f_w / fs) with the corrected per-pass cutoff f_w."""
     n_design = order // 2
     correction = (np.sqrt(2.0) - 1.0) ** (1.0 / (2 * n_design))

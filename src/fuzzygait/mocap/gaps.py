@@ -287,7 +287,7 @@ def _spline_fills(
     Returns:
         ``{gap index: (length, k) fill}``.
     """
-    fills = {}
+    fills: dict[int, np.ndarray] = {}
     for group in groups:
         knots = plan.knots(group[0], group[-1])
         lengths = [plan.runs[i].length for i in group]
@@ -302,7 +302,7 @@ def _check_method(method: object) -> Method:
     if method not in METHODS:
         choices = ", ".join(repr(m) for m in METHODS)
         raise ParameterError(f"method must be one of {choices}; got {method!r}")
-    return method  # type: ignore[return-value]
+    return method
 
 
 def _fit_for_gap(
@@ -479,7 +479,7 @@ def fill_gaps(
     out[missing] = np.nan
     gaps: list[Gap] = []
     fills = []  # written after the loop: donors are measured samples, never fills
-    for m in np.flatnonzero(missing.any(axis=0)):
+    for m in np.flatnonzero(missing.any(axis=0)).tolist():
         where, values, marker_gaps = _fill_marker(out, missing, m, labels, max_gap, method)
         gaps.extend(marker_gaps)
         if where is not None:
