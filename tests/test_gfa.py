@@ -9,8 +9,6 @@ reach elsewhere (a local, Frank-Wolfe-like ascent from the library's best entry)
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -19,9 +17,13 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.pendulum import Pendulum
 from fuzzygait.uncertainty import (
     CountedModel,
+    Direct,
+    Evaluation,
     FunctionModel,
     FuzzyBalls,
     FuzzyVector,
+    Linearised,
+    Output,
     graph_follower,
     optimisation_nodes,
     triangular,
@@ -29,6 +31,12 @@ from fuzzygait.uncertainty import (
 )
 
 MODES = ("linearised", "direct")
+
+
+def strategy_for(mode: str, **options: object) -> Linearised | Direct:
+    """The strategy called ``mode`` with those of ``options`` it has."""
+    kind = Linearised if mode == "linearised" else Direct
+    return kind(**{k: v for k, v in options.items() if k in kind.__dataclass_fields__})  # type: ignore[arg-type]
 
 
 # --------------------------------------------------------------------- helpers
@@ -59,7 +67,7 @@ def hull_error(result, truth: dict[float, tuple[np.ndarray, np.ndarray]]) -> tup
 
 
 def report(label: str, result, err: float) -> None:
-    print(f"\n{label}: relative error {err:.1e}, {result.attrs['model_evaluations']} model evaluations")
+    print(f"\n{label}: relative error {err:.1e}, {result.attrs['forward_simulations']} model evaluations")
 
 
 # --------------------------------------------------------------------- monotone model
@@ -80,7 +88,7 @@ def mono_jac(p: np.ndarray) -> np.ndarray:
 def test_monotone_model_hulls_are_the_cut_ends(mode, jacobian) -> None:
     alphas = (0.0, 0.3, 0.7, 1.0)
     model = FunctionModel(mono, T_MONO, jacobian)
-    result = graph_follower(model, FuzzyVector([P_MONO]), alphas, mode=mode, starts=3)
+    result = graph_follower(model, FuzzyVector([P_MONO]), alphas, strategy=strategy_for(mode, starts=3))
     truth = {}
     for alpha in alphas:
         lo, hi = P_MONO.alpha_cut(alpha)
@@ -110,7 +118,7 @@ def mono2(p: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("mode", MODES)
 def test_monotone_two_parameter_model_hulls_are_box_vertices(mode) -> None:
     model = FunctionModel(mono2, T_MONO2)
-    result = graph_follower(model, FuzzyVector(P_MONO2), (0.0, 0.5), mode=mode, starts=3)
+    result = graph_follower(model, FuzzyVector(P_MONO2), (0.0, 0.5), strategy=strategy_for(mode, starts=3))
     truth = {}
     for alpha in (0.0, 0.5, 1.0):
         (a_lo, a_hi), (b_lo, b_hi) = (n.alpha_cut(alpha) for n in P_MONO2)
@@ -171,7 +179,7 @@ def test_sin_truth_has_interior_extrema() -> None:
 )
 def test_sin_model_interior_extrema(mode, jacobian, options, tolerance) -> None:
     result = graph_follower(FunctionModel(sin_model, T_SIN, jacobian), FuzzyVector([P_SIN]), SIN_ALPHAS,
-                            mode=mode, **options)  # fmt: skip
+                            strategy=strategy_for(mode, **options))  # fmt: skip
     err, over = hull_error(result, sin_truth())
     report(f"sin(ωpt) {mode} jac={jacobian is not None} {options}", result, err)
     assert err <= tolerance
@@ -213,7 +221,7 @@ def prod_truth(alphas) -> dict[float, tuple[np.ndarray, np.ndarray]]:
 def test_two_parameter_product_model(mode, jacobian, options, tolerance) -> None:
     alphas = (0.0, 0.5, 1.0)
     result = graph_follower(FunctionModel(prod_model, T_PROD, jacobian), FuzzyVector(P_PROD), alphas,
-                            mode=mode, **options)  # fmt: skip
+                            strategy=strategy_for(mode, **options))  # fmt: skip
     err, over = hull_error(result, prod_truth(alphas))
     report(f"amp·sin(freq·t) {mode} jac={jacobian is not None} {options}", result, err)
     assert err <= tolerance
@@ -269,7 +277,7 @@ def grid_reference() -> dict[float, tuple[np.ndarray, np.ndarray]]:
     ],
 )
 def test_two_parameter_coupled_model_against_grid(grid_reference, mode, tolerance) -> None:
-    result = graph_follower(FunctionModel(grid_model, T_GRID), FuzzyVector(P_GRID), GRID_ALPHAS, mode=mode)
+    result = graph_follower(FunctionModel(grid_model, T_GRID), FuzzyVector(P_GRID), GRID_ALPHAS, strategy=strategy_for(mode))
     err, over = hull_error(result, grid_reference)
     report(f"coupled 2-p grid {mode}", result, err)
     assert err <= tolerance
@@ -291,7 +299,7 @@ def ball_model(p: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize(("mode", "tolerance"), [("direct", 1e-6), ("linearised", 1e-6)])
 def test_fuzzy_balls_match_the_analytic_hull(mode, tolerance) -> None:
     balls = FuzzyBalls(np.zeros((2, 3)), R_BALL, ("A", "B"))
-    result = graph_follower(FunctionModel(ball_model, T_BALL), balls, (0.0, 0.5), mode=mode, starts=4)
+    result = graph_follower(FunctionModel(ball_model, T_BALL), balls, (0.0, 0.5), strategy=strategy_for(mode, starts=4))
     distance = np.linalg.norm(C_BALL - X_BALL, axis=1) + np.linalg.norm(X_BALL - E_BALL, axis=1)
     truth = {alpha: (distance - (1 - alpha) * R_BALL.sum(), distance + (1 - alpha) * R_BALL.sum())
              for alpha in (0.0, 0.5, 1.0)}  # fmt: skip
@@ -314,33 +322,29 @@ PENDULUM_LENGTH = triangular_relative(1.0, 0.1, "L")
 def pendulum_reference() -> dict[str, object]:
     """Dense sampling: 201 lengths across each α-cut (α = 0, 0.5), min/max per node."""
     model = Pendulum()
-    start = time.perf_counter()
     truth, runs = {}, 0
     for alpha in (0.0, 0.5):
         lo, hi = PENDULUM_LENGTH.alpha_cut(alpha)
-        runs_alpha = np.array([model.evaluate(np.array([length])) for length in np.linspace(lo, hi, 201)])
+        runs_alpha = np.array([model.evaluate(np.array([length])).values for length in np.linspace(lo, hi, 201)])
         truth[alpha] = (runs_alpha.min(axis=0), runs_alpha.max(axis=0))
         runs += runs_alpha.shape[0]
-    deterministic = model.evaluate(np.array([1.0]))
+    deterministic = model.evaluate(np.array([1.0])).values
     truth[1.0] = (deterministic, deterministic)
-    return {"truth": truth, "runs": runs, "seconds": time.perf_counter() - start}
+    return {"truth": truth, "runs": runs}
 
 
 def test_pendulum_against_dense_sampling(pendulum_reference) -> None:
     model = Pendulum()
     assert model.times.size == 201 and model.times[-1] == 2.0
-    start = time.perf_counter()
     result = graph_follower(model, FuzzyVector([PENDULUM_LENGTH]), (0.0, 0.5, 1.0))
-    seconds = time.perf_counter() - start
     truth = pendulum_reference["truth"]
     worst = max(
         float(np.max(np.abs(result.hull.sel(alpha=a, bound=b).to_numpy() - truth[a][k])))
         for a in truth for k, b in enumerate(("lower", "upper"))
     )  # fmt: skip
-    evaluations, dense = result.attrs["model_evaluations"], pendulum_reference["runs"]
+    evaluations, dense = result.attrs["forward_simulations"], pendulum_reference["runs"]
     print(
-        f"\npendulum: GFA {evaluations} evaluations ({seconds:.2f} s) vs dense {dense} "
-        f"({pendulum_reference['seconds']:.2f} s); max |GFA − dense| = {worst:.2e} rad "
+        f"\npendulum: GFA {evaluations} evaluations vs dense {dense}; max |GFA − dense| = {worst:.2e} rad "
         f"= {100 * worst / model.theta0:.1e} % of the amplitude"
     )
     assert worst <= 0.005 * model.theta0
@@ -355,19 +359,18 @@ def test_pendulum_alpha_one_is_the_deterministic_run() -> None:
     result = graph_follower(model, FuzzyVector([PENDULUM_LENGTH]), (0.0, 1.0))
     # linearised mode simulates with sensitivities: the deterministic run is that solve
     # (θ and ∂θ/∂L integrated together), bit for bit
-    run, _ = model.evaluate_with_sensitivities(np.array([1.0]))
+    run = model.evaluate(np.array([1.0]), sensitivities=True).values
     np.testing.assert_array_equal(result.deterministic, run)
     for bound in ("lower", "upper"):
         np.testing.assert_array_equal(result.hull.sel(alpha=1.0, bound=bound), run)
     # and the plain solve agrees to the integrator's tolerance
-    np.testing.assert_allclose(run, model.evaluate(np.array([1.0])), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(run, model.evaluate(np.array([1.0])).values, rtol=0, atol=1e-9)
 
 
 # --------------------------------------------------------------------- α = 1
 @pytest.mark.parametrize("mode", MODES)
 def test_alpha_one_hull_is_the_deterministic_run(mode) -> None:
-    result = graph_follower(FunctionModel(sin_model, T_SIN), FuzzyVector([P_SIN]), (0.0, 0.5), mode=mode, starts=2,
-                            stride=5)  # fmt: skip
+    result = graph_follower(FunctionModel(sin_model, T_SIN), FuzzyVector([P_SIN]), (0.0, 0.5), strategy=strategy_for(mode, starts=2, stride=5))  # fmt: skip
     run = sin_model(np.array([P_SIN.peak]))
     np.testing.assert_array_equal(result.deterministic, run)
     for bound in ("lower", "upper"):
@@ -406,7 +409,7 @@ def test_nesting_and_attainability_over_random_models() -> None:
     for case in range(30):
         model, params, alphas = random_model(rng)
         for mode in MODES:
-            result = graph_follower(model, params, alphas, mode=mode, starts=1, max_iterations=2)
+            result = graph_follower(model, params, alphas, strategy=strategy_for(mode, starts=1, max_iterations=2))
             hull = result.hull.to_numpy()
             levels = result.alpha.to_numpy()
             for a in range(levels.size - 1):  # every lower level contains every higher one
@@ -419,7 +422,7 @@ def test_nesting_and_attainability_over_random_models() -> None:
                 for b in range(2):
                     ex = result.extremiser.to_numpy()[a, b]
                     assert np.all(domain.contains(ex, tol=1e-12)), (case, mode, alpha)
-                    values = np.array([model.evaluate(p)[j] for j, p in enumerate(ex)])
+                    values = np.array([model.evaluate(p).values[j] for j, p in enumerate(ex)])
                     np.testing.assert_array_equal(hull[a, b], values)
 
 
@@ -454,7 +457,7 @@ def test_linearised_evaluations_are_counted(with_jacobian) -> None:
     model = FunctionModel(function, T_PROD, jacobian if with_jacobian else None)
     result = graph_follower(model, FuzzyVector(P_PROD), (0.0, 0.5))
     size = result.attrs["library_size"]
-    assert result.attrs["model_evaluations"] == function.calls
+    assert result.attrs["forward_simulations"] == function.calls
     if with_jacobian:  # one simulation with sensitivities per library entry
         assert function.calls == jacobian.calls == size
     else:  # finite differences: 1 + n_p simulations per library entry
@@ -464,29 +467,32 @@ def test_linearised_evaluations_are_counted(with_jacobian) -> None:
 
 def test_direct_evaluations_are_counted_and_node_models_used() -> None:
     function = Calls(sin_model)
-    options = {"mode": "direct", "starts": 3, "stride": 4}
-    result = graph_follower(FunctionModel(function, T_SIN), FuzzyVector([P_SIN]), (0.0,), **options)
-    assert result.attrs["model_evaluations"] == function.calls > 0
+    strategy = Direct(starts=3, stride=4)
+    result = graph_follower(FunctionModel(function, T_SIN), FuzzyVector([P_SIN]), (0.0,), strategy=strategy)
+    assert result.attrs["forward_simulations"] == function.calls > 0
     assert result.attrs["node_evaluations"] == 0
 
     class NodeModel:
         times = T_SIN
+        parameter_names = ()
+        output = Output()
+        capabilities = frozenset({"nodes"})
 
         def __init__(self) -> None:
             self.full = self.nodes = 0
 
-        def evaluate(self, p: np.ndarray) -> np.ndarray:
+        def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
             self.full += 1
-            return sin_model(p)
+            return Evaluation(sin_model(p))
 
-        def evaluate_node(self, p: np.ndarray, j: int) -> float:
-            self.nodes += 1
-            return float(np.sin(OMEGA * p[0] * T_SIN[j]))
+        def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+            self.nodes += len(nodes)
+            return np.sin(OMEGA * P[:, 0] * T_SIN[nodes])
 
     node_model = NodeModel()
-    fast = graph_follower(node_model, FuzzyVector([P_SIN]), (0.0,), **options)
+    fast = graph_follower(node_model, FuzzyVector([P_SIN]), (0.0,), strategy=strategy)
     assert fast.attrs["node_evaluations"] == node_model.nodes > 0
-    assert fast.attrs["model_evaluations"] == node_model.full < result.attrs["model_evaluations"]
+    assert fast.attrs["forward_simulations"] == node_model.full < result.attrs["forward_simulations"]
     # at the optimised nodes the single-node optimisation finds the analytic hull
     nodes = optimisation_nodes(T_SIN.size, 4)
     lower, upper = sin_truth()[0.0]
@@ -503,7 +509,7 @@ def test_nan_output_is_rejected(mode) -> None:
         return out
 
     with pytest.raises(ParameterError, match="non-finite"):
-        graph_follower(FunctionModel(bad, T_SIN), FuzzyVector([P_SIN]), mode=mode, starts=1)
+        graph_follower(FunctionModel(bad, T_SIN), FuzzyVector([P_SIN]), strategy=strategy_for(mode, starts=1))
 
 
 def test_wrong_output_length_is_rejected() -> None:
@@ -517,8 +523,40 @@ def test_model_without_times_is_rejected() -> None:
         def evaluate(self, p: np.ndarray) -> np.ndarray:
             return p
 
-    with pytest.raises(ParameterError, match="times"):
+    with pytest.raises(ParameterError, match="lacks times.*FunctionModel"):
         graph_follower(NoTimes(), FuzzyVector([P_SIN]))
+
+
+def test_plain_function_with_times_is_wrapped() -> None:
+    """A plain callable and a list of fuzzy numbers: the same result as the explicit
+    FunctionModel and FuzzyVector."""
+    plain = graph_follower(lambda p: mono(p), [P_MONO], (0.0, 0.5), times=T_MONO)
+    explicit = graph_follower(FunctionModel(mono, T_MONO), FuzzyVector([P_MONO]), (0.0, 0.5))
+    np.testing.assert_array_equal(plain.hull.values, explicit.hull.values)
+    lo, hi = P_MONO.alpha_cut(0.0)
+    np.testing.assert_array_equal(plain.hull.sel(alpha=0.0, bound="upper"), mono(np.array([hi])))
+
+
+def test_plain_function_without_times_says_what_to_pass() -> None:
+    with pytest.raises(ParameterError, match=r"pass times=\.\.\. as well.*FunctionModel"):
+        graph_follower(lambda p: mono(p), [P_MONO])
+
+
+def test_misnamed_parameter_is_rejected() -> None:
+    with pytest.raises(ParameterError, match=r"named \['length'\].*takes \['L'\]"):
+        graph_follower(Pendulum(), [triangular_relative(1.0, 0.1, "length")])
+    with pytest.raises(ParameterError, match="takes 1 parameters"):
+        graph_follower(Pendulum(), [triangular_relative(1.0, 0.1, "L"), triangular_relative(1.0, 0.1, "x")])
+    # unnamed fuzzy numbers are matched by position
+    result = graph_follower(Pendulum(times=np.linspace(0.0, 0.2, 5)), [triangular_relative(1.0, 0.1)], (0.0,))
+    assert list(result["parameter"].values) == ["p0"]
+
+
+def test_batched_direct_needs_nodes() -> None:
+    from fuzzygait.uncertainty import BatchedDirect
+
+    with pytest.raises(ParameterError, match="'nodes' capability.*Direct"):
+        graph_follower(FunctionModel(mono, T_MONO), [P_MONO], strategy=BatchedDirect())
 
 
 # --------------------------------------------------------------------- arguments
@@ -528,10 +566,7 @@ def test_model_without_times_is_rejected() -> None:
         ({"alphas": (-0.1, 0.5)}, "alphas"),
         ({"alphas": (0.0, 1.5)}, "alphas"),
         ({"alphas": ()}, "alphas"),
-        ({"mode": "linearized"}, "mode"),
-        ({"stride": 0}, "stride"),
-        ({"stride": 1.5}, "stride"),
-        ({"starts": 0}, "starts"),
+        ({"strategy": "linearized"}, "strategy"),
     ],
 )
 def test_bad_arguments_name_the_argument(kwargs, needle) -> None:
@@ -539,12 +574,28 @@ def test_bad_arguments_name_the_argument(kwargs, needle) -> None:
         graph_follower(FunctionModel(sin_model, T_SIN), FuzzyVector([P_SIN]), **kwargs)
 
 
+@pytest.mark.parametrize(
+    ("build", "needle"),
+    [
+        (lambda: Linearised(stride=0), "stride"),
+        (lambda: Linearised(stride=1.5), "stride"),  # type: ignore[arg-type]
+        (lambda: Linearised(max_iterations=0), "max_iterations"),
+        (lambda: Linearised(novelty_tol=-1.0), "novelty_tol"),
+        (lambda: Direct(starts=0), "starts"),
+    ],
+)
+def test_bad_strategy_options_name_the_option(build, needle) -> None:
+    with pytest.raises(ParameterError, match=needle):
+        build()
+
+
 def test_stride_and_progress() -> None:
     np.testing.assert_array_equal(optimisation_nodes(10, 4), [0, 4, 8, 9])
     np.testing.assert_array_equal(optimisation_nodes(5, 1), [0, 1, 2, 3, 4])
     calls: list[tuple[int, int]] = []
     result = graph_follower(FunctionModel(mono, T_MONO, mono_jac), FuzzyVector([P_MONO]), (0.0, 0.5),
-                            stride=5, progress=lambda done, total: calls.append((done, total)))  # fmt: skip
+                            strategy=Linearised(stride=5),
+                            progress=lambda done, total: calls.append((done, total)))  # fmt: skip
     nodes = optimisation_nodes(T_MONO.size, 5).size
     assert calls == [(k, 2 * 2 * nodes) for k in range(1, 2 * 2 * nodes + 1)]
     assert result.attrs["optimisations"] == 2 * 2 * nodes
@@ -586,8 +637,8 @@ def test_inert_parameters_cost_no_extra_simulations() -> None:
     alone = graph_follower(FunctionModel(active, T_INERT, active_jac), FuzzyVector([p_active]), (0.0, 0.5))
     params = FuzzyVector([p_active, triangular_relative(1.0, 0.1, "J2"), triangular_relative(3.0, 0.1, "J3")])
     both = graph_follower(FunctionModel(with_inert, T_INERT, with_inert_jac), params, (0.0, 0.5))
-    print(f"\nevaluations: 1 parameter {alone.attrs['model_evaluations']}, "
-          f"with 2 inert {both.attrs['model_evaluations']}")  # fmt: skip
-    assert alone.attrs["model_evaluations"] > 3  # interior extrema: the follower does work
-    assert both.attrs["model_evaluations"] == alone.attrs["model_evaluations"]
+    print(f"\nevaluations: 1 parameter {alone.attrs['forward_simulations']}, "
+          f"with 2 inert {both.attrs['forward_simulations']}")  # fmt: skip
+    assert alone.attrs["forward_simulations"] > 3  # interior extrema: the follower does work
+    assert both.attrs["forward_simulations"] == alone.attrs["forward_simulations"]
     np.testing.assert_array_equal(both.hull.values, alone.hull.values)
