@@ -8,6 +8,7 @@ import numpy as np
 from conftest import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
 
 from fuzzygait.io import read_c3d
+from fuzzygait.markererror.result import angle_components, component_hull
 from fuzzygait.uncertainty import load_result
 
 SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
@@ -21,10 +22,11 @@ def test_uncertainty_writes_dataset_and_recording(tmp_path: Path) -> None:
     assert "ΔΦ" in result.stdout and "LHipAngles_X" in result.stdout
     ds = load_result(out)
     assert set(ds["alpha"].to_numpy()) == {0.0, 0.5, 1.0}
-    assert {"LHipAngles_X", "LHipAngles_Y", "LHipAngles_Z", "LHipAngles_X__deviation", "ball_radius"} <= set(ds)
+    assert {"hull", "deviation", "ball_radius"} <= set(ds)
+    assert angle_components(ds) == ["LHipAngles_X", "LHipAngles_Y", "LHipAngles_Z"]
     trial = read_c3d(SAMPLE_DATA / "walking.c3d")
     np.testing.assert_array_equal(ds["frame"].to_numpy(), trial.frames)
-    hull = ds["LHipAngles_X"]
+    hull = component_hull(ds, "LHipAngles_X")
     lower, upper = hull.sel(bound="lower"), hull.sel(bound="upper")
     # nested hulls around the measured angle; α = 1 is the measured curve itself
     assert bool((lower.sel(alpha=0.0) <= lower.sel(alpha=0.5) + 1e-9).all())

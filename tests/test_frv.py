@@ -203,7 +203,7 @@ def _library_and_intervals(model: FunctionModel, n_disc: int, seed: int = 9):
     grid = Grid.from_samples(cuts, n_disc)
     pairs = occurring_intervals(group(cuts, grid))
     centres = grid.centres()
-    values = np.array([model.evaluate(np.array([c])) for c in centres])
+    values = np.array([model.evaluate(np.array([c])).values for c in centres])
     slopes = np.array([model.jacobian(np.array([c]))[:, 0] for c in centres]) if model.jacobian else None
     return grid, pairs, centres, values, slopes
 
@@ -271,7 +271,7 @@ def test_study_hulls_counts_and_truth(tmp_path) -> None:
     for i in (0, 77, 1499):  # each sample as if the GFA were applied to it alone (dense truth)
         sample = hull[i].to_numpy()
         # α = 1: the model at the raw peak (Hermite interpolation of the library)
-        assert np.all(np.abs(sample[-1, 0] - model.evaluate(peaks[i : i + 1])) <= hermite)
+        assert np.all(np.abs(sample[-1, 0] - model.evaluate(peaks[i : i + 1]).values) <= hermite)
         for a in range(4):
             lo, hi = centres[i, a, 0], centres[i, a, 1]
             true_lower, true_upper = dense_hull(model, lo, hi)
@@ -316,7 +316,7 @@ def test_add_samples_extends_the_grid_and_simulates_only_new_bins(tmp_path) -> N
     assert study.counts["possible_intervals"] == grid.possible_intervals
     # truth: the model at every bin centre of the extended grid, brute-force extremes
     centres = grid.centres()
-    library = np.array([model.evaluate(np.array([c])) for c in centres])
+    library = np.array([model.evaluate(np.array([c])).values for c in centres])
     bins = study.samples()["bin"].to_numpy() - grid.first_bin
     hull = study.hulls()["hull"].to_numpy()
     for i in range(0, 3020, 97):

@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-import xarray as xr
 
 from conftest import SAMPLE_DATA
 from fuzzygait.core.errors import ParameterError
@@ -29,7 +28,14 @@ from fuzzygait.markererror.comparison import (
 )
 from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
 from fuzzygait.workflows.angles import AnglesRun, run_angles
-from fuzzygait.uncertainty import FuzzyBalls, graph_follower
+from fuzzygait.markererror.result import (
+    angle_components,
+    ball_radius,
+    component_deviation,
+    component_hull,
+    fuzzy_angles_dataset,
+)
+from fuzzygait.uncertainty import BatchedDirect, Evaluation, FuzzyBalls, Output, graph_follower
 
 JOINTS = ("Hip", "Knee", "Ankle")
 N_FRAMES = 8
@@ -77,7 +83,7 @@ def test_hulls_contain_monte_carlo(run: AnglesRun, frames: np.ndarray, side: str
         for axis in range(3):
             model = angle_model(run, f"{side}{joint}Angles", axis, frames)
             params = balls(model)
-            result = graph_follower(model, params, (0.0, 0.5), mode="direct")
+            result = graph_follower(model, params, (0.0, 0.5), strategy=BatchedDirect())
             for k, alpha in enumerate((0.0, 0.5)):
                 radii = (1.0 - alpha) * params.support_radii
                 lower, upper = monte_carlo_envelope(model, radii, 10_000, seed=100 + k)
@@ -101,6 +107,10 @@ class TwoMarkerLine:
     """The direction (rad) of the line from A(t) to B(t) in the x-y plane: ``atan2`` of
     ``B + p_B − A − p_A``; 6 parameters (deviations of A and B, mm)."""
 
+    parameter_names = ("A_x", "A_y", "A_z", "B_x", "B_y", "B_z")
+    output = Output("direction", "rad")
+    capabilities = frozenset({"nodes"})
+
     def __init__(self, n: int = 60) -> None:
         t = np.linspace(0.0, 1.0, n)
         self.times = t
@@ -114,9 +124,9 @@ class TwoMarkerLine:
         v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
         return np.arctan2(v[:, 1], v[:, 0])
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         nodes = np.arange(self.times.size)
-        return self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
 
 
 def test_two_marker_angle_worst_case_is_arcsin() -> None:
@@ -125,9 +135,9 @@ def test_two_marker_angle_worst_case_is_arcsin() -> None:
     the radius is (1 − α) r. The batched direct mode reproduces it to 1e-6 rad."""
     model, r = TwoMarkerLine(), 30.0
     result = graph_follower(model, FuzzyBalls(np.zeros((2, 3)), [r, r], ("A", "B")), (0.0, 0.25, 0.5, 0.75),
-                            mode="direct")  # fmt: skip
-    assert "batch_iterations" in result.attrs  # the all-nodes batched solver ran
-    deterministic = model.evaluate(np.zeros(6))
+                            strategy=BatchedDirect())  # fmt: skip
+    assert result.attrs["strategy"] == "batched-direct"  # the all-nodes batched solver ran
+    deterministic = model.evaluate(np.zeros(6)).values
     for alpha in (0.0, 0.25, 0.5, 0.75):
         exact = np.arcsin(2 * (1 - alpha) * r / model.distance)
         hull = result["hull"].sel(alpha=alpha)
@@ -160,8 +170,8 @@ def test_cartesian_and_spherical_give_the_same_envelopes(run: AnglesRun, sparse_
              for method in ("cartesian", "spherical")}  # fmt: skip
     print()
     for name in ("LHipAngles_X", "LKneeAngles_X"):
-        cartesian = fuzzy["cartesian"][name].sel(alpha=[0.0, 0.5]).isel(frame=frames).to_numpy()
-        spherical = fuzzy["spherical"][name].sel(alpha=[0.0, 0.5]).isel(frame=frames).to_numpy()
+        cartesian = component_hull(fuzzy["cartesian"], name).sel(alpha=[0.0, 0.5]).isel(frame=frames).to_numpy()
+        spherical = component_hull(fuzzy["spherical"], name).sel(alpha=[0.0, 0.5]).isel(frame=frames).to_numpy()
         width = cartesian[:, 1] - cartesian[:, 0]  # (alpha, frame)
         difference = np.abs(cartesian - spherical).max(axis=1)
         relative = difference / width
@@ -170,7 +180,7 @@ def test_cartesian_and_spherical_give_the_same_envelopes(run: AnglesRun, sparse_
         assert relative.max() <= 0.12
         assert relative.mean() <= 0.05
     for method in ("cartesian", "spherical"):
-        norms = fuzzy[method]["LKneeAngles_X__deviation"].sel(alpha=0.0).isel(frame=frames)
+        norms = component_deviation(fuzzy[method], "LKneeAngles_X").sel(alpha=0.0).isel(frame=frames)
         radius = fuzzy[method]["ball_radius"].sel(marker=norms["marker"])
         assert bool(((norms <= radius + 1e-9) | norms.isnull()).all())
 
@@ -258,7 +268,7 @@ def test_larger_source_sets_give_wider_envelopes(run: AnglesRun, sparse_trial: T
         fuzzy = fuzzy_joint_angles(sparse_trial, run.subject, run.result, options, ["LKneeAngles"])
         assert fuzzy.attrs["sources"] == ",".join(sources)
         assert fuzzy["ball_radius"].sel(marker="LKNE") == ErrorModel().radius("LKNE", sources)
-        hulls[sources] = {name: fuzzy[name].sel(alpha=0.0).isel(frame=frames)
+        hulls[sources] = {name: component_hull(fuzzy, name).sel(alpha=0.0).isel(frame=frames)
                           for name in ("LKneeAngles_X", "LKneeAngles_Y")}  # fmt: skip
     chains = [(("measurement",), ("placement",)), (("measurement",), ("measurement", "placement")),
               (("measurement", "placement"), all_three)]  # fmt: skip
@@ -281,13 +291,9 @@ def test_relative_envelope_width_by_hand() -> None:
         [phi, phi],
     ])  # fmt: skip
     negative = -hull[:, ::-1]  # mirrored angle: Φ = −10, −40, −20; reference |−40|
-    fuzzy = xr.Dataset(
-        {"LKneeAngles_X": (("alpha", "bound", "frame"), hull),
-         "LHipAngles_Y": (("alpha", "bound", "frame"), negative),
-         "LKneeAngles_X__deviation": (("alpha", "bound", "frame", "marker"), np.zeros((3, 2, 4, 1))),
-         "ball_radius": (("marker",), [32.0])},
-        coords={"alpha": [0.0, 0.5, 1.0], "bound": ["lower", "upper"], "frame": [1, 2, 3, 4], "marker": ["LKNE"]},
-    )  # fmt: skip
+    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": hull, "LHipAngles_Y": negative}, alphas=[0.0, 0.5, 1.0],
+                                 frames=[1, 2, 3, 4], times=[0.0, 0.01, 0.02, 0.03], markers=["LKNE"],
+                                 ball_radius=[32.0])  # fmt: skip
     table = relative_envelope_width(fuzzy)
     assert list(table.columns) == [0.5, 0.0]
     assert sorted(table.index) == ["LHipAngles_Y", "LKneeAngles_X"]
@@ -313,7 +319,13 @@ def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) 
                                ["LPelvisAngles", "LKneeAngles"])  # fmt: skip
 
     components = [f"{n}_{a}" for n in ("LPelvisAngles", "LKneeAngles") for a in AXES]
-    assert set(fuzzy.data_vars) == {*components, *(f"{c}__deviation" for c in components), "ball_radius"}
+    assert set(fuzzy.data_vars) == {"hull", "deviation", "ball_radius"}
+    assert angle_components(fuzzy) == components
+    assert fuzzy["angle"].to_numpy().tolist() == [c[:-2] for c in components]
+    assert fuzzy["axis"].to_numpy().tolist() == [c[-1] for c in components]
+    assert fuzzy["hull"].dims == ("component", "alpha", "bound", "frame") and fuzzy["hull"].attrs["units"] == "deg"
+    assert fuzzy["deviation"].dims == ("component", "alpha", "bound", "frame", "marker")
+    assert fuzzy["deviation"].attrs["units"] == fuzzy["ball_radius"].attrs["units"] == "mm"
     assert fuzzy["alpha"].to_numpy().tolist() == [0.0, 0.5, 1.0]
     assert fuzzy["bound"].to_numpy().tolist() == ["lower", "upper"]
     np.testing.assert_array_equal(fuzzy["frame"], run.trial.frames)
@@ -321,27 +333,28 @@ def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) 
     knee_markers = ["LASI", "RASI", "LPSI", "RPSI", "LTHI", "LKNE", "LTIB", "LANK"]
     assert fuzzy["marker"].to_numpy().tolist() == knee_markers
     for c in components:
-        assert fuzzy[c].dims == ("alpha", "bound", "frame")
-        assert fuzzy[f"{c}__deviation"].dims == ("alpha", "bound", "frame", "marker")
+        assert component_hull(fuzzy, c).dims == ("alpha", "bound", "frame")
+        assert component_deviation(fuzzy, c).dims == ("alpha", "bound", "frame", "marker")
     assert fuzzy["ball_radius"].to_numpy().tolist() == [32, 32, 32, 32, 32, 32, 30, 20]
-    assert {"trial", "sources", "method", "model_evaluations", "seconds"} <= set(fuzzy.attrs)
-    assert fuzzy.attrs["method"] == "cartesian" and fuzzy.attrs["model_evaluations"] > 0
+    assert {"trial", "sources", "method", "units", "strategy", "forward_simulations", "node_evaluations",
+            "seconds"} <= set(fuzzy.attrs)  # fmt: skip
+    assert fuzzy.attrs["method"] == "cartesian" and fuzzy.attrs["node_evaluations"] > 0
 
     knee_ok = keep.copy()
     knee_ok[cut] = False
     for name, ok in (("LPelvisAngles_X", keep), ("LKneeAngles_X", knee_ok), ("LKneeAngles_Z", knee_ok)):
-        finite = np.isfinite(fuzzy[name].to_numpy())
+        finite = np.isfinite(component_hull(fuzzy, name).to_numpy())
         assert np.all(finite[..., ok]) and not np.any(finite[..., ~ok]), name
         # α = 1 is the measured angle
-        np.testing.assert_allclose(fuzzy[name].sel(alpha=1.0, bound="upper")[ok],
+        np.testing.assert_allclose(component_hull(fuzzy, name).sel(alpha=1.0, bound="upper")[ok],
                                    run.result.angles[name[:-2]][ok, AXES.index(name[-1])], atol=1e-9)  # fmt: skip
 
     # deviations: NaN for markers the angle does not use, inside the α-level balls
-    pelvis = fuzzy["LPelvisAngles_X__deviation"]
+    pelvis = component_deviation(fuzzy, "LPelvisAngles_X")
     assert bool(pelvis.sel(marker=["LTHI", "LKNE", "LTIB", "LANK"]).isnull().all())
     for name in ("LPelvisAngles_Y", "LKneeAngles_X", "LKneeAngles_Y"):
-        norms = fuzzy[f"{name}__deviation"]
-        limit = fuzzy["ball_radius"] * (1.0 - fuzzy["alpha"]) + 1e-9
+        norms = component_deviation(fuzzy, name)
+        limit = ball_radius(fuzzy) * (1.0 - fuzzy["alpha"]) + 1e-9
         assert bool(((norms <= limit) | norms.isnull()).all()), name
         assert bool((norms.sel(alpha=1.0).fillna(0.0) == 0.0).all())
     # the convenience view for Fig. 5.12
@@ -363,8 +376,8 @@ def test_fixed_deviation_curves(run: AnglesRun, frames: np.ndarray) -> None:
     assert set(curves) == {"none", "positive", "negative"}
     np.testing.assert_allclose(curves["none"], run.result.angles["LKneeAngles"][frames, 0], atol=1e-9)
     shift = (radii[:, None] * DIAGONAL).ravel()
-    np.testing.assert_allclose(curves["positive"], model.evaluate(shift))
-    np.testing.assert_allclose(curves["negative"], model.evaluate(-shift))
+    np.testing.assert_allclose(curves["positive"], model.evaluate(shift).values)
+    np.testing.assert_allclose(curves["negative"], model.evaluate(-shift).values)
     np.testing.assert_allclose(np.linalg.norm(shift.reshape(-1, 3), axis=1), radii)  # on the spheres
     assert np.all(np.abs(curves["positive"] - curves["none"]) > 1e-3)
     with pytest.raises(ParameterError, match="one radius per marker"):
@@ -376,7 +389,7 @@ def test_monte_carlo_envelope_chunks_and_modes(run: AnglesRun, frames: np.ndarra
     radii = balls(model).support_radii
     lower, upper = monte_carlo_envelope(model, radii, 500, seed=3)
     assert lower.shape == upper.shape == (frames.size,)
-    deterministic = model.evaluate(np.zeros(model.n_parameters))
+    deterministic = model.evaluate(np.zeros(model.n_parameters)).values
     assert np.all(lower < deterministic) and np.all(deterministic < upper)
     # the chunk size (rows per model call) does not change the result
     again = monte_carlo_envelope(model, radii, 500, seed=3, chunk_rows=7 * frames.size + 3)

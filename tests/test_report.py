@@ -23,6 +23,7 @@ import xarray as xr
 from conftest import SAMPLE_DATA, assert_one_line_error, run
 
 from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.markererror.result import fuzzy_angles_dataset
 from fuzzygait.viz.report import ReportItem, component_label, cycle_bands, write_report
 
 ALPHAS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
@@ -49,23 +50,19 @@ def fake_analysis(run_: AnglesRun, alphas: np.ndarray = ALPHAS) -> FakeAnalysis:
     table = run_.angle_table()
     names = [c for c in table.columns if c not in ("frame", "time") and table[c].notna().any()]
     markers = list(run_.trial.marker_labels)
-    variables: dict[str, tuple] = {}
+    hulls: dict[str, np.ndarray] = {}
     delta_phi = {}
     for name in names:
         det = table[name].to_numpy()
         half = (1.0 - alphas)[:, None] * spread(name)
-        variables[name] = (("alpha", "bound", "frame"), np.stack([det - half, det + half], axis=1))
+        hulls[name] = np.stack([det - half, det + half], axis=1)
         width = 2.0 * half[:, 0]
         delta_phi[name] = 100.0 * width / np.nanmax(np.abs(det))
     deviation = np.zeros((alphas.size, 2, run_.trial.n_frames, len(markers)))
-    variables["LKneeAngles_X__deviation"] = (("alpha", "bound", "frame", "marker"), deviation)
-    variables["ball_radius"] = (("marker",), np.linspace(7.0, 32.0, len(markers)))
-    fuzzy = xr.Dataset(
-        variables,
-        coords={"alpha": alphas, "bound": ["lower", "upper"], "frame": run_.trial.frames,
-                "time": ("frame", run_.trial.times), "marker": markers},
-        attrs={"trial": run_.trial.name, "sources": "measurement,placement,sta"},
-    )  # fmt: skip
+    fuzzy = fuzzy_angles_dataset(hulls, alphas=alphas, frames=run_.trial.frames, times=run_.trial.times,
+                                 markers=markers, ball_radius=np.linspace(7.0, 32.0, len(markers)),
+                                 deviations={name: deviation for name in names},
+                                 attrs={"trial": run_.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
     keep = alphas < 1
     frame = pd.DataFrame({n: v[keep] for n, v in delta_phi.items()}, index=alphas[keep]).T
     return FakeAnalysis(run_, fuzzy, frame, notes=["fake analysis for the report tests"])

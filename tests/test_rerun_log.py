@@ -16,6 +16,7 @@ import pytest
 from conftest import SAMPLE_DATA
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.kinematics.model import CGMResult
+from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
 
 rr = pytest.importorskip("rerun")
 pa = pytest.importorskip("pyarrow")
@@ -43,27 +44,15 @@ def fuzzy(run):
     """A fuzzy result of the lead's layout: deterministic ± (1 − α)·2°."""
     trial, result = run.trial, run.result
     half = (1.0 - ALPHAS)[:, None] * 2.0
-    data = {}
+    hulls, deviations = {}, {}
     for name, values in result.angles.items():
         for k, axis in enumerate("XYZ"):
             centre = values[None, :, k]
-            data[f"{name}_{axis}"] = (("alpha", "bound", "frame"), np.stack([centre - half, centre + half], axis=1))
-            data[f"{name}_{axis}__deviation"] = (
-                ("alpha", "bound", "frame", "marker"),
-                np.ones((len(ALPHAS), 2, trial.n_frames, trial.n_markers)),
-            )
-    data["ball_radius"] = (("marker",), 4.0 + np.arange(trial.n_markers) * 0.5)
-    return xr.Dataset(
-        data,
-        coords={
-            "alpha": ALPHAS,
-            "bound": ["lower", "upper"],
-            "frame": trial.frames,
-            "time": ("frame", trial.times),
-            "marker": trial.marker_labels,
-        },
-        attrs={"trial": trial.name},
-    )
+            hulls[f"{name}_{axis}"] = np.stack([centre - half, centre + half], axis=1)
+            deviations[f"{name}_{axis}"] = np.ones((len(ALPHAS), 2, trial.n_frames, trial.n_markers))
+    return fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=trial.frames, times=trial.times,
+                                markers=trial.marker_labels, ball_radius=4.0 + np.arange(trial.n_markers) * 0.5,
+                                deviations=deviations, attrs={"trial": trial.name})  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +99,7 @@ def test_entity_paths_with_fuzzy(fuzzy_rrd, run):
             for alpha in ("0", "0.25", "0.5"):
                 expected |= {f"/angles/{angle}/{axis}/alpha_{alpha}/{bound}" for bound in ("lower", "upper")}
     assert expected <= paths, sorted(expected - paths)
-    assert not any("alpha_1" in p or "__deviation" in p for p in paths)
+    assert not any("alpha_1" in p or "deviation" in p for p in paths)
     reader = rr.chunk.RrdReader(fuzzy_rrd)
     assert len(reader.recordings()) == 1
     assert reader.recordings()[0].application_id == "fuzzygait"
@@ -134,7 +123,7 @@ def test_frames_timeline_and_values(fuzzy_rrd, run, fuzzy):
 
     upper = temporal_rows(fuzzy_rrd, "/angles/LKneeAngles/X/alpha_0.5/upper")
     assert upper.num_rows == trial.n_frames
-    expected = fuzzy["LKneeAngles_X"].sel(alpha=0.5, bound="upper").values
+    expected = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.5, bound="upper").values
     np.testing.assert_allclose(scalars(upper), expected, rtol=1e-6)
     lower = temporal_rows(fuzzy_rrd, "/angles/RHipAngles/Z/alpha_0/lower")
     np.testing.assert_allclose(scalars(lower), run.result.angles["RHipAngles"][:, 2] - 2.0, rtol=1e-6)

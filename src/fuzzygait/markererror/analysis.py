@@ -24,11 +24,9 @@ a ``component`` dimension, on the trial's frames:
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -39,9 +37,8 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
-from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
-from fuzzygait.workflows.angles import AnglesRun, Preprocessing, run_angles
-from fuzzygait.markererror.result import angle_components, component_hull
+from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
+from fuzzygait.markererror.result import angle_components, component_hull, fuzzy_angles_dataset
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 
@@ -159,47 +156,25 @@ def fuzzy_joint_angles(
 def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: list[str],
               alphas: np.ndarray, options: FuzzyAngleOptions, sources: Sequence[str],
               seconds: float) -> xr.Dataset:  # fmt: skip
-    n_frames, n_components = trial.n_frames, len(tasks)
-    hull = np.full((n_components, alphas.size, 2, n_frames), np.nan)
-    deviation = np.full((n_components, alphas.size, 2, n_frames, len(markers)), np.nan)
-    components, totals = [], {"forward_simulations": 0, "node_evaluations": 0}
-    for c, (task, (column, values, norms, counts)) in enumerate(zip(tasks, outputs, strict=True)):
+    n_frames = trial.n_frames
+    hulls: dict[str, np.ndarray] = {}
+    deviations: dict[str, np.ndarray] = {}
+    totals = {"forward_simulations": 0, "node_evaluations": 0}
+    for task, (column, values, norms, counts) in zip(tasks, outputs, strict=True):
         frames, used = task[5], task[6]
-        hull[c][:, :, frames] = values
+        hulls[column] = np.full((alphas.size, 2, n_frames), np.nan)
+        hulls[column][:, :, frames] = values
+        deviations[column] = np.full((alphas.size, 2, n_frames, len(markers)), np.nan)
         columns = np.asarray([markers.index(m) for m in used])
-        deviation[c][:, :, frames[:, None], columns[None, :]] = norms
-        components.append(column)
+        deviations[column][:, :, frames[:, None], columns[None, :]] = norms
         for key in totals:
             totals[key] += counts[key]
-    radii = np.array([options.error_model.radius(m, sources) for m in markers])
-    return xr.Dataset(
-        {
-            "hull": (("component", "alpha", "bound", "frame"), hull, {"units": "deg"}),
-            "deviation": (("component", "alpha", "bound", "frame", "marker"), deviation, {"units": "mm"}),
-            "ball_radius": (("marker",), radii, {"units": "mm"}),
-        },
-        coords={
-            "component": components,
-            "angle": ("component", [c.rsplit("_", 1)[0] for c in components]),
-            "axis": ("component", [c.rsplit("_", 1)[1] for c in components]),
-            "alpha": alphas,
-            "bound": ["lower", "upper"],
-            "frame": trial.frames,
-            "time": ("frame", trial.times, {"units": "s"}),
-            "marker": markers,
-        },
-        attrs={
-            "trial": trial.name,
-            "sources": ",".join(sources),
-            "method": options.method,
-            "starts": options.starts,
-            "output": "joint angle",
-            "units": "deg",
-            "strategy": BatchedDirect.name,
-            **totals,
-            "seconds": round(seconds, 3),
-        },
-    )
+    attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method, "starts": options.starts,
+             "output": "joint angle", "strategy": BatchedDirect.name, **totals, "seconds": round(seconds, 3)}  # fmt: skip
+    return fuzzy_angles_dataset(
+        hulls, alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
+        ball_radius=[options.error_model.radius(m, sources) for m in markers], deviations=deviations, attrs=attrs,
+    )  # fmt: skip
 
 
 def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
@@ -221,43 +196,3 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     table.index.name = "angle"
     return table[sorted(table.columns, reverse=True)]
 
-
-@dataclass
-class MarkerErrorAnalysis:
-    """A trial's deterministic run, its fuzzy angles and their ΔΦ table."""
-
-    run: AnglesRun
-    fuzzy: xr.Dataset
-    delta_phi: pd.DataFrame
-    notes: list[str]
-
-
-def analyse_trial(
-    dynamic: str | os.PathLike[str] | Trial,
-    *,
-    static: str | os.PathLike[str] | Trial | None = None,
-    subject_file: str | os.PathLike[str] | None = None,
-    preprocessing: Preprocessing = Preprocessing(),
-    errors_file: str | os.PathLike[str] | None = None,
-    sources: Sequence[str] = SOURCES,
-    alphas: Sequence[float] = DEFAULT_ALPHAS,
-    angles: Sequence[str] | None = None,
-    method: str = "cartesian",
-    workers: int | None = None,
-    progress: Progress | None = None,
-) -> MarkerErrorAnalysis:
-    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` followed by the fuzzy
-    marker-error analysis of every computed angle (or ``angles``)."""
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
-    error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()
-    options = FuzzyAngleOptions(
-        alphas=tuple(alphas), sources=parse_sources(sources), error_model=error_model, method=method,
-        workers=workers if workers is not None else min(2, os.cpu_count() or 1),
-    )  # fmt: skip
-    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, angles, progress)
-    notes = list(run.notes) + [
-        f"marker errors: {', '.join(options.sources)} ({error_model.source}), {method} formulation, "
-        f"α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}"
-    ]
-    fuzzy.attrs["trial"] = Path(run.trial.name).name
-    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)

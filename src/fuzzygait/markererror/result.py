@@ -1,15 +1,67 @@
-"""Read access to a fuzzy joint-angle dataset (the result of
-:func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`; layout in that module).
-
-Every consumer (reports, Rerun recordings, comparisons) reads the dataset through these
-functions, so its layout is defined in one place.
+"""The fuzzy joint-angle dataset (the result of
+:func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`, layout described there): one
+builder and the read access every consumer (reports, Rerun recordings, comparisons)
+uses, so the layout is defined in this module only.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
+import numpy as np
 import xarray as xr
+from numpy.typing import NDArray
 
 from fuzzygait.core.errors import ParameterError
+
+
+def fuzzy_angles_dataset(
+    hulls: Mapping[str, NDArray[np.float64]],
+    *,
+    alphas: Sequence[float] | NDArray[np.float64],
+    frames: Sequence[int] | NDArray[np.int_],
+    times: Sequence[float] | NDArray[np.float64],
+    markers: Sequence[str],
+    ball_radius: Sequence[float] | NDArray[np.float64],
+    deviations: Mapping[str, NDArray[np.float64]] | None = None,
+    attrs: Mapping[str, object] | None = None,
+) -> xr.Dataset:
+    """Build the dataset.
+
+    Args:
+        hulls: component name (``"LKneeAngles_X"``) → hull ``(alpha, bound, frame)`` in
+            degrees, bounds ordered lower, upper.
+        alphas: ascending α-levels (1 included).
+        frames: 1-based C3D frame numbers; ``times`` their times in s.
+        markers: marker labels of the ``marker`` dimension.
+        ball_radius: α = 0 ball radius Σ (mm) per marker.
+        deviations: component → deviation norms ``(alpha, bound, frame, marker)`` in mm
+            (NaN for markers the component does not use); None: no ``deviation`` variable.
+        attrs: dataset attributes (``units`` is set to ``"deg"``).
+    """
+    components = list(hulls)
+    data: dict[str, tuple] = {
+        "hull": (("component", "alpha", "bound", "frame"), np.stack([hulls[c] for c in components]),
+                 {"units": "deg"}),
+        "ball_radius": (("marker",), np.asarray(ball_radius, dtype=float), {"units": "mm"}),
+    }  # fmt: skip
+    if deviations is not None:
+        stacked = np.stack([deviations[c] for c in components])
+        data["deviation"] = (("component", "alpha", "bound", "frame", "marker"), stacked, {"units": "mm"})
+    return xr.Dataset(
+        data,
+        coords={
+            "component": components,
+            "angle": ("component", [c.rsplit("_", 1)[0] for c in components]),
+            "axis": ("component", [c.rsplit("_", 1)[-1] for c in components]),
+            "alpha": np.asarray(alphas, dtype=float),
+            "bound": ["lower", "upper"],
+            "frame": np.asarray(frames),
+            "time": ("frame", np.asarray(times, dtype=float), {"units": "s"}),
+            "marker": list(markers),
+        },
+        attrs={**dict(attrs or {}), "units": "deg"},
+    )
 
 
 def _require_layout(fuzzy: xr.Dataset) -> None:
