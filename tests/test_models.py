@@ -1,0 +1,148 @@
+"""Every model of the package keeps the engine's model protocol
+(:func:`fuzzygait.testing.check_model`): declared attributes, shapes, finiteness,
+determinism, sensitivities against central finite differences, single-node evaluations
+against whole trajectories. And check_model itself finds each kind of defect."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import SAMPLE_DATA
+from fuzzygait.testing import AnalyticRecipe, ModelCheckError, check_model
+from fuzzygait.uncertainty import Evaluation, FunctionModel, FuzzyModel, Output
+from fuzzygait.uncertainty.execution import Evaluator
+
+
+@pytest.fixture(scope="module")
+def angles_run():
+    from fuzzygait.workflows.angles import run_angles
+
+    return run_angles(SAMPLE_DATA / "walking.c3d", static=SAMPLE_DATA / "static.c3d",
+                      subject_file=SAMPLE_DATA / "subject.toml")  # fmt: skip
+
+
+def joint_angle_model(run, name: str = "LKneeAngles", axis: int = 0):
+    from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject
+
+    frames = np.linspace(0, run.trial.n_frames - 1, 6).round().astype(int)
+    return JointAngleModel(run.trial, fixed_subject(run.trial, run.subject), run.result.progression, name, axis, frames)
+
+
+def test_function_and_analytic_models() -> None:
+    t = np.linspace(0.0, 1.0, 11)
+    report = check_model(FunctionModel(lambda p: p[0] * t**2 + p[1], t, lambda p: np.column_stack([t**2, 1 + 0 * t])),
+                         np.array([2.0, 0.5]))  # fmt: skip
+    assert report["sensitivity_error"] < 1e-8
+    check_model(FunctionModel(lambda p: np.sin(p[0] * t), t), np.array([1.0]))
+    for kind in ("sin", "poly"):
+        assert check_model(AnalyticRecipe(kind).build(), np.array([0.7, 1.3]))["sensitivity_error"] < 1e-6
+
+
+def test_pendulum() -> None:
+    from fuzzygait.mechanics.pendulum import Pendulum
+
+    model = Pendulum(times=np.linspace(0.0, 1.0, 51))
+    assert isinstance(model, FuzzyModel)
+    assert check_model(model, np.array([1.0]))["sensitivity_error"] < 1e-5
+
+
+def test_joint_angle_models(angles_run) -> None:
+    from fuzzygait.markererror.angle_model import SphericalDeviationModel
+
+    cartesian = joint_angle_model(angles_run)
+    p = np.random.default_rng(1).uniform(-5.0, 5.0, cartesian.n_parameters)
+    assert check_model(cartesian, p, scale=np.full(p.size, 10.0))["nodes_error"] <= 1e-9
+    spherical = SphericalDeviationModel(cartesian)
+    q = np.tile([4.0, 1.0, 0.5], len(cartesian.markers))
+    check_model(spherical, q)
+    assert spherical.parameter_names[:3] == (f"{cartesian.markers[0]}_r", f"{cartesian.markers[0]}_theta",
+                                             f"{cartesian.markers[0]}_phi")  # fmt: skip
+    assert cartesian.output == Output("LKneeAngles_X", "deg")
+
+
+@pytest.mark.slow
+def test_leg_target_model() -> None:
+    from fuzzygait.mechanics.scenarios import LegSimulator
+    from fuzzygait.mechanics.targets import LegTargetModel
+
+    swing = LegSimulator("swing", nodes=6)
+    base = swing.parameters(eta=1e5)
+    for scheme in ("variational", "energy-momentum"):
+        model = LegTargetModel(swing, "total_deformation_energy", ("E", "rho"), base=base, duration=0.03, scheme=scheme)
+        p = np.array([base[0], base[2]])
+        report = check_model(model, p, fd_step=1e-5, sensitivity_rtol=1e-3)
+        assert report["sensitivity_error"] < 1e-3, scheme
+
+
+@pytest.mark.slow
+def test_layered_blade_model() -> None:
+    from fuzzygait.mechanics.layered_blade import LayeredBladeModel
+
+    model = LayeredBladeModel(target="toe_z", nodes=8, duration=0.02, dt=1e-3, tip_force=(0.0, 0.0, 100.0))
+    check_model(model, model.base)
+
+
+def test_evaluated_model_on_the_serial_evaluator() -> None:
+    recipe = AnalyticRecipe("sin", n_time=21)
+    with Evaluator() as evaluator:
+        model = evaluator.model(recipe, sensitivities=True)
+        report = check_model(model, np.array([1.0, 2.0]))
+    assert report["nodes_error"] == 0.0 and report["sensitivity_error"] < 1e-6
+
+
+class Broken:
+    """A model whose defects are switched on one at a time."""
+
+    def __init__(self, defect: str) -> None:
+        self.defect = defect
+        self.times = np.linspace(0.0, 1.0, 5)
+        self.parameter_names = ("a", "b") if defect == "names" else ("a",)
+        self.output = Output()
+        self.capabilities = frozenset({"sensitivities", "nodes"}) if defect != "undeclared" else frozenset({"magic"})
+        self.calls = 0
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation | np.ndarray:
+        self.calls += 1
+        values = p[0] * self.times
+        if self.defect == "array":
+            return values
+        if self.defect == "shape":
+            values = values[:-1]
+        if self.defect == "nan":
+            values = values.copy()
+            values[2] = np.nan
+        if self.defect == "random":
+            values = values + 1e-3 * self.calls
+        jacobian = self.times[:, None] * (2.0 if self.defect == "jacobian" else 1.0)
+        return Evaluation(values, jacobian if sensitivities else None)
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        offset = 1.0 if self.defect == "nodes" else 0.0
+        return P[:, 0] * self.times[nodes] + offset
+
+
+@pytest.mark.parametrize(
+    ("defect", "needle"),
+    [
+        ("array", "expected an Evaluation"),
+        ("shape", "shape"),
+        ("nan", "non-finite"),
+        ("random", "deterministic"),
+        ("jacobian", "finite differences"),
+        ("nodes", "evaluate_nodes differs"),
+        ("names", "2 parameter names"),
+        ("undeclared", "unknown capabilities"),
+    ],
+)
+def test_check_model_finds_each_defect(defect: str, needle: str) -> None:
+    check_model(Broken("none"), np.array([2.0]))
+    with pytest.raises(ModelCheckError, match=needle):
+        check_model(Broken(defect), np.array([2.0]))
+
+
+def test_check_model_names_what_is_missing() -> None:
+    with pytest.raises(ModelCheckError, match="plain function"):
+        check_model(lambda p: p, np.array([1.0]))
+    with pytest.raises(ModelCheckError, match="lacks .*parameter_names"):
+        check_model(type("Old", (), {"times": np.arange(3.0), "evaluate": lambda self, p: p})(), np.array([1.0]))
