@@ -4,10 +4,10 @@ Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/formulations.py   (abou
 
 The thesis found that the norm-constrained Cartesian deviations and the box-constrained
 spherical ones give the same envelopes (with fmincon multistart). Here the engine's
-per-node scipy multistart is used (SLSQP on the balls, L-BFGS-B on the spherical box;
-the model is wrapped without ``evaluate_nodes`` so the batched first-order solver is
-not used), on 8 frames of the synthetic trial, hip flexion, α = 0 and 0.5, 10 starts.
-The batched Cartesian solver (the default of ``fuzzygait uncertainty``) is compared too.
+per-node scipy multistart is used (``Direct``: SLSQP on the balls, L-BFGS-B on the
+spherical box; the model is wrapped without the ``"nodes"`` capability, so it is solved
+node by node on whole trajectories), on 8 frames of the synthetic trial, hip flexion, α = 0 and 0.5, 10 starts.
+The batched Cartesian solver (``BatchedDirect``, the default of ``fuzzygait uncertainty``) is compared too.
 """
 
 from __future__ import annotations
@@ -19,16 +19,28 @@ import numpy as np
 from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
 from fuzzygait.markererror.sources import ErrorModel
 from fuzzygait.workflows.angles import run_angles
-from fuzzygait.uncertainty import FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
+from fuzzygait.uncertainty import (
+    BatchedDirect,
+    Direct,
+    Evaluation,
+    FuzzyBalls,
+    FuzzyNumber,
+    FuzzyVector,
+    graph_follower,
+)
 
 
 class WholeTrajectoryModel:
-    """Hides ``evaluate_nodes``: the engine solves each node with scipy's multistart."""
+    """Declares no ``"nodes"`` capability (so no ``evaluate_nodes``): the engine solves
+    each node with scipy's multistart on whole trajectories."""
+
+    capabilities = frozenset[str]()
 
     def __init__(self, model: object) -> None:
         self.model, self.times = model, model.times
+        self.parameter_names, self.output = model.parameter_names, model.output
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         return self.model.evaluate(p)
 
 
@@ -51,14 +63,14 @@ def main() -> None:
     radii = np.array([ErrorModel().radius(m) for m in model.markers])
     cartesian = FuzzyBalls(np.zeros((len(model.markers), 3)), radii, tuple(model.markers))
     runs = {}
-    for name, fuzzy_model, params, kwargs in (
-        ("Cartesian, SLSQP multistart", WholeTrajectoryModel(model), cartesian, {"starts": 10}),
+    for name, fuzzy_model, params, strategy in (
+        ("Cartesian, SLSQP multistart", WholeTrajectoryModel(model), cartesian, Direct(starts=10)),
         ("spherical, L-BFGS-B multistart", WholeTrajectoryModel(SphericalDeviationModel(model)),
-         spherical_parameters(radii), {"starts": 10}),
-        ("Cartesian, batched (default)", model, cartesian, {"starts": 6, "batch_iterations": 50}),
+         spherical_parameters(radii), Direct(starts=10)),
+        ("Cartesian, batched (default)", model, cartesian, BatchedDirect(starts=6, iterations=50)),
     ):  # fmt: skip
         start = time.perf_counter()
-        result = graph_follower(fuzzy_model, params, (0.0, 0.5), mode="direct", **kwargs)
+        result = graph_follower(fuzzy_model, params, (0.0, 0.5), strategy=strategy)
         runs[name] = (result["hull"].sel(alpha=[0.0, 0.5]).to_numpy(), time.perf_counter() - start)
     reference, _ = runs["Cartesian, SLSQP multistart"]
     width = reference[:, 1] - reference[:, 0]

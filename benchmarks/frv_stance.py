@@ -4,8 +4,8 @@ Young's modulus as a fuzzy random variable (Eqs. 2.28–2.30, N(1, 1) increments
 redraw), N_s samples grouped on N_p-disc = 100 grid points, target maximum element energy
 (Eq. 5.2), 2 s at dt = 1 ms, energy-momentum scheme (the variational scheme does not
 converge for this stiff, heavily loaded case at dt = 1 ms), forward simulations in
-parallel through Dask.  Reports occurring vs possible intervals (Eq. 2.32), forward
-simulations, optimisations and wall time; then adds N_s more samples to the stored study;
+parallel on an ``Evaluator`` (a local Dask process pool).  Reports occurring vs possible
+intervals (Eq. 2.32), forward simulations, optimisations and wall time; then adds N_s more samples to the stored study;
 then checks the α = 1 output distribution against a Monte Carlo run of the deterministic
 model on a random subset of the same (ungrouped) peak samples (two-sample KS test).
 
@@ -28,9 +28,9 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
-from fuzzygait.mechanics.targets import LegTargetModel  # noqa: E402
+from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
+from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, fit_distributions, generate_samples  # noqa: E402
-from fuzzygait.uncertainty.parallel import BatchEvaluator, LegModelRecipe  # noqa: E402
 
 FIGURES = Path(__file__).parent / "figures"
 MODULUS = 59.958e9  # Pa, Table 5.3
@@ -57,7 +57,8 @@ def main() -> None:
                             duration=args.duration, scheme=scheme)  # fmt: skip
     spec = FRVSpec("E", MODULUS, alphas=ALPHAS)
     args.store.parent.mkdir(parents=True, exist_ok=True)
-    with BatchEvaluator(recipe, workers=args.workers, sensitivities=True) as evaluator:
+    with Evaluator(workers=args.workers) as pool:
+        evaluator = pool.batch(recipe, sensitivities=True)
         start = time.perf_counter()
         study = FRVStudy.create(model, spec, args.samples, n_disc=args.disc, seed=0, store=args.store,
                                 evaluator=evaluator, overwrite=True)  # fmt: skip
@@ -80,7 +81,8 @@ def main() -> None:
     peaks = generate_samples(spec, args.samples, seed=0)[:, -1, 0]
     rng = np.random.default_rng(1)
     subset = np.sort(rng.choice(args.samples, size=min(args.mc, args.samples), replace=False))
-    with BatchEvaluator(recipe, workers=args.workers) as evaluator:
+    with Evaluator(workers=args.workers) as pool:
+        evaluator = pool.batch(recipe)
         start = time.perf_counter()
         monte_carlo = np.asarray(evaluator(peaks[subset, None]))
         mc_wall = time.perf_counter() - start

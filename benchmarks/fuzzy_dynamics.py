@@ -47,13 +47,17 @@ STANCE_MODULUS = 59.958e9  # Pa
 
 
 def _evaluator(model: LegTargetModel, scenario: str, workers: int):
+    """A local pool of ``workers`` processes and a batch function of ``model`` on it
+    (``(None, None)`` for one worker: the dense reference then runs in this process)."""
     if workers <= 1:
-        return None
-    from fuzzygait.uncertainty.parallel import BatchEvaluator, LegModelRecipe
+        return None, None
+    from fuzzygait.mechanics.targets import LegModelRecipe
+    from fuzzygait.uncertainty.execution import Evaluator
 
     recipe = LegModelRecipe(scenario, model.target, tuple(model.names), tuple(float(v) for v in model.base),
                             nodes=20, dt=model.dt, duration=model.duration, scheme=model.scheme)  # fmt: skip
-    return BatchEvaluator(recipe, workers=workers)
+    pool = Evaluator(workers=workers)
+    return pool, pool.batch(recipe)
 
 
 def swing_one_parameter(duration: float, workers: int) -> None:
@@ -62,17 +66,18 @@ def swing_one_parameter(duration: float, workers: int) -> None:
     result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration)
     e = base[0]
     model = LegTargetModel(sim, "total_deformation_energy", ("E",), base=base, duration=duration)
-    evaluator = _evaluator(model, "swing", workers)
+    pool, evaluator = _evaluator(model, "swing", workers)
     start = time.perf_counter()
     dense = dense_reference(model, 0.9 * e, 1.1 * e, 41, evaluator=evaluator)
     dense_wall = time.perf_counter() - start
     upper = result["hull"].sel(alpha=0.0, bound="upper").values
     lower = result["hull"].sel(alpha=0.0, bound="lower").values
     scale = float(np.max(np.abs(dense)))
-    deterministic = model.evaluate([e])
+    deterministic = model.evaluate(np.array([e])).values
     exact = np.array_equal(result["hull"].sel(alpha=1.0, bound="upper").values, deterministic)
     print(f"\n1. swing, fuzzy E ±10 %, {duration:g} s, {result.sizes['time']} time nodes, stride 100")
-    print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, {result.attrs['model_evaluations']} forward simulations "
+    print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, "
+          f"{result.attrs['forward_simulations']} forward simulations "
           f"(with sensitivities), {result.attrs['optimisations']} optimisations")  # fmt: skip
     print(f"   dense reference: 41 forward simulations, {dense_wall:.1f} s wall ({max(workers, 1)} worker(s))")
     print(f"   max |hull − dense| α = 0: upper {np.max(np.abs(upper - dense.max(0))):.3e} J, "
@@ -83,8 +88,8 @@ def swing_one_parameter(duration: float, workers: int) -> None:
     print(f"   α = 1 hull equals the deterministic run bit for bit: {exact}")
     FIGURES.mkdir(exist_ok=True)
     save_figure(hull_figure(result), FIGURES / "fuzzy_swing_E.png")
-    if evaluator is not None:
-        evaluator.close()
+    if pool is not None:
+        pool.close()
 
 
 def swing_eleven_parameters(duration: float) -> None:
@@ -94,17 +99,20 @@ def swing_eleven_parameters(duration: float) -> None:
     one = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration)
     print(f"\n2. swing, 11 fuzzy parameters ±10 %, {duration:g} s")
     for label, r in (("11 parameters", result), ("1 parameter", one)):
-        print(f"   {label}: {r.attrs['wall_time_s']:.1f} s wall, {r.attrs['model_evaluations']} forward simulations, "
+        print(f"   {label}: {r.attrs['wall_time_s']:.1f} s wall, {r.attrs['forward_simulations']} forward simulations, "
               f"{r.attrs['optimisations']} optimisations, library {r.attrs['library_size']}")  # fmt: skip
     print(f"   ratio 11/1: wall {result.attrs['wall_time_s'] / one.attrs['wall_time_s']:.2f}×, "
-          f"simulations {result.attrs['model_evaluations'] / one.attrs['model_evaluations']:.2f}×")  # fmt: skip
+          f"simulations {result.attrs['forward_simulations'] / one.attrs['forward_simulations']:.2f}×")  # fmt: skip
     # How many of those simulations do the hulls need? Re-simulate the distinct extremisers
     # (no sensitivities) and find the fewest that keep the hulls within 1 % / 0.1 % of their width.
     for label, r in (("11 parameters", result), ("1 parameter", one)):
         names = r.attrs["fuzzy_parameters"]
         model = LegTargetModel(sim, r.attrs["target"], names, base=base, duration=duration)
         params = FuzzyVector([triangular_relative(model.base[LEG_PARAMETERS.index(n)], 0.1, n) for n in names])
-        distinct, [(lp1, greedy1), (lp01, greedy01)] = sufficient_runs(r, params, model.evaluate, (0.01, 0.001))
+        def trajectory(p: np.ndarray, model: LegTargetModel = model) -> np.ndarray:
+            return model.evaluate(p).values
+
+        distinct, [(lp1, greedy1), (lp01, greedy01)] = sufficient_runs(r, params, trajectory, (0.01, 0.001))
         print(f"   {label}: the hulls are attained by {distinct} distinct parameter sets; {lp1}-{greedy1} of them keep "
               f"every hull within 1 % of its width, {lp01}-{greedy01} within 0.1 % (LP lower bound - greedy cover)")  # fmt: skip
     save_figure(extremiser_figure(result), FIGURES / "fuzzy_swing_11_parameter_sets.png")
@@ -117,14 +125,15 @@ def stance_one_parameter(duration: float) -> None:
     result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration, scheme="energy-momentum")
     print(f"\n3. stance, fuzzy E ±10 % about {STANCE_MODULUS:g} Pa (Table 5.3), max element energy, "
           f"{duration:g} s (energy-momentum)")
-    print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, {result.attrs['model_evaluations']} forward simulations, "
+    print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, "
+          f"{result.attrs['forward_simulations']} forward simulations, "
           f"{result.attrs['optimisations']} optimisations")  # fmt: skip
     save_figure(hull_figure(result), FIGURES / "fuzzy_stance_E.png")
 
 
 def layered_blade(duration: float) -> None:
     from fuzzygait.mechanics.layered_blade import LayeredBladeModel
-    from fuzzygait.uncertainty import graph_follower
+    from fuzzygait.uncertainty import Linearised, graph_follower
 
     print(f"\n4. layered blade (coupled homogenisation), clamped, 500 N on the toe, {min(duration, 0.3):g} s; "
           "fuzzy face modulus, core modulus, face thickness ±10 % (finite-difference linearisation)")  # fmt: skip
@@ -132,12 +141,12 @@ def layered_blade(duration: float) -> None:
         model = LayeredBladeModel(target=target, duration=min(duration, 0.3))
         numbers = [triangular_relative(v, 0.1, n) for v, n in zip(model.base, model.names)]
         start = time.perf_counter()
-        result = graph_follower(model, FuzzyVector(numbers), (0.0, 0.5, 1.0), stride=30)
+        result = graph_follower(model, FuzzyVector(numbers), (0.0, 0.5, 1.0), strategy=Linearised(stride=30))
         wall = time.perf_counter() - start
         result.attrs.update(scenario="layered blade", target=target, target_units="m" if target == "toe_z" else "J",
                             fuzzy_parameters=list(model.names), fuzzy_spreads=[0.1] * 3)  # fmt: skip
         end = result["hull"].isel(time=-1)
-        print(f"   {target}: {wall:.1f} s wall, {result.attrs['model_evaluations']} forward simulations; at "
+        print(f"   {target}: {wall:.1f} s wall, {result.attrs['forward_simulations']} forward simulations; at "
               f"t = {model.times[-1]:g} s α = 0 hull [{float(end.sel(alpha=0.0, bound='lower')):.5g}, "
               f"{float(end.sel(alpha=0.0, bound='upper')):.5g}], deterministic {float(result['deterministic'][-1]):.5g}")  # fmt: skip
         save_figure(hull_figure(result), FIGURES / name)

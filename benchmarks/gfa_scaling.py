@@ -51,7 +51,16 @@ from dataclasses import dataclass, field  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from fuzzygait.uncertainty import FuzzyVector, graph_follower, sufficient_runs, triangular, triangular_relative  # noqa: E402
+from fuzzygait.uncertainty import (  # noqa: E402
+    Evaluation,
+    FuzzyVector,
+    Linearised,
+    Output,
+    graph_follower,
+    sufficient_runs,
+    triangular,
+    triangular_relative,
+)
 
 OMEGA = 2 * np.pi * np.array([1.0, 1.7, 2.9, 4.3, 6.1])  # rad/s
 AMPLITUDE = np.array([1.0, 0.6, 0.4, 0.25, 0.15])
@@ -71,11 +80,19 @@ GRID = 2001
 @dataclass
 class Oscillators:
     """Sum of five damped oscillators; ``free`` are the indices (into ``P_DET``) of the
-    model's parameters, the others are fixed at their deterministic values."""
+    model's parameters, the others are fixed at their deterministic values. A model of the
+    engine's protocol with analytic sensitivities."""
 
     times: np.ndarray
     free: np.ndarray = field(default_factory=lambda: np.arange(P_DET.size))
     seconds: float = 0.0  # time spent inside the model
+
+    output = Output("oscillators", "", "sum of five damped oscillators")
+    capabilities = frozenset({"sensitivities"})
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(NAMES[int(i)] for i in self.free)
 
     def _full(self, p: np.ndarray) -> np.ndarray:
         """``(n, 11)`` full parameter rows from ``(n, n_free)`` free values."""
@@ -90,14 +107,17 @@ class Oscillators:
         t = self.times[None, None, :]
         return np.sum(amp * np.exp(-delta * DECAY[None, :, None] * t) * np.sin(omega * t + PHASE[None, :, None]), axis=1)
 
-    def evaluate(self, p: np.ndarray) -> np.ndarray:
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """The trajectory and, with ``sensitivities``, the analytic Jacobian
+        ``(n_time, n_free)`` in the same evaluation."""
+        if sensitivities:
+            return Evaluation(*self._with_sensitivities(p))
         start = time.perf_counter()
         f = self.evaluate_many(p[None, :])[0]
         self.seconds += time.perf_counter() - start
-        return f
+        return Evaluation(f)
 
-    def evaluate_with_sensitivities(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Trajectory and the analytic Jacobian ``(n_time, n_free)`` in one evaluation."""
+    def _with_sensitivities(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         start = time.perf_counter()
         full = self._full(p[None, :])[0]
         omega, amp, delta = full[:5, None], full[5:10, None], full[10]
@@ -160,8 +180,8 @@ def run(case: Case, n_time: int, stride: int, max_iterations: int = 4) -> tuple[
     for _ in range(REPEATS):
         model = case.model(times)
         start = time.perf_counter()
-        result = graph_follower(model, case.params(), alphas=ALPHAS, mode="linearised", stride=stride,
-                                max_iterations=max_iterations)  # fmt: skip
+        strategy = Linearised(stride=stride, max_iterations=max_iterations)
+        result = graph_follower(model, case.params(), alphas=ALPHAS, strategy=strategy)
         wall = time.perf_counter() - start
         if wall < best:
             best, model_share = wall, model.seconds / wall
@@ -228,8 +248,8 @@ def main() -> None:
             wall, share, r = rows[case.label]
             single = case is not ALL
             ratio = f"{w11 / wall:.2f}" if single else ""
-            evals = f"{r11.attrs['model_evaluations'] / r.attrs['model_evaluations']:.1f}" if single else ""
-            print(f"| {case.label} | {n_time} | {stride} | {r.attrs['model_evaluations']} | "
+            evals = f"{r11.attrs['forward_simulations'] / r.attrs['forward_simulations']:.1f}" if single else ""
+            print(f"| {case.label} | {n_time} | {stride} | {r.attrs['forward_simulations']} | "
                   f"{r.attrs['optimisations']} | {r.attrs['library_size']} | {wall:.3f} | {share:.0%} | "
                   f"{ratio} | {evals} |")  # fmt: skip
 
@@ -249,7 +269,7 @@ def main() -> None:
           "| (α, node) pairs with GFA ⊇ reference | largest shortfall % | largest excess % |")  # fmt: skip
     print("|---|---|---|---|---|---|---|---|")
     times = np.linspace(0.0, DURATION, 2000)
-    scale = float(np.max(np.abs(Oscillators(times).evaluate(P_DET))))
+    scale = float(np.max(np.abs(Oscillators(times).evaluate(P_DET).values)))
     for case in CASES[:3]:
         reference = reference_hulls(case, times, rng)
         for max_iterations in (4, 1):
@@ -259,7 +279,7 @@ def main() -> None:
                 else:  # the thesis' single linearised step per node
                     wall, _, r = run(case, 2000, stride, max_iterations=1)
                 frac, short, excess = quality(r, reference, scale)
-                print(f"| {case.label} | {max_iterations} | {stride} | {r.attrs['model_evaluations']} | "
+                print(f"| {case.label} | {max_iterations} | {stride} | {r.attrs['forward_simulations']} | "
                       f"{wall:.3f} | {frac:.1%} | {short:.3f} | {excess:.3f} |")  # fmt: skip
     print(f"(percent of the largest deterministic output magnitude, {scale:.3f}. 'shortfall': the sample "
           "reaches beyond the GFA hull; 'excess': the GFA hull reaches beyond the sample, which for 11 "
@@ -278,16 +298,17 @@ def main() -> None:
         for stride in (100, 1):
             r = results[2000, stride][case.label][2]
             model, params = Oscillators(times), Case(case.label, case.fuzzy).params()
-            distinct, [(one_lp, one), (tenth_lp, tenth)] = sufficient_runs(r, params, model.evaluate, (0.01, 0.001))
+            distinct, [(one_lp, one), (tenth_lp, tenth)] = sufficient_runs(
+                r, params, lambda p, model=model: model.evaluate(p).values, (0.01, 0.001))
             needed[case.label, stride] = (one_lp, one)
-            print(f"| {case.label} | {stride} | {r.attrs['model_evaluations']} | {distinct} | {one_lp}-{one} "
+            print(f"| {case.label} | {stride} | {r.attrs['forward_simulations']} | {distinct} | {one_lp}-{one} "
                   f"| {tenth_lp}-{tenth} |")  # fmt: skip
 
     wall_ratios = [results[k][ALL.label][0] / results[k][OMEGA1.label][0] for k in results]
-    eval_ratios = [results[k][ALL.label][2].attrs["model_evaluations"] / results[k][OMEGA1.label][2].attrs["model_evaluations"]
-                   for k in results]  # fmt: skip
-    per_opt = {k: results[k][ALL.label][2].attrs["model_evaluations"] / results[k][ALL.label][2].attrs["optimisations"]
-               for k in results}  # fmt: skip
+    eval_ratios = [results[k][ALL.label][2].attrs["forward_simulations"]
+                   / results[k][OMEGA1.label][2].attrs["forward_simulations"] for k in results]  # fmt: skip
+    per_opt = {k: results[k][ALL.label][2].attrs["forward_simulations"]
+               / results[k][ALL.label][2].attrs["optimisations"] for k in results}  # fmt: skip
     share = results[2000, 1][ALL.label][1]
     big = results[2000, 1][ALL.label][2]
     jac_gb = big.attrs["library_size"] * big.sizes["time"] * P_DET.size * 8 / 1e9
@@ -303,7 +324,7 @@ def main() -> None:
   sets that attain the hulls; each node's optimum is its own vertex or interior point, so a set
   outside them would have to be near-optimal at many nodes at once.) So no method that takes its
   hulls from forward runs can reach the thesis' 1.05x on this model at that accuracy; the
-  Graph Follower spends {results[2000, 100][ALL.label][2].attrs['model_evaluations'] / needed[ALL.label, 100][0]:.1f}x the 11-parameter bound at stride 100.
+  Graph Follower spends {results[2000, 100][ALL.label][2].attrs['forward_simulations'] / needed[ALL.label, 100][0]:.1f}x the 11-parameter bound at stride 100.
 * Per node the linearised α-level optimisation (OP-III) is closed form: the box vertex picked by
   the signs of the node's sensitivities, O(n_p) arithmetic and no optimiser run; the
   sensitivities come with the model run (trajectory + full Jacobian in one evaluation, no

@@ -3,7 +3,7 @@ against Monte Carlo sampling given the same wall time (thesis §5.5, Fig. 5.11, 
 
 Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/markererror_speed.py
 
-1. Graph Follower (batched direct mode, Cartesian deviations, Table 3.1 radii with all
+1. Graph Follower (``BatchedDirect`` strategy, Cartesian deviations, Table 3.1 radii with all
    three sources): ``sample_data/walking.c3d`` (static calibration of ``static.c3d``),
    both sides, hip/knee/ankle x X/Y/Z = 18 angle components, every frame,
    α = 0, 0.25, 0.5, 0.75, 1, ``workers=2``. Target: <= 60 s on 2 cores.
@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles, relative_envelope_width  # noqa: E402
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, fixed_subject  # noqa: E402
 from fuzzygait.markererror.comparison import monte_carlo_timed  # noqa: E402
+from fuzzygait.markererror.result import component_hull  # noqa: E402
 from fuzzygait.markererror.sources import ErrorModel  # noqa: E402
 from fuzzygait.workflows.angles import run_angles  # noqa: E402
 
@@ -71,7 +72,7 @@ def main() -> None:
     print()
     print(f"## Fuzzy joint angles, {trial.n_frames} frames at {trial.rate:g} Hz, {len(components)} components, "
           f"α = {', '.join(f'{a:g}' for a in ALPHAS)}")  # fmt: skip
-    evaluations = int(fuzzy.attrs["model_evaluations"])
+    evaluations = int(fuzzy.attrs["node_evaluations"])
     print(f"Graph Follower (batched direct, Cartesian, starts={options.starts}, iterations={options.iterations}, "
           f"workers={WORKERS}): wall {wall:.1f} s (target <= 60 s), node evaluations "
           f"{evaluations:,} ({evaluations / wall:,.0f} per s wall)")  # fmt: skip
@@ -103,7 +104,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     ratios = []
     for name in components:
-        hull = fuzzy[name].sel(alpha=0.0)
+        hull = component_hull(fuzzy, name).sel(alpha=0.0)
         valid = np.isfinite(hull.sel(bound="upper").to_numpy())
         g_lo, g_up = hull.sel(bound="lower").to_numpy()[valid], hull.sel(bound="upper").to_numpy()[valid]
         _, m_lo, m_up, n, _, _ = sampled[name]
@@ -130,7 +131,7 @@ def main() -> None:
     print("| component | " + " | ".join(f"α = {a:g}" for a in levels) + " | MC α = 0 | max |Φ| deg |")
     print("|---|" + "---|" * (len(levels) + 2))
     for name in components:
-        measured = fuzzy[name].sel(alpha=1.0, bound="upper")
+        measured = component_hull(fuzzy, name).sel(alpha=1.0, bound="upper")
         reference = float(np.nanmax(np.abs(measured)))
         _, m_lo, m_up, _, _, _ = sampled[name]
         mc = 100.0 * float(np.max(m_up - m_lo)) / reference
