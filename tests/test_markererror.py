@@ -427,3 +427,17 @@ def test_uniform_ball_samples_fill_the_ball() -> None:
     assert np.all(np.abs(P[:, 1].mean(axis=0)) < 0.5)
     assert pd.Series(norms[:, 2]).eq(0).all()
 
+
+
+def test_two_frames_are_enough(run: AnglesRun) -> None:
+    """A component with fewer optimisation nodes than the neighbour window still runs:
+    finite hulls around the measured angle at the two frames, NaN elsewhere."""
+    keep = np.zeros(run.trial.n_frames, dtype=bool)
+    keep[[10, 60]] = True
+    trial = run.trial.with_markers(np.where(keep[:, None, None], run.trial.markers, np.nan))
+    options = FuzzyAngleOptions(alphas=(0.0,), starts=2, iterations=5)
+    fuzzy = fuzzy_joint_angles(trial, run.subject, run.result, options, ["LKneeAngles"])
+    hull = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.0).to_numpy()
+    assert np.isfinite(hull[:, keep]).all() and np.isnan(hull[:, ~keep]).all()
+    measured = run.result.angles["LKneeAngles"][keep, 0]
+    assert np.all(hull[0, keep] < measured) and np.all(measured < hull[1, keep])

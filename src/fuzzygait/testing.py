@@ -105,7 +105,7 @@ def _check_nodes(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n
     rng = np.random.default_rng(seed)
     P = p + 1e-3 * scale * rng.standard_normal((n_nodes, p.size))
     nodes = rng.integers(0, n_time, n_nodes)
-    at_nodes = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
+    at_nodes: np.ndarray = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
     if at_nodes.shape != (n_nodes,):
         raise ModelCheckError(f"evaluate_nodes returned shape {at_nodes.shape} for {n_nodes} pairs")
     full = np.array([_values(model, row, n_time)[j] for row, j in zip(P, nodes, strict=True)])

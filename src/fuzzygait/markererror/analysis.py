@@ -33,12 +33,12 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
 from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
-from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.markererror.result import angle_components, component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 
@@ -81,8 +81,8 @@ def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str,
     trial, subject, progression, name, axis, frames, markers, radii, options = args
     model = JointAngleModel(trial, subject, progression, name, axis, frames, markers)
     if options.method == "cartesian":
-        params = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
-        fuzzy_model: object = model
+        params: FuzzyBalls | FuzzyVector = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
+        fuzzy_model: JointAngleModel | SphericalDeviationModel = model
     else:
         numbers = []
         for label, radius in zip(markers, radii):
@@ -136,7 +136,7 @@ def fuzzy_joint_angles(
 
     tasks, markers_all = [], []
     for name in names:
-        model_markers = JointAngleModel(trial, fixed, result.progression, name, 0, [0]).markers
+        model_markers = JointAngleModel(trial, fixed, result.progression, name, 0, np.array([0])).markers
         values = np.column_stack([trial.marker(m) for m in model_markers] + [result.angles[name]])
         frames = np.flatnonzero(np.all(np.isfinite(values), axis=1))
         radii = np.array([options.error_model.radius(m, sources) for m in model_markers])
@@ -169,8 +169,9 @@ def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: l
         deviations[column][:, :, frames[:, None], columns[None, :]] = norms
         for key in totals:
             totals[key] += counts[key]
-    attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method, "starts": options.starts,
-             "output": "joint angle", "strategy": BatchedDirect.name, **totals, "seconds": round(seconds, 3)}  # fmt: skip
+    attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method,
+             "starts": options.starts, "output": "joint angle", "strategy": BatchedDirect.name, **totals,
+             "seconds": round(seconds, 3)}  # fmt: skip
     return fuzzy_angles_dataset(
         hulls, alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
         ball_radius=[options.error_model.radius(m, sources) for m in markers], deviations=deviations, attrs=attrs,

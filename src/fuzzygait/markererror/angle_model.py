@@ -19,8 +19,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance

@@ -39,6 +39,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.markererror.result import angle_components, component_deviation
+from fuzzygait.uncertainty.protocol import NodeModel
 
 #: The fixed-deviation direction of Fig. 5.11 (a): the unit diagonal of the lab frame.
 DIAGONAL = np.ones(3) / np.sqrt(3.0)
@@ -49,7 +50,7 @@ DIAGONAL = np.ones(3) / np.sqrt(3.0)
 DEFAULT_CHUNK_ROWS = 50_000
 
 
-def _radii(model: object, radii: Sequence[float] | np.ndarray) -> np.ndarray:
+def _radii(model: NodeModel, radii: Sequence[float] | np.ndarray) -> np.ndarray:
     """Validated per-marker radii (mm) matching the model's parameter vector."""
     r = np.asarray(radii, dtype=float).ravel()
     n_p = _n_parameters(model)
@@ -60,7 +61,7 @@ def _radii(model: object, radii: Sequence[float] | np.ndarray) -> np.ndarray:
     return r
 
 
-def _n_parameters(model: object) -> int:
+def _n_parameters(model: NodeModel) -> int:
     n_p = getattr(model, "n_parameters", None)
     if n_p is None:
         markers = getattr(model, "markers", None)
@@ -70,7 +71,7 @@ def _n_parameters(model: object) -> int:
     return int(n_p)
 
 
-def fixed_deviation_curves(model: object, radii: Sequence[float] | np.ndarray) -> dict[str, np.ndarray]:
+def fixed_deviation_curves(model: NodeModel, radii: Sequence[float] | np.ndarray) -> dict[str, np.ndarray]:
     """The angle curve without deviation and with the largest positive and negative
     fixed deviations (Fig. 5.11 a).
 
@@ -108,7 +109,7 @@ def uniform_ball_deviations(rng: np.random.Generator, n: int, radii: np.ndarray,
     return (direction * length[..., None]).reshape(n, -1)
 
 
-def _node_indices(model: object, frames: Sequence[int] | np.ndarray | None) -> np.ndarray:
+def _node_indices(model: NodeModel, frames: Sequence[int] | np.ndarray | None) -> np.ndarray:
     n_time = int(np.asarray(model.times).size)
     if frames is None:
         return np.arange(n_time)
@@ -123,7 +124,7 @@ def _generators(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
     return tuple(np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))  # type: ignore[return-value]
 
 
-def _sample_chunks(model: object, radii: np.ndarray, nodes: np.ndarray, n_samples: int,
+def _sample_chunks(model: NodeModel, radii: np.ndarray, nodes: np.ndarray, n_samples: int,
                    seed: int, per_frame: bool,
                    chunk_rows: int) -> Iterator[tuple[int, np.ndarray]]:  # fmt: skip
     """Yield ``(samples in this chunk, values (samples, len(nodes)))`` until
@@ -144,7 +145,7 @@ def _sample_chunks(model: object, radii: np.ndarray, nodes: np.ndarray, n_sample
 
 
 def monte_carlo_envelope(
-    model: object,
+    model: NodeModel,
     radii: Sequence[float] | np.ndarray,
     n_samples: int,
     seed: int = 0,
@@ -178,7 +179,7 @@ def monte_carlo_envelope(
 
 
 def monte_carlo_timed(
-    model: object,
+    model: NodeModel,
     radii: Sequence[float] | np.ndarray,
     seconds: float,
     seed: int = 0,
@@ -193,7 +194,7 @@ def monte_carlo_timed(
     return _envelope(model, radii, np.iinfo(np.int64).max, seed, frames, per_frame, chunk_rows, seconds)
 
 
-def _envelope(model: object, radii: Sequence[float] | np.ndarray, n_samples: int, seed: int,
+def _envelope(model: NodeModel, radii: Sequence[float] | np.ndarray, n_samples: int, seed: int,
               frames: Sequence[int] | np.ndarray | None, per_frame: bool, chunk_rows: int,
               seconds: float | None) -> tuple[np.ndarray, np.ndarray, int]:  # fmt: skip
     if n_samples < 1:
@@ -214,7 +215,7 @@ def _envelope(model: object, radii: Sequence[float] | np.ndarray, n_samples: int
 
 
 def random_deviation_curves(
-    model: object,
+    model: NodeModel,
     radii: Sequence[float] | np.ndarray,
     n_curves: int,
     seed: int = 0,

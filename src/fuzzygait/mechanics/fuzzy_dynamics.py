@@ -11,7 +11,7 @@ for comparison.
 from __future__ import annotations
 
 import time
-from typing import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import xarray as xr
@@ -41,7 +41,8 @@ def parse_fuzzy(specs: Sequence[str]) -> dict[str, float]:
             if not sep:
                 raise ParameterError(f"--fuzzy {item!r}: write NAME=SPREAD, e.g. E=10%")
             if name not in LEG_PARAMETERS:
-                raise ParameterError(f"--fuzzy {item!r}: unknown parameter {name!r}; known: {', '.join(LEG_PARAMETERS)}")
+                known = ", ".join(LEG_PARAMETERS)
+                raise ParameterError(f"--fuzzy {item!r}: unknown parameter {name!r}; known: {known}")
             text = value.strip()
             try:
                 spread = float(text[:-1]) / 100 if text.endswith("%") else float(text)

@@ -10,7 +10,7 @@ it (thesis OP-III).  Every ``evaluate`` is one forward simulation.
 from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
-from dataclasses import astuple, dataclass, field
+from dataclasses import astuple, dataclass
 
 import numpy as np
 
@@ -28,7 +28,6 @@ TARGETS = (
 )
 
 
-@dataclass
 class LegTargetModel:
     """One target output of a scenario as a function of some leg parameters.
 
@@ -40,30 +39,31 @@ class LegTargetModel:
         base: the full parameter vector the others are fixed at (default: the scenario's).
         dt, duration: time step and simulated time (s; default: the scenario's).
         scheme: time stepping scheme, "variational" or "energy-momentum" (both give sensitivities).
+
+    Attributes ``runs`` counts the simulations run.
     """
 
-    simulator: LegSimulator
-    target: str = "total_deformation_energy"
-    names: Sequence[str] = ("E",)
-    base: np.ndarray | None = None
-    dt: float | None = None
-    duration: float | None = None
-    scheme: str = "variational"
-    runs: int = field(default=0, init=False)
-
-    def __post_init__(self) -> None:
-        if self.target not in TARGETS:
-            raise ParameterError(f"unknown target {self.target!r}; choose one of {', '.join(TARGETS)}")
-        unknown = [n for n in self.names if n not in LEG_PARAMETERS]
+    def __init__(self, simulator: LegSimulator, target: str = "total_deformation_energy",
+                 names: Sequence[str] = ("E",), base: np.ndarray | None = None, dt: float | None = None,
+                 duration: float | None = None, scheme: str = "variational") -> None:  # fmt: skip
+        if target not in TARGETS:
+            raise ParameterError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+        unknown = [n for n in names if n not in LEG_PARAMETERS]
         if unknown:
             raise ParameterError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(LEG_PARAMETERS)}")
-        self.names = tuple(self.names)
-        self.base = self.simulator.default_parameters.copy() if self.base is None else np.asarray(self.base, float)
-        self.dt = self.simulator.preset.dt if self.dt is None else float(self.dt)
-        self.duration = self.simulator.preset.duration if self.duration is None else float(self.duration)
+        self.simulator, self.target, self.scheme = simulator, target, scheme
+        self.names: tuple[str, ...] = tuple(names)
+        self.base: np.ndarray = simulator.default_parameters.copy() if base is None else np.asarray(base, float)
+        self.dt: float = simulator.preset.dt if dt is None else float(dt)
+        self.duration: float = simulator.preset.duration if duration is None else float(duration)
         n_steps = int(round(self.duration / self.dt))
         self.times = np.arange(n_steps + 1) * self.dt
         self._index = [LEG_PARAMETERS.index(n) for n in self.names]
+        self.runs = 0
+
+    def __repr__(self) -> str:
+        return (f"LegTargetModel({self.simulator.scenario!r}, {self.target!r}, names={self.names}, "
+                f"dt={self.dt:g}, duration={self.duration:g}, scheme={self.scheme!r})")  # fmt: skip
 
     def full_parameters(self, p: np.ndarray) -> np.ndarray:
         """The full leg parameter vector with the varying entries set to ``p``."""
@@ -110,7 +110,8 @@ class LegTargetModel:
 
 @dataclass(frozen=True)
 class LegModelRecipe:
-    """Recipe of :class:`LegTargetModel` for the engine's :class:`~fuzzygait.uncertainty.execution.Evaluator`: one target output of
+    """Recipe of :class:`LegTargetModel` for the engine's
+    :class:`~fuzzygait.uncertainty.execution.Evaluator`: one target output of
     a leg scenario as a function of the named parameters.
 
     Args:

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import xarray as xr
 from scipy.optimize import linprog
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
 
 
 def repair_nesting(hull: np.ndarray) -> np.ndarray:
@@ -100,7 +101,7 @@ def _area_left_of(xs: np.ndarray, mu: np.ndarray, cut: np.ndarray) -> np.ndarray
     return area
 
 
-def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
+def sufficient_runs(result: xr.Dataset, params: FuzzyVector | FuzzyBalls, evaluate: Callable[[np.ndarray], object],
                     tolerances: Sequence[float] = (0.01,)) -> tuple[int, list[tuple[int, int]]]:  # fmt: skip
     """How many forward runs a Graph Follower result's hulls actually need.
 
@@ -136,7 +137,7 @@ def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
         return 0, [(0, 0)] * len(tolerances)
     extremisers = result["extremiser"].sel(alpha=alphas).to_numpy()
     points = np.unique(extremisers.reshape(-1, extremisers.shape[-1]), axis=0)
-    values = np.array([np.asarray(evaluate(p), dtype=float) for p in points])
+    values = np.array([_trajectory(evaluate(p)) for p in points])
     hulls = [result["hull"].sel(alpha=alpha).to_numpy() for alpha in alphas]  # (bound, time) each
     inside = [params.domain(alpha).contains(points, tol=1e-12 * float(np.max(np.abs(points)))) for alpha in alphas]
     sizes = []
@@ -148,6 +149,12 @@ def sufficient_runs(result: xr.Dataset, params: object, evaluate: object,
             covers.append(admissible[:, None] & (values >= hull[1] - slack))
         sizes.append(_cover_sizes(np.concatenate(covers, axis=1)))
     return points.shape[0], sizes
+
+
+def _trajectory(output: object) -> np.ndarray:
+    """A trajectory from ``evaluate``'s output: an array, or an Evaluation's values."""
+    values = getattr(output, "values", output)
+    return np.asarray(values, dtype=float)
 
 
 def _cover_sizes(cover: np.ndarray) -> tuple[int, int]:

@@ -59,28 +59,35 @@ class Evaluation:
     """One forward simulation: ``values (n_time,)`` and, when asked for and available,
     ``jacobian (n_time, n_p)`` = d values / d p."""
 
-    values: Array
-    jacobian: Array | None = None
+    values: np.ndarray
+    jacobian: np.ndarray | None = None
 
 
 @runtime_checkable
 class FuzzyModel(Protocol):
     """What the Graph Follower algorithm, the FRV-GFA and the checks need of a model
-    (see the module docstring)."""
+    (see the module docstring). Plain attributes or properties both do."""
 
-    times: Array
-    parameter_names: tuple[str, ...]
-    output: Output
-    capabilities: frozenset[str]
+    @property
+    def times(self) -> np.ndarray: ...
 
-    def evaluate(self, p: Array, *, sensitivities: bool = False) -> Evaluation: ...
+    @property
+    def parameter_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def output(self) -> Output: ...
+
+    @property
+    def capabilities(self) -> frozenset[str]: ...
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation: ...
 
 
 @runtime_checkable
 class NodeModel(FuzzyModel, Protocol):
     """A :class:`FuzzyModel` with the ``"nodes"`` capability."""
 
-    def evaluate_nodes(self, P: Array, nodes: NDArray[np.int_]) -> Array: ...
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass
@@ -129,10 +136,10 @@ def model_problem(model: object) -> str | None:
         return (f"{type(model).__name__} lacks {', '.join(missing)}; a model needs times, parameter_names, "
                 "output, capabilities and evaluate(p, sensitivities=False) -> Evaluation "
                 "(see fuzzygait.uncertainty.protocol), or use FunctionModel(f, times)")  # fmt: skip
-    times = np.asarray(getattr(model, "times"))
+    times = np.asarray(model.times)
     if times.ndim != 1 or times.size == 0:
         return f"{type(model).__name__}.times must be a non-empty 1-D array of time nodes; got shape {times.shape}"
-    unknown = set(getattr(model, "capabilities")) - CAPABILITIES
+    unknown = set(model.capabilities) - CAPABILITIES
     if unknown:
         return f"{type(model).__name__} declares unknown capabilities {sorted(unknown)}; known: {sorted(CAPABILITIES)}"
     if NODES in model.capabilities and not callable(getattr(model, "evaluate_nodes", None)):  # type: ignore[attr-defined]
@@ -148,8 +155,9 @@ def as_model(model: object, times: Sequence[float] | Array | None = None) -> Fuz
         if isinstance(model, FuzzyModel):
             raise ParameterError("times= is only for plain functions; this model has its own times")
         if not callable(model):
-            raise ParameterError(f"the model must be a FuzzyModel or a function p -> values; got {type(model).__name__}")
-        return FunctionModel(model, np.asarray(times, dtype=float))  # type: ignore[arg-type]
+            kind = type(model).__name__
+            raise ParameterError(f"the model must be a FuzzyModel or a function p -> values; got {kind}")
+        return FunctionModel(model, np.asarray(times, dtype=float))
     problem = model_problem(model)
     if problem is not None:
         raise ParameterError(f"not a model: {problem}")

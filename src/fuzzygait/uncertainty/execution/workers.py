@@ -186,7 +186,7 @@ def evaluate_rows(
         with lock:
             for i, p in enumerate(np.asarray(P, dtype=float)):
                 row = start + i
-                if out_sens is not None:
+                if out_sens is not None and sens is not None:
                     evaluation = model.evaluate(p.copy(), sensitivities=True)
                     f, jac = evaluation.values, np.asarray(evaluation.jacobian, dtype=float)
                     if jac.size != out_sens[i].size:
@@ -206,7 +206,7 @@ def evaluate_rows(
         return status
     if values.visible(status["stop"]) and (sens is None or sens.visible(status["stop"])):
         values.write(start, out)
-        if sens is not None:
+        if sens is not None and out_sens is not None:
             sens.write(start, out_sens)
     else:
         status["values"] = out

@@ -53,8 +53,10 @@ class BatchedObjective:
         self.h = fd_step * np.asarray(scale, dtype=float)
 
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        if P.shape[0] == 0:  # e.g. no neighbours at this shift: nothing to evaluate
+            return np.empty(0)
         self.counts.node_evaluations += int(P.shape[0])
-        out = np.asarray(self.model.model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
+        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
         return self.sense * out
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -117,10 +119,10 @@ def maximise(
         reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
         active[idx[(better & (gain <= tolerance)) | (reach[idx] < MIN_REACH)]] = False
-    value = value.reshape(len(starts), k)
-    pick = np.argmax(value, axis=0)
+    per_start = value.reshape(len(starts), k)
+    pick = np.argmax(per_start, axis=0)
     points = P.reshape(len(starts), k, -1)[pick, np.arange(k)]
-    return points, value[pick, np.arange(k)]
+    return points, per_start[pick, np.arange(k)]
 
 
 def neighbour_pass(

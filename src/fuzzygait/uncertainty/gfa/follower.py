@@ -27,6 +27,7 @@ from fuzzygait.uncertainty.gfa.batched import optimisation_nodes
 from fuzzygait.uncertainty.gfa.library import Library
 from fuzzygait.uncertainty.gfa.strategies import Direct, Linearised
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
+
 #: Slack (relative to the parameter scale) when deciding whether a library entry lies
 #: in an α-level set; covers rounding in projections onto the set.
 MEMBERSHIP_SLACK = 1e-12
@@ -141,8 +142,8 @@ class _Follower:
                 fraction = np.full_like(fraction, 0.25)
             return step * fraction
         total0, total1 = float(slope0.sum()), float(slope1.sum())
-        fraction = total0 / (total0 - total1) if total1 < 0 else 0.25
-        return step * float(np.clip(fraction, 0.05, 0.9))
+        along = total0 / (total0 - total1) if total1 < 0 else 0.25
+        return step * float(np.clip(along, 0.05, 0.9))
 
     def _direct(self, alpha: float, node: int, sense: float,
                 warm: np.ndarray | None) -> np.ndarray:  # fmt: skip
