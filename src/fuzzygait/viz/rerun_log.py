@@ -63,8 +63,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
-from fuzzygait.io.atomic import atomic_output
 from fuzzygait.core.trial import Trial
+from fuzzygait.io.atomic import atomic_output
 from fuzzygait.kinematics.model import CGMResult
 from fuzzygait.markererror.result import angle_components, ball_radius, component_hull
 
