@@ -14,30 +14,49 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.io import Event, Trial, read_c3d
-from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
-from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
-from fuzzygait.mocap import fill_trial_gaps, filter_trial
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import trial_gait_events
-from fuzzygait.mocap.gaps import Gap
+from fuzzygait.io import Event, Trial, read_c3d, write_c3d
+from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
+from fuzzygait.io.tables import write_table
+from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
+from fuzzygait.mocap import fill_trial_gaps, filter_trial
+from fuzzygait.mocap.gaps import Gap, Method
 
 AXES = ("X", "Y", "Z")
 
 
 @dataclass(frozen=True)
 class Preprocessing:
-    """Pre-processing options: gaps up to ``max_gap`` frames filled, then a zero-lag
-    Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False."""
+    """Pre-processing options: gaps up to ``max_gap`` frames filled by ``fill_method``
+    (``"auto"``, ``"spline"`` or ``"pattern"``, see :func:`fuzzygait.mocap.gaps.fill_gaps`),
+    then a zero-lag Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False."""
 
     max_gap: int = 10
     cutoff: float = 6.0
     filter: bool = True
+    fill_method: Method = "auto"
 
     def apply(self, trial: Trial) -> tuple[Trial, list[Gap]]:
         """The pre-processed trial and its gap report."""
-        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap)
+        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap, method=self.fill_method)
         return (filter_trial(filled, cutoff=self.cutoff) if self.filter else filled), gaps
+
+
+#: The default pre-processing (gaps up to 10 frames, auto method; 6 Hz low-pass).
+DEFAULT_PREPROCESSING = Preprocessing()
+
+
+def preprocess_file(
+    input_file: str | os.PathLike[str], out_file: str | os.PathLike[str], preprocessing: Preprocessing = Preprocessing()
+) -> tuple[Trial, list[Gap]]:
+    """Read a C3D file, pre-process it and write the result to ``out_file`` (its folder
+    created); returns the trial as read and the gap report."""
+    raw = read_c3d(input_file)
+    cleaned, gaps = preprocessing.apply(raw)
+    Path(out_file).parent.mkdir(parents=True, exist_ok=True)
+    write_c3d(cleaned, out_file)
+    return raw, gaps
 
 
 @dataclass
@@ -149,3 +168,43 @@ def model_output_trial(run: AnglesRun) -> Trial:
     out.parameters.update(run.subject.to_processing())
     out.events = list(run.events)
     return out
+
+
+
+@dataclass(frozen=True)
+class AngleOutputs:
+    """Files to write from a run (each optional): the angles per frame (``table``, .csv or
+    .parquet), their mean and SD over gait cycles (``cycles``) and the model-output C3D
+    (``c3d``, see :func:`model_output_trial`)."""
+
+    table: Path | None = None
+    cycles: Path | None = None
+    c3d: Path | None = None
+
+    def write(self, run: AnglesRun) -> list[Path]:
+        """Write the files asked for (folders created); returns them in that order."""
+        written = []
+        for path, make in ((self.table, run.angle_table), (self.cycles, run.cycle_statistics)):
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                written.append(write_table(make(), path))
+        if self.c3d is not None:
+            self.c3d.parent.mkdir(parents=True, exist_ok=True)
+            write_c3d(model_output_trial(run), self.c3d)
+            written.append(self.c3d)
+        return written
+
+
+def angles_to_files(
+    dynamic: str | os.PathLike[str] | Trial,
+    outputs: AngleOutputs,
+    *,
+    static: str | os.PathLike[str] | Trial | None = None,
+    subject_file: str | os.PathLike[str] | None = None,
+    preprocessing: Preprocessing = Preprocessing(),
+    flat_foot: bool = False,
+) -> tuple[AnglesRun, list[Path]]:
+    """:func:`run_angles` and then ``outputs.write``: the run and the files written."""
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
+                     flat_foot=flat_foot)  # fmt: skip
+    return run, outputs.write(run)

@@ -20,11 +20,11 @@ import pandas as pd
 from rich.console import Console
 
 from fuzzygait.io.tables import write_table
-from fuzzygait.markererror.analysis import analyse_trial
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, write_report
+from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
 #: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
 DEMO_FUZZY_ANGLES = ("LKneeAngles", "RKneeAngles")
@@ -74,10 +74,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     comparison = truth_comparison(run, pd.read_csv(data / "walking_truth_angles.csv"))
     if progress is not None:
         progress.print("fuzzy marker-error analysis of the knee angles (about 30 s)...", markup=False)
-    analysis = analyse_trial(
-        data / "walking_noisy.c3d", static=data / "static.c3d", subject_file=data / "subject.toml",
-        angles=DEMO_FUZZY_ANGLES, alphas=DEMO_ALPHAS,
-    )  # fmt: skip
+    analysis = analyse_run(run, MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES))
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
     knee = analysis.delta_phi.loc[["LKneeAngles_X", "RKneeAngles_X"]]
 

@@ -16,6 +16,7 @@ import pandas as pd
 
 from fuzzygait import __version__
 from fuzzygait.markererror.result import ball_radius
+from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.report.bands import (
     SIDE_NAMES,
@@ -32,10 +33,6 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["index_page", "trial_page"]
-
-#: Readable names of the marker error sources (``fuzzygait.markererror.sources``).
-SOURCE_NAMES = {"measurement": "measurement system", "placement": "marker placement",
-                "sta": "soft-tissue artefact"}  # fmt: skip
 
 
 def _esc(value: object) -> str:
@@ -55,7 +52,7 @@ def _sources_text(fuzzy: xr.Dataset) -> str:
     """``"measurement,sta"`` attribute -> ``"measurement system, soft-tissue artefact"``."""
     sources = fuzzy.attrs.get("sources", "")
     names = sources.split(",") if isinstance(sources, str) else list(np.atleast_1d(sources))
-    return ", ".join(SOURCE_NAMES.get(str(n).strip(), str(n).strip()) for n in names if str(n).strip())
+    return ", ".join(SOURCE_TITLES.get(str(n).strip(), str(n).strip()) for n in names if str(n).strip())
 
 
 CSS = """

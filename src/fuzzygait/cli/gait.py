@@ -1,0 +1,295 @@
+"""Commands on walking trials: info, preprocess, angles, demo, uncertainty, report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from fuzzygait.cli.app import (
+    EXIT_USER_ERROR,
+    StageBars,
+    app,
+    debugging,
+    err,
+    out,
+    progress_bars,
+    progress_over,
+    user_errors,
+)
+from fuzzygait.cli.options import (
+    DEFAULT_ALPHAS,
+    DEFAULT_SOURCES,
+    AlphasOption,
+    AnglesOption,
+    CutoffOption,
+    ErrorsOption,
+    MaxGapOption,
+    NoFilterOption,
+    SourcesOption,
+    StaticOption,
+    SubjectOption,
+    parse_alphas,
+    parse_angles,
+)
+from fuzzygait.core.errors import FuzzyGaitError
+
+if TYPE_CHECKING:
+    from fuzzygait.workflows.angles import AnglesRun
+
+
+def _check_workers(workers: int) -> None:
+    if workers < 1:
+        raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
+
+
+# --------------------------------------------------------------------------- info
+@app.command()
+def info(
+    files: Annotated[list[Path], typer.Argument(help="C3D files to summarise.")],
+) -> None:
+    """Summarise C3D files: rate, frames, markers, gaps, events, units, subject parameters.
+
+    Files that cannot be read get one error line each; the others are still summarised.
+    The exit code is non-zero when any file failed.
+    """
+    from fuzzygait.io import read_c3d
+    from fuzzygait.viz.summary import describe_trial
+
+    failed = 0
+    for path in progress_over(files, "reading"):
+        try:
+            with user_errors():
+                out.print(describe_trial(read_c3d(path)), markup=False)
+        except typer.Exit:
+            failed += 1
+    if failed:
+        if len(files) > 1:
+            err.print(f"fuzzygait: {failed} of {len(files)} files could not be read", markup=False)
+        raise typer.Exit(EXIT_USER_ERROR)
+
+
+# --------------------------------------------------------------------------- preprocess
+@app.command()
+def preprocess(
+    input_file: Annotated[Path, typer.Argument(metavar="IN.c3d", help="Trial to clean.")],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Output C3D file.")],
+    max_gap: Annotated[int, typer.Option(help="Longest gap (frames) to fill; 0 fills none.")] = 10,
+    fill_method: Annotated[
+        str,
+        typer.Option(
+            "--fill-method",
+            help="auto (per gap, whichever refills nearby pseudo-gaps better), spline "
+            "(cubic spline through the marker's own samples) or pattern (regression on "
+            "the other markers visible, spline where there are too few).",
+        ),
+    ] = "auto",
+    cutoff: Annotated[
+        float, typer.Option(help="Low-pass cutoff (Hz) of the 4th-order zero-lag Butterworth.")
+    ] = 6.0,
+    no_filter: Annotated[bool, typer.Option("--no-filter", help="Fill gaps only.")] = False,
+) -> None:
+    """Fill marker gaps (spline or inter-marker pattern) and low-pass filter (Butterworth, zero lag)."""
+    from fuzzygait.mocap.gaps import METHODS, methods_used
+    from fuzzygait.workflows.angles import Preprocessing, preprocess_file
+
+    with user_errors():
+        if out_file.suffix.lower() != ".c3d":
+            raise FuzzyGaitError(f"{out_file}: --out must name a .c3d file")
+        if fill_method not in METHODS:
+            raise FuzzyGaitError(f"--fill-method must be one of {', '.join(METHODS)}; got {fill_method!r}")
+        options = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter, fill_method=fill_method)
+        trial, gaps = preprocess_file(input_file, out_file, options)
+    n_filled = sum(g.filled for g in gaps)
+    by_method = methods_used(gaps)
+    out.print(
+        f"{input_file.name}: filled {n_filled} of {len(gaps)} gaps"
+        + (f" ({by_method})" if by_method else "")
+        + ("" if no_filter else f", low-pass {cutoff:g} Hz")
+        + f" -> {out_file}",
+        markup=False,
+    )
+    for gap in (g for g in gaps if not g.filled):
+        out.print(
+            f"  not filled: {gap.marker} frames {trial.first_frame + gap.start}"
+            f"-{trial.first_frame + gap.start + gap.length - 1} ({gap.reason})",
+            markup=False,
+        )
+
+
+# --------------------------------------------------------------------------- angles
+@app.command()
+def angles(
+    dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
+    static: StaticOption = None,
+    subject: SubjectOption = None,
+    out_table: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Angles per frame, .csv or .parquet.")
+    ] = None,
+    c3d_out: Annotated[
+        Path | None, typer.Option("--c3d-out", help="C3D with markers, angles and virtual markers.")
+    ] = None,
+    cycles: Annotated[
+        Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
+    ] = None,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
+    flat_foot: Annotated[bool, typer.Option("--flat-foot", help="Static calibration with flat feet.")] = False,
+) -> None:
+    """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
+    from fuzzygait.io.tables import check_table_path
+    from fuzzygait.workflows.angles import AngleOutputs, Preprocessing, angles_to_files
+
+    with user_errors():
+        for path, option in ((out_table, "--out"), (cycles, "--cycles")):
+            if path is not None:
+                check_table_path(path, option)
+        if c3d_out is not None and c3d_out.suffix.lower() != ".c3d":
+            raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
+        run, written = angles_to_files(
+            dynamic,
+            AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out),
+            static=static,
+            subject_file=subject,
+            preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+            flat_foot=flat_foot,
+        )
+    _print_run_summary(run)
+    for path in written:
+        out.print(f"wrote {path}", markup=False)
+
+
+def _print_run_summary(run: AnglesRun) -> None:
+    """One line on the trial and the angles computed, then the run's notes."""
+    trial = run.trial
+    computed = [name for name in run.result.angles if name not in run.result.unavailable]
+    counts = {side: sum(1 for e in run.events if e.context == ctx and e.label == "Foot Strike")
+              for side, ctx in (("L", "Left"), ("R", "Right"))}  # fmt: skip
+    out.print(
+        f"{trial.name}: {trial.n_frames} frames at {trial.rate:g} Hz, "
+        f"{len(computed)} angles computed, foot strikes L {counts['L']} / R {counts['R']} "
+        f"(events: {run.event_source})",
+        markup=False,
+    )
+    for note in run.notes:
+        out.print(f"  note: {note}", markup=False)
+
+
+# --------------------------------------------------------------------------- demo
+@app.command()
+def demo(
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for the results.")] = Path(
+        "results/demo"
+    ),
+    data: Annotated[
+        Path, typer.Option("--data", help="Sample-data folder (generated when absent).")
+    ] = Path("sample_data"),
+) -> None:
+    """The main job on the bundled sample: angles, gait cycles, a plot and a summary."""
+    from fuzzygait.workflows.demo import run_demo
+
+    with user_errors():
+        summary = run_demo(data, out_dir, progress=err)
+    out.print(summary, markup=False)
+
+
+# --------------------------------------------------------------------------- uncertainty
+@app.command()
+def uncertainty(
+    dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
+    static: StaticOption = None,
+    subject: SubjectOption = None,
+    errors: ErrorsOption = None,
+    sources: SourcesOption = DEFAULT_SOURCES,
+    alphas: AlphasOption = DEFAULT_ALPHAS,
+    angle_names: AnglesOption = None,
+    method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
+    workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
+) -> None:
+    """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
+    every angle component over all marker deviations inside the α-level balls."""
+    from fuzzygait.uncertainty.storage import SUFFIXES
+    from fuzzygait.workflows.angles import Preprocessing
+    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
+
+    with user_errors():
+        if out_file.suffix.lower() not in SUFFIXES:
+            raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
+        if rrd is not None and rrd.suffix.lower() != ".rrd":
+            raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+        _check_workers(workers)
+        selected = parse_angles(angle_names)
+        settings = MarkerErrorSettings.create(errors_file=errors, sources=sources.split(","),
+                                              alphas=parse_alphas(alphas), angles=selected, method=method,
+                                              workers=workers)  # fmt: skip
+        with progress_bars() as bars:
+            bar = StageBars(bars)
+            bar.stage("fuzzy angles")
+            analysis = analyse_to_files(
+                dynamic, out_file, rrd=rrd, static=static, subject_file=subject, settings=settings,
+                preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+                progress=bar.update,
+            )  # fmt: skip
+    _print_run_summary(analysis.run)
+    out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|:", markup=False)
+    out.print(analysis.delta_phi.round(1).to_string(), markup=False)
+    out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
+
+
+# --------------------------------------------------------------------------- report
+@app.command()
+def report(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(metavar="INPUT", help="Walking trials: C3D files, or folders searched "
+                       "recursively for *.c3d (files there with 'static' in the name are skipped)."),
+    ],
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
+    static: StaticOption = None,
+    subject: SubjectOption = None,
+    errors: ErrorsOption = None,
+    sources: SourcesOption = DEFAULT_SOURCES,
+    alphas: AlphasOption = DEFAULT_ALPHAS,
+    angle_names: AnglesOption = None,
+    workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
+    no_filter: NoFilterOption = False,
+    max_gap: MaxGapOption = 10,
+    cutoff: CutoffOption = 6.0,
+) -> None:
+    """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
+    bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
+
+    A trial that fails is listed in the index with its error; the others are still
+    reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
+    """
+    from fuzzygait.workflows.angles import Preprocessing
+    from fuzzygait.workflows.batch_report import write_batch_report
+    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
+
+    def failed(path: Path, error: str) -> None:
+        where = "" if path.name in error else f"{path}: "
+        err.print(f"fuzzygait: failed: {where}{error}", markup=False)
+
+    with user_errors():
+        alpha_levels = parse_alphas(alphas)
+        _check_workers(workers)
+        settings = MarkerErrorSettings.create(errors_file=errors, sources=sources, alphas=alpha_levels,
+                                              angles=parse_angles(angle_names), workers=workers)  # fmt: skip
+        with progress_bars() as bars:
+            result = write_batch_report(
+                inputs, out_dir, static=static, subject_file=subject, settings=settings,
+                preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+                strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
+            )  # fmt: skip
+    out.print(f"report: {result.n_ok} of {len(result.entries)} trials OK"
+              + (f", {result.n_failed} failed" if result.n_failed else ""), markup=False)  # fmt: skip
+    out.print(f"wrote {result.index}", markup=False)
+    if result.n_ok == 0:
+        raise typer.Exit(EXIT_USER_ERROR)

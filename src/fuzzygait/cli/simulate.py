@@ -1,0 +1,216 @@
+"""Commands on the leg + prosthesis model: simulate, fuzzy-sim, frv-sim."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from fuzzygait.cli.app import StageBars, app, out, progress_bars, user_errors
+from fuzzygait.cli.options import parse_alphas, parse_overrides
+from fuzzygait.core.errors import FuzzyGaitError
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+NodesOption = Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")]
+FixedValuesOption = Annotated[
+    list[str] | None, typer.Option("--set", metavar="NAME=VALUE,...", help="Fixed parameter values (SI units).")
+]
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Simulation results, .nc or .zarr.")],
+    nodes: NodesOption = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's, 0.001.")] = None,
+    duration: Annotated[
+        float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's, 2.")
+    ] = None,
+    overrides: Annotated[
+        list[str] | None,
+        typer.Option("--set", metavar="NAME=VALUE,...", help="Parameter values in SI units, comma-separated "
+                     "or repeated, e.g. E=6e5,eta=2 (names: E, nu, rho, eta, thigh_mass, thigh_J1..3, "
+                     "shank_mass, shank_J1..3); default: the scenario's."),
+    ] = None,  # fmt: skip
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", help="Also plot the energies over time (.png, .svg or .pdf).")
+    ] = None,
+    scheme: Annotated[
+        str, typer.Option(help="Time integrator: variational (thesis Eq. 4.26) or energy-momentum "
+                          "(exact energy balance, more robust for very flexible and stiff blades).")
+    ] = "variational",
+    sensitivities: Annotated[
+        bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities "
+                           "(about twice the cost of a plain run).")
+    ] = False,
+) -> None:
+    """Simulate the leg with the prosthesis blade (swing or stance scenario) and save
+    positions, directors, joint angles and energies over time.
+
+    Nothing is written when the simulation fails: try a smaller --dt or more damping then.
+    """
+    from fuzzygait.workflows.fuzzy_dynamics import (
+        LegSetup,
+        SimulationOutputs,
+        check_scenario,
+        check_scheme,
+        simulate_leg,
+        simulation_timing,
+    )
+    from fuzzygait.workflows.outputs import check_output_suffixes
+
+    with user_errors():
+        check_scenario(scenario)
+        check_output_suffixes(out_file, rrd, {"--plot": plot})
+        if nodes < 2:
+            raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
+        step, span = simulation_timing(scenario, dt, duration)
+        check_scheme(scheme)
+        values = parse_overrides(overrides or [])
+        with progress_bars() as bars:
+            ds, written = simulate_leg(
+                LegSetup(scenario, nodes, step, span, values, scheme), SimulationOutputs(out_file, plot=plot, rrd=rrd),
+                sensitivities=sensitivities, progress=StageBars(bars),
+            )  # fmt: skip
+    _print_simulation_summary(ds)
+    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+
+
+@app.command("fuzzy-sim")
+def fuzzy_sim(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
+    fuzzy: Annotated[
+        list[str], typer.Option("--fuzzy", metavar="NAME=SPREAD,...",
+                                help="Triangular fuzzy parameters as ± relative spreads, e.g. E=10% (repeatable).")
+    ],
+    out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy result, .zarr or .nc.")],
+    target: Annotated[
+        str | None, typer.Option(help="total_deformation_energy (swing default), max_element_energy (stance "
+                                 "default), last_node_x|y|z.")
+    ] = None,  # fmt: skip
+    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.5,1",
+    stride: Annotated[int, typer.Option(help="Optimise every STRIDE-th time node (thesis: 100).")] = 100,
+    novelty: Annotated[float, typer.Option(help="Novelty tolerance, relative (thesis: 0.01 % = 1e-4).")] = 1e-4,
+    nodes: NodesOption = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's.")] = None,
+    duration: Annotated[
+        float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's.")
+    ] = None,
+    overrides: FixedValuesOption = None,
+    scheme: Annotated[str, typer.Option(help="variational or energy-momentum.")] = "variational",
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write the hulls as a Rerun recording.")] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Also plot the hulls (.png, .svg, .pdf).")] = None,
+    parameter_plot: Annotated[
+        Path | None, typer.Option("--parameter-plot", help="Also plot the extremising parameter sets (Fig. 5.6).")
+    ] = None,
+) -> None:
+    """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
+    (Graph Follower algorithm, linearised with the simulator's sensitivities)."""
+    from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
+    from fuzzygait.workflows.fuzzy_dynamics import FuzzySimOutputs, LegSetup, check_scenario, fuzzy_simulation
+    from fuzzygait.workflows.outputs import check_output_suffixes
+
+    with user_errors():
+        check_scenario(scenario)
+        check_output_suffixes(out_file, rrd, {"--plot": plot, "--parameter-plot": parameter_plot})
+        spreads = parse_fuzzy(fuzzy)
+        levels = parse_alphas(alphas)
+        values = parse_overrides(overrides or [])
+        with progress_bars() as bars:
+            result, written = fuzzy_simulation(
+                LegSetup(scenario, nodes, dt, duration, values, scheme), spreads,
+                FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
+                target=target, alphas=levels, stride=stride, novelty=novelty, progress=StageBars(bars),
+            )  # fmt: skip
+    attrs = result.attrs
+    out.print(
+        f"{scenario}: {attrs['target']} with fuzzy {', '.join(f'{n} ±{100 * s:g} %' for n, s in spreads.items())}; "
+        f"{attrs['model_evaluations']} forward simulations, {attrs['optimisations']} optimisations, "
+        f"wall time {attrs['wall_time_s']:.1f} s",
+        markup=False,
+    )
+    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+
+
+@app.command("frv-sim")
+def frv_sim(
+    scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="stance (thesis §5.7) or swing.")],
+    out_store: Annotated[Path, typer.Option("--out", "-o", help="FRV study, a .zarr directory; an existing "
+                                            "study is extended with --samples more samples.")],
+    parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter.")] = "E",
+    value: Annotated[
+        float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the scenario's.")
+    ] = None,
+    samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
+    disc: Annotated[int, typer.Option(help="Grouping grid points N_p-disc.")] = 100,
+    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
+    distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
+    seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
+    target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
+    overrides: FixedValuesOption = None,
+    nodes: NodesOption = 20,
+    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s).")] = None,
+    duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s).")] = None,
+    scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",
+    workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations.")] = 2,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Address of an existing Dask scheduler (e.g. tcp://host:8786).")
+    ] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists.")] = False,
+) -> None:
+    """FRV-GFA (thesis §2.7, §5.7): a leg parameter as a fuzzy random variable, grouped
+    samples, Graph Follower hulls on the occurring intervals only, output samples and
+    their counts in a chunked zarr store."""
+    from fuzzygait.workflows.frv_leg import FRVRequest, check_frv_parameter, run_frv_leg
+    from fuzzygait.workflows.fuzzy_dynamics import LegSetup, check_scenario
+
+    with user_errors():
+        check_scenario(scenario)
+        if out_store.suffix.lower() != ".zarr":
+            raise FuzzyGaitError(f"{out_store}: --out must be a .zarr directory")
+        check_frv_parameter(parameter)
+        values = parse_overrides(overrides or [])
+        levels = parse_alphas(alphas)
+        with progress_bars() as bars:
+            study = run_frv_leg(
+                LegSetup(scenario, nodes, dt, duration, values, scheme),
+                FRVRequest(parameter, value, samples, disc, levels, distribution, seed), out_store,
+                target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, progress=StageBars(bars),
+            )  # fmt: skip
+    counts = study.counts
+    out.print(
+        f"{scenario}: {counts.get('samples')} samples; occurring intervals {counts.get('occurring_intervals')} of "
+        f"{counts.get('possible_intervals')} possible; forward simulations {counts.get('forward_simulations')}; "
+        f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s",
+        markup=False,
+    )
+    out.print(f"wrote {out_store}", markup=False)
+
+
+def _print_simulation_summary(ds: xr.Dataset) -> None:
+    """Steps, wall time, Newton iterations, peak internal energy and energy drift."""
+    import numpy as np
+
+    from fuzzygait.viz.mechanics import energy_drift
+
+    attrs = ds.attrs
+    iterations = np.asarray(ds["newton_iterations"].values)
+    n_steps = iterations.size
+    per_step = f"{iterations.mean():.2f} mean, {iterations.max()} max" if n_steps else "none"
+    nodes = int(attrs.get("nodes", 0))
+    out.print(
+        f"{attrs.get('scenario')}: {n_steps} steps of {float(attrs['dt']):g} s to t = {float(attrs['duration']):g} s"
+        + (f", {nodes} blade nodes" if nodes else "")
+        + (f", {attrs['scheme']} scheme" if "scheme" in attrs else "")
+        + f"; wall time {float(attrs.get('wall_time_s', np.nan)):.2f} s"
+        + ("" if int(attrs.get("compiled", 0)) else " (not compiled)"),
+        markup=False,
+    )
+    out.print(f"  Newton iterations per step: {per_step}", markup=False)
+    out.print(f"  max internal energy: {float(ds['internal_energy'].max()):.4g} J", markup=False)
+    drift = float(np.nanmax(np.abs(energy_drift(ds))))
+    out.print(f"  energy drift max |total + dissipated − initial| / |initial|: {drift:.3g}", markup=False)

@@ -1,0 +1,171 @@
+"""Leg + prosthesis simulations as jobs (``fuzzygait simulate`` and ``fuzzy-sim``): the
+scenario's simulator built (or its compiled code loaded), one forward run or the fuzzy
+forward dynamics of :func:`fuzzygait.mechanics.fuzzy_dynamics.fuzzy_forward_dynamics`,
+and every output file written, or none of them."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+from fuzzygait.workflows.outputs import write_all_or_none
+from fuzzygait.workflows.progress import SILENT, StageProgress
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = [
+    "FuzzySimOutputs",
+    "LegSetup",
+    "SimulationOutputs",
+    "build_simulator",
+    "check_scenario",
+    "check_scheme",
+    "fuzzy_simulation",
+    "simulate_leg",
+    "simulation_timing",
+]
+
+
+def check_scenario(scenario: str) -> None:
+    """A :class:`FuzzyGaitError` unless ``scenario`` is one of the presets."""
+    if scenario not in SCENARIOS:
+        raise FuzzyGaitError(f"unknown scenario {scenario!r}; choose {' or '.join(SCENARIOS)}")
+
+
+def check_scheme(scheme: str) -> None:
+    """A :class:`FuzzyGaitError` unless ``scheme`` is a time integrator."""
+    from fuzzygait.mechanics.integrator import SCHEMES
+
+    if scheme not in SCHEMES:
+        raise FuzzyGaitError(f"--scheme must be {' or '.join(SCHEMES)}; got {scheme!r}")
+
+
+def simulation_timing(scenario: str, dt: float | None, duration: float | None) -> tuple[float, float]:
+    """The time step and simulated time (s): the given ones, else the scenario's."""
+    preset = SCENARIOS[scenario]
+    step = preset.dt if dt is None else dt
+    if not (np.isfinite(step) and step > 0):
+        raise FuzzyGaitError(f"--dt must be a time step > 0 s; got {dt:g}")
+    span = preset.duration if duration is None else duration
+    if not (np.isfinite(span) and span >= step):
+        raise FuzzyGaitError(f"--duration must be at least the time step ({step:g} s); got {span:g}")
+    return step, span
+
+
+@dataclass(frozen=True)
+class LegSetup:
+    """A leg scenario as simulated: preset, blade nodes, time step and simulated time (s;
+    None: the scenario's), parameter ``values`` in SI units (the others: the scenario's)
+    and the time integrator."""
+
+    scenario: str
+    nodes: int = 20
+    dt: float | None = None
+    duration: float | None = None
+    values: Mapping[str, float] = field(default_factory=dict)
+    scheme: str = "variational"
+
+
+def build_simulator(setup: LegSetup, progress: StageProgress = SILENT) -> tuple[LegSimulator, np.ndarray]:
+    """The scenario's simulator (built, or its compiled code loaded) and its full
+    parameter vector with the setup's values set."""
+    progress.stage(f"{setup.scenario}: building the model")
+    sim = LegSimulator(scenario=setup.scenario, nodes=setup.nodes)
+    return sim, sim.parameters(**setup.values)
+
+
+@dataclass(frozen=True)
+class SimulationOutputs:
+    """Files of a simulation: the results (``out_file``, .nc or .zarr) and optionally the
+    energies over time (``plot``) and a Rerun recording (``rrd``)."""
+
+    out_file: Path
+    plot: Path | None = None
+    rrd: Path | None = None
+
+
+def simulate_leg(
+    setup: LegSetup, outputs: SimulationOutputs, *, sensitivities: bool = False, progress: StageProgress = SILENT
+) -> tuple[xr.Dataset, list[Path]]:
+    """Simulate a scenario and write its outputs (all or none).
+
+    The dataset has positions, directors, joint angles and energies over time, and the
+    segment lengths and centre-of-mass distances (``thigh_length_m`` ...) in its
+    attributes.  Returns it and the files written.
+    """
+    from fuzzygait.uncertainty.storage import save_result
+    from fuzzygait.viz.mechanics import write_energy_figure, write_simulation_recording
+
+    check_scenario(setup.scenario)
+    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    sim, p = build_simulator(setup, progress)
+    progress.stage(f"{setup.scenario}: time steps", int(round(span / step)))
+    # the integrator checks for non-finite values itself; numpy's overflow warnings on a
+    # diverging step would only add lines to its one-line error
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities, scheme=setup.scheme,
+                     progress=progress.update)  # fmt: skip
+    config = sim.configuration
+    ds.attrs.update({f"{seg.name}_{key}_m": float(getattr(seg, key))
+                     for seg in (config.thigh, config.shank) for key in ("length", "com_from_proximal")})  # fmt: skip
+    written = write_all_or_none([
+        (outputs.out_file, lambda path: save_result(ds, path)),
+        (outputs.plot, lambda path: write_energy_figure(ds, path)),
+        (outputs.rrd, lambda path: write_simulation_recording(ds, path, configuration=config)),
+    ])  # fmt: skip
+    return ds, written
+
+
+@dataclass(frozen=True)
+class FuzzySimOutputs:
+    """Files of a fuzzy simulation: the result (``out_file``, .zarr or .nc) and optionally
+    the hull plot, the extremising parameter sets (Fig. 5.6) and a Rerun recording."""
+
+    out_file: Path
+    plot: Path | None = None
+    parameter_plot: Path | None = None
+    rrd: Path | None = None
+
+
+def fuzzy_simulation(
+    setup: LegSetup,
+    spreads: Mapping[str, float],
+    outputs: FuzzySimOutputs,
+    *,
+    target: str | None = None,
+    alphas: Sequence[float] = (0.0, 0.5, 1.0),
+    stride: int = 100,
+    novelty: float = 1e-4,
+    progress: StageProgress = SILENT,
+) -> tuple[xr.Dataset, list[Path]]:
+    """Fuzzy forward dynamics of a scenario (hulls of ``target`` for triangular fuzzy
+    parameters with relative ``spreads``) and its outputs (all or none)."""
+    from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics
+    from fuzzygait.uncertainty.storage import save_result
+    from fuzzygait.viz.figures import save_figure
+    from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
+
+    check_scenario(setup.scenario)
+    if stride < 1:
+        raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
+    sim, base = build_simulator(setup, progress)
+    progress.stage(f"{setup.scenario}: α-level optimisations")
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        result = fuzzy_forward_dynamics(
+            sim, spreads, target=target, base=base, alphas=alphas, stride=stride, novelty_tol=novelty,
+            dt=setup.dt, duration=setup.duration, scheme=setup.scheme, progress=progress.update,
+        )  # fmt: skip
+    written = write_all_or_none([
+        (outputs.out_file, lambda path: save_result(result, path)),
+        (outputs.plot, lambda path: save_figure(hull_figure(result), path)),
+        (outputs.parameter_plot, lambda path: save_figure(extremiser_figure(result), path)),
+        (outputs.rrd, lambda path: write_fuzzy_recording(result, path)),
+    ])  # fmt: skip
+    return result, written

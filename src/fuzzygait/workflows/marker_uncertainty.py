@@ -1,0 +1,168 @@
+"""Fuzzy joint angles of a trial from fuzzy marker errors (thesis §3.7.3, §5.5), as a job.
+
+:func:`analyse_run` takes a joint-angle run that is already computed
+(:func:`fuzzygait.workflows.angles.run_angles`), so a caller that needs both the
+deterministic angles and their uncertainty reads and processes the trial once;
+:func:`analyse_trial` does both from the files.  The analysis itself (arrays in, dataset
+out) is :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TypedDict, Unpack
+
+import pandas as pd
+import xarray as xr
+
+from fuzzygait.core.trial import Trial
+from fuzzygait.markererror.analysis import (
+    DEFAULT_ALPHAS,
+    FuzzyAngleOptions,
+    fuzzy_joint_angles,
+    relative_envelope_width,
+)
+from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
+from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
+
+__all__ = [
+    "DEFAULT_SETTINGS",
+    "MarkerErrorAnalysis",
+    "MarkerErrorSettings",
+    "analyse_run",
+    "analyse_to_files",
+    "analyse_trial",
+]
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass
+class MarkerErrorAnalysis:
+    """A trial's deterministic run, its fuzzy angles and their ΔΦ table."""
+
+    run: AnglesRun
+    fuzzy: xr.Dataset
+    delta_phi: pd.DataFrame
+    notes: list[str]
+
+
+class SettingsArguments(TypedDict, total=False):
+    """Arguments of :meth:`MarkerErrorSettings.create` (and :func:`analyse_trial`)."""
+
+    errors_file: str | os.PathLike[str] | None
+    sources: Sequence[str]
+    alphas: Sequence[float]
+    angles: Sequence[str] | None
+    method: str
+    workers: int | None
+
+
+@dataclass(frozen=True)
+class MarkerErrorSettings:
+    """What the marker-error analysis assumes and computes.
+
+    Attributes:
+        error_model: the marker error sizes (default: thesis Table 3.1).
+        sources: error sources summed into each marker's ball radius.
+        alphas: α-levels (1, the measured angle, is added).
+        angles: angle names to analyse (None: every computed angle).
+        method: ``"cartesian"`` or ``"spherical"`` marker deviations.
+        workers: processes for the angle components (None: up to 2).
+    """
+
+    error_model: ErrorModel = field(default_factory=ErrorModel)
+    sources: tuple[str, ...] = SOURCES
+    alphas: tuple[float, ...] = DEFAULT_ALPHAS
+    angles: tuple[str, ...] | None = None
+    method: str = "cartesian"
+    workers: int | None = None
+
+    @classmethod
+    def create(cls, **arguments: Unpack[SettingsArguments]) -> MarkerErrorSettings:
+        """Settings with the error sizes read from ``errors_file`` (once) and the sources
+        checked; the other arguments as the attributes (defaults: theirs)."""
+        names = parse_sources(arguments.get("sources", SOURCES))
+        errors_file = arguments.get("errors_file")
+        error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()
+        angles = arguments.get("angles")
+        return cls(error_model, names, tuple(arguments.get("alphas", DEFAULT_ALPHAS)),
+                   None if angles is None else tuple(angles), arguments.get("method", "cartesian"),
+                   arguments.get("workers"))  # fmt: skip
+
+    def options(self) -> FuzzyAngleOptions:
+        """The options of :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`."""
+        workers = self.workers if self.workers is not None else min(2, os.cpu_count() or 1)
+        return FuzzyAngleOptions(alphas=self.alphas, sources=self.sources, error_model=self.error_model,
+                                 method=self.method, workers=workers)  # fmt: skip
+
+
+#: The default analysis: Table 3.1 errors, all sources, α = 0, 0.25, 0.5, 0.75 (and 1).
+DEFAULT_SETTINGS = MarkerErrorSettings()
+
+
+def analyse_run(
+    run: AnglesRun, settings: MarkerErrorSettings = DEFAULT_SETTINGS, progress: Progress | None = None
+) -> MarkerErrorAnalysis:
+    """The fuzzy marker-error analysis of an already computed joint-angle run.
+
+    ``progress(done, total)`` is called per angle component.  The dataset's ``trial``
+    attribute is the trial's file name; the notes are the run's plus one line on the
+    assumed errors.
+    """
+    options = settings.options()
+    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress)
+    notes = list(run.notes) + [
+        f"marker errors: {', '.join(options.sources)} ({settings.error_model.source}), {options.method} "
+        f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}"
+    ]
+    fuzzy.attrs["trial"] = Path(run.trial.name).name
+    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)
+
+
+def analyse_trial(
+    dynamic: str | os.PathLike[str] | Trial,
+    *,
+    static: str | os.PathLike[str] | Trial | None = None,
+    subject_file: str | os.PathLike[str] | None = None,
+    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
+    progress: Progress | None = None,
+    **settings: Unpack[SettingsArguments],
+) -> MarkerErrorAnalysis:
+    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` followed by the fuzzy
+    marker-error analysis of every computed angle (or ``angles``); ``settings`` are the
+    arguments of :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``,
+    ``alphas``, ``angles``, ``method``, ``workers``)."""
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
+    return analyse_run(run, MarkerErrorSettings.create(**settings), progress)
+
+
+def analyse_to_files(
+    dynamic: str | os.PathLike[str] | Trial,
+    out_file: Path,
+    *,
+    rrd: Path | None = None,
+    static: str | os.PathLike[str] | Trial | None = None,
+    subject_file: str | os.PathLike[str] | None = None,
+    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
+    settings: MarkerErrorSettings = DEFAULT_SETTINGS,
+    progress: Progress | None = None,
+) -> MarkerErrorAnalysis:
+    """Run the pipeline and the marker-error analysis of one trial, save the fuzzy angles
+    to ``out_file`` (.nc or .zarr) and, with ``rrd``, a Rerun recording of the trial with
+    its bands (folders created)."""
+    from fuzzygait.uncertainty.storage import save_result
+
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
+    analysis = analyse_run(run, settings, progress)
+    out_file.parent.mkdir(parents=True, exist_ok=True)
+    save_result(analysis.fuzzy, out_file)
+    if rrd is not None:
+        from fuzzygait.viz.rerun_log import write_recording
+
+        rrd.parent.mkdir(parents=True, exist_ok=True)
+        write_recording(rrd, run.trial, run.result, analysis.fuzzy)
+    return analysis
