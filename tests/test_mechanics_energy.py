@@ -28,8 +28,9 @@ import numpy as np
 import pytest
 
 from fuzzygait.mechanics.cantilever import build_cantilever
-from fuzzygait.mechanics.integrator import integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.trajectory import trajectory_energies
 
 STIFF_BLADE = dict(E=59958e6, rho=1.71e3, eta=0.0)
 

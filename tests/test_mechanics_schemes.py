@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import SimulationError
-from fuzzygait.mechanics.integrator import integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.trajectory import trajectory_energies
 
 STIFF = dict(E=59958e6, rho=1.71e3)  # Table 4.2 blade
 

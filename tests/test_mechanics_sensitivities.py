@@ -32,9 +32,10 @@ import numpy as np
 import pytest
 
 from fuzzygait.mechanics.cantilever import build_cantilever
-from fuzzygait.mechanics.integrator import integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.trajectory import trajectory_energies
 
 DT = 1e-3
 N_STEPS = 60

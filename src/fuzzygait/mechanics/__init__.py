@@ -8,8 +8,12 @@ Modules, from the bottom up:
   three-layer (Eqs. 4.35–4.42),
 * :mod:`.geometry` — the blade centreline file and its discretisation,
 * :mod:`.presets` — Tables 4.1–4.4,
-* :mod:`.integrator` — the constrained forced variational integrator (Eqs. 4.16–4.29),
-  Newton with sparse LU, forward parameter sensitivities,
+* :mod:`.discrete` — the CasADi functions of a built system and their buffered evaluation,
+* :mod:`.schemes` — the step equations of the variational (Eqs. 4.16–4.29) and the
+  energy-momentum scheme: residuals, Jacobians, sensitivity terms,
+* :mod:`.integrator` — time stepping: Newton with a kept sparse LU, forward parameter
+  sensitivities,
+* :mod:`.trajectory` — the results: trajectory and energies,
 * :mod:`.codegen` — compiled CasADi code cached on disk by model structure,
 * :mod:`.leg`, :mod:`.scenarios` — the leg model and the swing/stance scenarios,
 * :mod:`.cantilever` — the clamped straight beam used for verification,
@@ -17,10 +21,12 @@ Modules, from the bottom up:
 """
 
 from fuzzygait.mechanics.cantilever import Cantilever, build_cantilever
+from fuzzygait.mechanics.discrete import DiscreteModel
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade, read_blade_geometry
-from fuzzygait.mechanics.integrator import DiscreteModel, Trajectory, integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, LegConfiguration, build_leg
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+from fuzzygait.mechanics.trajectory import Trajectory, trajectory_energies
 
 __all__ = [
     "BladeGeometry",

@@ -16,9 +16,11 @@ import numpy as np
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration
 from fuzzygait.mechanics.beam import BeamSection, add_beam
+from fuzzygait.mechanics.discrete import DiscreteModel
 from fuzzygait.mechanics.geometry import BladeMesh, straight_beam
-from fuzzygait.mechanics.integrator import DiscreteModel, Trajectory, integrate
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, RectangleSection
+from fuzzygait.mechanics.trajectory import Trajectory
 
 BEAM_PARAMETERS: tuple[str, ...] = ("E", "nu", "rho", "eta")
 

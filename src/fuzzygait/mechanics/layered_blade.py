@@ -21,7 +21,8 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.cantilever import build_clamped_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
-from fuzzygait.mechanics.integrator import integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
+from fuzzygait.mechanics.trajectory import trajectory_energies
 from fuzzygait.uncertainty.protocol import Evaluation, Output
 
 LAYER_PARAMETERS: tuple[str, ...] = ("face_modulus", "core_modulus", "face_thickness")

@@ -16,9 +16,10 @@ import numpy as np
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.mechanics.discrete import BufferedFunction, DiscreteModel
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials
-from fuzzygait.mechanics.integrator import BufferedFunction, DiscreteModel, integrate, trajectory_energies
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import (
     LEG_PARAMETERS,
     PARAMETER_UNITS,
@@ -29,6 +30,7 @@ from fuzzygait.mechanics.leg import (
     default_parameters,
 )
 from fuzzygait.mechanics.presets import STANCE, SWING, ScenarioPreset
+from fuzzygait.mechanics.trajectory import trajectory_energies
 
 SCENARIOS: dict[str, ScenarioPreset] = {"swing": SWING, "stance": STANCE}
 
