@@ -12,19 +12,9 @@ import pytest
 from scipy import stats
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
-from fuzzygait.uncertainty import (
-    FRVSpec,
-    FRVStudy,
-    FunctionModel,
-    Grid,
-    fit_distributions,
-    generate_samples,
-    group,
-    interval_hulls,
-    occurring_intervals,
-    serial_evaluator,
-)
-from fuzzygait.uncertainty import frv
+from fuzzygait.uncertainty import FunctionModel, frv
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, Grid, fit_distributions, generate_samples, group
+from fuzzygait.uncertainty.frv import interval_hulls, occurring_intervals, serial_evaluator
 from fuzzygait.uncertainty.gfa import optimisation_nodes
 
 ALPHAS5 = (0.0, 0.25, 0.5, 0.75, 1.0)

@@ -41,27 +41,4 @@ __all__ = [
     "triangular_relative",
 ]
 
-# Fuzzy random variables and the FRV Graph Follower algorithm (thesis §2.7, §5.7)
-from fuzzygait.uncertainty.frv import (  # noqa: E402
-    FRVSpec,
-    FRVStudy,
-    Grid,
-    fit_distributions,
-    generate_samples,
-    group,
-    interval_hulls,
-    occurring_intervals,
-    serial_evaluator,
-)
-
-__all__ += [
-    "FRVSpec",
-    "FRVStudy",
-    "Grid",
-    "fit_distributions",
-    "generate_samples",
-    "group",
-    "interval_hulls",
-    "occurring_intervals",
-    "serial_evaluator",
-]
+# The FRV-GFA (thesis §2.7, §5.7) is in the subpackage fuzzygait.uncertainty.frv.
