@@ -129,7 +129,7 @@ def fuzzy_sim(
     attrs = result.attrs
     out.print(
         f"{scenario}: {attrs['target']} with fuzzy {', '.join(f'{n} ±{100 * s:g} %' for n, s in spreads.items())}; "
-        f"{attrs['model_evaluations']} forward simulations, {attrs['optimisations']} optimisations, "
+        f"{attrs['forward_simulations']} forward simulations, {attrs['optimisations']} optimisations, "
         f"wall time {attrs['wall_time_s']:.1f} s",
         markup=False,
     )
