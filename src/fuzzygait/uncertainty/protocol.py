@@ -136,13 +136,15 @@ def model_problem(model: object) -> str | None:
         return (f"{type(model).__name__} lacks {', '.join(missing)}; a model needs times, parameter_names, "
                 "output, capabilities and evaluate(p, sensitivities=False) -> Evaluation "
                 "(see fuzzygait.uncertainty.protocol), or use FunctionModel(f, times)")  # fmt: skip
-    times = np.asarray(model.times)
+    name = type(model).__name__
+    times = np.asarray(getattr(model, "times"))  # noqa: B009 - model is an unknown object here
     if times.ndim != 1 or times.size == 0:
-        return f"{type(model).__name__}.times must be a non-empty 1-D array of time nodes; got shape {times.shape}"
-    unknown = set(model.capabilities) - CAPABILITIES
+        return f"{name}.times must be a non-empty 1-D array of time nodes; got shape {times.shape}"
+    capabilities = set(getattr(model, "capabilities"))  # noqa: B009
+    unknown = capabilities - CAPABILITIES
     if unknown:
-        return f"{type(model).__name__} declares unknown capabilities {sorted(unknown)}; known: {sorted(CAPABILITIES)}"
-    if NODES in model.capabilities and not callable(getattr(model, "evaluate_nodes", None)):  # type: ignore[attr-defined]
+        return f"{name} declares unknown capabilities {sorted(unknown)}; known: {sorted(CAPABILITIES)}"
+    if NODES in capabilities and not callable(getattr(model, "evaluate_nodes", None)):
         return f"{type(model).__name__} declares 'nodes' but has no evaluate_nodes(P, nodes)"
     return None
 
