@@ -198,6 +198,11 @@ def _c3d_header_events(header: Any) -> list[tuple[str, float]]:
 
 
 # --------------------------------------------------------------------------- public
+#: What the ``c3d`` package (0.6) says of a parameter name that occurs twice in a group.
+#: Vicon Nexus writes such files and ezc3d reads them, so it is not taken as corruption.
+DUPLICATE_PARAMETER = "Parameter already exists"
+
+
 def check_parameter_section(path: Path) -> None:
     """Parse header and parameter section with the ``c3d`` package (milliseconds).
 
@@ -214,6 +219,8 @@ def check_parameter_section(path: Path) -> None:
             warnings.simplefilter("ignore")
             c3d.Reader(handle)
     except Exception as exc:
+        if DUPLICATE_PARAMETER in str(exc):  # a repeated name (Nexus writes such files): not corruption
+            return
         raise BackendError(
             f"header or parameter section is corrupt ({_first_sentence(str(exc)) or type(exc).__name__})"
         ) from exc
