@@ -24,7 +24,6 @@ All return a :class:`matplotlib.figure.Figure` (no pyplot state; save with
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -47,7 +46,7 @@ Store = FRVStudy | str | os.PathLike[str]
 SIDES = (("lower", "left", "tab:green"), ("upper", "right", "tab:blue"))
 
 
-def _membership_lines(cuts: np.ndarray, alphas: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def _membership_lines(cuts: np.ndarray, alphas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Polylines ``(x, y)`` of fuzzy numbers ``(n, n_alpha, 2)`` for one ``ax.plot``:
     up the left flank, down the right one; one column per number."""
     x = np.concatenate([cuts[:, :, 0], cuts[:, ::-1, 1]], axis=1).T
@@ -67,7 +66,8 @@ def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n
     x, y = _membership_lines(cuts[:n_show], alphas)
     top.plot(x, y, color="tab:blue", lw=0.6, alpha=0.5)
     top.axvline(spec.deterministic, color="black", lw=1, ls="--", label="p_det")
-    top.set(xlabel=spec.name, ylabel="α", title=f"{min(n_show, n_samples)} of {n_samples} samples of the FRV {spec.name}")
+    title = f"{min(n_show, n_samples)} of {n_samples} samples of the FRV {spec.name}"
+    top.set(xlabel=spec.name, ylabel="α", title=title)
     top.legend(fontsize=8)
     for k, alpha in enumerate(alphas):
         ax = fig.add_subplot(grid[1, k])
@@ -99,7 +99,8 @@ def grouping_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_disc
     alphas = np.asarray(spec.alphas)
     fig = Figure(figsize=(10, 6), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
-    for ax, data, title in zip(axes, (cuts[:n_show], grouped), ("before grouping", f"after grouping ({grid.n_points} points)")):
+    titles = ("before grouping", f"after grouping ({grid.n_points} points)")
+    for ax, data, title in zip(axes, (cuts[:n_show], grouped), titles):
         x, y = _membership_lines(data, alphas)
         ax.plot(x, y, color="tab:blue", lw=0.6, alpha=0.5)
         ax.set(ylabel="α", title=title)
@@ -184,7 +185,8 @@ def temporal_evolution_figure(store: Store, max_nodes: int = 200, n_show: int = 
     for a, (ax, alpha) in enumerate(zip(axes, alphas)):
         for b, (bound, _, colour) in enumerate(SIDES):
             ax.fill_between(t, low_q[a, b], high_q[a, b], color=colour, alpha=0.2, lw=0)
-            ax.plot(t, fit["mean"].values[a, b], color=colour, lw=1.2, label=f"{bound}: mean, {quantiles[0]:.0%}–{quantiles[1]:.0%}")
+            band = f"{quantiles[0]:.0%}–{quantiles[1]:.0%}"
+            ax.plot(t, fit["mean"].values[a, b], color=colour, lw=1.2, label=f"{bound}: mean, {band}")
             ax.plot(t, values[:n_show, a, b].T, color=colour, lw=0.4, alpha=0.5)
         ax.plot(t, peak_mean, color="navy", lw=1.0, ls="--", label="mean at α = 1")
         ax.set_ylabel(f"α = {alpha:g}")

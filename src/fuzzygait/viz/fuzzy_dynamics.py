@@ -20,10 +20,10 @@ import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 
-
 def _title(result: xr.Dataset) -> str:
     attrs = result.attrs
-    fuzzy = ", ".join(f"{n} ±{100 * s:g} %" for n, s in zip(attrs.get("fuzzy_parameters", []), attrs.get("fuzzy_spreads", [])))
+    spreads = zip(attrs.get("fuzzy_parameters", []), attrs.get("fuzzy_spreads", []))
+    fuzzy = ", ".join(f"{n} ±{100 * s:g} %" for n, s in spreads)
     return f"{attrs.get('scenario', '')}: {attrs.get('target', 'target')} with fuzzy {fuzzy}"
 
 
@@ -87,7 +87,8 @@ def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
     with recording_file(path, recording_name, _title(result)) as (rec, rr):
         times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
         for alpha in sorted(float(a) for a in result["alpha"].values if a < 1):
-            colour = tuple(int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
+            red, green, blue = (int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
+            colour = (red, green, blue)
             for bound in ("lower", "upper"):
                 values = result["hull"].sel(alpha=alpha, bound=bound).values
                 _log_series(rec, rr, f"{target}/alpha_{alpha:g}/{bound}", times, values,

@@ -183,7 +183,7 @@ def segment_geometry(
     if configuration is not None:
         segments = {"thigh": configuration.thigh, "shank": configuration.shank}
     else:  # geometry saved by `fuzzygait simulate` in the attributes
-        for name, preset in list(segments.items()):
+        for name in list(segments):
             keys = (f"{name}_length_m", f"{name}_com_from_proximal_m")
             if all(k in ds.attrs for k in keys):
                 segments[name] = _Segment(float(ds.attrs[keys[0]]), float(ds.attrs[keys[1]]))
