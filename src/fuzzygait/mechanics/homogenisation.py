@@ -10,13 +10,13 @@ mid-planes. Axis 3 is the beam axis. All layers share one Poisson ratio, so
 Two homogenisations replace the separable matrices ``diag(Gκ₁A, Gκ₂A, EA)`` and
 ``diag(EI₁, EI₂, GJ)`` of Eq. 4.35 by ``diag(A₁, A₂, A₃)`` and ``diag(C₁, C₂, C₃)``:
 
-* :func:`standard_stiffness` (Eq. 4.37) sums the layers as independent beams:
+* :data:`standard_stiffness` (Eq. 4.37) sums the layers as independent beams:
   ``C₁ = 2 E_f I_f1 + E_c I_c1`` with the parallel-axis theorem for the faces,
   ``C₂ = 2 E_f I_f2 + E_c I_c2``, ``C₃ = 2 G_f J_f + G_c J_c`` (each layer's own
   Saint-Venant constant, so the layers twist without shear coupling),
   ``A_i = κ (2 G_f A_f + G_c A_c)`` and ``A₃ = 2 E_f A_f + E_c A_c`` (the printed
   "G_f Λ_f" in Eq. 4.37 is a typo for the axial stiffness).
-* :func:`coupled_stiffness` (Eqs. 4.38–4.40) replaces C₁, C₃ and A₂ by the [Bîr13]
+* :data:`coupled_stiffness` (Eqs. 4.38–4.40) replaces C₁, C₃ and A₂ by the [Bîr13]
   expressions; the other entries are the standard ones. Eq. 4.38 for C₁ *is* the
   exact composite bending stiffness ``∫ E x₂² dA``, so it equals the standard C₁.
 
@@ -80,7 +80,8 @@ value per beam element, broadcast against each other); the fields of the returne
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -89,6 +90,7 @@ from scipy.special import zeta
 from fuzzygait.core.errors import ParameterError
 
 __all__ = [
+    "Homogenisation",
     "LayerMaterials",
     "SectionStiffness",
     "coupled_stiffness",
@@ -325,62 +327,13 @@ def _standard(
     )
 
 
-def standard_stiffness(
-    materials: LayerMaterials,
-    width: ArrayLike,
-    core_thickness: ArrayLike,
-    face_thickness: ArrayLike,
-    shear_factor: float = 5.0 / 6.0,
-    terms: int = 50,
+def _coupled(
+    mat: LayerMaterials, b: np.ndarray, c: np.ndarray, t: np.ndarray, kappa: float, terms: int
 ) -> SectionStiffness:
-    """Standard homogenisation, Eq. 4.37: the layers summed as independent beams.
-
-    Args:
-        materials: face and core materials.
-        width: section width b in m (scalar or one value per element).
-        core_thickness: core thickness c in m (scalar or array).
-        face_thickness: thickness t_f of each face in m (scalar or array).
-        shear_factor: shear correction factor κ (same for both shear directions).
-        terms: minimum number of series terms for the layers' torsion constants.
-
-    Returns:
-        The section stiffnesses; C₃ = 2 G_f J(b, t_f) + G_c J(b, c) neglects the shear
-        coupling of the bonded layers and so underestimates the torsional rigidity.
-    """
-    b, c, t = _geometry(materials, width, core_thickness, face_thickness, shear_factor)
-    return _standard(materials, b, c, t, shear_factor, _check_terms(terms))
-
-
-def coupled_stiffness(
-    materials: LayerMaterials,
-    width: ArrayLike,
-    core_thickness: ArrayLike,
-    face_thickness: ArrayLike,
-    shear_factor: float = 5.0 / 6.0,
-    terms: int = 50,
-) -> SectionStiffness:
-    """Coupled homogenisation, Eqs. 4.38–4.40 ([Bîr13], [Mus53]).
-
-    C₁ (Eq. 4.38, the exact composite bending stiffness), C₃ (Eq. 4.39 with the derived
-    C₍ₙ₎, see the module docstring) and A₂ (Eq. 4.40); A₁, A₃, C₂ and the inertia terms
-    as in :func:`standard_stiffness`.
-
-    Args:
-        materials: face and core materials.
-        width: section width b in m (scalar or one value per element).
-        core_thickness: core thickness c in m (scalar or array).
-        face_thickness: thickness t_f of each face in m (scalar or array).
-        shear_factor: shear correction factor κ.
-        terms: minimum number of explicitly summed terms of the torsion series; more
-            are used automatically for layers thin compared with the width, and the
-            remainder is added in closed form (see the module docstring).
-    """
-    b, c, t = _geometry(materials, width, core_thickness, face_thickness, shear_factor)
-    terms = _check_terms(terms)
-    std = _standard(materials, b, c, t, shear_factor, terms)
-    ef, ec = materials.face_modulus, materials.core_modulus
-    gf, gc = materials.face_shear_modulus, materials.core_shear_modulus
-    rf, rc = materials.face_density, materials.core_density
+    std = _standard(mat, b, c, t, kappa, terms)
+    ef, ec = mat.face_modulus, mat.core_modulus
+    gf, gc = mat.face_shear_modulus, mat.core_shear_modulus
+    rf, rc = mat.face_density, mat.core_density
     a, d = c + 2.0 * t, c + t
     bending_1 = ef * b * t * d**2 / 2.0 + ef * b * t**3 / 6.0 + ec * b * c**3 / 12.0
     torsion = _composite_torsion(b, c, t, gc, gf, terms)
@@ -388,7 +341,7 @@ def coupled_stiffness(
     f = shape_function_F(np.pi * c / (2.0 * a))
     effective_density = c * rc + 2.0 * t * rf + c * (rf - rc) * f
     rotary = rf * t * d**2 / 2.0 + rf * t**3 / 6.0 + rc * c**3 / 12.0
-    shear_2 = shear_factor * 12.0 * b / a**2 * s / effective_density * rotary
+    shear_2 = kappa * 12.0 * b / a**2 * s / effective_density * rotary
     return SectionStiffness(
         shear_1=std.shear_1,
         shear_2=_out(shear_2),
@@ -400,3 +353,57 @@ def coupled_stiffness(
         rotary_1=std.rotary_1,
         rotary_2=std.rotary_2,
     )
+
+
+#: ``(materials, b, c, t_f, κ, terms) -> SectionStiffness`` on validated, broadcast geometry
+_Kernel = Callable[[LayerMaterials, np.ndarray, np.ndarray, np.ndarray, float, int], SectionStiffness]
+
+
+@dataclass(frozen=True)
+class Homogenisation:
+    """One homogenisation of the three-layer section, called with the materials and the
+    geometry (see :meth:`__call__`); :data:`standard_stiffness` and :data:`coupled_stiffness`
+    are the two of the module docstring.
+
+    Attributes:
+        name: ``"standard"`` or ``"coupled"``.
+    """
+
+    name: str
+    _kernel: _Kernel = field(repr=False)
+
+    def __call__(
+        self,
+        materials: LayerMaterials,
+        width: ArrayLike,
+        core_thickness: ArrayLike,
+        face_thickness: ArrayLike,
+        shear_factor: float = 5.0 / 6.0,
+        terms: int = 50,
+    ) -> SectionStiffness:
+        """The section stiffnesses of this homogenisation.
+
+        Args:
+            materials: face and core materials.
+            width: section width b in m (scalar or one value per element).
+            core_thickness: core thickness c in m (scalar or array).
+            face_thickness: thickness t_f of each face in m (scalar or array).
+            shear_factor: shear correction factor κ (same for both shear directions).
+            terms: minimum number of explicitly summed terms of the torsion series; more
+                are used automatically for layers thin compared with the width, and the
+                remainder is added in closed form (see the module docstring).
+        """
+        b, c, t = _geometry(materials, width, core_thickness, face_thickness, shear_factor)
+        return self._kernel(materials, b, c, t, shear_factor, _check_terms(terms))
+
+
+#: Standard homogenisation, Eq. 4.37: the layers summed as independent beams.
+#: C₃ = 2 G_f J(b, t_f) + G_c J(b, c) neglects the shear coupling of the bonded layers
+#: and so underestimates the torsional rigidity.
+standard_stiffness = Homogenisation("standard", _standard)
+
+#: Coupled homogenisation, Eqs. 4.38–4.40 ([Bîr13], [Mus53]): C₁ (Eq. 4.38, the exact
+#: composite bending stiffness), C₃ (Eq. 4.39 with the derived C₍ₙ₎, see the module
+#: docstring) and A₂ (Eq. 4.40); A₁, A₃, C₂ and the inertia terms as in
+#: :data:`standard_stiffness`.
+coupled_stiffness = Homogenisation("coupled", _coupled)
