@@ -11,19 +11,8 @@ import pytest
 from conftest import SAMPLE_DATA
 from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.io import read_c3d
-from fuzzygait.io.subject import read_subject
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import ANGLE_NAMES, compute_lower_body, static_calibration
-
-
-@pytest.fixture(scope="module")
-def walking() -> Trial:
-    return read_c3d(SAMPLE_DATA / "walking.c3d")
-
-
-@pytest.fixture(scope="module")
-def subject():
-    return read_subject(SAMPLE_DATA / "subject.toml")
 
 
 def _without(trial: Trial, *labels: str) -> Trial:

@@ -18,7 +18,6 @@ import pytest
 
 from conftest import SAMPLE_DATA
 from fuzzygait.io import read_c3d
-from fuzzygait.io.subject import read_subject
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import (
     ANGLE_NAMES,
@@ -39,18 +38,8 @@ PIG_FOOT = axis_rotation(1, -math.pi / 2)
 
 
 @pytest.fixture(scope="module")
-def walking() -> Trial:
-    return read_c3d(SAMPLE_DATA / "walking.c3d")
-
-
-@pytest.fixture(scope="module")
 def static() -> Trial:
     return read_c3d(SAMPLE_DATA / "static.c3d")
-
-
-@pytest.fixture(scope="module")
-def subject():
-    return read_subject(SAMPLE_DATA / "subject.toml")
 
 
 @pytest.fixture(scope="module")
@@ -59,11 +48,6 @@ def calibrated(static, subject):
     for side in "LR":
         bare = bare.with_side(side, static_plant_flex=0.0, static_rot_off=0.0)
     return static_calibration(static, bare)
-
-
-@pytest.fixture(scope="module")
-def truth() -> pd.DataFrame:
-    return pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
 
 
 # ----------------------------------------------------------------------- acceptance

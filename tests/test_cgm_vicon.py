@@ -35,11 +35,6 @@ OFFSET_NAMES = ("StaticPlantFlex", "StaticRotOff")
 
 
 @pytest.fixture(scope="module")
-def movement():
-    return read_c3d(shared_file("vicon", "Movement_trial.c3d"))
-
-
-@pytest.fixture(scope="module")
 def static():
     return read_c3d(shared_file("vicon", "Static_trial.c3d"))
 

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import SAMPLE_DATA, shared_file
+from conftest import shared_file
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.gait.cycles import (
@@ -33,16 +33,6 @@ from fuzzygait.synthetic.gait_curves import FOOT_OFF_PHASE, STRIDE_TIME_S, joint
 JOINTS = ("hip", "knee", "ankle")
 TOL_100HZ = 2e-4  # deg, measured 7.3e-5
 TOL_50HZ = 1e-3  # deg, measured 3.5e-4
-
-
-@pytest.fixture(scope="module")
-def walking() -> Trial:
-    return read_c3d(SAMPLE_DATA / "walking.c3d")
-
-
-@pytest.fixture(scope="module")
-def truth() -> pd.DataFrame:
-    return pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
 
 
 def _angles(truth: pd.DataFrame, side: str, joint: str) -> np.ndarray:

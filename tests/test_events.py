@@ -41,11 +41,6 @@ from fuzzygait.synthetic import make_walking_trial
 KINDS = [(lbl, ctx) for lbl in ("Foot Strike", "Foot Off") for ctx in ("Left", "Right")]
 
 
-@pytest.fixture(scope="module")
-def walking() -> Trial:
-    return read_c3d(SAMPLE_DATA / "walking.c3d")
-
-
 def _indices(trial: Trial, events: list[Event], label: str, context: str) -> np.ndarray:
     return np.array(
         [trial.event_index(e) for e in events if e.label == label and e.context == context]
@@ -224,11 +219,6 @@ def test_gait_pig_toe_detection_vs_vicon_events() -> None:
         det = _indices(trial, detected, label, context)
         inside = det[(det >= ref.min() - 2) & (det <= ref.max() + 2)]
         assert np.all(np.min(np.abs(inside[:, None] - ref[None, :]), axis=1) <= 2.0)
-
-
-@pytest.fixture(scope="module")
-def movement() -> Trial:
-    return read_c3d(shared_file("vicon", "Movement_trial.c3d"))
 
 
 def test_movement_trial_gets_detected_events(movement: Trial) -> None:

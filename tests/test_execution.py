@@ -9,8 +9,6 @@ naming the row."""
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 import pytest
 
@@ -36,16 +34,6 @@ RNG_SEED = 7
 
 
 @pytest.fixture(scope="module")
-def cluster():
-    """A 2-process Dask cluster shared by the tests of this module (≈1.5 s to start)."""
-    with distributed.LocalCluster(
-        n_workers=2, processes=True, threads_per_worker=1, silence_logs=logging.ERROR,
-        dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-    ) as c:
-        yield c
-
-
-@pytest.fixture(scope="module")
 def evaluators(cluster):
     """The three kinds of evaluator: serial, a local pool of 2 (started by the Evaluator)
     and the address of an existing LocalCluster."""
@@ -53,16 +41,6 @@ def evaluators(cluster):
     yield {"serial": Evaluator(), "pool": pool, "cluster": remote}
     pool.close()
     remote.close()
-
-
-@pytest.fixture(scope="module")
-def angles_run():
-    from conftest import SAMPLE_DATA
-
-    from fuzzygait.workflows.angles import run_angles
-
-    return run_angles(SAMPLE_DATA / "walking.c3d", static=SAMPLE_DATA / "static.c3d",
-                      subject_file=SAMPLE_DATA / "subject.toml")  # fmt: skip
 
 
 def parameters(k: int = 20, n_p: int = 3) -> np.ndarray:

@@ -16,13 +16,6 @@ MODULUS = 59.958e9  # Pa, Table 5.3
 SMALL = dict(nodes=6, duration=0.03, n_disc=8, base_overrides={"E": MODULUS})
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as local:  # fmt: skip
-        yield local
-
-
 def test_one_and_two_workers_give_bit_identical_hulls(tmp_path, cluster):
     spec = FRVSpec("E", MODULUS, alphas=(0.0, 0.5, 1.0))
     serial = leg_frv_study("stance", spec, 150, tmp_path / "one.zarr", workers=1, **SMALL)

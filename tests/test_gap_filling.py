@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 from scipy.interpolate import CubicSpline
 
+from conftest import cut
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import Gap, GapRun, fill_gaps, fill_trial_gaps, find_gaps, gap_report_table
@@ -38,14 +39,6 @@ def markers_at(rate: float, seconds: float = 24.0, n_markers: int = 2) -> np.nda
         [trajectory(t, 0.7 * m + 2.1 * c) for c in range(3)] for m in range(n_markers)
     ]
     return np.transpose(np.array(columns), (2, 0, 1))
-
-
-def cut(markers: np.ndarray, cuts: list[tuple[int, int, int]]) -> np.ndarray:
-    """Copy with NaN runs (marker, start, length)."""
-    out = markers.copy()
-    for m, start, length in cuts:
-        out[start : start + length, m] = np.nan
-    return out
 
 
 def interior_cuts(n_frames: int, n_markers: int) -> list[tuple[int, int, int]]:

@@ -14,7 +14,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import SAMPLE_DATA
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles, relative_envelope_width
@@ -27,7 +26,7 @@ from fuzzygait.markererror.comparison import (
     random_deviation_curves,
 )
 from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
-from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.markererror.result import (
     angle_components,
     ball_radius,
@@ -42,24 +41,18 @@ N_FRAMES = 8
 
 
 @pytest.fixture(scope="module")
-def run() -> AnglesRun:
-    return run_angles(SAMPLE_DATA / "walking.c3d", static=SAMPLE_DATA / "static.c3d",
-                      subject_file=SAMPLE_DATA / "subject.toml")  # fmt: skip
-
-
-@pytest.fixture(scope="module")
-def frames(run: AnglesRun) -> np.ndarray:
+def frames(angles_run: AnglesRun) -> np.ndarray:
     """8 sample indices spread over the trial (0-based)."""
-    return np.linspace(0, run.trial.n_frames - 1, N_FRAMES).round().astype(int)
+    return np.linspace(0, angles_run.trial.n_frames - 1, N_FRAMES).round().astype(int)
 
 
 @pytest.fixture(scope="module")
-def sparse_trial(run: AnglesRun, frames: np.ndarray) -> Trial:
+def sparse_trial(angles_run: AnglesRun, frames: np.ndarray) -> Trial:
     """The trial with every marker NaN outside ``frames``: fuzzy_joint_angles then only
     works on those 8 frames."""
-    markers = np.full_like(run.trial.markers, np.nan)
-    markers[frames] = run.trial.markers[frames]
-    return run.trial.with_markers(markers)
+    markers = np.full_like(angles_run.trial.markers, np.nan)
+    markers[frames] = angles_run.trial.markers[frames]
+    return angles_run.trial.with_markers(markers)
 
 
 def angle_model(run: AnglesRun, name: str, axis: int, frames: np.ndarray) -> JointAngleModel:
@@ -74,14 +67,14 @@ def balls(model: JointAngleModel, sources: tuple[str, ...] = ("measurement", "pl
 
 # ---------------------------------------------------------------------------- soundness
 @pytest.mark.parametrize("side", ["L", "R"])
-def test_hulls_contain_monte_carlo(run: AnglesRun, frames: np.ndarray, side: str) -> None:
+def test_hulls_contain_monte_carlo(angles_run: AnglesRun, frames: np.ndarray, side: str) -> None:
     """At α = 0 and 0.5, for every hip/knee/ankle component, the Graph Follower hull
     contains the range of 10,000 uniform random deviations per frame (same balls).
     Both are inner bounds of the true range; the GFA's should reach further."""
     ratios = []
     for joint in JOINTS:
         for axis in range(3):
-            model = angle_model(run, f"{side}{joint}Angles", axis, frames)
+            model = angle_model(angles_run, f"{side}{joint}Angles", axis, frames)
             params = balls(model)
             result = graph_follower(model, params, (0.0, 0.5), strategy=BatchedDirect())
             for k, alpha in enumerate((0.0, 0.5)):
@@ -149,7 +142,7 @@ def test_two_marker_angle_worst_case_is_arcsin() -> None:
 
 
 # ---------------------------------------------------------------------------- formulations
-def test_cartesian_and_spherical_give_the_same_envelopes(run: AnglesRun, sparse_trial: Trial,
+def test_cartesian_and_spherical_give_the_same_envelopes(angles_run: AnglesRun, sparse_trial: Trial,
                                                          frames: np.ndarray) -> None:  # fmt: skip
     """Thesis §3.7.2: the norm-constrained Cartesian deviations and the box-constrained
     spherical ones (r, θ, φ) give the same joint-angle envelopes.
@@ -165,7 +158,7 @@ def test_cartesian_and_spherical_give_the_same_envelopes(run: AnglesRun, sparse_
     """
     options = dict(alphas=(0.0, 0.5), starts=6, iterations=50, seed=0)
     angles = ["LHipAngles", "LKneeAngles"]
-    fuzzy = {method: fuzzy_joint_angles(sparse_trial, run.subject, run.result,
+    fuzzy = {method: fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result,
                                         FuzzyAngleOptions(method=method, **options), angles)
              for method in ("cartesian", "spherical")}  # fmt: skip
     print()
@@ -258,14 +251,16 @@ def test_missing_error_file(tmp_path) -> None:  # noqa: ANN001
         read_error_model(tmp_path / "absent.toml")
 
 
-def test_larger_source_sets_give_wider_envelopes(run: AnglesRun, sparse_trial: Trial, frames: np.ndarray) -> None:
+def test_larger_source_sets_give_wider_envelopes(
+    angles_run: AnglesRun, sparse_trial: Trial, frames: np.ndarray
+) -> None:
     """Fig. 5.9: the balls of measurement ⊂ placement and measurement ⊂ measurement +
     placement ⊂ all three are nested, and so are the α = 0 knee envelopes."""
     hulls = {}
     all_three = ("measurement", "placement", "sta")
     for sources in (("measurement",), ("placement",), ("measurement", "placement"), all_three):
         options = FuzzyAngleOptions(alphas=(0.0,), sources=sources)
-        fuzzy = fuzzy_joint_angles(sparse_trial, run.subject, run.result, options, ["LKneeAngles"])
+        fuzzy = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options, ["LKneeAngles"])
         assert fuzzy.attrs["sources"] == ",".join(sources)
         assert fuzzy["ball_radius"].sel(marker="LKNE") == ErrorModel().radius("LKNE", sources)
         hulls[sources] = {name: component_hull(fuzzy, name).sel(alpha=0.0).isel(frame=frames)
@@ -304,18 +299,18 @@ def test_relative_envelope_width_by_hand() -> None:
 
 
 # ---------------------------------------------------------------------------- result layout
-def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) -> None:
+def test_dataset_layout_and_missing_markers(angles_run: AnglesRun, frames: np.ndarray) -> None:
     """Variables, dims and coordinates of the result; NaN exactly on the frames where a
     marker the angle needs is missing; deviation norms inside the α-level balls."""
-    keep = np.zeros(run.trial.n_frames, dtype=bool)
+    keep = np.zeros(angles_run.trial.n_frames, dtype=bool)
     keep[frames] = True
     keep[100:106] = True
     cut = np.array([frames[2], 101, 103])  # LKNE missing here
-    markers = np.where(keep[:, None, None], run.trial.markers, np.nan)
-    markers[cut, run.trial.marker_labels.index("LKNE")] = np.nan
-    trial = run.trial.with_markers(markers)
+    markers = np.where(keep[:, None, None], angles_run.trial.markers, np.nan)
+    markers[cut, angles_run.trial.marker_labels.index("LKNE")] = np.nan
+    trial = angles_run.trial.with_markers(markers)
     alphas = (0.0, 0.5)
-    fuzzy = fuzzy_joint_angles(trial, run.subject, run.result, FuzzyAngleOptions(alphas=alphas),
+    fuzzy = fuzzy_joint_angles(trial, angles_run.subject, angles_run.result, FuzzyAngleOptions(alphas=alphas),
                                ["LPelvisAngles", "LKneeAngles"])  # fmt: skip
 
     components = [f"{n}_{a}" for n in ("LPelvisAngles", "LKneeAngles") for a in AXES]
@@ -328,8 +323,8 @@ def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) 
     assert fuzzy["deviation"].attrs["units"] == fuzzy["ball_radius"].attrs["units"] == "mm"
     assert fuzzy["alpha"].to_numpy().tolist() == [0.0, 0.5, 1.0]
     assert fuzzy["bound"].to_numpy().tolist() == ["lower", "upper"]
-    np.testing.assert_array_equal(fuzzy["frame"], run.trial.frames)
-    np.testing.assert_allclose(fuzzy["time"], run.trial.times)
+    np.testing.assert_array_equal(fuzzy["frame"], angles_run.trial.frames)
+    np.testing.assert_allclose(fuzzy["time"], angles_run.trial.times)
     knee_markers = ["LASI", "RASI", "LPSI", "RPSI", "LTHI", "LKNE", "LTIB", "LANK"]
     assert fuzzy["marker"].to_numpy().tolist() == knee_markers
     for c in components:
@@ -346,8 +341,8 @@ def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) 
         finite = np.isfinite(component_hull(fuzzy, name).to_numpy())
         assert np.all(finite[..., ok]) and not np.any(finite[..., ~ok]), name
         # α = 1 is the measured angle
-        np.testing.assert_allclose(component_hull(fuzzy, name).sel(alpha=1.0, bound="upper")[ok],
-                                   run.result.angles[name[:-2]][ok, AXES.index(name[-1])], atol=1e-9)  # fmt: skip
+        measured = angles_run.result.angles[name[:-2]][ok, AXES.index(name[-1])]
+        np.testing.assert_allclose(component_hull(fuzzy, name).sel(alpha=1.0, bound="upper")[ok], measured, atol=1e-9)
 
     # deviations: NaN for markers the angle does not use, inside the α-level balls
     pelvis = component_deviation(fuzzy, "LPelvisAngles_X")
@@ -369,12 +364,12 @@ def test_dataset_layout_and_missing_markers(run: AnglesRun, frames: np.ndarray) 
 
 
 # ---------------------------------------------------------------------------- Fig. 5.11 helpers
-def test_fixed_deviation_curves(run: AnglesRun, frames: np.ndarray) -> None:
-    model = angle_model(run, "LKneeAngles", 0, frames)
+def test_fixed_deviation_curves(angles_run: AnglesRun, frames: np.ndarray) -> None:
+    model = angle_model(angles_run, "LKneeAngles", 0, frames)
     radii = balls(model).support_radii
     curves = fixed_deviation_curves(model, radii)
     assert set(curves) == {"none", "positive", "negative"}
-    np.testing.assert_allclose(curves["none"], run.result.angles["LKneeAngles"][frames, 0], atol=1e-9)
+    np.testing.assert_allclose(curves["none"], angles_run.result.angles["LKneeAngles"][frames, 0], atol=1e-9)
     shift = (radii[:, None] * DIAGONAL).ravel()
     np.testing.assert_allclose(curves["positive"], model.evaluate(shift).values)
     np.testing.assert_allclose(curves["negative"], model.evaluate(-shift).values)
@@ -384,8 +379,8 @@ def test_fixed_deviation_curves(run: AnglesRun, frames: np.ndarray) -> None:
         fixed_deviation_curves(model, radii[:-1])
 
 
-def test_monte_carlo_envelope_chunks_and_modes(run: AnglesRun, frames: np.ndarray) -> None:
-    model = angle_model(run, "LKneeAngles", 0, frames)
+def test_monte_carlo_envelope_chunks_and_modes(angles_run: AnglesRun, frames: np.ndarray) -> None:
+    model = angle_model(angles_run, "LKneeAngles", 0, frames)
     radii = balls(model).support_radii
     lower, upper = monte_carlo_envelope(model, radii, 500, seed=3)
     assert lower.shape == upper.shape == (frames.size,)
@@ -429,15 +424,15 @@ def test_uniform_ball_samples_fill_the_ball() -> None:
 
 
 
-def test_two_frames_are_enough(run: AnglesRun) -> None:
+def test_two_frames_are_enough(angles_run: AnglesRun) -> None:
     """A component with fewer optimisation nodes than the neighbour window still runs:
     finite hulls around the measured angle at the two frames, NaN elsewhere."""
-    keep = np.zeros(run.trial.n_frames, dtype=bool)
+    keep = np.zeros(angles_run.trial.n_frames, dtype=bool)
     keep[[10, 60]] = True
-    trial = run.trial.with_markers(np.where(keep[:, None, None], run.trial.markers, np.nan))
+    trial = angles_run.trial.with_markers(np.where(keep[:, None, None], angles_run.trial.markers, np.nan))
     options = FuzzyAngleOptions(alphas=(0.0,), starts=2, iterations=5)
-    fuzzy = fuzzy_joint_angles(trial, run.subject, run.result, options, ["LKneeAngles"])
+    fuzzy = fuzzy_joint_angles(trial, angles_run.subject, angles_run.result, options, ["LKneeAngles"])
     hull = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.0).to_numpy()
     assert np.isfinite(hull[:, keep]).all() and np.isnan(hull[:, ~keep]).all()
-    measured = run.result.angles["LKneeAngles"][keep, 0]
+    measured = angles_run.result.angles["LKneeAngles"][keep, 0]
     assert np.all(hull[0, keep] < measured) and np.all(measured < hull[1, keep])

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SAMPLE_DATA, assert_one_line_error, run, shared_file
+from conftest import SAMPLE_DATA, assert_one_line_error, cut, run, shared_file
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
@@ -55,14 +55,6 @@ def smooth_markers(n_frames: int, n_markers: int, seed: int = 0) -> np.ndarray:
     f, phase = rng.uniform(0.4, 1.6, (2, 1, n_markers, 3))
     slow = 100 * np.sin(2 * np.pi * f * t + phase)
     return slow + 30 * np.sin(2 * np.pi * 2.3 * f * t + 2 * phase)
-
-
-def cut(markers: np.ndarray, cuts: list[tuple[int, int, int]]) -> np.ndarray:
-    """Copy with NaN runs (marker, start, length)."""
-    out = markers.copy()
-    for m, start, length in cuts:
-        out[start : start + length, m] = np.nan
-    return out
 
 
 # --------------------------------------------------------------------------- (a) accuracy

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import SAMPLE_DATA
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.kinematics.model import CGMResult
 from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
@@ -29,20 +28,9 @@ ALPHAS = np.array([0.0, 0.25, 0.5, 1.0])
 
 
 @pytest.fixture(scope="module")
-def run():
-    from fuzzygait.workflows.angles import run_angles
-
-    return run_angles(
-        SAMPLE_DATA / "walking.c3d",
-        static=SAMPLE_DATA / "static.c3d",
-        subject_file=SAMPLE_DATA / "subject.toml",
-    )
-
-
-@pytest.fixture(scope="module")
-def fuzzy(run):
+def fuzzy(angles_run):
     """A fuzzy result of the lead's layout: deterministic ± (1 − α)·2°."""
-    trial, result = run.trial, run.result
+    trial, result = angles_run.trial, angles_run.result
     half = (1.0 - ALPHAS)[:, None] * 2.0
     hulls, deviations = {}, {}
     for name, values in result.angles.items():
@@ -56,16 +44,16 @@ def fuzzy(run):
 
 
 @pytest.fixture(scope="module")
-def fuzzy_rrd(run, fuzzy, tmp_path_factory) -> Path:
+def fuzzy_rrd(angles_run, fuzzy, tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("rrd") / "walking.rrd"
-    assert write_recording(path, run.trial, run.result, fuzzy) == path
+    assert write_recording(path, angles_run.trial, angles_run.result, fuzzy) == path
     return path
 
 
 @pytest.fixture(scope="module")
-def plain_rrd(run, tmp_path_factory) -> Path:
+def plain_rrd(angles_run, tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("rrd") / "walking_plain.rrd"
-    write_recording(path, run.trial, run.result)
+    write_recording(path, angles_run.trial, angles_run.result)
     return path
 
 
@@ -89,11 +77,11 @@ def scalars(table: pa.Table) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- content
-def test_entity_paths_with_fuzzy(fuzzy_rrd, run):
+def test_entity_paths_with_fuzzy(fuzzy_rrd, angles_run):
     paths = entity_paths(fuzzy_rrd)
     expected = {"/world", "/world/markers", "/world/marker_balls", "/world/joint_centres"}
-    expected |= {f"/world/segments/{name}" for name in run.result.segment_frames}
-    for angle in run.result.angles:
+    expected |= {f"/world/segments/{name}" for name in angles_run.result.segment_frames}
+    for angle in angles_run.result.angles:
         for axis in "XYZ":
             expected.add(f"/angles/{angle}/{axis}/deterministic")
             for alpha in ("0", "0.25", "0.5"):
@@ -105,8 +93,8 @@ def test_entity_paths_with_fuzzy(fuzzy_rrd, run):
     assert reader.recordings()[0].application_id == "fuzzygait"
 
 
-def test_frames_timeline_and_values(fuzzy_rrd, run, fuzzy):
-    trial, result = run.trial, run.result
+def test_frames_timeline_and_values(fuzzy_rrd, angles_run, fuzzy):
+    trial, result = angles_run.trial, angles_run.result
     markers = temporal_rows(fuzzy_rrd, "/world/markers")
     assert markers.num_rows == trial.n_frames
     np.testing.assert_array_equal(markers.column("frame").to_numpy(), trial.frames)
@@ -126,11 +114,11 @@ def test_frames_timeline_and_values(fuzzy_rrd, run, fuzzy):
     expected = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.5, bound="upper").values
     np.testing.assert_allclose(scalars(upper), expected, rtol=1e-6)
     lower = temporal_rows(fuzzy_rrd, "/angles/RHipAngles/Z/alpha_0/lower")
-    np.testing.assert_allclose(scalars(lower), run.result.angles["RHipAngles"][:, 2] - 2.0, rtol=1e-6)
+    np.testing.assert_allclose(scalars(lower), angles_run.result.angles["RHipAngles"][:, 2] - 2.0, rtol=1e-6)
 
 
-def test_balls_and_segments(fuzzy_rrd, run, fuzzy):
-    trial, result = run.trial, run.result
+def test_balls_and_segments(fuzzy_rrd, angles_run, fuzzy):
+    trial, result = angles_run.trial, angles_run.result
     balls = temporal_rows(fuzzy_rrd, "/world/marker_balls")
     assert balls.num_rows == trial.n_frames
     half_sizes = np.array(balls.column("Ellipsoids3D:half_sizes").to_pylist()[0])
@@ -163,37 +151,37 @@ def test_series_style_and_blueprint(fuzzy_rrd):
     assert len(active) == 1  # the Tabs container, opened on the angle grid
 
 
-def test_without_fuzzy_no_balls_or_envelopes(plain_rrd, run):
+def test_without_fuzzy_no_balls_or_envelopes(plain_rrd, angles_run):
     paths = entity_paths(plain_rrd)
     assert "/world/markers" in paths and "/angles/LKneeAngles/X/deterministic" in paths
     assert not any("marker_balls" in p or "/alpha_" in p for p in paths)
-    assert temporal_rows(plain_rrd, "/angles/RAnkleAngles/Y/deterministic").num_rows == run.trial.n_frames
+    assert temporal_rows(plain_rrd, "/angles/RAnkleAngles/Y/deterministic").num_rows == angles_run.trial.n_frames
     # a dedicated stream: nothing leaks into rerun's global / thread-local recording
     assert rr.get_global_data_recording() is None
     assert rr.get_thread_local_data_recording() is None
 
 
-def test_alphas_to_show(run, fuzzy, tmp_path):
-    path = write_recording(tmp_path / "a.rrd", run.trial, run.result, fuzzy, alphas_to_show=[0.5, 1.0])
+def test_alphas_to_show(angles_run, fuzzy, tmp_path):
+    path = write_recording(tmp_path / "a.rrd", angles_run.trial, angles_run.result, fuzzy, alphas_to_show=[0.5, 1.0])
     paths = entity_paths(path)
     assert "/angles/LKneeAngles/X/alpha_0.5/upper" in paths
     assert not any("alpha_0/" in p or "alpha_0.25" in p for p in paths)
     with pytest.raises(ParameterError, match="0.3"):
-        write_recording(tmp_path / "b.rrd", run.trial, run.result, fuzzy, alphas_to_show=[0.3])
+        write_recording(tmp_path / "b.rrd", angles_run.trial, angles_run.result, fuzzy, alphas_to_show=[0.3])
     assert not (tmp_path / "b.rrd").exists()
 
 
 # ----------------------------------------------------------------------------- errors
-def test_folder_that_is_a_file(run, tmp_path):
+def test_folder_that_is_a_file(angles_run, tmp_path):
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("")
     target = blocker / "walking.rrd"
     with pytest.raises(FuzzyGaitError, match=str(target).replace("\\", "\\\\")):
-        write_recording(target, run.trial, run.result)
+        write_recording(target, angles_run.trial, angles_run.result)
     assert sorted(os.listdir(tmp_path)) == ["not_a_folder"]
 
 
-def test_read_only_folder(run, tmp_path):
+def test_read_only_folder(angles_run, tmp_path):
     folder = tmp_path / "locked"
     folder.mkdir()
     folder.chmod(0o500)
@@ -202,41 +190,41 @@ def test_read_only_folder(run, tmp_path):
             pytest.skip("running with rights that ignore folder permissions (root)")
         target = folder / "walking.rrd"
         with pytest.raises(FuzzyGaitError, match=str(target)):
-            write_recording(target, run.trial, run.result)
+            write_recording(target, angles_run.trial, angles_run.result)
         assert os.listdir(folder) == []
     finally:
         folder.chmod(0o700)
 
 
-def test_failure_mid_write_leaves_nothing(run, tmp_path, monkeypatch):
+def test_failure_mid_write_leaves_nothing(angles_run, tmp_path, monkeypatch):
     def broken(*args, **kwargs):
         raise RuntimeError("simulated failure")
 
     monkeypatch.setattr(rerun_log, "_log_angles", broken)
     target = tmp_path / "walking.rrd"
     with pytest.raises(FuzzyGaitError, match="simulated failure") as info:
-        write_recording(target, run.trial, run.result)
+        write_recording(target, angles_run.trial, angles_run.result)
     assert str(target) in str(info.value)
     assert os.listdir(tmp_path) == []
 
 
-def test_bad_suffix_and_missing_folder(run, tmp_path):
+def test_bad_suffix_and_missing_folder(angles_run, tmp_path):
     with pytest.raises(ParameterError, match=r"\.rrd"):
-        write_recording(tmp_path / "walking.txt", run.trial, run.result)
+        write_recording(tmp_path / "walking.txt", angles_run.trial, angles_run.result)
     with pytest.raises(FuzzyGaitError, match="does not exist"):
-        write_recording(tmp_path / "nope" / "walking.rrd", run.trial, run.result)
+        write_recording(tmp_path / "nope" / "walking.rrd", angles_run.trial, angles_run.result)
     assert os.listdir(tmp_path) == []
 
 
-def test_missing_samples(run, tmp_path):
+def test_missing_samples(angles_run, tmp_path):
     """NaN markers are left out of their frame's row; a NaN segment frame gives an empty
     row; NaN angles stay NaN (one row per frame everywhere)."""
-    trial = run.trial.with_markers(run.trial.markers.copy())
+    trial = angles_run.trial.with_markers(angles_run.trial.markers.copy())
     trial.markers[5, trial.marker_labels.index("LTOE")] = np.nan
     result = CGMResult(
-        angles={k: v.copy() for k, v in run.result.angles.items()},
-        joint_centres=dict(run.result.joint_centres),
-        segment_frames={k: v.copy() for k, v in run.result.segment_frames.items()},
+        angles={k: v.copy() for k, v in angles_run.result.angles.items()},
+        joint_centres=dict(angles_run.result.joint_centres),
+        segment_frames={k: v.copy() for k, v in angles_run.result.segment_frames.items()},
     )
     result.segment_frames["left_foot"][7] = np.nan
     result.angles["LKneeAngles"][9] = np.nan

@@ -38,18 +38,20 @@ FIRST_STRIKE = 0.11
 
 # --------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
-def walking():
+def generated():
     return make_walking_trial()
 
 
 @pytest.fixture(scope="module")
-def trial(walking):
-    return walking[0]
+def trial(generated):
+    return generated[0]
 
 
 @pytest.fixture(scope="module")
-def truth(walking):
-    return walking[1]
+def truth(generated):
+    """The generator's own truth (in this module it overrides conftest's ``truth``, the
+    CSV in sample_data)."""
+    return generated[1]
 
 
 @pytest.fixture(scope="module")
