@@ -19,19 +19,15 @@ from fuzzygait.cli.app import (
     user_errors,
 )
 from fuzzygait.cli.options import (
-    DEFAULT_ALPHAS,
-    DEFAULT_SOURCES,
-    AlphasOption,
-    AnglesOption,
-    CutoffOption,
-    ErrorsOption,
-    MaxGapOption,
-    NoFilterOption,
-    SourcesOption,
+    DEFAULT_MARKER_ERRORS,
+    DEFAULT_PREPROCESSING,
+    MarkerErrorOptions,
+    PreprocessingOptions,
     StaticOption,
     SubjectOption,
     parse_alphas,
     parse_angles,
+    with_option_groups,
 )
 from fuzzygait.core.errors import FuzzyGaitError
 
@@ -120,6 +116,7 @@ def preprocess(
 
 # --------------------------------------------------------------------------- angles
 @app.command()
+@with_option_groups
 def angles(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
     static: StaticOption = None,
@@ -133,14 +130,12 @@ def angles(
     cycles: Annotated[
         Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
     ] = None,
-    no_filter: NoFilterOption = False,
-    max_gap: MaxGapOption = 10,
-    cutoff: CutoffOption = 6.0,
+    preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     flat_foot: Annotated[bool, typer.Option("--flat-foot", help="Static calibration with flat feet.")] = False,
 ) -> None:
     """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
     from fuzzygait.io.tables import check_table_path
-    from fuzzygait.workflows.angles import AngleOutputs, Preprocessing, angles_to_files
+    from fuzzygait.workflows.angles import AngleOutputs, angles_to_files
 
     with user_errors():
         for path, option in ((out_table, "--out"), (cycles, "--cycles")):
@@ -153,7 +148,7 @@ def angles(
             AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out),
             static=static,
             subject_file=subject,
-            preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+            preprocessing=preprocessing.preprocessing(),
             flat_foot=flat_foot,
         )
     _print_run_summary(run)
@@ -197,26 +192,21 @@ def demo(
 
 # --------------------------------------------------------------------------- uncertainty
 @app.command()
+@with_option_groups
 def uncertainty(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
     static: StaticOption = None,
     subject: SubjectOption = None,
-    errors: ErrorsOption = None,
-    sources: SourcesOption = DEFAULT_SOURCES,
-    alphas: AlphasOption = DEFAULT_ALPHAS,
-    angle_names: AnglesOption = None,
+    marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
     workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
-    no_filter: NoFilterOption = False,
-    max_gap: MaxGapOption = 10,
-    cutoff: CutoffOption = 6.0,
+    preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
 ) -> None:
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
     every angle component over all marker deviations inside the α-level balls."""
     from fuzzygait.uncertainty.storage import SUFFIXES
-    from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
 
     with user_errors():
@@ -225,17 +215,16 @@ def uncertainty(
         if rrd is not None and rrd.suffix.lower() != ".rrd":
             raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
         _check_workers(workers)
-        selected = parse_angles(angle_names)
-        settings = MarkerErrorSettings.create(errors_file=errors, sources=sources.split(","),
-                                              alphas=parse_alphas(alphas), angles=selected, method=method,
-                                              workers=workers)  # fmt: skip
+        selected = parse_angles(marker_errors.angle_names)
+        settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
+                                              alphas=parse_alphas(marker_errors.alphas), angles=selected,
+                                              method=method, workers=workers)  # fmt: skip
         with progress_bars() as bars:
             bar = StageBars(bars)
             bar.stage("fuzzy angles")
             analysis = analyse_to_files(
                 dynamic, out_file, rrd=rrd, static=static, subject_file=subject, settings=settings,
-                preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
-                progress=bar.update,
+                preprocessing=preprocessing.preprocessing(), progress=bar.update,
             )  # fmt: skip
     _print_run_summary(analysis.run)
     out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|:", markup=False)
@@ -245,6 +234,7 @@ def uncertainty(
 
 # --------------------------------------------------------------------------- report
 @app.command()
+@with_option_groups
 def report(
     inputs: Annotated[
         list[Path],
@@ -254,14 +244,9 @@ def report(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
     static: StaticOption = None,
     subject: SubjectOption = None,
-    errors: ErrorsOption = None,
-    sources: SourcesOption = DEFAULT_SOURCES,
-    alphas: AlphasOption = DEFAULT_ALPHAS,
-    angle_names: AnglesOption = None,
+    marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
-    no_filter: NoFilterOption = False,
-    max_gap: MaxGapOption = 10,
-    cutoff: CutoffOption = 6.0,
+    preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
 ) -> None:
     """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
     bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
@@ -269,7 +254,6 @@ def report(
     A trial that fails is listed in the index with its error; the others are still
     reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
-    from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.workflows.batch_report import write_batch_report
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
 
@@ -278,14 +262,15 @@ def report(
         err.print(f"fuzzygait: failed: {where}{error}", markup=False)
 
     with user_errors():
-        alpha_levels = parse_alphas(alphas)
+        alpha_levels = parse_alphas(marker_errors.alphas)
         _check_workers(workers)
-        settings = MarkerErrorSettings.create(errors_file=errors, sources=sources, alphas=alpha_levels,
-                                              angles=parse_angles(angle_names), workers=workers)  # fmt: skip
+        settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
+                                              alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
+                                              workers=workers)  # fmt: skip
         with progress_bars() as bars:
             result = write_batch_report(
                 inputs, out_dir, static=static, subject_file=subject, settings=settings,
-                preprocessing=Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter),
+                preprocessing=preprocessing.preprocessing(),
                 strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
             )  # fmt: skip
     out.print(f"report: {result.n_ok} of {len(result.entries)} trials OK"

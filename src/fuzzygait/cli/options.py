@@ -1,14 +1,27 @@
-"""Options shared by several commands and the parsers of their text values."""
+"""Options shared by several commands and the parsers of their text values.
+
+Single shared options are ``Annotated`` aliases (``static: StaticOption = None``); options
+that always come together are an option group, a dataclass of such fields: a command
+decorated with :func:`with_option_groups` declares one parameter of the group's type,
+typer sees the group's options in its place, and the command gets the group.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import dataclasses
+import functools
+import inspect
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any, get_type_hints
 
 import typer
 
 from fuzzygait.core.errors import FuzzyGaitError
+
+if TYPE_CHECKING:
+    from fuzzygait.workflows.angles import Preprocessing
 
 StaticOption = Annotated[Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")]
 SubjectOption = Annotated[
@@ -30,6 +43,68 @@ MaxGapOption = Annotated[int, typer.Option(help="Longest gap (frames) to fill.")
 CutoffOption = Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")]
 DEFAULT_SOURCES = "measurement,placement,sta"
 DEFAULT_ALPHAS = "0,0.25,0.5,0.75"
+
+
+@dataclass(frozen=True)
+class MarkerErrorOptions:
+    """``--errors``, ``--sources``, ``--alphas`` and ``--angles`` as given (text)."""
+
+    errors: ErrorsOption = None
+    sources: SourcesOption = DEFAULT_SOURCES
+    alphas: AlphasOption = DEFAULT_ALPHAS
+    angle_names: AnglesOption = None
+
+
+@dataclass(frozen=True)
+class PreprocessingOptions:
+    """``--no-filter``, ``--max-gap`` and ``--cutoff`` of the commands computing angles."""
+
+    no_filter: NoFilterOption = False
+    max_gap: MaxGapOption = 10
+    cutoff: CutoffOption = 6.0
+
+    def preprocessing(self) -> Preprocessing:
+        """The pre-processing these options ask for (default gap-filling method)."""
+        from fuzzygait.workflows.angles import Preprocessing
+
+        return Preprocessing(max_gap=self.max_gap, cutoff=self.cutoff, filter=not self.no_filter)
+
+
+DEFAULT_MARKER_ERRORS = MarkerErrorOptions()
+DEFAULT_PREPROCESSING = PreprocessingOptions()
+
+
+def with_option_groups(command: Callable[..., None]) -> Callable[..., None]:
+    """``command`` as typer should see it: every parameter annotated with an option group
+    replaced, in place, by the group's options (their defaults those of the parameter's
+    default group), which are gathered back into the group when the command is called."""
+    hints = get_type_hints(command, include_extras=True)
+    groups: dict[str, tuple[type[Any], list[str]]] = {}
+    parameters = []
+    for parameter in inspect.signature(command).parameters.values():
+        group = hints[parameter.name]
+        if not (isinstance(group, type) and dataclasses.is_dataclass(group)):
+            parameters.append(parameter.replace(annotation=group))
+            continue
+        names = [field.name for field in dataclasses.fields(group)]
+        options = get_type_hints(group, include_extras=True)
+        defaults = parameter.default if isinstance(parameter.default, group) else group()
+        groups[parameter.name] = (group, names)
+        parameters += [
+            inspect.Parameter(name, parameter.kind, default=getattr(defaults, name), annotation=options[name])
+            for name in names
+        ]
+
+    @functools.wraps(command)
+    def expanded(**values: Any) -> None:
+        for name, (group, members) in groups.items():
+            values[name] = group(**{member: values.pop(member) for member in members})
+        command(**values)
+
+    signature = inspect.Signature(parameters, return_annotation=None)
+    expanded.__signature__ = signature  # type: ignore[attr-defined]
+    expanded.__annotations__ = {p.name: p.annotation for p in parameters} | {"return": None}
+    return expanded
 
 
 def parse_angles(text: str | None) -> list[str] | None:
