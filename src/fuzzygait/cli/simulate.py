@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -77,7 +78,7 @@ def simulate(
                 sensitivities=sensitivities, progress=StageBars(bars),
             )  # fmt: skip
     _print_simulation_summary(ds)
-    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+    _print_written(written)
 
 
 @app.command("fuzzy-sim")
@@ -126,14 +127,8 @@ def fuzzy_sim(
                 FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
                 target=target, alphas=levels, stride=stride, novelty=novelty, progress=StageBars(bars),
             )  # fmt: skip
-    attrs = result.attrs
-    out.print(
-        f"{scenario}: {attrs['target']} with fuzzy {', '.join(f'{n} ±{100 * s:g} %' for n, s in spreads.items())}; "
-        f"{attrs['forward_simulations']} forward simulations, {attrs['optimisations']} optimisations, "
-        f"wall time {attrs['wall_time_s']:.1f} s",
-        markup=False,
-    )
-    out.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+    out.print(_fuzzy_summary(scenario, spreads, result.attrs), markup=False)
+    _print_written(written)
 
 
 @app.command("frv-sim")
@@ -181,14 +176,31 @@ def frv_sim(
                 FRVRequest(parameter, value, samples, disc, levels, distribution, seed), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, progress=StageBars(bars),
             )  # fmt: skip
-    counts = study.counts
-    out.print(
+    out.print(_frv_summary(scenario, study.counts), markup=False)
+    _print_written([out_store])
+
+
+def _print_written(paths: Sequence[Path]) -> None:
+    out.print("wrote " + ", ".join(str(p) for p in paths), markup=False)
+
+
+def _fuzzy_summary(scenario: str, spreads: Mapping[str, float], attrs: Mapping[str, Any]) -> str:
+    """The target, the fuzzy parameters, the engine's counts and the wall time."""
+    fuzzy = ", ".join(f"{n} ±{100 * s:g} %" for n, s in spreads.items())
+    return (
+        f"{scenario}: {attrs['target']} with fuzzy {fuzzy}; "
+        f"{attrs['forward_simulations']} forward simulations, {attrs['optimisations']} optimisations, "
+        f"wall time {attrs['wall_time_s']:.1f} s"
+    )
+
+
+def _frv_summary(scenario: str, counts: Mapping[str, Any]) -> str:
+    """Samples, occurring and possible intervals, the engine's counts and the wall time."""
+    return (
         f"{scenario}: {counts.get('samples')} samples; occurring intervals {counts.get('occurring_intervals')} of "
         f"{counts.get('possible_intervals')} possible; forward simulations {counts.get('forward_simulations')}; "
-        f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s",
-        markup=False,
+        f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s"
     )
-    out.print(f"wrote {out_store}", markup=False)
 
 
 def _print_simulation_summary(ds: xr.Dataset) -> None:
