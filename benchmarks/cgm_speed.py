@@ -13,20 +13,18 @@ run on one core (BLAS threads pinned to 1).
 
 from __future__ import annotations
 
-import os
+from _setup import ROOT, VICON, one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from fuzzygait.core.trial import Trial  # noqa: E402
 from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing  # noqa: E402
-from fuzzygait.core.trial import Trial  # noqa: E402
 from fuzzygait.kinematics import ANGLE_NAMES, compute_lower_body  # noqa: E402
 from fuzzygait.kinematics.angles import joint_angles  # noqa: E402
 from fuzzygait.kinematics.joint_centres import chord_joint_centre, davis_hjc_local  # noqa: E402
@@ -39,8 +37,6 @@ from fuzzygait.kinematics.segments import (  # noqa: E402
 )
 from fuzzygait.kinematics.vectors import to_lab  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-VICON = ROOT.parent / "shared" / "data" / "vicon"
 MIN_FRAMES = 30_000
 LOOP_FRAMES = 600
 REPEATS = 5

@@ -15,10 +15,9 @@ Prints Markdown tables (degrees; frames where both values are finite):
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
+from _setup import ROOT, VICON
 
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject, read_vsk, subject_from_processing
@@ -28,9 +27,6 @@ from fuzzygait.kinematics import (
     compute_lower_body,
     static_calibration,
 )
-
-ROOT = Path(__file__).resolve().parents[1]
-VICON = ROOT.parent / "shared" / "data" / "vicon"
 
 
 def stats(ours: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -37,12 +37,12 @@ as ``$TMPDIR``; it needs ≈ the printed disk size) that is removed at the end.
 
 from __future__ import annotations
 
-import os
+from _setup import one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import argparse  # noqa: E402
+import os  # noqa: E402
 import resource  # noqa: E402
 import shutil  # noqa: E402
 import sys  # noqa: E402

@@ -39,10 +39,9 @@ Takes about two minutes and ~3.5 GB of memory (the 11-parameter stride-1 runs).
 
 from __future__ import annotations
 
-import os
+from _setup import one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import itertools  # noqa: E402
 import time  # noqa: E402

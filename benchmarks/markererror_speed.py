@@ -19,15 +19,14 @@ Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/markererror_speed.py
 
 from __future__ import annotations
 
-import os
+from _setup import ROOT, one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
+import os  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -38,7 +37,6 @@ from fuzzygait.markererror.result import component_hull  # noqa: E402
 from fuzzygait.markererror.sources import ErrorModel  # noqa: E402
 from fuzzygait.workflows.angles import run_angles  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "sample_data"
 ANGLES = [f"{side}{joint}Angles" for side in "LR" for joint in ("Hip", "Knee", "Ankle")]
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)

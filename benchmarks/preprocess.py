@@ -19,16 +19,13 @@ from __future__ import annotations
 
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
+from _setup import VICON
 from scipy.interpolate import CubicSpline
 
 from fuzzygait.io import read_c3d
 from fuzzygait.mocap import butterworth_lowpass, fill_gaps
-
-VICON = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vicon"
-
 
 METHODS = ("spline", "pattern", "auto")
 LENGTHS = (1, 2, 3, 5, 7, 10)

@@ -25,12 +25,12 @@ highlighted, a dashed O(n⁻²) guide line through the 20-node point of the last
 
 from __future__ import annotations
 
-import os
+from _setup import ROOT, one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import argparse  # noqa: E402
+import os  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -43,7 +43,6 @@ import numpy as np  # noqa: E402
 from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 FIGURE = ROOT / "benchmarks" / "figures" / "node_convergence.png"
 STIFF = dict(E=59958e6, rho=1710.0, eta=1.0)  # Table 4.2, reverse-engineered blade
 NODES = (5, 10, 15, 20, 30, 40, 60, 80, 120, 250)

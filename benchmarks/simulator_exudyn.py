@@ -52,14 +52,14 @@ What each solver does per step (both: fixed step, sparse direct LU, modified New
 
 from __future__ import annotations
 
-import os
+from _setup import one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import argparse  # noqa: E402
 import contextlib  # noqa: E402
 import io  # noqa: E402
+import os  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402

@@ -36,25 +36,23 @@ pinned to 1 and SuperLU is single-threaded.
 
 from __future__ import annotations
 
-import os
+from _setup import ROOT, one_thread
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+one_thread()
 
 import argparse  # noqa: E402
+import os  # noqa: E402
 import shutil  # noqa: E402
 import subprocess  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 STIFF = dict(E=59958e6, rho=1710.0, eta=1.0)  # Table 4.2, reverse-engineered blade
 TARGET_S = 4.0  # s wall per 2 s simulated (issue)
 
