@@ -73,15 +73,9 @@ class LegSimulator:
         blade = blade or default_blade()
         anchors = stance_anchors(blade, nodes) if scenario == "stance" and foot == "beam" else ()
         self.configuration = LegConfiguration(
-            hip_angle=self.preset.hip_angle,
-            knee_angle=self.preset.knee_angle,
-            nodes=nodes,
-            foot=foot,
-            anchored_nodes=anchors,
-            blade=blade,
-            section=section,
-            layers=layers,
-        )
+            hip_angle=self.preset.hip_angle, knee_angle=self.preset.knee_angle, nodes=nodes, foot=foot,
+            anchored_nodes=anchors, blade=blade, section=section, layers=layers,
+        )  # fmt: skip
         self.leg = build_leg(self.configuration, rigid_foot_density=self.preset.material.density)
         self.model = DiscreteModel.from_builder(self.leg.builder, compile=compile)
         self.default_parameters = default_parameters(self.preset.material, shank_mass=self.preset.shank_mass)
