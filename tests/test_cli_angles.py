@@ -99,6 +99,7 @@ def test_angles_match_vicon_on_movement_trial(tmp_path: Path) -> None:
             assert np.sqrt(np.mean(diff**2)) <= 0.001 and np.abs(diff).max() <= 0.01, (name, axis)
 
 
+@pytest.mark.slow
 def test_demo_writes_results(tmp_path: Path) -> None:
     out = tmp_path / "demo"
     result = run("demo", "--out", out)
@@ -113,6 +114,7 @@ def test_demo_writes_results(tmp_path: Path) -> None:
     assert "walking_noisy" in index and "OK" in index
 
 
+@pytest.mark.slow
 def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:
     result = run("demo", "--data", tmp_path / "data", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr

@@ -5,11 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from conftest import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
 
 from fuzzygait.io import read_c3d
 from fuzzygait.markererror.result import angle_components, component_hull
 from fuzzygait.uncertainty import load_result
+
+pytestmark = pytest.mark.slow  # each test runs the marker-error analysis in a subprocess
 
 SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
 

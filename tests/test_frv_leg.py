@@ -12,6 +12,8 @@ from fuzzygait.uncertainty.frv import FRVSpec
 
 distributed = pytest.importorskip("distributed")
 
+pytestmark = pytest.mark.slow  # leg simulations on a Dask cluster and through the CLI
+
 MODULUS = 59.958e9  # Pa, Table 5.3
 SMALL = dict(nodes=6, duration=0.03, n_disc=8, base_overrides={"E": MODULUS})
 

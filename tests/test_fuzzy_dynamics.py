@@ -29,6 +29,7 @@ def result(swing):
     return fuzzy_forward_dynamics(swing, {"E": 0.1}, base=base, duration=DURATION, stride=25), base
 
 
+@pytest.mark.slow
 def test_hulls_match_dense_sampling(swing, result):
     fuzzy, base = result
     model = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base, duration=DURATION)
@@ -46,6 +47,7 @@ def test_hulls_match_dense_sampling(swing, result):
     assert fuzzy.attrs["forward_simulations"] < 21  # fewer simulations than the reference
 
 
+@pytest.mark.slow
 def test_alpha_one_is_the_deterministic_run_bit_for_bit(swing, result):
     fuzzy, base = result
     deterministic = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base, duration=DURATION)
@@ -54,6 +56,7 @@ def test_alpha_one_is_the_deterministic_run_bit_for_bit(swing, result):
         assert np.array_equal(fuzzy["hull"].sel(alpha=1.0, bound=bound).values, values)
 
 
+@pytest.mark.slow
 def test_alpha_levels_nest(result):
     fuzzy, _ = result
     hull = fuzzy["hull"]
@@ -77,6 +80,7 @@ def test_parse_fuzzy_values():
     )
 
 
+@pytest.mark.slow
 def test_fuzzy_sim_command(tmp_path):
     out = tmp_path / "swing.zarr"
     result = run("fuzzy-sim", "swing", "--fuzzy", "E=10%", "--set", "eta=1e5", "--nodes", "6",

@@ -56,6 +56,7 @@ def test_schemes_converge_to_the_same_motion(swing):
     assert ea == pytest.approx(eb, rel=0.01)  # measured 3.1265e-5 vs 3.1236e-5 J
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("scenario", "overrides"), [("swing", {"eta": 1e5}), ("stance", {})])
 def test_presets_run_their_full_two_seconds_with_energy_momentum(scenario, overrides):
     """Table 4.3 / 4.4 values (dt = 1 ms, T = 2 s); the soft swing blade needs η = 10⁵ Pa s

@@ -80,6 +80,7 @@ def test_notebook_is_stored_without_outputs(path: Path) -> None:
             assert cell.execution_count is None, f"{path.name}: clear the execution counts"
 
 
+@pytest.mark.slow  # each notebook runs in its own kernel
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_runs(path: Path, kernel_dir: Path, tmp_path: Path) -> None:
     before = sorted(p.name for p in (ROOT / "notebooks").iterdir())

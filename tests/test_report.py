@@ -268,6 +268,7 @@ def test_pages_render_in_chromium(report_dir: Path, tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not HAS_ANALYSIS, reason="fuzzygait.markererror.analysis is not written yet")
+@pytest.mark.slow
 def test_report_command_end_to_end(tmp_path: Path) -> None:
     corrupt = tmp_path / "corrupt.c3d"
     corrupt.write_bytes(b"this is not a C3D file" * 20)
