@@ -13,14 +13,18 @@ Takes about 20 s on 2 cores.
 
 from __future__ import annotations
 
-import argparse
-import time
-from collections.abc import Callable
+from _setup import one_thread
 
-import numpy as np
-from scipy.interpolate import CubicSpline
+one_thread()
 
-from fuzzygait.mocap import fill_gaps
+import argparse  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.interpolate import CubicSpline  # noqa: E402
+
+from fuzzygait.mocap import fill_gaps  # noqa: E402
 
 
 def random_walk_trial(seconds: float = 600.0, rate: float = 120.0, n_markers: int = 60) -> np.ndarray:

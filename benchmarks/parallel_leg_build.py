@@ -14,13 +14,17 @@ time is shown against the in-process build. Starts a 2-process Dask cluster; abo
 
 from __future__ import annotations
 
-import time
+from _setup import one_thread
 
-import numpy as np
+one_thread()
 
-from fuzzygait.mechanics.scenarios import LegSimulator
-from fuzzygait.mechanics.targets import LegModelRecipe
-from fuzzygait.uncertainty.execution import Evaluator
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.targets import LegModelRecipe  # noqa: E402
+from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 
 P = np.array([[4.0e5], [5.0e5], [6.0e5], [7.0e5]])
 

@@ -12,14 +12,18 @@ a fraction of the baseline's. Takes a few seconds.
 
 from __future__ import annotations
 
-import argparse
-import time
-from collections.abc import Callable
+from _setup import one_thread
 
-import numpy as np
+one_thread()
 
-from fuzzygait.mechanics.pendulum import Pendulum
-from fuzzygait.uncertainty import FuzzyVector, graph_follower, triangular_relative
+import argparse  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from fuzzygait.mechanics.pendulum import Pendulum  # noqa: E402
+from fuzzygait.uncertainty import FuzzyVector, graph_follower, triangular_relative  # noqa: E402
 
 LENGTH = triangular_relative(1.0, 0.1, "L")
 
