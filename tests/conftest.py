@@ -1,14 +1,11 @@
-"""Shared helpers and fixtures: where the reference data lives (skipping when it does not),
-the `fuzzygait` command in a subprocess, the sample trials and a Dask cluster."""
+"""Fixtures shared by every test folder: the sample trials, the Vicon movement trial, the
+angles run of the sample trial and a Dask cluster. Helpers are in ``support.py``."""
 
 from __future__ import annotations
 
 import logging
 import os
-import subprocess
-import sys
 from collections.abc import Iterator
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
@@ -18,62 +15,15 @@ import pytest
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 if TYPE_CHECKING:
     from distributed import LocalCluster
 
     from fuzzygait.core.trial import Trial
-    from fuzzygait.io.subject import SubjectParameters
     from fuzzygait.workflows.angles import AnglesRun
 
-ROOT = Path(__file__).resolve().parents[1]
-SAMPLE_DATA = ROOT / "sample_data"
-SHARED_DATA = ROOT.parent / "shared" / "data"
-VICON = SHARED_DATA / "vicon"
-C3D_FORMATS = SHARED_DATA / "c3d-formats"
-
-needs_shared = pytest.mark.skipif(
-    not SHARED_DATA.is_dir(),
-    reason=f"reference data {SHARED_DATA} is absent (it sits beside the clone in CI)",
-)
-
-
-def shared_file(*parts: str) -> Path:
-    """Path of a reference file; skips the calling test when it is absent."""
-    path = SHARED_DATA.joinpath(*parts)
-    if not path.is_file():
-        pytest.skip(f"reference file {path} is absent")
-    return path
-
-
-def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    """Run the `fuzzygait` command in a subprocess, as a user would."""
-    return subprocess.run(
-        [sys.executable, "-m", "fuzzygait", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-
-
-def assert_one_line_error(result: subprocess.CompletedProcess[str], *needles: str) -> None:
-    assert result.returncode != 0
-    assert "Traceback" not in result.stderr + result.stdout
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("fuzzygait: error: ")
-    for needle in needles:
-        assert needle in lines[0]
-
-
-def cut(markers: np.ndarray, cuts: list[tuple[int, int, int]]) -> np.ndarray:
-    """Copy of ``(frames, markers, 3)`` marker data with NaN runs ``(marker, start, length)``."""
-    out = markers.copy()
-    for m, start, length in cuts:
-        out[start : start + length, m] = np.nan
-    return out
+from support import SAMPLE_DATA, shared_file  # noqa: E402
 
 
 # --------------------------------------------------------------------------- fixtures
@@ -91,14 +41,6 @@ def walking() -> Trial:
 def truth() -> pd.DataFrame:
     """The true joint angles of walking.c3d (sample_data/walking_truth_angles.csv, deg)."""
     return pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
-
-
-@pytest.fixture(scope="module")
-def subject() -> SubjectParameters:
-    """sample_data/subject.toml."""
-    from fuzzygait.io.subject import read_subject
-
-    return read_subject(SAMPLE_DATA / "subject.toml")
 
 
 @pytest.fixture(scope="module")

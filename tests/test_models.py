@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import SAMPLE_DATA
+from support import SAMPLE_DATA
 from fuzzygait.testing import AnalyticRecipe, ModelCheckError, check_model
 from fuzzygait.uncertainty import Evaluation, FunctionModel, FuzzyModel, Output
 from fuzzygait.uncertainty.execution import Evaluator

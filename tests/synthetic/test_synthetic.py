@@ -31,7 +31,7 @@ from fuzzygait.synthetic.generate import (
     truth_joint_centres_csv_text,
 )
 
-SAMPLE_DATA = Path(__file__).resolve().parents[1] / "sample_data"
+SAMPLE_DATA = Path(__file__).resolve().parents[2] / "sample_data"
 STRIDE = 1.1
 FIRST_STRIKE = 0.11
 

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
-from conftest import SAMPLE_DATA, assert_one_line_error, run
+from support import SAMPLE_DATA, assert_one_line_error, run
 
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.markererror.result import fuzzy_angles_dataset

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import SAMPLE_DATA, shared_file
+from support import SAMPLE_DATA, shared_file
 from fuzzygait.core.errors import MarkerError
 from fuzzygait.io import Event, Trial, read_c3d
 from fuzzygait.gait.events import (

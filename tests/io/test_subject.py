@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 import pytest
-from conftest import SAMPLE_DATA, needs_shared, shared_file
+from support import SAMPLE_DATA, needs_shared, shared_file
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import read_c3d

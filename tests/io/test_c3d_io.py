@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import C3D_FORMATS, SHARED_DATA, needs_shared, shared_file
+from support import C3D_FORMATS, SHARED_DATA, needs_shared, shared_file
 
 from fuzzygait.core.errors import C3DError
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d

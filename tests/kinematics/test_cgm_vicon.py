@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import needs_shared, shared_file
+from support import needs_shared, shared_file
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_vsk, subject_from_processing
 from fuzzygait.kinematics import (

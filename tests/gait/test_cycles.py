@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import shared_file
+from support import shared_file
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.gait.cycles import (

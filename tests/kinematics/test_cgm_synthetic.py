@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import SAMPLE_DATA
+from support import SAMPLE_DATA
 from fuzzygait.io import read_c3d
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import (

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import SAMPLE_DATA
+from support import SAMPLE_DATA
 from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.io import read_c3d
 from fuzzygait.core.trial import Trial

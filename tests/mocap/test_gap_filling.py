@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from scipy.interpolate import CubicSpline
 
-from conftest import cut
+from support import cut
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import Gap, GapRun, fill_gaps, fill_trial_gaps, find_gaps, gap_report_table

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, shared_file
+from support import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
 

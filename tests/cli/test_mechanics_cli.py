@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import assert_one_line_error, run
+from support import assert_one_line_error, run
 
 xr = pytest.importorskip("xarray")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_one_line_error, run
+from support import assert_one_line_error, run
 
 from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
 from fuzzygait.uncertainty.frv import FRVSpec

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SAMPLE_DATA, assert_one_line_error, cut, run, shared_file
+from support import SAMPLE_DATA, assert_one_line_error, cut, run, shared_file
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 

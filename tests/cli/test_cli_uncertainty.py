@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
+from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
 
 from fuzzygait.io import read_c3d
 from fuzzygait.markererror.result import angle_components, component_hull

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_one_line_error, run
+from support import assert_one_line_error, run
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.fuzzy_dynamics import dense_reference, fuzzy_forward_dynamics, parse_fuzzy

@@ -1,0 +1,59 @@
+"""Helpers shared by the test folders: where the sample and reference data live
+(skipping when the reference data is absent), the `fuzzygait` command in a subprocess,
+and marker-cutting. Imported as ``from support import ...`` (``tests/`` is on the path)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]  # the repository
+SAMPLE_DATA = ROOT / "sample_data"
+SHARED_DATA = ROOT.parent / "shared" / "data"
+VICON = SHARED_DATA / "vicon"
+C3D_FORMATS = SHARED_DATA / "c3d-formats"
+
+needs_shared = pytest.mark.skipif(
+    not SHARED_DATA.is_dir(),
+    reason=f"reference data {SHARED_DATA} is absent (it sits beside the clone in CI)",
+)
+
+
+def shared_file(*parts: str) -> Path:
+    """Path of a reference file; skips the calling test when it is absent."""
+    path = SHARED_DATA.joinpath(*parts)
+    if not path.is_file():
+        pytest.skip(f"reference file {path} is absent")
+    return path
+
+
+def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """Run the `fuzzygait` command in a subprocess, as a user would."""
+    return subprocess.run(
+        [sys.executable, "-m", "fuzzygait", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def assert_one_line_error(result: subprocess.CompletedProcess[str], *needles: str) -> None:
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr + result.stdout
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("fuzzygait: error: ")
+    for needle in needles:
+        assert needle in lines[0]
+
+
+def cut(markers: np.ndarray, cuts: list[tuple[int, int, int]]) -> np.ndarray:
+    """Copy of ``(frames, markers, 3)`` marker data with NaN runs ``(marker, start, length)``."""
+    out = markers.copy()
+    for m, start, length in cuts:
+        out[start : start + length, m] = np.nan
+    return out
