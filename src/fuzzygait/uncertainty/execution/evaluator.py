@@ -95,6 +95,21 @@ class _Resources:
                 shutil.rmtree(tmpdir, ignore_errors=True)
 
 
+def _pre_spawn_environ() -> dict[str, object]:
+    """Dask's environment for new worker processes without its ``MALLOC_TRIM_THRESHOLD_``.
+
+    Dask sets glibc's trim threshold to 64 KiB in every worker so that memory goes back
+    to the system at once; the engine's evaluations allocate and free many mid-sized
+    arrays, and with that setting two workers ran the marker-error analysis no faster
+    than one plain process (1.9× slower than without it, the extra time mostly system
+    time; ``benchmarks/evaluator_overhead.py``). glibc's adaptive default is used instead."""
+    import dask
+
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    return environ
+
+
 class Evaluator:
     """Where the engine's work runs (see the module docstring).
 
@@ -138,16 +153,18 @@ class Evaluator:
             return res.client
 
     def _connect(self, res: _Resources) -> None:
+        import dask
         from distributed import Client, LocalCluster
 
         if self.scheduler is None:
             try:
-                cluster = LocalCluster(
-                    n_workers=self.workers, threads_per_worker=1, processes=True,
-                    silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
-                    # no dashboard; the scheduler's health endpoint on a free local port
-                    scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                )  # fmt: skip
+                with dask.config.set({"distributed.nanny.pre-spawn-environ": _pre_spawn_environ()}):
+                    cluster = LocalCluster(
+                        n_workers=self.workers, threads_per_worker=1, processes=True,
+                        silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
+                        # no dashboard; the scheduler's health endpoint on a free local port
+                        scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                    )  # fmt: skip
             except Exception as err:  # noqa: BLE001
                 raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}") from None
             res.cluster, res.client, res.owns_client = cluster, Client(cluster, set_as_default=False), True
