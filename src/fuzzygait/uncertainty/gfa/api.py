@@ -26,7 +26,7 @@ from fuzzygait.uncertainty.gfa.follower import run_follower
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect, Direct, Linearised, Strategy
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
 from fuzzygait.uncertainty.postprocess import repair_nesting
-from fuzzygait.uncertainty.protocol import NODES, Array, as_model, check_parameter_names
+from fuzzygait.uncertainty.protocol import NODES, Array, FuzzyModel, as_model, check_parameter_names
 
 Progress = Callable[[int, int], None]
 
@@ -55,7 +55,7 @@ def alpha_levels(alphas: Sequence[float]) -> Array:
 
 
 def graph_follower(
-    model: object,
+    model: FuzzyModel | Callable[[Array], Array],
     params: FuzzyVector | FuzzyBalls | Sequence[FuzzyNumber],
     alphas: Sequence[float] = (0.0, 0.5, 1.0),
     *,
