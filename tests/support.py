@@ -57,3 +57,16 @@ def cut(markers: np.ndarray, cuts: list[tuple[int, int, int]]) -> np.ndarray:
     for m, start, length in cuts:
         out[start : start + length, m] = np.nan
     return out
+
+
+def nexus_angle_errors(angles: dict[str, np.ndarray], trial, names) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``{name: (max |ours - Nexus|, RMS)}`` per component (deg) of the angle outputs
+    ``names``, over the frames where Nexus has an output; ours must be finite there."""
+    out = {}
+    for name in names:
+        nexus = np.all(np.isfinite(trial.outputs[name]), axis=1)
+        assert nexus.any(), name
+        diff = angles[name][nexus] - trial.outputs[name][nexus]
+        assert np.isfinite(diff).all(), name
+        out[name] = (np.abs(diff).max(axis=0), np.sqrt(np.mean(diff**2, axis=0)))
+    return out

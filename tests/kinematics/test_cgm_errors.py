@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -118,11 +117,6 @@ def test_nan_samples_give_nan_angles_only_where_needed(walking, subject):
         np.testing.assert_array_equal(result.angles[name][keep], full.angles[name][keep])
     for name in ("LPelvisAngles", "RHipAngles", "RKneeAngles"):
         assert np.isfinite(result.angles[name]).all()
-
-
-def test_unsupported_parameters_are_reported(walking, subject):
-    result = compute_lower_body(walking, subject.with_side("R", thigh_rotation=math.radians(5)))
-    assert any("RThighRotation" in note and "not applied" in note for note in result.notes)
 
 
 def test_inter_asis_distance_is_measured_when_unknown(walking, subject):

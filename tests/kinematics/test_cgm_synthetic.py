@@ -200,18 +200,58 @@ def test_davis_hip_joint_centre():
     assert local[1] == pytest.approx(125.0 - c * math.sin(0.5))
 
 
-def test_tibial_torsion_turns_the_knee_not_the_ankle(walking, subject):
+def test_tibial_torsion_turns_the_knee_tibia_and_the_foot_axis(walking, subject):
     torsion = math.radians(12)
     plain = compute_lower_body(walking, subject)
     for side in "LR":
         twisted = compute_lower_body(walking, subject.with_side(side, tibial_torsion=torsion))
+        long = "left" if side == "L" else "right"
+        # Nexus' sign: untorsioned = torsioned @ R_z(s * torsion), a positive torsion
+        # shows as knee external (negative) rotation on either side
+        delta = twisted.angles[side + "KneeAngles"] - plain.angles[side + "KneeAngles"]
+        np.testing.assert_allclose(delta, np.tile([0.0, 0.0, -12.0], (walking.n_frames, 1)), atol=1e-9)
+        np.testing.assert_array_equal(
+            twisted.segment_frames[long + "_tibia_torsioned"], plain.segment_frames[long + "_tibia_torsioned"]
+        )
+        # the foot's ankle axis is the untorsioned tibia's y axis: the foot turns too
+        assert not np.allclose(twisted.segment_frames[long + "_foot"], plain.segment_frames[long + "_foot"])
         for name in ANGLE_NAMES:
-            # an external torsion of the (marker-based) ankle axis relative to the knee
-            # axis shows as knee internal rotation on either side; nothing else moves
-            expected = [0.0, 0.0, 12.0] if name == side + "KneeAngles" else [0.0, 0.0, 0.0]
-            delta = twisted.angles[name] - plain.angles[name]
-            np.testing.assert_allclose(delta, np.tile(expected, (walking.n_frames, 1)), atol=1e-9)
-        assert any("TibialTorsion" in note for note in twisted.notes)
+            if name[0] != side or name[1:4] in ("Pel", "Hip"):
+                np.testing.assert_array_equal(twisted.angles[name], plain.angles[name])
+        assert twisted.notes == plain.notes
+
+
+def _dihedral(axis_from: np.ndarray, axis_to: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Right-handed angle (rad) about ``axis_from -> axis_to`` from ``start`` to ``end``."""
+    k = unit(axis_to - axis_from)
+    a = start - axis_from
+    b = end - axis_from
+    a -= k * np.sum(k * a, axis=1)[:, None]
+    b -= k * np.sum(k * b, axis=1)[:, None]
+    return np.arctan2(np.sum(k * np.cross(a, b), axis=1), np.sum(a * b, axis=1))
+
+
+@pytest.mark.parametrize("side", ["L", "R"])
+def test_wand_rotations_and_ankle_abadd_place_the_joint_centres(walking, subject, side):
+    """The definitions of fuzzygait.kinematics.joint_centres, checked geometrically."""
+    thigh, shank, abadd = math.radians(9), math.radians(-14), math.radians(7)
+    changed = subject.with_side(side, thigh_rotation=thigh, shank_rotation=shank, ankle_abadd=abadd)
+    result = compute_lower_body(walking, changed)
+    s = 1.0 if side == "L" else -1.0
+    hjc, kjc, ajc = (result.joint_centres[side + c] for c in ("HJC", "KJC", "AJC"))
+    kne, thi, ank = (walking.marker(side + m) for m in ("KNE", "THI", "ANK"))
+    params, radius = changed.side(side), changed.marker_radius
+    np.testing.assert_allclose(np.linalg.norm(kne - kjc, axis=1), params.knee_width / 2 + radius, atol=1e-9)
+    np.testing.assert_allclose(np.sum(unit(kne - kjc) * unit(hjc - kjc), axis=1), 0.0, atol=1e-12)
+    np.testing.assert_allclose(_dihedral(kjc, hjc, kne, thi), s * thigh, atol=1e-10)
+    # the ankle: the wand-rotated chord centre turned about ANK towards the KJC
+    np.testing.assert_allclose(np.linalg.norm(ank - ajc, axis=1), params.ankle_width / 2 + radius, atol=1e-9)
+    chord_angle = np.arccos((params.ankle_width / 2 + radius) / np.linalg.norm(kjc - ank, axis=1))
+    at_ank = np.arccos(np.sum(unit(ajc - ank) * unit(kjc - ank), axis=1))
+    np.testing.assert_allclose(chord_angle - at_ank, abadd, atol=1e-10)
+    unabducted = compute_lower_body(walking, changed.with_side(side, ankle_abadd=0.0)).joint_centres[side + "AJC"]
+    np.testing.assert_allclose(_dihedral(unabducted, kjc, ank, walking.marker(side + "TIB")), s * shank, atol=1e-10)
+    assert result.notes == []
 
 
 # ----------------------------------------------------------------------- progression

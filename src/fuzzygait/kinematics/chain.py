@@ -26,11 +26,16 @@ import numpy as np
 
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.kinematics.joint_centres import chord_joint_centre, davis_hjc_local
+from fuzzygait.kinematics.joint_centres import (
+    abducted_joint_centre,
+    davis_hjc_local,
+    rotated_chord_joint_centre,
+)
 from fuzzygait.kinematics.pelvis import inter_asis_distance, pelvis_frame
 from fuzzygait.kinematics.segments import (
     corrected_foot,
     long_bone_frame,
+    side_sign,
     uncorrected_foot,
     untorsioned_tibia,
 )
@@ -158,18 +163,21 @@ class LowerBodyChain:
         """Knee joint centre, mm."""
         if self.use_medial_markers:
             return 0.5 * (self.marker(side + "KNE") + self.marker(side + "KNM"))
-        offset = self._offset(self.subject.side(side).knee_width)
+        params = self.subject.side(side)
         thi, kne = self.marker(side + "THI"), self.marker(side + "KNE")
-        return chord_joint_centre(thi, self.hjc(side), kne, offset)
+        rotation = side_sign(side) * params.thigh_rotation
+        return rotated_chord_joint_centre(thi, self.hjc(side), kne, self._offset(params.knee_width), rotation)
 
     @_memo
     def ajc(self, side: str) -> np.ndarray:
         """Ankle joint centre, mm."""
         if self.use_medial_markers:
             return 0.5 * (self.marker(side + "ANK") + self.marker(side + "MED"))
-        offset = self._offset(self.subject.side(side).ankle_width)
-        tib, ank = self.marker(side + "TIB"), self.marker(side + "ANK")
-        return chord_joint_centre(tib, self.kjc(side), ank, offset)
+        params = self.subject.side(side)
+        tib, ank, kjc = self.marker(side + "TIB"), self.marker(side + "ANK"), self.kjc(side)
+        rotation = side_sign(side) * params.shank_rotation
+        centre = rotated_chord_joint_centre(tib, kjc, ank, self._offset(params.ankle_width), rotation)
+        return abducted_joint_centre(centre, kjc, ank, params.ankle_abadd)
 
     @_memo
     def thigh(self, side: str) -> np.ndarray:
@@ -178,18 +186,21 @@ class LowerBodyChain:
 
     @_memo
     def torsioned_tibia(self, side: str) -> np.ndarray:
-        """Marker-based tibia frame (y = ankle flexion axis), origin AJC."""
+        """Marker-based tibia frame (from KJC, AJC, ANK), origin AJC: the proximal frame
+        of the ankle angles."""
         return long_bone_frame(self.kjc(side), self.ajc(side), self.marker(side + "ANK"), side)
 
     @_memo
     def tibia(self, side: str) -> np.ndarray:
-        """Untorsioned tibia frame (knee flexion axis), origin AJC."""
+        """Untorsioned tibia frame, origin AJC: distal frame of the knee angles, ``L/RTI*``
+        and the ankle axis of the foot."""
         return untorsioned_tibia(self.torsioned_tibia(side), self.subject.side(side).tibial_torsion, side)
 
     @_memo
     def uncorrected_foot(self, side: str) -> np.ndarray:
-        """Foot frame before the static offsets (z from TOE to AJC)."""
-        ankle_axis = self.torsioned_tibia(side)[:, :, 1]
+        """Foot frame before the static offsets (z from TOE to AJC; ankle axis: the
+        untorsioned tibia's y axis)."""
+        ankle_axis = self.tibia(side)[:, :, 1]
         return uncorrected_foot(self.ajc(side), self.marker(side + "TOE"), ankle_axis)
 
     @_memo

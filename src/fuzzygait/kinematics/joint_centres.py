@@ -1,13 +1,31 @@
 """Joint-centre constructions of Plug-in Gait: Davis hip regression and the chord function.
 
 All positions are in mm in the laboratory frame; arrays are ``(n, 3)``.
+
+With a knee alignment device (KAD) or medial malleolus markers in the static trial,
+Nexus applies two calibrated offsets to the dynamic chord function (definitions inferred
+from Nexus 2.3 output, ``pig-options/PiGKad_Motion.c3d`` and ``PiGKadMed_Motion.c3d``,
+whose exported joint centres they reproduce to float32 storage, 2e-4 mm):
+
+* **wand rotation** (``ThighRotation``, ``ShankRotation``): the joint centre ``J`` stays
+  on the chord circle of the lateral marker and the proximal joint centre, but the plane
+  it shares with them is no longer the wand's plane: seen along the segment's own long
+  axis ``J -> proximal``, the wand lies at the angle ``s * rotation`` (``s = +1`` left,
+  ``-1`` right) from the lateral marker, right-handed about that axis
+  (:func:`rotated_chord_joint_centre`).  Rotating the wand about the line from the
+  lateral marker to the proximal joint centre instead is 3 mm off.
+* **ankle ab/adduction** (``AnkleAbAdd``): the ankle centre of the wand-rotated chord is
+  then turned about the ankle marker, in the plane of the marker, that centre and the
+  knee centre, by ``AnkleAbAdd`` towards the knee centre, on either side
+  (:func:`abducted_joint_centre`); ``J - ANK`` is then no longer perpendicular to the
+  tibia's long axis.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fuzzygait.kinematics.vectors import cross, dot, norm, unit
+from fuzzygait.kinematics.vectors import cross, norm, rotate_about, unit
 
 #: Davis et al. (1991) regression angles used by Plug-in Gait, rad.
 DAVIS_THETA = 0.5
@@ -75,10 +93,67 @@ def chord_joint_centre(
     to_proximal = proximal - marker
     normal = unit(cross(wand - marker, to_proximal))
     mid = 0.5 * (proximal + marker)
-    half = proximal - mid
     with np.errstate(invalid="ignore"):
         angle = 2.0 * np.arccos(offset / norm(to_proximal))
-    cos_a, sin_a = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    # Rodrigues' rotation of ``half`` about ``normal`` (``half`` is perpendicular to it).
-    along_normal = (1.0 - cos_a) * dot(normal, half)[:, None] * normal  # 0 up to rounding
-    return mid + cos_a * half + sin_a * cross(normal, half) + along_normal
+    return rotate_about(proximal, mid, normal, angle)
+
+
+#: Fixed-point iterations of :func:`rotated_chord_joint_centre`: each shrinks the change
+#: by about 4e-3 (joint width / segment length), so 12 reach rounding from a 20 mm start.
+ROTATED_CHORD_ITERATIONS = 12
+
+
+def rotated_chord_joint_centre(
+    wand: np.ndarray, proximal: np.ndarray, marker: np.ndarray, offset: float, rotation: float
+) -> np.ndarray:
+    """Chord function with a wand rotation offset (Plug-in Gait ``Thigh/ShankRotation``).
+
+    ``J`` satisfies the chord conditions of :func:`chord_joint_centre` (``|J - marker| =
+    offset``, ``J - marker`` perpendicular to ``proximal - J``) and, looking along the
+    long axis ``a = unit(proximal - J)``, the wand's direction from ``J`` makes the
+    right-handed angle ``rotation`` about ``a`` with the marker's direction ``marker - J``
+    (with ``rotation = 0`` the four points are coplanar: the plain chord).  The
+    condition refers to ``J`` itself, so it is solved by fixed-point iteration: start
+    from the plain chord, turn the wand about the current long axis by ``-rotation``
+    into the marker's plane, solve the plain chord again
+    (:data:`ROTATED_CHORD_ITERATIONS` times; the iteration contracts by about ``offset /
+    |proximal - J|`` per step).
+
+    Args:
+        wand, proximal, marker: ``(n, 3)`` mm (THI, HJC, KNE or TIB, KJC, ANK).
+        offset: marker-to-joint-centre distance, mm.
+        rotation: rad, ``s * ThighRotation`` / ``s * ShankRotation`` (``s = +1`` left,
+            ``-1`` right).
+
+    Returns:
+        ``(n, 3)`` joint centres, mm (NaN as for the plain chord).
+    """
+    centre = chord_joint_centre(wand, proximal, marker, offset)
+    if rotation == 0.0:
+        return centre
+    for _ in range(ROTATED_CHORD_ITERATIONS):
+        turned = rotate_about(wand, centre, unit(proximal - centre), -rotation)
+        centre = chord_joint_centre(turned, proximal, marker, offset)
+    return centre
+
+
+def abducted_joint_centre(
+    centre: np.ndarray, proximal: np.ndarray, marker: np.ndarray, angle: float
+) -> np.ndarray:
+    """Plug-in Gait ``AnkleAbAdd``: ``centre`` turned about ``marker`` towards ``proximal``.
+
+    The rotation axis passes through ``marker`` normal to the plane of ``marker``,
+    ``centre`` and ``proximal``; a positive ``angle`` (rad, either side) reduces the
+    angle at ``marker`` between ``centre`` and ``proximal`` by ``angle``.  The distance
+    ``|centre - marker|`` is kept.
+
+    Args:
+        centre: ``(n, 3)`` chord ankle centre, mm.
+        proximal: ``(n, 3)`` knee joint centre, mm.
+        marker: ``(n, 3)`` ANK, mm.
+        angle: ``AnkleAbAdd``, rad.
+    """
+    if angle == 0.0:
+        return centre
+    normal = unit(cross(centre - marker, proximal - marker))
+    return rotate_about(centre, marker, normal, angle)

@@ -103,25 +103,6 @@ def _missing_reason(missing: list[str]) -> str:
     return f"marker{'s' if len(missing) > 1 else ''} {', '.join(missing)} missing"
 
 
-def _parameter_notes(subject: SubjectParameters) -> list[str]:
-    notes = []
-    for side, params in (("L", subject.left), ("R", subject.right)):
-        unsupported = {
-            "ThighRotation": params.thigh_rotation,
-            "ShankRotation": params.shank_rotation,
-            "AnkleAbAdd": params.ankle_abadd,
-        }
-        for name, value in unsupported.items():
-            if value != 0.0:
-                notes.append(f"{side}{name}={value:g} rad is not applied (only 0 is supported)")
-        if params.tibial_torsion != 0.0:
-            notes.append(
-                f"{side}TibialTorsion={params.tibial_torsion:g} rad applied as an external torsion of the "
-                "marker-based tibia; this sign convention is not validated against Vicon output"
-            )
-    return notes
-
-
 def compute_lower_body(
     trial: Trial, subject: SubjectParameters, *, use_medial_markers: bool | None = None
 ) -> CGMResult:
@@ -147,7 +128,7 @@ def compute_lower_body(
     subject.validate()
     medial = bool(use_medial_markers)
     chain = LowerBodyChain(trial, subject, use_medial_markers=medial)
-    result = CGMResult(notes=_parameter_notes(subject))
+    result = CGMResult()
     if medial:
         result.notes.append(
             "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"

@@ -8,17 +8,17 @@ right-handed axis directions (no mirroring of axes):
   left, along ``KNE - KJC`` on the left leg and ``KJC - KNE`` on the right; x = y × z
   (anterior).  Vicon exports it as ``LFEO/LFEA/LFEL/LFEP``.
 * **tibia** (origin AJC): the same construction from KJC, AJC and ANK.  The frame built
-  from the markers is the *torsioned* tibia, whose y axis is the ankle flexion axis (the
-  TIB wand defines the ankle axis).  The *untorsioned* tibia, used for the knee angles and
-  exported as ``LTIO...``, is the torsioned one turned back about its z axis by the
-  tibial torsion ``τ``: ``R_untorsioned = R_torsioned @ R_z(-s τ)`` with ``s = +1`` left,
-  ``-1`` right, so a positive ``TibialTorsion`` means an ankle axis externally rotated
-  relative to the knee axis on either side.  With ``τ = 0`` (all Vicon reference data at
-  hand) the two coincide.
+  from the markers is the *torsioned* tibia, the proximal frame of the ankle angles.  The
+  *untorsioned* tibia, used for the knee angles, exported as ``LTIO...`` and whose y
+  axis is the ankle axis of the foot frame, is the torsioned one turned about its z axis
+  by the tibial torsion ``τ``: ``R_untorsioned = R_torsioned @ R_z(s τ)`` with ``s = +1``
+  left, ``-1`` right (Nexus 2.3, ``PiGKadMed_Motion.c3d``, ``TibialTorsion`` -0.21 and
+  -0.31 rad: this reproduces its ``L/RTI*`` frames, knee, ankle and foot progression
+  angles to float32 rounding; the opposite sign is 12° and 18° off in knee rotation).
 * **foot** (Plug-in Gait orientation, as Vicon exports ``LFOA/LFOL/LFOP``): z runs along
   the foot from the toe backwards, x points dorsally (up), y to the left.  The
   *uncorrected* foot has z = ``unit(AJC - TOE)``, x = ``unit(y_ankle × z)`` with
-  ``y_ankle`` the torsioned tibia's y axis, y = z × x.  The static calibration offsets
+  ``y_ankle`` the untorsioned tibia's y axis, y = z × x.  The static calibration offsets
   turn it into the anatomical foot: ``R_foot = R_uncorrected @ R_y(-StaticPlantFlex) @
   R_x(-s StaticRotOff)`` (``s = +1`` left, ``-1`` right).
 """
@@ -66,12 +66,12 @@ def untorsioned_tibia(torsioned: np.ndarray, tibial_torsion: float, side: str) -
 
     Args:
         torsioned: ``(n, 3, 3)`` tibia frame from KJC, AJC and ANK.
-        tibial_torsion: ``TibialTorsion`` in rad (positive = external).
+        tibial_torsion: ``TibialTorsion`` in rad (Nexus' sign; see the module docstring).
         side: ``"L"`` or ``"R"``.
     """
     if tibial_torsion == 0.0:
         return torsioned
-    return rotate_frame(torsioned, 2, -side_sign(side) * tibial_torsion)
+    return rotate_frame(torsioned, 2, side_sign(side) * tibial_torsion)
 
 
 def uncorrected_foot(ajc: np.ndarray, toe: np.ndarray, ankle_axis: np.ndarray) -> np.ndarray:
@@ -79,7 +79,7 @@ def uncorrected_foot(ajc: np.ndarray, toe: np.ndarray, ankle_axis: np.ndarray) -
 
     Args:
         ajc, toe: ``(n, 3)`` mm.
-        ankle_axis: ``(n, 3)`` ankle flexion axis (the torsioned tibia's y axis).
+        ankle_axis: ``(n, 3)`` ankle flexion axis (the untorsioned tibia's y axis).
     """
     z = unit(ajc - toe)
     x = unit(cross(ankle_axis, z))

@@ -23,6 +23,7 @@ __all__ = [
     "frame_from_axes",
     "norm",
     "relative_rotation",
+    "rotate_about",
     "rotate_frame",
     "to_lab",
     "to_local",
@@ -86,6 +87,18 @@ def rotate_frame(frame: np.ndarray, axis: int, angle: np.ndarray | float) -> np.
     """Rotate each frame about its **own** axis ``axis`` by ``angle`` (rad, right-handed):
     ``frame @ R_axis(angle)``."""
     return frame @ axis_rotation(axis, angle)
+
+
+def rotate_about(
+    points: np.ndarray, origin: np.ndarray, axis: np.ndarray, angle: np.ndarray | float
+) -> np.ndarray:
+    """``points`` ``(n, 3)`` rotated by ``angle`` (rad, ``(n,)`` or scalar, right-handed)
+    about the line through ``origin`` along the **unit** vector ``axis`` (Rodrigues)."""
+    v = points - origin
+    angle = np.asarray(angle, dtype=float)[..., None]
+    cos_a, sin_a = np.cos(angle), np.sin(angle)
+    along = (1.0 - cos_a) * dot(axis, v)[..., None] * axis
+    return origin + cos_a * v + sin_a * cross(axis, v) + along
 
 
 def relative_rotation(proximal: np.ndarray, distal: np.ndarray) -> np.ndarray:
