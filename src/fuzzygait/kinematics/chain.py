@@ -14,6 +14,19 @@ Joint centres
   KJC = midpoint of KNE and KNM, AJC = midpoint of ANK and MED; THI and TIB are then not
   used.  The segment frames are built the same way from these centres (the lateral
   marker direction is made orthogonal to the long axis).
+
+Foot
+----
+In a dynamic trial the foot is the uncorrected foot (TOE, AJC, ankle axis) turned by the
+static offsets.  In the static trial itself Nexus reports the *heel foot* instead
+(``static_foot``): the same construction with HEE in place of AJC, i.e. z =
+``unit(HEE - TOE)``, x = ``unit(y_ankle × z)`` (the uncorrected foot's ankle axis);
+with the foot-flat option HEE is first brought to the height of TOE + ``SoleDelta``
+along the laboratory vertical (lab Z).
+Measured: Nexus 2 ``Static_trial.c3d`` (flat foot off) within 4.5e-5° of its ``LFO*``
+frames, Nexus 1.4 ``PiG_Calibration-FlatFoot-Full.c3d`` (flat foot on) within 4.4e-5°.
+The static calibration offsets are the angles of this heel foot's z axis in the
+uncorrected foot (see :mod:`fuzzygait.kinematics.static`).
 """
 
 from __future__ import annotations
@@ -44,6 +57,11 @@ from fuzzygait.kinematics.vectors import to_lab
 #: Segments of one leg in chain order.
 LEG_SEGMENTS = ("thigh", "tibia", "foot")
 
+#: Laboratory vertical axis (Z up) along which the foot-flat option levels HEE.
+VERTICAL_AXIS = 2
+
+#: ``static_foot`` values: the heel foot as is, or levelled (Plug-in Gait "foot flat").
+STATIC_FOOT_MODES = ("heel", "flat")
 
 
 def _memo(method: Callable[..., Any]) -> Callable[..., Any]:
@@ -99,14 +117,27 @@ class LowerBodyChain:
         subject: validated subject parameters; ``inter_asis_distance`` None means "measure
             it on this trial".
         use_medial_markers: KJC/AJC as KNE-KNM / ANK-MED midpoints instead of the chord.
+        static_foot: None (dynamic trial: foot from the static offsets), ``"heel"`` or
+            ``"flat"``: the foot of a static trial as Nexus reports it, built from HEE and
+            TOE (``"flat"``: HEE levelled to TOE + ``SoleDelta``), see the module
+            docstring.  HEE is then needed.
 
     Accessing a quantity whose markers are absent raises :class:`MarkerError`.
     """
 
-    def __init__(self, trial: Trial, subject: SubjectParameters, use_medial_markers: bool = False):
+    def __init__(
+        self,
+        trial: Trial,
+        subject: SubjectParameters,
+        use_medial_markers: bool = False,
+        static_foot: str | None = None,
+    ):
+        if static_foot is not None and static_foot not in STATIC_FOOT_MODES:
+            raise ValueError(f"static_foot must be None, 'heel' or 'flat'; got {static_foot!r}")
         self.trial = trial
         self.subject = subject
         self.use_medial_markers = use_medial_markers
+        self.static_foot = static_foot
         self._cache: dict[tuple[str, str], Any] = {}
 
     def marker(self, label: str) -> np.ndarray:
@@ -204,8 +235,20 @@ class LowerBodyChain:
         return uncorrected_foot(self.ajc(side), self.marker(side + "TOE"), ankle_axis)
 
     @_memo
+    def heel_foot(self, side: str) -> np.ndarray:
+        """Static-trial foot from TOE and HEE (HEE levelled when ``static_foot="flat"``);
+        z from TOE to HEE, x dorsal."""
+        toe, hee = self.marker(side + "TOE"), self.marker(side + "HEE")
+        if self.static_foot == "flat":
+            hee = hee.copy()
+            hee[:, VERTICAL_AXIS] = toe[:, VERTICAL_AXIS] + self.subject.side(side).sole_delta
+        return uncorrected_foot(hee, toe, self.tibia(side)[:, :, 1])
+
+    @_memo
     def foot(self, side: str) -> np.ndarray:
         """Anatomical Plug-in Gait foot frame (z along the foot, backwards; x dorsal)."""
+        if self.static_foot is not None:
+            return self.heel_foot(side)
         p = self.subject.side(side)
         return corrected_foot(self.uncorrected_foot(side), p.static_plant_flex, p.static_rot_off, side)
 

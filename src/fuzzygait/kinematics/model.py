@@ -104,7 +104,11 @@ def _missing_reason(missing: list[str]) -> str:
 
 
 def compute_lower_body(
-    trial: Trial, subject: SubjectParameters, *, use_medial_markers: bool | None = None
+    trial: Trial,
+    subject: SubjectParameters,
+    *,
+    use_medial_markers: bool | None = None,
+    static_foot: str | None = None,
 ) -> CGMResult:
     """Run the Plug-in Gait lower-body model on every frame of ``trial``.
 
@@ -121,13 +125,18 @@ def compute_lower_body(
         use_medial_markers: True to place KJC / AJC at the KNE-KNM / ANK-MED midpoints
             (CGM 2.x style; Plug-in Gait ignores medial markers).  None or False: the
             Plug-in Gait chord construction.
+        static_foot: None for a dynamic trial (the foot from the static offsets).  For
+            the outputs Nexus stores in a *static* trial, ``"heel"`` (foot flat off) or
+            ``"flat"`` (foot flat on): the foot is then built from HEE and TOE, HEE
+            levelled to TOE + ``SoleDelta`` for ``"flat"`` (see
+            :mod:`fuzzygait.kinematics.chain`); the static offsets are not used.
 
     Raises:
         ParameterError: implausible subject parameters (names them).
     """
     subject.validate()
     medial = bool(use_medial_markers)
-    chain = LowerBodyChain(trial, subject, use_medial_markers=medial)
+    chain = LowerBodyChain(trial, subject, use_medial_markers=medial, static_foot=static_foot)
     result = CGMResult()
     if medial:
         result.notes.append(
@@ -176,6 +185,10 @@ def compute_lower_body(
         result.virtual_markers.update(vm.tibia_markers(side, kjc, ajc, tibia, knee_width))
         result.angles[side + "KneeAngles"] = angle_from_chain(chain, side + "KneeAngles", result.progression)
         if chain.missing("foot", side):
+            continue
+        if static_foot is not None and not trial.has_marker(side + "HEE"):
+            for name in ("AnkleAngles", "FootProgressAngles"):
+                result.unavailable[side + name] = _missing_reason([side + "HEE"]) + " (static-trial foot)"
             continue
         foot = chain.foot(side)
         result.segment_frames[long + "_foot"] = foot

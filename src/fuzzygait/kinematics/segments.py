@@ -77,8 +77,11 @@ def untorsioned_tibia(torsioned: np.ndarray, tibial_torsion: float, side: str) -
 def uncorrected_foot(ajc: np.ndarray, toe: np.ndarray, ankle_axis: np.ndarray) -> np.ndarray:
     """Plug-in Gait foot frame before the static offsets (z from TOE to AJC).
 
+    The same construction with HEE (possibly levelled) in place of AJC is the foot Nexus
+    reports in a static trial (see :mod:`fuzzygait.kinematics.chain`).
+
     Args:
-        ajc, toe: ``(n, 3)`` mm.
+        ajc, toe: ``(n, 3)`` mm (``ajc``: the point the z axis points to from TOE).
         ankle_axis: ``(n, 3)`` ankle flexion axis (the untorsioned tibia's y axis).
     """
     z = unit(ajc - toe)
