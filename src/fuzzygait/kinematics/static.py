@@ -19,6 +19,12 @@ mean LASI and the mean RASI positions over those frames (inferred from Nexus' st
 ``InterAsisDistance``: it reproduces the float32 value of ``PiGKad_Calibration.c3d``
 exactly and that of ``PiG_Calibration-FlatFoot-Full.c3d`` within 2.3e-4 mm, where the
 mean of the per-frame distances is 5.6e-3 mm off).
+
+With a knee alignment device (``L/RKAX``, ``L/RKD1``, ``L/RKD2``) and optionally medial
+malleolus markers (``L/RMED``) in the static trial (:func:`~fuzzygait.kinematics.kad.knee_method`
+tells which), the knee and ankle centres come from them and the calibration also gives
+``ThighRotation``, ``ShankRotation``, ``AnkleAbAdd`` and, with MED, ``TibialTorsion``
+(see :mod:`fuzzygait.kinematics.kad`); the foot offsets then use that chain.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
+from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method
 from fuzzygait.kinematics.segments import foot_offsets
 
 
@@ -48,14 +55,22 @@ def static_calibration(
     Returns:
         A copy of ``subject`` with ``static_plant_flex`` and ``static_rot_off`` (rad) set
         on both sides and, when it was None, ``inter_asis_distance`` = the distance (mm)
-        between the mean LASI and RASI positions of the static trial.
+        between the mean LASI and RASI positions of the static trial.  With a KAD also
+        ``thigh_rotation``, ``shank_rotation`` and ``ankle_abadd`` (0 without MED) and,
+        with MED, ``tibial_torsion`` (rad, :mod:`fuzzygait.kinematics.kad`).
 
     Raises:
-        MarkerError: a needed marker is absent from the trial (all of them named).
+        MarkerError: a needed marker is absent from the trial (all of them named), an
+            incomplete or implausible KAD, or a medial marker on the lateral side.
         ParameterError: implausible subject parameters, or no frame with every marker.
     """
     subject.validate()
+    method = knee_method(static)
     labels = required_markers(static, use_medial_markers=False) + ["LHEE", "RHEE"]
+    if method != "plain":
+        labels = [m for m in labels if m[1:] != "KNE"] + [side + m for side in "LR" for m in KAD_MARKERS]
+    if method == "KAD+MED":
+        labels += ["LMED", "RMED"]
     missing = [m for m in labels if not static.has_marker(m)]
     if missing:
         raise MarkerError(
@@ -72,7 +87,16 @@ def static_calibration(
         iad = float(np.linalg.norm(mean_lasi - mean_rasi))
         calibrated = replace(subject, inter_asis_distance=iad).validate()
 
-    chain = LowerBodyChain(static, calibrated, static_foot="flat" if flat_foot else "heel")
+    static_foot = "flat" if flat_foot else "heel"
+    chain: LowerBodyChain = LowerBodyChain(static, calibrated, static_foot=static_foot)
+    if method != "plain":
+        knee_chain = StaticKneeChain(static, calibrated, static_foot=static_foot)
+        for side in "LR":
+            check_kad(static, side)
+            if knee_chain.medial_malleoli:
+                check_medial_malleolus(knee_chain, side, seen)
+            calibrated = calibrated.with_side(side, **knee_chain.offsets(side, seen))
+        chain = knee_chain
     for side in "LR":
         offsets = foot_offsets(chain.uncorrected_foot(side), chain.heel_foot(side)[:, :, 2], side)
         plantar_flex, rot_off = np.mean(offsets[seen], axis=0)
