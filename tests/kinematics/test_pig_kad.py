@@ -29,6 +29,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from fuzzygait.core.errors import MarkerError
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import subject_from_processing
 from fuzzygait.kinematics import ANGLE_NAMES, compute_lower_body, static_calibration
@@ -119,3 +120,65 @@ def test_walking_angles_with_our_static_calibration(session):
     result = compute_lower_body(motion, calibrated)
     assert result.notes == []
     _assert_agreement(result.angles, motion)
+
+
+# ----------------------------------------------------------------------- the static trial itself
+#: Nexus' own ankle angles in the KAD + MED static trial are the one output not reproduced:
+#: its proximal frame is our marker-based tibia turned about its long axis by a nearly
+#: constant -2.37e-4 rad (left) / +2.16e-5 rad (right), for a reason not found yet.
+STATIC_MED_ANKLE_MAX_DEG = {"L": 0.014, "R": 0.0013}
+
+
+def test_static_trial_outputs(session):
+    name, static, _, calibrated = session
+    result = compute_lower_body(static, calibrated, static_foot="heel")
+    assert result.unavailable == {}
+    for angle, (worst, rms) in nexus_angle_errors(result.angles, static, ANGLE_NAMES).items():
+        if name == "PiGKadMed" and angle[1:] == "AnkleAngles":
+            assert worst.max() <= STATIC_MED_ANKLE_MAX_DEG[angle[0]], (angle, worst)
+            continue
+        assert np.all(worst <= MAX_BOUND_DEG) and np.all(rms <= RMS_BOUND_DEG), (angle, worst, rms)
+    for side in "LR":  # the virtual knee marker, the segment frames
+        for marker in [side + "KNE"] + [side + seg + s for seg in ("FE", "TI", "FO") for s in "OALP"]:
+            err = np.max(np.abs(result.virtual_markers[marker] - static.outputs[marker]))
+            assert err < POSITION_BOUND_MM, (marker, err)
+
+
+# ----------------------------------------------------------------------- bad input
+@pytest.fixture(scope="module")
+def kad_med_static():
+    return read_c3d(shared_file("pig-options", "PiGKadMed_Calibration.c3d"))
+
+
+def _without(trial, label):
+    return trial.select_markers([m for m in trial.marker_labels if m != label])
+
+
+def test_a_missing_kad_marker_is_named(kad_med_static):
+    static = _without(kad_med_static, "RKD2")
+    with pytest.raises(MarkerError, match="RKD2 missing") as error:
+        static_calibration(static, _blank_subject(static))
+    assert "\n" not in str(error.value)
+
+
+def test_a_kad_whose_markers_are_not_equidistant_is_refused(kad_med_static):
+    markers = kad_med_static.markers.copy()
+    markers[:, kad_med_static.marker_labels.index("LKD1")] += [0.0, 0.0, 40.0]
+    static = kad_med_static.with_markers(markers)
+    with pytest.raises(MarkerError, match="LKAX-LKD1-LKD2 distances"):
+        static_calibration(static, _blank_subject(static))
+
+
+def test_a_medial_marker_on_the_lateral_side_is_refused(kad_med_static):
+    markers = kad_med_static.markers.copy()
+    ank, med = (kad_med_static.marker_labels.index(m) for m in ("RANK", "RMED"))
+    markers[:, med] = 2 * markers[:, ank] - markers[:, med]  # mirrored to the lateral side
+    static = kad_med_static.with_markers(markers)
+    with pytest.raises(MarkerError, match="RMED is on the lateral side"):
+        static_calibration(static, _blank_subject(static))
+
+
+def test_one_medial_marker_only_is_refused(kad_med_static):
+    static = _without(kad_med_static, "LMED")
+    with pytest.raises(MarkerError, match="LMED missing"):
+        static_calibration(static, _blank_subject(static))

@@ -8,8 +8,12 @@ the static calibration (:mod:`fuzzygait.kinematics.static`).
 Joint centres
 -------------
 * HJC: Davis regression in the pelvis frame (:func:`~fuzzygait.kinematics.joint_centres.davis_hjc_local`).
-* KJC: chord function on THI, HJC, KNE with ``KneeWidth / 2 + marker radius``.
-* AJC: chord function on TIB, KJC, ANK with ``AnkleWidth / 2 + marker radius``.
+* KJC: chord function on THI, HJC, KNE with ``KneeWidth / 2 + marker radius``, the
+  THI wand turned by ``ThighRotation``.
+* AJC: chord function on TIB, KJC, ANK with ``AnkleWidth / 2 + marker radius``, the TIB
+  wand turned by ``ShankRotation``, then turned by ``AnkleAbAdd`` (see
+  :mod:`fuzzygait.kinematics.joint_centres`; a static trial with a knee alignment device
+  uses :class:`fuzzygait.kinematics.kad.StaticKneeChain` instead).
 * Optional medial markers (``use_medial_markers=True``, CGM 2.x style, not Plug-in Gait):
   KJC = midpoint of KNE and KNM, AJC = midpoint of ANK and MED; THI and TIB are then not
   used.  The segment frames are built the same way from these centres (the lateral

@@ -19,6 +19,7 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
 from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers
+from fuzzygait.kinematics.kad import StaticKneeChain, knee_method
 from fuzzygait.kinematics.progression import progression_frame
 
 #: The Plug-in Gait lower-body angle outputs, in Vicon's names.
@@ -129,7 +130,10 @@ def compute_lower_body(
             the outputs Nexus stores in a *static* trial, ``"heel"`` (foot flat off) or
             ``"flat"`` (foot flat on): the foot is then built from HEE and TOE, HEE
             levelled to TOE + ``SoleDelta`` for ``"flat"`` (see
-            :mod:`fuzzygait.kinematics.chain`); the static offsets are not used.
+            :mod:`fuzzygait.kinematics.chain`); the static offsets are not used.  A
+            static trial with a knee alignment device then uses the KAD (and MED)
+            knee and ankle centres of :mod:`fuzzygait.kinematics.kad` and exports the
+            virtual ``L/RKNE``.
 
     Raises:
         ParameterError: implausible subject parameters (names them).
@@ -137,6 +141,8 @@ def compute_lower_body(
     subject.validate()
     medial = bool(use_medial_markers)
     chain = LowerBodyChain(trial, subject, use_medial_markers=medial, static_foot=static_foot)
+    if static_foot is not None and knee_method(trial) != "plain":
+        chain = StaticKneeChain(trial, subject, static_foot=static_foot)
     result = CGMResult()
     if medial:
         result.notes.append(
@@ -174,6 +180,8 @@ def compute_lower_body(
         result.joint_centres[side + "KJC"] = kjc
         result.segment_frames[long + "_thigh"] = thigh
         result.virtual_markers.update(vm.thigh_markers(side, hjc[side], kjc, thigh))
+        if isinstance(chain, StaticKneeChain):  # Nexus exports the KAD's virtual knee marker
+            result.virtual_markers[side + "KNE"] = chain.marker(side + "KNE")
         result.angles[side + "HipAngles"] = angle_from_chain(chain, side + "HipAngles", result.progression)
         if chain.missing("tibia", side):
             continue
