@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fuzzygait.kinematics.vectors import cross, norm, rotate_about, unit
+from fuzzygait.kinematics.vectors import cross, dot, norm, rotate_about, unit
 
 #: Davis et al. (1991) regression angles used by Plug-in Gait, rad.
 DAVIS_THETA = 0.5
@@ -98,9 +98,12 @@ def chord_joint_centre(
     return rotate_about(proximal, mid, normal, angle)
 
 
-#: Fixed-point iterations of :func:`rotated_chord_joint_centre`: each shrinks the change
-#: by about 4e-3 (joint width / segment length), so 12 reach rounding from a 20 mm start.
-ROTATED_CHORD_ITERATIONS = 12
+#: :func:`rotated_chord_joint_centre` iterates until no centre moves by more than this
+#: (mm) or for at most :data:`ROTATED_CHORD_MAX_ITERATIONS` steps; each step shrinks the
+#: change about 250-fold on adult legs (12 mm, 0.02, 9e-5, 4e-7, 2e-9 mm), so it stops
+#: after 5 or 6.
+ROTATED_CHORD_TOLERANCE_MM = 1e-10
+ROTATED_CHORD_MAX_ITERATIONS = 30
 
 
 def rotated_chord_joint_centre(
@@ -114,10 +117,10 @@ def rotated_chord_joint_centre(
     right-handed angle ``rotation`` about ``a`` with the marker's direction ``marker - J``
     (with ``rotation = 0`` the four points are coplanar: the plain chord).  The
     condition refers to ``J`` itself, so it is solved by fixed-point iteration: start
-    from the plain chord, turn the wand about the current long axis by ``-rotation``
-    into the marker's plane, solve the plain chord again
-    (:data:`ROTATED_CHORD_ITERATIONS` times; the iteration contracts by about ``offset /
-    |proximal - J|`` per step).
+    from the plain chord; turn the wand about the current long axis by ``-rotation``;
+    take the chord point in the plane of that turned wand, the marker and the proximal
+    centre (on the chord circle, the same side of the marker-proximal line as before);
+    repeat until the centres settle (:data:`ROTATED_CHORD_TOLERANCE_MM`).
 
     Args:
         wand, proximal, marker: ``(n, 3)`` mm (THI, HJC, KNE or TIB, KJC, ANK).
@@ -131,9 +134,26 @@ def rotated_chord_joint_centre(
     centre = chord_joint_centre(wand, proximal, marker, offset)
     if rotation == 0.0:
         return centre
-    for _ in range(ROTATED_CHORD_ITERATIONS):
+    # The chord circle: centre ``foot`` on the marker-proximal line, radius ``radius``.
+    axis = unit(proximal - marker)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        foot = marker + (offset**2 / norm(proximal - marker))[:, None] * axis
+    radial = centre - foot
+
+    def across(point: np.ndarray) -> np.ndarray:
+        """Component of ``point - marker`` normal to the marker-proximal line."""
+        v = point - marker
+        return v - dot(v, axis)[:, None] * axis
+
+    # signed radius: the side of the line the chord takes relative to the wand
+    radius = norm(radial) * np.sign(dot(radial, across(wand)))
+    for _ in range(ROTATED_CHORD_MAX_ITERATIONS):
         turned = rotate_about(wand, centre, unit(proximal - centre), -rotation)
-        centre = chord_joint_centre(turned, proximal, marker, offset)
+        moved = foot + radius[:, None] * unit(across(turned))
+        change = norm(moved - centre)
+        centre = moved
+        if not np.any(change > ROTATED_CHORD_TOLERANCE_MM):  # NaN frames do not count
+            break
     return centre
 
 
