@@ -39,6 +39,45 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method
 from fuzzygait.kinematics.segments import foot_offsets
+from fuzzygait.kinematics.vectors import unit
+
+#: The offsets (rad) a static calibration computes: ``SideParameters`` field -> Vicon
+#: ``PROCESSING`` name (after the side letter).
+CALIBRATED_OFFSETS = {
+    "thigh_rotation": "ThighRotation",
+    "shank_rotation": "ShankRotation",
+    "tibial_torsion": "TibialTorsion",
+    "ankle_abadd": "AnkleAbAdd",
+    "static_plant_flex": "StaticPlantFlex",
+    "static_rot_off": "StaticRotOff",
+}
+
+#: Largest angle (degrees) between the standing legs (mean AJC -> HJC direction) and lab
+#: +Z the foot-flat calibration accepts: a standing subject's legs are within a few
+#: degrees of the vertical; a trial exported with another axis up (Y-up lab) or a
+#: subject lying down is 90 degrees off.
+MAX_LEG_TILT_DEG = 30.0
+
+
+def check_upright(static: Trial, chain: LowerBodyChain, seen: np.ndarray) -> None:
+    """Raise :class:`ParameterError` when the subject does not stand along lab +Z.
+
+    Only the foot-flat option needs it: it levels HEE along the lab vertical, so with
+    another axis up its ``StaticPlantFlex``/``StaticRotOff`` are wrong.  A subject turned
+    about the vertical (facing 45 degrees between the lab axes, or any direction) is
+    *not* refused: every calibrated value is a relative angle or a distance, unchanged by
+    such a turn (measured on ``sample_data/static.c3d`` turned by 20, 45, 90, 135 and 180
+    degrees: identical to 1e-12 rad); only the static trial's own pelvis and
+    foot-progression angles refer to the lab axis nearest to where the pelvis faces, as
+    Nexus' do.
+    """
+    legs = np.mean([unit(chain.hjc(side) - chain.ajc(side))[seen].mean(axis=0) for side in "LR"], axis=0)
+    tilt = float(np.degrees(np.arccos(np.clip(unit(legs[None])[0, 2], -1.0, 1.0))))
+    if tilt > MAX_LEG_TILT_DEG:
+        raise ParameterError(
+            f"{static.name}: the subject's legs are {tilt:.0f} deg from the lab's +Z axis, but the foot-flat "
+            "option levels the heel along lab Z; export the static trial with Z up (or calibrate without foot flat)"
+        )
 
 
 def static_calibration(
@@ -62,7 +101,9 @@ def static_calibration(
     Raises:
         MarkerError: a needed marker is absent from the trial (all of them named), an
             incomplete or implausible KAD, or a medial marker on the lateral side.
-        ParameterError: implausible subject parameters, or no frame with every marker.
+        ParameterError: implausible subject parameters, no frame with every marker, or
+            with ``flat_foot`` a subject not standing along lab +Z (:func:`check_upright`;
+            a subject turned about the vertical is calibrated as any other).
     """
     subject.validate()
     method = knee_method(static)
@@ -97,6 +138,8 @@ def static_calibration(
                 check_medial_malleolus(knee_chain, side, seen)
             calibrated = calibrated.with_side(side, **knee_chain.offsets(side, seen))
         chain = knee_chain
+    if flat_foot:
+        check_upright(static, chain, seen)
     for side in "LR":
         offsets = foot_offsets(chain.uncorrected_foot(side), chain.heel_foot(side)[:, :, 2], side)
         plantar_flex, rot_off = np.mean(offsets[seen], axis=0)
