@@ -4,7 +4,9 @@
   gait phase, degrees);
 * :mod:`~fuzzygait.synthetic.leg_model` -- kinematic chain, sign conventions, Davis hip
   joint centre, marker placement;
-* :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the ``sample_data`` folder.
+* :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the ``sample_data`` folder;
+* :mod:`~fuzzygait.synthetic.pig_options` -- opt-in knee alignment device, medial
+  malleoli, misplaced wands and tibial torsion with known values.
 
 Regenerate the bundled data with ``python -m fuzzygait.synthetic [OUT_DIR]``.
 """
@@ -45,6 +47,7 @@ from fuzzygait.synthetic.leg_model import (
     pose_lower_body,
     static_offsets,
 )
+from fuzzygait.synthetic.pig_options import LegOffsets, PigOptions
 
 __all__ = [
     "DEFAULT_GAPS",
@@ -55,6 +58,8 @@ __all__ = [
     "STATIC_LABELS",
     "STRIDE_TIME_S",
     "FourierCurve",
+    "LegOffsets",
+    "PigOptions",
     "CutGap",
     "Pose",
     "SubjectGeometry",
