@@ -1,4 +1,4 @@
-"""Commands on walking trials: info, preprocess, angles, demo, uncertainty, report."""
+"""Commands on gait trials: info, preprocess, calibrate, angles, demo, uncertainty, report."""
 
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ from fuzzygait.cli.app import (
 from fuzzygait.cli.options import (
     DEFAULT_MARKER_ERRORS,
     DEFAULT_PREPROCESSING,
+    FlatFootOption,
+    MarkerDiameterOption,
     MarkerErrorOptions,
     PreprocessingOptions,
     StaticOption,
@@ -32,6 +34,7 @@ from fuzzygait.cli.options import (
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
+    from fuzzygait.io.subject import SubjectParameters
     from fuzzygait.workflows.angles import AnglesRun
 
 
@@ -114,6 +117,52 @@ def preprocess(
         )
 
 
+# --------------------------------------------------------------------------- calibrate
+#: The calibrated values ``calibrate`` prints per side (SideParameters field, Vicon name).
+_CALIBRATED = (("thigh_rotation", "ThighRotation"), ("shank_rotation", "ShankRotation"),
+               ("tibial_torsion", "TibialTorsion"), ("ankle_abadd", "AnkleAbAdd"),
+               ("static_plant_flex", "StaticPlantFlex"), ("static_rot_off", "StaticRotOff"))  # fmt: skip
+
+
+@app.command()
+@with_option_groups
+def calibrate(
+    static: Annotated[Path, typer.Argument(metavar="STATIC.c3d", help="Static (standing) trial.")],
+    out_file: Annotated[
+        Path, typer.Option("--out", "-o", help="Calibrated subject parameters, .toml or .vsk.")
+    ],
+    subject: SubjectOption = None,
+    flat_foot: FlatFootOption = False,
+    marker_diameter: MarkerDiameterOption = None,
+    preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
+) -> None:
+    """Plug-in Gait static calibration to a subject file: every value a Nexus static run
+    stores (ThighRotation, ShankRotation, TibialTorsion, AnkleAbAdd, StaticPlantFlex,
+    StaticRotOff, InterAsisDistance when absent) and the method, plain, KAD or KAD+MED,
+    told by the static trial's markers. `angles --subject OUT` then gives what
+    `angles --static STATIC.c3d` gives."""
+    from fuzzygait.workflows.calibrate import calibrate_to_file
+
+    with user_errors():
+        calibration = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
+                                        preprocessing=preprocessing.preprocessing(), flat_foot=flat_foot)  # fmt: skip
+    out.print(calibration.describe(), markup=False)
+    _print_calibrated(calibration.subject)
+    out.print(f"wrote {out_file}", markup=False)
+
+
+def _print_calibrated(subject: SubjectParameters) -> None:
+    """The calibrated offsets per side (degrees) and the inter-ASIS distance."""
+    import math
+
+    for side in "LR":
+        values = subject.side(side)
+        out.print(f"  {side}: " + ", ".join(f"{vicon} {math.degrees(getattr(values, name)):.4f}°"
+                                            for name, vicon in _CALIBRATED), markup=False)  # fmt: skip
+    if subject.inter_asis_distance is not None:
+        out.print(f"  InterAsisDistance {subject.inter_asis_distance:.3f} mm", markup=False)
+
+
 # --------------------------------------------------------------------------- angles
 @app.command()
 @with_option_groups
@@ -131,7 +180,8 @@ def angles(
         Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
     ] = None,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
-    flat_foot: Annotated[bool, typer.Option("--flat-foot", help="Static calibration with flat feet.")] = False,
+    flat_foot: FlatFootOption = False,
+    marker_diameter: MarkerDiameterOption = None,
 ) -> None:
     """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
     from fuzzygait.io.tables import check_table_path
@@ -150,6 +200,7 @@ def angles(
             subject_file=subject,
             preprocessing=preprocessing.preprocessing(),
             flat_foot=flat_foot,
+            marker_diameter=marker_diameter,
         )
     _print_run_summary(run)
     for path in written:
@@ -198,6 +249,8 @@ def uncertainty(
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
     static: StaticOption = None,
     subject: SubjectOption = None,
+    marker_diameter: MarkerDiameterOption = None,
+    flat_foot: FlatFootOption = False,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
@@ -223,7 +276,8 @@ def uncertainty(
             bar = StageBars(bars)
             bar.stage("fuzzy angles")
             analysis = analyse_to_files(
-                dynamic, out_file, rrd=rrd, static=static, subject_file=subject, settings=settings,
+                dynamic, out_file, rrd=rrd, static=static, subject_file=subject, marker_diameter=marker_diameter,
+                flat_foot=flat_foot, settings=settings,
                 preprocessing=preprocessing.preprocessing(), progress=bar.update,
             )  # fmt: skip
     _print_run_summary(analysis.run)
@@ -244,6 +298,8 @@ def report(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
     static: StaticOption = None,
     subject: SubjectOption = None,
+    marker_diameter: MarkerDiameterOption = None,
+    flat_foot: FlatFootOption = False,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
@@ -269,7 +325,8 @@ def report(
                                               workers=workers)  # fmt: skip
         with progress_bars() as bars:
             result = write_batch_report(
-                inputs, out_dir, static=static, subject_file=subject, settings=settings,
+                inputs, out_dir, static=static, subject_file=subject, marker_diameter=marker_diameter,
+                flat_foot=flat_foot, settings=settings,
                 preprocessing=preprocessing.preprocessing(),
                 strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
             )  # fmt: skip

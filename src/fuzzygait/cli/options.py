@@ -28,6 +28,17 @@ SubjectOption = Annotated[
     Path | None,
     typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
 ]
+MarkerDiameterOption = Annotated[
+    float | None,
+    typer.Option(
+        "--marker-diameter", metavar="MM",
+        help="Marker diameter in mm, overriding the subject's MarkerDiameter (Nexus keeps it in the "
+        "pipeline, not in the C3D: give it for e.g. 16 mm markers); default: the subject file's, else 14.",
+    ),
+]  # fmt: skip
+FlatFootOption = Annotated[
+    bool, typer.Option("--flat-foot", help="Static calibration with Plug-in Gait's foot flat (uses SoleDelta).")
+]
 ErrorsOption = Annotated[
     Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
 ]

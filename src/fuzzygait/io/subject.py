@@ -7,6 +7,8 @@ Three sources give the same :class:`SubjectParameters`:
 * a Vicon ``.vsk`` subject file (XML; ``LeftLegLength`` / ``RightLegLength`` names);
 * the ``PROCESSING`` group of a C3D file (``trial.parameters``).
 
+:func:`write_subject` writes them back as TOML or ``.vsk`` (read back equal).
+
 Units: lengths in mm, angles in **radians** (as Vicon stores them), mass in kg.
 """
 
@@ -15,12 +17,13 @@ from __future__ import annotations
 import math
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.io.tomlfile import load_toml
+from fuzzygait.io.atomic import atomic_output
+from fuzzygait.io.tomlfile import TomlValue, load_toml, toml_text
 
 #: Default marker diameter (mm) when a source does not give one.
 DEFAULT_MARKER_DIAMETER = 14.0
@@ -259,3 +262,76 @@ def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
         return read_vsk(path)
     raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml or .vsk")
 
+
+
+# ---------------------------------------------------------------------- writers
+def subject_values(subject: SubjectParameters) -> dict[str, float]:
+    """The parameters under Vicon ``PROCESSING`` names as they are: unlike
+    :meth:`SubjectParameters.to_processing`, values left to a regression or to the static
+    trial (``AsisTrocanterDistance``, ``InterAsisDistance`` None) are left out, so that a
+    file written from them reads back equal."""
+    out: dict[str, float] = {"Bodymass": subject.body_mass, "Height": subject.height,
+                             "MarkerDiameter": subject.marker_diameter}  # fmt: skip
+    if subject.inter_asis_distance is not None:
+        out["InterAsisDistance"] = subject.inter_asis_distance
+    for prefix, params in (("L", subject.left), ("R", subject.right)):
+        for name, vicon in _SIDE_NAMES.items():
+            value = getattr(params, name)
+            if value is not None:
+                out[prefix + vicon] = float(value)
+    return out
+
+
+def subject_vsk_text(subject: SubjectParameters, comments: Sequence[str] = ()) -> str:
+    """A Vicon-style ``.vsk`` (XML) holding the parameters (``StaticParameter`` elements
+    with Nexus' names, ``LeftLegLength``, ...; mm, rad, kg) and ``comments`` as an XML
+    comment. Only parameters: no skeleton or marker set."""
+    root = ET.Element("KinematicModel", MODEL="PlugInGait", VERSION="3.2")
+    if comments:
+        text = " ".join(comments).replace("--", "- -")
+        root.append(ET.Comment(f" {text} "))
+    parameters = ET.SubElement(root, "Parameters")
+    angles = {v for k, v in _SIDE_NAMES.items() if k in _ANGLE_FIELDS}
+    for name, value in subject_values(subject).items():
+        vicon = name
+        if name[0] in "LR" and name[1:] in _SIDE_NAMES.values():
+            vicon = ("Left" if name[0] == "L" else "Right") + name[1:]
+        quantity = "mass" if name == "Bodymass" else "angle" if name[1:] in angles else "length"
+        ET.SubElement(parameters, "StaticParameter", NAME=vicon, VALUE=repr(float(value)), PRIOR=repr(float(value)),
+                      QUANTITY=quantity)  # fmt: skip
+    ET.indent(root, space="\t")
+    return '<?xml version="1.0" encoding="UTF-8" standalone="no"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def write_subject(
+    subject: SubjectParameters,
+    path: str | os.PathLike[str],
+    *,
+    comments: Sequence[str] = (),
+    metadata: Mapping[str, TomlValue] | None = None,
+) -> Path:
+    """Write the parameters to ``path`` by its extension, atomically (complete or not at
+    all): ``.toml`` (``PROCESSING`` names at top level, ``comments`` as ``#`` lines,
+    ``metadata`` as a ``[calibration]`` table, which :func:`read_subject_toml` ignores) or
+    ``.vsk`` (:func:`subject_vsk_text`; ``metadata`` goes into the comment).  Returns the path.
+
+    Raises:
+        ParameterError: another extension, or implausible parameters.
+        FuzzyGaitError: the folder does not exist.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".toml", ".vsk"):
+        raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml or .vsk")
+    subject.validate()
+    if suffix == ".toml":
+        document: dict[str, TomlValue | Mapping[str, TomlValue]] = dict(subject_values(subject))
+        if metadata:
+            document["calibration"] = dict(metadata)
+        text = toml_text(document, comments)
+    else:
+        details = [f"{key} = {value}" for key, value in (metadata or {}).items()]
+        text = subject_vsk_text(subject, [*comments, *(["(" + "; ".join(details) + ")"] if details else [])])
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path

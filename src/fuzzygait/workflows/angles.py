@@ -6,8 +6,9 @@ static calibration (optional) -> Plug-in Gait lower body -> gait events -> cycle
 
 from __future__ import annotations
 
+import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -20,10 +21,13 @@ from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
+from fuzzygait.kinematics.kad import knee_method
 from fuzzygait.mocap import fill_trial_gaps, filter_trial
 from fuzzygait.mocap.gaps import Gap, Method
 
 AXES = ("X", "Y", "Z")
+#: Marker diameters (mm) taken as plausible (the subject parameters' check).
+MARKER_DIAMETER_RANGE = (1.0, 40.0)
 
 
 @dataclass(frozen=True)
@@ -104,17 +108,60 @@ class AnglesRun:
 
 
 def resolve_subject(
-    trial: Trial, subject_file: str | os.PathLike[str] | None
+    trial: Trial, subject_file: str | os.PathLike[str] | None, marker_diameter: float | None = None
 ) -> SubjectParameters:
-    """Subject parameters from ``subject_file`` or else the trial's PROCESSING group."""
+    """Subject parameters from ``subject_file`` or else the trial's PROCESSING group, with
+    ``marker_diameter`` (mm) in place of theirs when given (Nexus keeps the marker size in
+    the pipeline, not in the C3D; the default is the subject file's, else 14 mm)."""
     if subject_file is not None:
-        return read_subject(subject_file)
-    if not trial.parameters:
+        subject = read_subject(subject_file)
+    elif not trial.parameters:
         raise FuzzyGaitError(
             f"{trial.name}: no subject parameters in the file (no PROCESSING group); "
             "give a subject file with --subject SUBJECT.toml or .vsk"
         )
-    return subject_from_processing(trial.parameters, source=f"{trial.name} PROCESSING group")
+    else:
+        subject = subject_from_processing(trial.parameters, source=f"{trial.name} PROCESSING group")
+    if marker_diameter is None:
+        return subject
+    low, high = MARKER_DIAMETER_RANGE
+    if not (math.isfinite(marker_diameter) and low <= marker_diameter <= high):
+        raise FuzzyGaitError(f"marker diameter {marker_diameter:g} mm is implausible: give it in mm "
+                             f"({low:g} to {high:g}, e.g. --marker-diameter 14)")  # fmt: skip
+    return replace(subject, marker_diameter=float(marker_diameter))
+
+
+@dataclass(frozen=True)
+class StaticCalibration:
+    """A static calibration: the calibrated ``subject``, the knee/ankle ``method``
+    (``"plain"``, ``"KAD"`` or ``"KAD+MED"``, :func:`fuzzygait.kinematics.kad.knee_method`),
+    whether foot flat was on, and the static trial's name."""
+
+    subject: SubjectParameters
+    method: str
+    flat_foot: bool
+    static: str
+
+    def describe(self) -> str:
+        """``"static offsets calibrated from S.c3d (KAD, foot flat off, 14 mm markers)"``."""
+        return (f"static offsets calibrated from {self.static} ({self.method}, foot flat "
+                f"{'on' if self.flat_foot else 'off'}, {self.subject.marker_diameter:g} mm markers)")  # fmt: skip
+
+
+def calibrate_static(
+    static: str | os.PathLike[str] | Trial,
+    subject: SubjectParameters,
+    *,
+    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
+    flat_foot: bool = False,
+) -> StaticCalibration:
+    """Pre-process the static trial as the walking trials and calibrate ``subject`` on it
+    (:func:`fuzzygait.kinematics.static_calibration`: every offset Nexus stores after a
+    static run, the inter-ASIS distance when ``subject`` has none)."""
+    trial = static if isinstance(static, Trial) else read_c3d(static)
+    clean, _ = preprocessing.apply(trial)
+    calibrated = static_calibration(clean, subject, flat_foot=flat_foot)
+    return StaticCalibration(calibrated, knee_method(clean), flat_foot, trial.name)
 
 
 def run_angles(
@@ -124,6 +171,7 @@ def run_angles(
     subject_file: str | os.PathLike[str] | None = None,
     preprocessing: Preprocessing = Preprocessing(),
     flat_foot: bool = False,
+    marker_diameter: float | None = None,
 ) -> AnglesRun:
     """Run the joint-angle pipeline on one dynamic trial.
 
@@ -135,16 +183,16 @@ def run_angles(
             group.
         preprocessing: gap filling and filter options (applied to both trials).
         flat_foot: static calibration with the flat-foot option (uses SoleDelta).
+        marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
     trial, gaps = preprocessing.apply(raw)
-    subject = resolve_subject(raw, subject_file)
+    subject = resolve_subject(raw, subject_file, marker_diameter)
     notes = list(trial.notes)
     if static is not None:
-        static_trial = static if isinstance(static, Trial) else read_c3d(static)
-        static_clean, _ = preprocessing.apply(static_trial)
-        subject = static_calibration(static_clean, subject, flat_foot=flat_foot)
-        notes.append(f"static offsets calibrated from {static_trial.name}")
+        calibration = calibrate_static(static, subject, preprocessing=preprocessing, flat_foot=flat_foot)
+        subject = calibration.subject
+        notes.append(calibration.describe())
     result = compute_lower_body(trial, subject)
     notes += result.notes
     notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
@@ -203,8 +251,9 @@ def angles_to_files(
     subject_file: str | os.PathLike[str] | None = None,
     preprocessing: Preprocessing = Preprocessing(),
     flat_foot: bool = False,
+    marker_diameter: float | None = None,
 ) -> tuple[AnglesRun, list[Path]]:
     """:func:`run_angles` and then ``outputs.write``: the run and the files written."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     flat_foot=flat_foot)  # fmt: skip
+                     flat_foot=flat_foot, marker_diameter=marker_diameter)  # fmt: skip
     return run, outputs.write(run)

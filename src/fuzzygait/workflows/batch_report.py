@@ -87,6 +87,8 @@ def write_batch_report(
     *,
     static: Path | None = None,
     subject_file: Path | None = None,
+    marker_diameter: float | None = None,
+    flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
     strict: bool = False,
@@ -101,7 +103,7 @@ def write_batch_report(
     Args:
         inputs: C3D files and folders.
         out_dir: the report folder.
-        static, subject_file, preprocessing: as for
+        static, subject_file, marker_diameter, flat_foot, preprocessing: as for
             :func:`~fuzzygait.workflows.angles.run_angles`, the same for every trial.
         settings: the marker-error analysis.
         strict: re-raise a trial's error instead of listing it as failed (debugging).
@@ -111,7 +113,8 @@ def write_batch_report(
     paths = report_inputs(inputs, static)
 
     def analyse(path: Path) -> MarkerErrorAnalysis:
-        run = run_angles(path, static=static, subject_file=subject_file, preprocessing=preprocessing)
+        run = run_angles(path, static=static, subject_file=subject_file, marker_diameter=marker_diameter,
+                         flat_foot=flat_foot, preprocessing=preprocessing)  # fmt: skip
         return analyse_run(run, settings, components.update)
 
     with ReportWriter(out_dir, strict=strict) as writer:

@@ -128,6 +128,8 @@ def analyse_trial(
     *,
     static: str | os.PathLike[str] | Trial | None = None,
     subject_file: str | os.PathLike[str] | None = None,
+    marker_diameter: float | None = None,
+    flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     progress: Progress | None = None,
     **settings: Unpack[SettingsArguments],
@@ -136,7 +138,8 @@ def analyse_trial(
     marker-error analysis of every computed angle (or ``angles``); ``settings`` are the
     arguments of :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``,
     ``alphas``, ``angles``, ``method``, ``workers``)."""
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
+                     marker_diameter=marker_diameter, flat_foot=flat_foot)  # fmt: skip
     return analyse_run(run, MarkerErrorSettings.create(**settings), progress)
 
 
@@ -147,6 +150,8 @@ def analyse_to_files(
     rrd: Path | None = None,
     static: str | os.PathLike[str] | Trial | None = None,
     subject_file: str | os.PathLike[str] | None = None,
+    marker_diameter: float | None = None,
+    flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
     progress: Progress | None = None,
@@ -156,7 +161,8 @@ def analyse_to_files(
     its bands (folders created)."""
     from fuzzygait.uncertainty.storage import save_result
 
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing)
+    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
+                     marker_diameter=marker_diameter, flat_foot=flat_foot)  # fmt: skip
     analysis = analyse_run(run, settings, progress)
     out_file.parent.mkdir(parents=True, exist_ok=True)
     save_result(analysis.fuzzy, out_file)
