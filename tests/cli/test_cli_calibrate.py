@@ -45,6 +45,7 @@ def test_calibrate_writes_what_static_calibration_computes(tmp_path: Path) -> No
     assert "Method plain, foot flat off, 14 mm markers" in out.read_text()
 
 
+@pytest.mark.slow  # end-to-end: several CLI runs
 def test_vsk_and_toml_outputs_agree(tmp_path: Path) -> None:
     toml = _calibrate(tmp_path, "cal.toml", STATIC, "--subject", SUBJECT, "--flat-foot")
     vsk = _calibrate(tmp_path, "cal.vsk", STATIC, "--subject", SUBJECT, "--flat-foot")
@@ -59,6 +60,7 @@ def test_without_subject_file_the_static_trials_processing_group(tmp_path: Path)
     assert "measurements from static.c3d PROCESSING group" in out.read_text()
 
 
+@pytest.mark.slow  # end-to-end: several CLI runs
 def test_angles_with_the_calibrated_file_equal_angles_with_the_static_trial(tmp_path: Path) -> None:
     walking = SAMPLE_DATA / "walking_noisy.c3d"
     tables = {}
@@ -70,6 +72,7 @@ def test_angles_with_the_calibrated_file_equal_angles_with_the_static_trial(tmp_
     pd.testing.assert_frame_equal(tables["static"], tables["file"], rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow  # end-to-end: several CLI runs
 def test_marker_diameter_overrides_the_subjects(tmp_path: Path) -> None:
     out = _calibrate(tmp_path, "cal16.toml", STATIC, "--subject", SUBJECT, "--marker-diameter", "16")
     written = read_subject(out)
