@@ -19,8 +19,10 @@ from fuzzygait.cli.app import (
     user_errors,
 )
 from fuzzygait.cli.options import (
+    DEFAULT_CALIBRATION,
     DEFAULT_MARKER_ERRORS,
     DEFAULT_PREPROCESSING,
+    CalibrationOptions,
     FlatFootOption,
     MarkerDiameterOption,
     MarkerErrorOptions,
@@ -247,10 +249,7 @@ def demo(
 def uncertainty(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
-    static: StaticOption = None,
-    subject: SubjectOption = None,
-    marker_diameter: MarkerDiameterOption = None,
-    flat_foot: FlatFootOption = False,
+    calibration: CalibrationOptions = DEFAULT_CALIBRATION,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
@@ -276,8 +275,8 @@ def uncertainty(
             bar = StageBars(bars)
             bar.stage("fuzzy angles")
             analysis = analyse_to_files(
-                dynamic, out_file, rrd=rrd, static=static, subject_file=subject, marker_diameter=marker_diameter,
-                flat_foot=flat_foot, settings=settings,
+                dynamic, out_file, rrd=rrd, static=calibration.static, subject_file=calibration.subject,
+                marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
                 preprocessing=preprocessing.preprocessing(), progress=bar.update,
             )  # fmt: skip
     _print_run_summary(analysis.run)
@@ -296,10 +295,7 @@ def report(
                        "recursively for *.c3d (files there with 'static' in the name are skipped)."),
     ],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
-    static: StaticOption = None,
-    subject: SubjectOption = None,
-    marker_diameter: MarkerDiameterOption = None,
-    flat_foot: FlatFootOption = False,
+    calibration: CalibrationOptions = DEFAULT_CALIBRATION,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
@@ -325,8 +321,8 @@ def report(
                                               workers=workers)  # fmt: skip
         with progress_bars() as bars:
             result = write_batch_report(
-                inputs, out_dir, static=static, subject_file=subject, marker_diameter=marker_diameter,
-                flat_foot=flat_foot, settings=settings,
+                inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
+                marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
                 preprocessing=preprocessing.preprocessing(),
                 strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
             )  # fmt: skip

@@ -81,6 +81,18 @@ class PreprocessingOptions:
         return Preprocessing(max_gap=self.max_gap, cutoff=self.cutoff, filter=not self.no_filter)
 
 
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """``--static``, ``--subject``, ``--marker-diameter`` and ``--flat-foot``: where the
+    subject parameters and the static offsets come from."""
+
+    static: StaticOption = None
+    subject: SubjectOption = None
+    marker_diameter: MarkerDiameterOption = None
+    flat_foot: FlatFootOption = False
+
+
+DEFAULT_CALIBRATION = CalibrationOptions()
 DEFAULT_MARKER_ERRORS = MarkerErrorOptions()
 DEFAULT_PREPROCESSING = PreprocessingOptions()
 
