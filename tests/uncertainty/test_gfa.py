@@ -642,3 +642,18 @@ def test_inert_parameters_cost_no_extra_simulations() -> None:
     assert alone.attrs["forward_simulations"] > 3  # interior extrema: the follower does work
     assert both.attrs["forward_simulations"] == alone.attrs["forward_simulations"]
     np.testing.assert_array_equal(both.hull.values, alone.hull.values)
+
+
+@pytest.mark.parametrize("strategy", [Linearised(stride=5), Direct(stride=5, starts=2)], ids=["linearised", "direct"])
+def test_every_strategy_returns_the_result_schema(strategy) -> None:
+    from fuzzygait.core.schema import schema_problems
+
+    model = FunctionModel(sin_model, T_SIN, output=Output("angle", "rad"))
+    result = graph_follower(model, [P_SIN], (0.0, 0.5), strategy=strategy)
+    assert schema_problems(result) == []
+    assert result.attrs["strategy"] == strategy.name and result.attrs["units"] == "rad"
+    assert result["hull"].attrs["units"] == result["deterministic"].attrs["units"] == "rad"
+    assert {k: result.attrs[k] for k in strategy.options()} == strategy.options()
+    broken = result.drop_vars("extremiser")
+    broken.attrs.pop("forward_simulations")
+    assert schema_problems(broken) == ["variable 'extremiser' missing", "attribute 'forward_simulations' missing"]

@@ -10,11 +10,6 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Array, FuzzyModel
 
 
-def has_sensitivities(model: FuzzyModel) -> bool:
-    """Whether ``model`` computes its own sensitivities (declares ``"sensitivities"``)."""
-    return SENSITIVITIES in model.capabilities
-
-
 @dataclass
 class CountedModel:
     """Wraps a model, validates its outputs and counts forward simulations.
@@ -39,6 +34,7 @@ class CountedModel:
 
     @property
     def has_sensitivities(self) -> bool:
+        """Whether the model computes its own sensitivities (declares ``"sensitivities"``)."""
         return SENSITIVITIES in self.model.capabilities
 
     @property

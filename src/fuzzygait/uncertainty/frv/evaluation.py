@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.uncertainty.counting import CountedModel, has_sensitivities
+from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.protocol import FuzzyModel
 
 #: ``P (k, n_p) -> F (k, n_time)`` or ``(F, J (k, n_time, n_p))``: a serial loop
@@ -22,7 +22,7 @@ def serial_evaluator(model: FuzzyModel) -> BatchFunction:
     ``model.evaluate``, or ``(F, J (k, n_time, n_p))`` when the model declares the
     ``"sensitivities"`` capability."""
     counted = CountedModel(model, scale=np.ones(1))
-    with_sensitivities = has_sensitivities(model)
+    with_sensitivities = counted.has_sensitivities
 
     def evaluate(P: np.ndarray) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         P = np.atleast_2d(np.asarray(P, dtype=float))
