@@ -45,6 +45,20 @@ def test_calibrate_writes_what_static_calibration_computes(tmp_path: Path) -> No
     assert "Method plain, foot flat off, 14 mm markers" in out.read_text()
 
 
+def test_the_static_trial_is_not_low_passed() -> None:
+    """Offsets are means over the standing frames; the walking trials' 6 Hz filter would
+    only add its edge transients.  The sample static trial with a 2 Hz filter asked for
+    gives the calibration of the unfiltered markers, exactly."""
+    from fuzzygait.kinematics import static_calibration
+    from fuzzygait.workflows.angles import Preprocessing
+
+    trial, subject = read_c3d(STATIC), read_subject(SUBJECT)
+    asked = calibrate_static(trial, subject, preprocessing=Preprocessing(cutoff=2.0, filter=True))
+    assert asked.subject == static_calibration(trial, subject)
+    filtered, _ = Preprocessing(cutoff=2.0, filter=True).apply(trial)
+    assert static_calibration(filtered, subject) != asked.subject  # a filter would change it
+
+
 @pytest.mark.slow  # end-to-end: several CLI runs
 def test_vsk_and_toml_outputs_agree(tmp_path: Path) -> None:
     toml = _calibrate(tmp_path, "cal.toml", STATIC, "--subject", SUBJECT, "--flat-foot")
@@ -135,12 +149,12 @@ def test_bad_subject_file_is_one_line(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------- Nexus sessions
 #: session: (static trial, file whose PROCESSING holds Nexus' calibration, calibrate options).
 #: The foot-flat session's static trial stores the parameters before calibration, its walking
-#: trial those after; 16 mm markers; its markers are Nexus' processed ones (no second filter).
+#: trial those after; 16 mm markers; static trials are never low-passed.
 NEXUS_SESSIONS = {
     "PiGKad": ("PiGKad_Calibration.c3d", "PiGKad_Calibration.c3d", ()),
     "PiGKadMed": ("PiGKadMed_Calibration.c3d", "PiGKadMed_Calibration.c3d", ()),
     "FlatFoot": ("PiG_Calibration-FlatFoot-Full.c3d", "PiG_Motion-FlatFoot-Full.c3d",
-                 ("--flat-foot", "--marker-diameter", "16", "--no-filter")),
+                 ("--flat-foot", "--marker-diameter", "16")),
 }  # fmt: skip
 
 
@@ -162,6 +176,23 @@ def test_calibrate_reproduces_nexus_processing_values(tmp_path: Path, session: s
 def test_a_missing_kad_marker_is_one_line(tmp_path: Path) -> None:
     trial = read_c3d(shared_file("pig-options", "PiGKad_Calibration.c3d"))
     write_c3d(trial.select_markers([m for m in trial.marker_labels if m != "RKD2"]), tmp_path / "s.c3d")
-    result = run("calibrate", tmp_path / "s.c3d", "--no-filter", "--out", tmp_path / "cal.toml")
+    result = run("calibrate", tmp_path / "s.c3d", "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "RKD2 missing")
     assert not (tmp_path / "cal.toml").exists()
+
+
+def test_calibrating_a_nexus_vsk_keeps_its_skeleton(tmp_path: Path) -> None:
+    """``--subject Test.vsk --out cal.vsk``: Nexus' file with the calibrated values, its
+    skeleton and marker set kept (what Nexus needs to load it as a subject)."""
+    import xml.etree.ElementTree as ET
+
+    vsk = shared_file("vicon", "Test.vsk")
+    out = _calibrate(tmp_path, "cal.vsk", shared_file("vicon", "Static_trial.c3d"), "--subject", vsk)
+    root = ET.parse(out).getroot()
+    assert root.attrib["MODEL"] == "PlugInGait FullBody Ai"
+    assert len(root.findall(".//Segment")) == len(ET.parse(vsk).getroot().findall(".//Segment")) > 0
+    nexus = read_c3d(shared_file("vicon", "Movement_trial.c3d")).parameters
+    written = subject_values(read_subject(out))
+    for side in "LR":
+        for name in ("StaticPlantFlex", "StaticRotOff"):
+            assert written[side + name] == pytest.approx(nexus[side + name], abs=1e-6), side + name

@@ -62,6 +62,67 @@ def test_nexus_vsk_rewritten_reads_back_equal(tmp_path: Path) -> None:
     assert read_vsk(write_subject(nexus, tmp_path / "again.vsk")) == nexus
 
 
+#: A Nexus-like subject file: parameters with and without VALUE, and a skeleton.
+TEMPLATE = """<?xml version="1.0" encoding="UTF-8" standalone="no"?>
+<KinematicModel MODEL="PlugInGait FullBody Ai" VERSION="3.2">
+\t<Parameters>
+\t\t<StaticParameter NAME="Bodymass" VALUE="1" PRIOR="65" REQUIRED="true" QUANTITY="mass"/>
+\t\t<StaticParameter NAME="LeftTibialTorsion" PRIOR="0" HIDDEN="false" QUANTITY="angle"/>
+\t\t<StaticParameter NAME="RightLegLength" QUANTITY="length" VALUE="2"/>
+\t\t<StaticParameter NAME="HeadOffset" VALUE="0.25" PRIOR="0" QUANTITY="angle"/>
+\t</Parameters>
+\t<Skeleton><Segment NAME="Pelvis"/></Skeleton>
+\t<MarkerSet><Markers><Marker NAME="LASI"/></Markers></MarkerSet>
+</KinematicModel>
+"""
+
+
+def test_vsk_from_a_template_keeps_it_and_sets_every_value(tmp_path: Path) -> None:
+    """Nexus' own file, values updated: what it does not know (the skeleton, marker set,
+    other parameters, attribute order) is kept byte for byte."""
+    (tmp_path / "nexus.vsk").write_text(TEMPLATE)
+    subject = _awkward_subject()
+    path = write_subject(subject, tmp_path / "cal.vsk", comments=["calibrated"], vsk_template=tmp_path / "nexus.vsk")
+    text = path.read_text()
+    assert read_vsk(path) == subject
+    root = ET.fromstring(text.encode())
+    values = {e.attrib["NAME"]: e.attrib for e in root.iter("StaticParameter")}
+    assert float(values["LeftTibialTorsion"]["VALUE"]) == -math.pi / 7 and values["LeftTibialTorsion"]["PRIOR"] == "0"
+    assert float(values["RightLegLength"]["VALUE"]) == subject.right.leg_length
+    assert values["HeadOffset"]["VALUE"] == "0.25"  # not ours: kept
+    assert set(subject_vsk_text(subject)) and len(values) == len(subject_values(subject)) + 1
+    for kept in ('<Skeleton><Segment NAME="Pelvis"/></Skeleton>', '<Marker NAME="LASI"/>',
+                 'NAME="Bodymass" VALUE="', '" PRIOR="65" REQUIRED="true" QUANTITY="mass"/>'):  # fmt: skip
+        assert kept in text
+    assert "<!-- calibrated -->" in text
+
+
+def test_a_template_without_parameters_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "bad.vsk").write_text("<KinematicModel/>")
+    with pytest.raises(ParameterError, match="bad.vsk.*no <Parameters>|no <Parameters>"):
+        write_subject(_awkward_subject(), tmp_path / "cal.vsk", vsk_template=tmp_path / "bad.vsk")
+    assert not (tmp_path / "cal.vsk").exists()
+
+
+@needs_shared
+def test_nexus_vsk_template_calibrated_keeps_its_model(tmp_path: Path) -> None:
+    """Test.vsk (Nexus' Plug-in Gait FullBody Ai) with new offsets: same elements, in the
+    same order, every non-parameter line unchanged, our values read back."""
+    source = shared_file("vicon", "Test.vsk")
+    nexus = read_vsk(source)
+    changed = nexus.with_side("L", thigh_rotation=0.125, tibial_torsion=-0.25)
+    path = write_subject(changed, tmp_path / "cal.vsk", vsk_template=source)
+    assert read_vsk(path) == changed
+    old, new = ET.parse(source).getroot(), ET.parse(path).getroot()
+    names = [{e.attrib["NAME"] for e in root.iter("StaticParameter")} for root in (old, new)]
+    assert names[1] - names[0] == {"MarkerDiameter"}  # the one parameter Test.vsk lacks, added
+    assert [e.tag for e in old.iter() if e.tag != "StaticParameter"] == [
+        e.tag for e in new.iter() if e.tag != "StaticParameter"
+    ]
+    old_lines, new_lines = source.read_text().splitlines(), path.read_text().splitlines()
+    assert [x for x in old_lines if "StaticParameter" not in x] == [x for x in new_lines if "StaticParameter" not in x]
+
+
 def test_bad_output_is_refused_and_nothing_written(tmp_path: Path) -> None:
     subject = read_subject(SAMPLE_DATA / "subject.toml")
     with pytest.raises(ParameterError, match=r"\.toml or \.vsk"):

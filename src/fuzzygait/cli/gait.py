@@ -26,6 +26,7 @@ from fuzzygait.cli.options import (
     FlatFootOption,
     MarkerDiameterOption,
     MarkerErrorOptions,
+    MaxGapOption,
     PreprocessingOptions,
     StaticOption,
     SubjectOption,
@@ -136,18 +137,20 @@ def calibrate(
     subject: SubjectOption = None,
     flat_foot: FlatFootOption = False,
     marker_diameter: MarkerDiameterOption = None,
-    preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
+    max_gap: MaxGapOption = 10,
 ) -> None:
     """Plug-in Gait static calibration to a subject file: every value a Nexus static run
     stores (ThighRotation, ShankRotation, TibialTorsion, AnkleAbAdd, StaticPlantFlex,
     StaticRotOff, InterAsisDistance when absent) and the method, plain, KAD or KAD+MED,
-    told by the static trial's markers. `angles --subject OUT` then gives what
-    `angles --static STATIC.c3d` gives."""
+    told by the static trial's markers. Gaps are filled; a static trial is not low-pass
+    filtered (each offset is a mean over its frames). `angles --subject OUT` then gives
+    what `angles --static STATIC.c3d` gives."""
+    from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.workflows.calibrate import calibrate_to_file
 
     with user_errors():
         calibration = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
-                                        preprocessing=preprocessing.preprocessing(), flat_foot=flat_foot)  # fmt: skip
+                                        preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot)  # fmt: skip
     out.print(calibration.describe(), markup=False)
     _print_calibrated(calibration.subject)
     out.print(f"wrote {out_file}", markup=False)

@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.atomic import atomic_output
@@ -282,25 +284,84 @@ def subject_values(subject: SubjectParameters) -> dict[str, float]:
     return out
 
 
-def subject_vsk_text(subject: SubjectParameters, comments: Sequence[str] = ()) -> str:
-    """A Vicon-style ``.vsk`` (XML) holding the parameters (``StaticParameter`` elements
-    with Nexus' names, ``LeftLegLength``, ...; mm, rad, kg) and ``comments`` as an XML
-    comment. Only parameters: no skeleton or marker set."""
-    root = ET.Element("KinematicModel", MODEL="PlugInGait", VERSION="3.2")
-    if comments:
-        text = " ".join(comments).replace("--", "- -")
-        root.append(ET.Comment(f" {text} "))
-    parameters = ET.SubElement(root, "Parameters")
+def _vsk_parameters(subject: SubjectParameters) -> dict[str, tuple[float, str]]:
+    """``{VSK name: (value, QUANTITY)}``: ``LeftLegLength`` style names; mm, rad, kg."""
     angles = {v for k, v in _SIDE_NAMES.items() if k in _ANGLE_FIELDS}
+    out: dict[str, tuple[float, str]] = {}
     for name, value in subject_values(subject).items():
         vicon = name
         if name[0] in "LR" and name[1:] in _SIDE_NAMES.values():
             vicon = ("Left" if name[0] == "L" else "Right") + name[1:]
         quantity = "mass" if name == "Bodymass" else "angle" if name[1:] in angles else "length"
-        ET.SubElement(parameters, "StaticParameter", NAME=vicon, VALUE=repr(float(value)), PRIOR=repr(float(value)),
-                      QUANTITY=quantity)  # fmt: skip
+        out[vicon] = (float(value), quantity)
+    return out
+
+
+def _vsk_comment(comments: Sequence[str]) -> str:
+    return " " + " ".join(comments).replace("--", "- -") + " "
+
+
+def subject_vsk_text(subject: SubjectParameters, comments: Sequence[str] = (), template: str | None = None) -> str:
+    """A Vicon ``.vsk`` (XML) with the parameters (``StaticParameter`` elements with
+    Nexus' names, ``LeftLegLength``, ...; mm, rad, kg) and ``comments`` as an XML comment.
+
+    With ``template`` (the text of the subject's own ``.vsk``, as Nexus wrote it) the
+    result is that file with each parameter's ``VALUE`` set (added where Nexus left it
+    unset, new ``StaticParameter`` elements for parameters it lacks) and every other byte
+    kept: its skeleton, marker set and model stay as Nexus needs them.  Without one the
+    file holds the parameters only (no skeleton or marker set).
+    """
+    parameters = _vsk_parameters(subject)
+    if template is not None:
+        return _update_vsk(template, parameters, comments)
+    root = ET.Element("KinematicModel", MODEL="PlugInGait", VERSION="3.2")
+    if comments:
+        root.append(ET.Comment(_vsk_comment(comments)))
+    element = ET.SubElement(root, "Parameters")
+    for vicon, (value, quantity) in parameters.items():
+        ET.SubElement(element, "StaticParameter", NAME=vicon, VALUE=repr(value), PRIOR=repr(value), QUANTITY=quantity)
     ET.indent(root, space="\t")
     return '<?xml version="1.0" encoding="UTF-8" standalone="no"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: A ``StaticParameter`` element of a VSK (one tag, attributes in any order).
+_STATIC_PARAMETER = re.compile(r"<StaticParameter\b[^>]*?/?>")
+
+
+def _update_vsk(template: str, parameters: Mapping[str, tuple[float, str]], comments: Sequence[str]) -> str:
+    """``template`` with the ``VALUE`` of each of ``parameters`` set (see
+    :func:`subject_vsk_text`)."""
+    pending = dict(parameters)
+
+    def set_value(match: re.Match[str]) -> str:
+        tag = match.group(0)
+        name = re.search(r'\bNAME="([^"]*)"', tag)
+        if name is None or name.group(1) not in pending:
+            return tag
+        value = xml_escape(repr(pending.pop(name.group(1))[0]), {'"': "&quot;"})
+        if re.search(r'\bVALUE="[^"]*"', tag):
+            return re.sub(r'\bVALUE="[^"]*"', f'VALUE="{value}"', tag, count=1)
+        return tag.replace(name.group(0), f'{name.group(0)} VALUE="{value}"', 1)
+
+    text = _STATIC_PARAMETER.sub(set_value, template)
+    end = text.find("</Parameters>")
+    if end < 0:
+        raise ParameterError("the template .vsk has no <Parameters> element; give a Vicon Nexus subject file")
+    if pending:  # before the line of </Parameters>, one level deeper than it
+        line_start = text.rfind("\n", 0, end) + 1
+        indent = text[line_start:end] if not text[line_start:end].strip() else ""
+        added = "".join(
+            f'{indent}\t<StaticParameter NAME="{name}" VALUE="{value!r}" PRIOR="{value!r}" QUANTITY="{quantity}"/>\n'
+            for name, (value, quantity) in pending.items()
+        )
+        at = line_start if indent or line_start == end else end
+        text = text[:at] + added + text[at:]
+    if comments:
+        opening = re.search(r"<KinematicModel\b[^>]*>", text)
+        if opening is None:
+            raise ParameterError("the template .vsk has no <KinematicModel> element; give a Vicon Nexus subject file")
+        text = text[: opening.end()] + f"<!--{_vsk_comment(comments)}-->" + text[opening.end() :]
+    return text
 
 
 def write_subject(
@@ -309,14 +370,17 @@ def write_subject(
     *,
     comments: Sequence[str] = (),
     metadata: Mapping[str, TomlValue] | None = None,
+    vsk_template: str | os.PathLike[str] | None = None,
 ) -> Path:
     """Write the parameters to ``path`` by its extension, atomically (complete or not at
     all): ``.toml`` (``PROCESSING`` names at top level, ``comments`` as ``#`` lines,
     ``metadata`` as a ``[calibration]`` table, which :func:`read_subject_toml` ignores) or
-    ``.vsk`` (:func:`subject_vsk_text`; ``metadata`` goes into the comment).  Returns the path.
+    ``.vsk`` (:func:`subject_vsk_text`; ``metadata`` goes into the comment; with
+    ``vsk_template``, the subject's own Nexus ``.vsk`` with the values updated).  Returns
+    the path.
 
     Raises:
-        ParameterError: another extension, or implausible parameters.
+        ParameterError: another extension, implausible parameters, an unreadable template.
         FuzzyGaitError: the folder does not exist.
     """
     path = Path(path)
@@ -331,7 +395,15 @@ def write_subject(
         text = toml_text(document, comments)
     else:
         details = [f"{key} = {value}" for key, value in (metadata or {}).items()]
-        text = subject_vsk_text(subject, [*comments, *(["(" + "; ".join(details) + ")"] if details else [])])
+        template = None
+        if vsk_template is not None:
+            try:
+                template = Path(vsk_template).read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                raise ParameterError(f"{vsk_template}: cannot read the .vsk template ({exc})") from None
+        text = subject_vsk_text(
+            subject, [*comments, *(["(" + "; ".join(details) + ")"] if details else [])], template=template
+        )
     with atomic_output(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return path

@@ -225,6 +225,10 @@ class LowerBodyChain:
         of the ankle angles."""
         return long_bone_frame(self.kjc(side), self.ajc(side), self.marker(side + "ANK"), side)
 
+    def ankle_tibia(self, side: str) -> np.ndarray:
+        """Proximal frame of the ankle angles: the torsioned tibia."""
+        return self.torsioned_tibia(side)
+
     @_memo
     def tibia(self, side: str) -> np.ndarray:
         """Untorsioned tibia frame, origin AJC: distal frame of the knee angles, ``L/RTI*``

@@ -107,7 +107,7 @@ ROTATED_CHORD_MAX_ITERATIONS = 30
 
 
 def rotated_chord_joint_centre(
-    wand: np.ndarray, proximal: np.ndarray, marker: np.ndarray, offset: float, rotation: float
+    wand: np.ndarray, proximal: np.ndarray, marker: np.ndarray, offset: float, rotation: float | np.ndarray
 ) -> np.ndarray:
     """Chord function with a wand rotation offset (Plug-in Gait ``Thigh/ShankRotation``).
 
@@ -126,13 +126,13 @@ def rotated_chord_joint_centre(
         wand, proximal, marker: ``(n, 3)`` mm (THI, HJC, KNE or TIB, KJC, ANK).
         offset: marker-to-joint-centre distance, mm.
         rotation: rad, ``s * ThighRotation`` / ``s * ShankRotation`` (``s = +1`` left,
-            ``-1`` right).
+            ``-1`` right); a scalar or one value per frame ``(n,)``.
 
     Returns:
         ``(n, 3)`` joint centres, mm (NaN as for the plain chord).
     """
     centre = chord_joint_centre(wand, proximal, marker, offset)
-    if rotation == 0.0:
+    if np.all(np.asarray(rotation) == 0.0):
         return centre
     # The chord circle: centre ``foot`` on the marker-proximal line, radius ``radius``.
     axis = unit(proximal - marker)
@@ -158,7 +158,7 @@ def rotated_chord_joint_centre(
 
 
 def abducted_joint_centre(
-    centre: np.ndarray, proximal: np.ndarray, marker: np.ndarray, angle: float
+    centre: np.ndarray, proximal: np.ndarray, marker: np.ndarray, angle: float | np.ndarray
 ) -> np.ndarray:
     """Plug-in Gait ``AnkleAbAdd``: ``centre`` turned about ``marker`` towards ``proximal``.
 
@@ -171,9 +171,9 @@ def abducted_joint_centre(
         centre: ``(n, 3)`` chord ankle centre, mm.
         proximal: ``(n, 3)`` knee joint centre, mm.
         marker: ``(n, 3)`` ANK, mm.
-        angle: ``AnkleAbAdd``, rad.
+        angle: ``AnkleAbAdd``, rad (a scalar or one value per frame ``(n,)``).
     """
-    if angle == 0.0:
+    if np.all(np.asarray(angle) == 0.0):
         return centre
     normal = unit(cross(centre - marker, proximal - marker))
     return rotate_about(centre, marker, normal, angle)

@@ -34,7 +34,14 @@ Medial malleolus (``MED`` on each ankle, static trial only, with the KAD)
       90° (either side).
     * In the static trial the tibia frame is the marker-based one (KJC, AJC, ANK) with no
       torsion turned in: Nexus' static ``L/RTI*`` frames, its foot frames and its
-      ``StaticPlantFlex`` / ``StaticRotOff`` use it.  Without MED the subject's
+      ``StaticPlantFlex`` / ``StaticRotOff`` use it.  The static trial's own **ankle
+      angles** alone take another proximal frame: that tibia turned about its long axis
+      to the azimuth (x axis) of the walking model's tibia ``(KJC, AJC', ANK)``, ``AJC'``
+      the rotated chord of ``TIB, KJC, ANK`` turned by ``AnkleAbAdd`` with **this frame's
+      own** ``ShankRotation`` and ``AnkleAbAdd`` (not their means).  This reproduces
+      Nexus' static ankle angles within 4.5e-7° (the marker-based tibia is 0.014° off:
+      the walking model's chord is not the exact inverse of the static definitions).
+      Without MED the subject's
       ``TibialTorsion`` is kept and applied as in a dynamic trial (not checked against
       Nexus: the data at hand have zero torsion then).
 
@@ -50,9 +57,9 @@ from fuzzygait.core.errors import MarkerError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
-from fuzzygait.kinematics.joint_centres import chord_joint_centre
-from fuzzygait.kinematics.segments import side_sign
-from fuzzygait.kinematics.vectors import cross, dot, norm, unit
+from fuzzygait.kinematics.joint_centres import abducted_joint_centre, chord_joint_centre, rotated_chord_joint_centre
+from fuzzygait.kinematics.segments import long_bone_frame, side_sign
+from fuzzygait.kinematics.vectors import cross, dot, norm, rotate_frame, unit
 
 #: The KAD's markers (after the side letter).
 KAD_MARKERS = ("KAX", "KD1", "KD2")
@@ -180,8 +187,35 @@ class StaticKneeChain(LowerBodyChain):
             return self.torsioned_tibia(side)
         return super().tibia(side)
 
-    def offsets(self, side: str, seen: np.ndarray) -> dict[str, float]:
-        """The side's calibrated ``SideParameters`` fields (rad), averaged over ``seen``."""
+    @_memo
+    def ankle_tibia(self, side: str) -> np.ndarray:
+        """Proximal frame of the static trial's own ankle angles.
+
+        Without MED the parent's.  With MED (inferred from Nexus 2.3's
+        ``PiGKadMed_Calibration.c3d``, see the module docstring): the marker-based tibia
+        turned about its long axis to the azimuth of the walking model's tibia, whose
+        ankle centre is the rotated chord of ``TIB``, ``KJC``, ``ANK`` with **this frame's
+        own** ``ShankRotation`` and ``AnkleAbAdd``.
+        """
+        torsioned = self.torsioned_tibia(side)
+        if not self.medial_malleoli:
+            return torsioned
+        s = side_sign(side)
+        per_frame = self.per_frame_offsets(side)
+        kjc, ank = self.kjc(side), self.marker(side + "ANK")
+        offset = self._offset(self.subject.side(side).ankle_width)
+        chord = rotated_chord_joint_centre(
+            self.marker(side + "TIB"), kjc, ank, offset, s * per_frame["shank_rotation"]
+        )
+        walking_ajc = abducted_joint_centre(chord, kjc, ank, per_frame["ankle_abadd"])
+        walking_tibia = long_bone_frame(kjc, walking_ajc, ank, side)
+        x, z = torsioned[:, :, 0], torsioned[:, :, 2]
+        turn = np.arctan2(dot(cross(x, walking_tibia[:, :, 0]), z), dot(x, walking_tibia[:, :, 0]))
+        return rotate_frame(torsioned, 2, turn)
+
+    @_memo
+    def per_frame_offsets(self, side: str) -> dict[str, np.ndarray]:
+        """The side's calibrated ``SideParameters`` fields in every frame (rad, ``(n,)``)."""
         s = side_sign(side)
         hjc, kjc, ajc = self.hjc(side), self.kjc(side), self.ajc(side)
         kne, ank = self.marker(side + "KNE"), self.marker(side + "ANK")
@@ -195,7 +229,11 @@ class StaticKneeChain(LowerBodyChain):
             per_frame["ankle_abadd"] = np.arccos(cos_ankle) - np.pi / 2.0
         else:
             per_frame["ankle_abadd"] = np.zeros(len(kjc))
-        return {name: float(np.mean(values[seen])) for name, values in per_frame.items()}
+        return per_frame
+
+    def offsets(self, side: str, seen: np.ndarray) -> dict[str, float]:
+        """The side's calibrated ``SideParameters`` fields (rad), averaged over ``seen``."""
+        return {name: float(np.mean(values[seen])) for name, values in self.per_frame_offsets(side).items()}
 
 
 def check_medial_malleolus(chain: StaticKneeChain, side: str, seen: np.ndarray) -> None:

@@ -83,7 +83,7 @@ def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) ->
     if joint == "Knee":
         return chain.thigh(side), chain.tibia(side)
     if joint == "Ankle":
-        return chain.torsioned_tibia(side), chain.foot(side)
+        return chain.ankle_tibia(side), chain.foot(side)
     if joint == "FootProgress":
         return progression, chain.foot(side)
     raise KeyError(f"unknown angle {name!r}")

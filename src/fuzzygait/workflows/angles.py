@@ -155,11 +155,18 @@ def calibrate_static(
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool = False,
 ) -> StaticCalibration:
-    """Pre-process the static trial as the walking trials and calibrate ``subject`` on it
+    """Fill the static trial's gaps as the walking trials' and calibrate ``subject`` on it
     (:func:`fuzzygait.kinematics.static_calibration`: every offset Nexus stores after a
-    static run, the inter-ASIS distance when ``subject`` has none)."""
+    static run, the inter-ASIS distance when ``subject`` has none).
+
+    The static trial is **not** low-pass filtered, whatever ``preprocessing.filter``
+    says: every offset is a mean over the standing frames already, and a Butterworth
+    over a short standing trial only adds its edge transients (measured on Nexus'
+    foot-flat static trial, 6 Hz: StaticPlantFlex 1.3e-4 rad off Nexus' value,
+    unfiltered 1e-8 rad).
+    """
     trial = static if isinstance(static, Trial) else read_c3d(static)
-    clean, _ = preprocessing.apply(trial)
+    clean, _ = replace(preprocessing, filter=False).apply(trial)
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot)
     return StaticCalibration(calibrated, knee_method(clean), flat_foot, trial.name)
 
@@ -181,7 +188,8 @@ def run_angles(
             parameters are used as they are.
         subject_file: ``.toml`` or ``.vsk``; without it the dynamic trial's PROCESSING
             group.
-        preprocessing: gap filling and filter options (applied to both trials).
+        preprocessing: gap filling and filter options (the static trial: gap filling
+            only, see :func:`calibrate_static`).
         flat_foot: static calibration with the flat-foot option (uses SoleDelta).
         marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
     """

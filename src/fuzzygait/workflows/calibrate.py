@@ -44,7 +44,9 @@ def calibrate_to_file(
 ) -> StaticCalibration:
     """Calibrate the subject on the static trial and write every parameter to ``out_file``
     (``.toml`` or ``.vsk``, atomically; the method, foot flat and the static trial noted
-    in it).
+    in it).  A ``.vsk`` written from a ``.vsk`` subject file is that file with the values
+    updated (skeleton and marker set kept, as Nexus' own calibration does); from a TOML
+    file or the PROCESSING group it holds the parameters only.
 
     Args:
         static: the static trial (path or :class:`Trial`).
@@ -52,7 +54,8 @@ def calibrate_to_file(
         subject_file: the subject's measurements (``.toml`` or ``.vsk``); without it the
             static trial's PROCESSING group.
         marker_diameter: mm, in place of the subject's (default: the subject's, else 14).
-        preprocessing: as for ``angles`` (gap filling and low-pass of the static trial).
+        preprocessing: gap filling of the static trial (never low-passed, see
+            :func:`fuzzygait.workflows.angles.calibrate_static`).
         flat_foot: Plug-in Gait's foot-flat option (uses ``SoleDelta``).
     """
     out_file = Path(out_file)
@@ -71,5 +74,6 @@ def calibrate_to_file(
     metadata: dict[str, TomlValue] = {"static": Path(trial.name).name, "method": calibration.method,
                                       "flat_foot": flat_foot, "fuzzygait": __version__}  # fmt: skip
     out_file.parent.mkdir(parents=True, exist_ok=True)
-    write_subject(calibration.subject, out_file, comments=comments, metadata=metadata)
+    template = subject_file if subject_file is not None and Path(subject_file).suffix.lower() == ".vsk" else None
+    write_subject(calibration.subject, out_file, comments=comments, metadata=metadata, vsk_template=template)
     return calibration
