@@ -187,8 +187,17 @@ def angles(
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     flat_foot: FlatFootOption = False,
     marker_diameter: MarkerDiameterOption = None,
+    model: Annotated[
+        str,
+        typer.Option(
+            "--model",
+            help="cgm1.0 (Plug-in Gait), cgm1.1, cgm2.1 (Hara hips), cgm2.3 (clusters; needs --static) "
+            "or auto: the richest the markers support.",
+        ),
+    ] = "auto",
 ) -> None:
-    """Plug-in Gait lower-body joint angles (degrees) of a walking trial."""
+    """Lower-body joint angles (degrees) of a walking trial by a Conventional Gait Model
+    version (Plug-in Gait for a Plug-in Gait marker set)."""
     from fuzzygait.io.tables import check_table_path
     from fuzzygait.workflows.angles import AngleOutputs, angles_to_files
 
@@ -206,6 +215,7 @@ def angles(
             preprocessing=preprocessing.preprocessing(),
             flat_foot=flat_foot,
             marker_diameter=marker_diameter,
+            model=model,
         )
     _print_run_summary(run)
     for path in written:

@@ -49,7 +49,11 @@ ANGLE_TABLE: dict[str, tuple[tuple[int, int, int], Triple, Triple]] = {
     "Knee": ((0, 1, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)),
     "Ankle": ((0, 2, 1), (-1.0, 1.0, 1.0), (-90.0, 0.0, 0.0)),
     "FootProgress": ((0, 2, 1), (1.0, -1.0, 1.0), (0.0, 0.0, 0.0)),
+    # CGM 1.1+ pelvis ("ROT", Baker 2001): Z-X-Y components (0 = c about z, 1 = b, 2 = a)
+    "PelvisROT": ((2, 1, 0), (1.0, -1.0, 1.0), (0.0, 0.0, 0.0)),
 }
+#: Joints decomposed Z-X-Y (:func:`cardan_zxy`) instead of Y-X-Z.
+ZXY_JOINTS = frozenset({"PelvisROT"})
 
 #: Sign factors applied on top of the right-side signs for the left side.
 LEFT_MIRROR = np.array([1.0, -1.0, -1.0])
@@ -65,6 +69,16 @@ def cardan_yxz(rotation: np.ndarray) -> np.ndarray:
     return np.degrees(np.stack([a, b, c], axis=-1))
 
 
+def cardan_zxy(rotation: np.ndarray) -> np.ndarray:
+    """Intrinsic Z-X-Y angles ``(c, b, a)`` in **degrees** of ``(n, 3, 3)`` rotations
+    ``R = R_z(c) R_x(b) R_y(a)`` (rotation, obliquity, tilt); NaN rows stay NaN."""
+    r = rotation
+    c = np.arctan2(-r[:, 0, 1], r[:, 1, 1])
+    b = np.arcsin(np.clip(r[:, 2, 1], -1.0, 1.0))
+    a = np.arctan2(-r[:, 2, 0], r[:, 2, 2])
+    return np.degrees(np.stack([c, b, a], axis=-1))
+
+
 def wrap_degrees(angles: np.ndarray) -> np.ndarray:
     """Angles wrapped into (-180, 180] degrees."""
     return 180.0 - np.mod(180.0 - angles, 360.0)
@@ -77,10 +91,11 @@ def joint_angles(proximal: np.ndarray, distal: np.ndarray, joint: str, side: str
         proximal: ``(n, 3, 3)`` frames, or one ``(3, 3)`` frame (the progression frame).
         distal: ``(n, 3, 3)`` frames.
         joint: a key of :data:`ANGLE_TABLE` (``"Pelvis"``, ``"Hip"``, ``"Knee"``,
-            ``"Ankle"``, ``"FootProgress"``).
+            ``"Ankle"``, ``"FootProgress"``; ``"PelvisROT"``: the CGM 1.1+ pelvis, Z-X-Y).
         side: ``"L"`` or ``"R"``.
     """
     order, table_signs, offsets = ANGLE_TABLE[joint]
     signs = np.asarray(table_signs) * (LEFT_MIRROR if side == "L" else 1.0)
-    components = cardan_yxz(relative_rotation(proximal, distal))
+    decompose = cardan_zxy if joint in ZXY_JOINTS else cardan_yxz
+    components = decompose(relative_rotation(proximal, distal))
     return wrap_degrees(components[:, list(order)] * signs + np.asarray(offsets))

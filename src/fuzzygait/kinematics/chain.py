@@ -7,16 +7,19 @@ the static calibration (:mod:`fuzzygait.kinematics.static`).
 
 Joint centres
 -------------
-* HJC: Davis regression in the pelvis frame (:func:`~fuzzygait.kinematics.joint_centres.davis_hjc_local`).
+* HJC: Davis regression in the pelvis frame (:func:`~fuzzygait.kinematics.joint_centres.davis_hjc_local`);
+  Hara's with ``hip="hara"`` (:func:`~fuzzygait.kinematics.joint_centres.hara_hjc_local`).
 * KJC: chord function on THI, HJC, KNE with ``KneeWidth / 2 + marker radius``, the
   THI wand turned by ``ThighRotation``.
 * AJC: chord function on TIB, KJC, ANK with ``AnkleWidth / 2 + marker radius``, the TIB
   wand turned by ``ShankRotation``, then turned by ``AnkleAbAdd`` (see
   :mod:`fuzzygait.kinematics.joint_centres`; a static trial with a knee alignment device
   uses :class:`fuzzygait.kinematics.kad.StaticKneeChain` instead).
-* Optional medial markers (``use_medial_markers=True``, CGM 2.x style, not Plug-in Gait):
-  KJC = midpoint of KNE and KNM, AJC = midpoint of ANK and MED; THI and TIB are then not
-  used.  The segment frames are built the same way from these centres (the lateral
+* Optional medial markers (``use_medial_markers=True``, CGM 2.x as pyCGM2, not Plug-in
+  Gait): KJC on the KNE->KNM line at ``KneeWidth / 2 + marker radius`` from KNE, AJC on
+  the ANK->MED line at ``AnkleWidth / 2 + marker radius`` from ANK (the midpoints when the
+  widths match the markers); THI and TIB are then not used.  The segment frames are built
+  the same way from these centres (the lateral
   marker direction is made orthogonal to the long axis).
 
 Foot
@@ -46,6 +49,7 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.joint_centres import (
     abducted_joint_centre,
     davis_hjc_local,
+    hara_hjc_local,
     rotated_chord_joint_centre,
 )
 from fuzzygait.kinematics.pelvis import inter_asis_distance, pelvis_frame
@@ -56,13 +60,16 @@ from fuzzygait.kinematics.segments import (
     uncorrected_foot,
     untorsioned_tibia,
 )
-from fuzzygait.kinematics.vectors import to_lab
+from fuzzygait.kinematics.vectors import to_lab, unit
 
 #: Segments of one leg in chain order.
 LEG_SEGMENTS = ("thigh", "tibia", "foot")
 
 #: Laboratory vertical axis (Z up) along which the foot-flat option levels HEE.
 VERTICAL_AXIS = 2
+
+#: Hip joint centre regressions (``hip=``): Davis (Plug-in Gait, CGM 1.x), Hara (CGM 2.x).
+HIP_REGRESSIONS = ("davis", "hara")
 
 #: ``static_foot`` values: the heel foot as is, or levelled (Plug-in Gait "foot flat").
 STATIC_FOOT_MODES = ("heel", "flat")
@@ -120,11 +127,17 @@ class LowerBodyChain:
         trial: markers in mm.
         subject: validated subject parameters; ``inter_asis_distance`` None means "measure
             it on this trial".
-        use_medial_markers: KJC/AJC as KNE-KNM / ANK-MED midpoints instead of the chord.
+        use_medial_markers: KJC/AJC on the KNE-KNM / ANK-MED lines instead of the chord.
         static_foot: None (dynamic trial: foot from the static offsets), ``"heel"`` or
             ``"flat"``: the foot of a static trial as Nexus reports it, built from HEE and
             TOE (``"flat"``: HEE levelled to TOE + ``SoleDelta``), see the module
             docstring.  HEE is then needed.
+        hip: ``"davis"`` (Plug-in Gait) or ``"hara"`` (CGM 2.1+) hip joint centres.
+        single_tibia: CGM 1.1+: the knee angles and the foot's ankle axis use the
+            marker-based (torsioned) tibia, as the ankle angles do; Plug-in Gait's knee
+            uses the tibia turned back by ``TibialTorsion``.
+        pelvis_sequence: ``"TOR"`` (Plug-in Gait: tilt, obliquity, rotation) or
+            ``"ROT"`` (CGM 1.1+: rotation, obliquity, tilt) pelvis angles.
 
     Accessing a quantity whose markers are absent raises :class:`MarkerError`.
     """
@@ -135,9 +148,19 @@ class LowerBodyChain:
         subject: SubjectParameters,
         use_medial_markers: bool = False,
         static_foot: str | None = None,
+        hip: str = "davis",
+        single_tibia: bool = False,
+        pelvis_sequence: str = "TOR",
     ):
         if static_foot is not None and static_foot not in STATIC_FOOT_MODES:
             raise ValueError(f"static_foot must be None, 'heel' or 'flat'; got {static_foot!r}")
+        if hip not in HIP_REGRESSIONS:
+            raise ValueError(f"hip must be one of {HIP_REGRESSIONS}; got {hip!r}")
+        if pelvis_sequence not in ("TOR", "ROT"):
+            raise ValueError(f"pelvis_sequence must be 'TOR' or 'ROT'; got {pelvis_sequence!r}")
+        self.hip = hip
+        self.single_tibia = single_tibia
+        self.pelvis_sequence = pelvis_sequence
         self.trial = trial
         self.subject = subject
         self.use_medial_markers = use_medial_markers
@@ -177,9 +200,11 @@ class LowerBodyChain:
 
     @_memo
     def hjc(self, side: str) -> np.ndarray:
-        """Hip joint centre (Davis), mm."""
+        """Hip joint centre (Davis, or Hara with ``hip="hara"``), mm."""
         origin, frame = self.pelvis()
         s = self.subject
+        if self.hip == "hara":
+            return to_lab(frame, origin, hara_hjc_local(s.side(side).leg_length, s.marker_radius, side))
         local = davis_hjc_local(
             0.5 * (s.left.leg_length + s.right.leg_length),
             s.side(side).asis_trochanter,
@@ -197,7 +222,8 @@ class LowerBodyChain:
     def kjc(self, side: str) -> np.ndarray:
         """Knee joint centre, mm."""
         if self.use_medial_markers:
-            return 0.5 * (self.marker(side + "KNE") + self.marker(side + "KNM"))
+            kne, offset = self.marker(side + "KNE"), self._offset(self.subject.side(side).knee_width)
+            return kne + offset * unit(self.marker(side + "KNM") - kne)
         params = self.subject.side(side)
         thi, kne = self.marker(side + "THI"), self.marker(side + "KNE")
         rotation = side_sign(side) * params.thigh_rotation
@@ -207,7 +233,8 @@ class LowerBodyChain:
     def ajc(self, side: str) -> np.ndarray:
         """Ankle joint centre, mm."""
         if self.use_medial_markers:
-            return 0.5 * (self.marker(side + "ANK") + self.marker(side + "MED"))
+            ank, offset = self.marker(side + "ANK"), self._offset(self.subject.side(side).ankle_width)
+            return ank + offset * unit(self.marker(side + "MED") - ank)
         params = self.subject.side(side)
         tib, ank, kjc = self.marker(side + "TIB"), self.marker(side + "ANK"), self.kjc(side)
         rotation = side_sign(side) * params.shank_rotation
@@ -232,7 +259,9 @@ class LowerBodyChain:
     @_memo
     def tibia(self, side: str) -> np.ndarray:
         """Untorsioned tibia frame, origin AJC: distal frame of the knee angles, ``L/RTI*``
-        and the ankle axis of the foot."""
+        and the ankle axis of the foot (with ``single_tibia`` the torsioned tibia)."""
+        if self.single_tibia:
+            return self.torsioned_tibia(side)
         return untorsioned_tibia(self.torsioned_tibia(side), self.subject.side(side).tibial_torsion, side)
 
     @_memo

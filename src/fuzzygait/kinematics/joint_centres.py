@@ -69,6 +69,34 @@ def davis_hjc_local(
     )
 
 
+#: Hara et al. (2016) regression coefficients (mm, mm/mm of leg length): x, y, z.
+HARA_INTERCEPT = (11.0, 8.0, -9.0)
+HARA_SLOPE = (-0.063, 0.086, -0.078)
+#: Thickness of a marker's base plate (mm) between the skin and the marker sphere.
+MARKER_BASE_MM = 2.0
+
+
+def hara_hjc_local(leg_length: float, marker_radius: float, side: str) -> np.ndarray:
+    """Hip joint centre (Hara et al. 2016, CGM 2.1+) in the pelvis frame (origin = ASIS
+    midpoint, x anterior, y left, z up), mm.
+
+    Hara's regression on leg length ``LL`` (mm) locates the centre from the bony ASIS
+    midpoint: ``x = 11 - 0.063 LL``, ``y = s (8 + 0.086 LL)``, ``z = -9 - 0.078 LL``
+    (``s = +1`` left, ``-1`` right).  The ASIS *markers* sit a marker radius plus the
+    base plate (:data:`MARKER_BASE_MM`) in front of the bone, so ``x`` is moved back by
+    ``r + 2`` mm (measured on pyCGM2's CGM 2.3 output of
+    ``../shared/data/cgm2``: (-61, ±94, -87) mm for LL = 1000 mm, r = 7 mm).
+
+    Args:
+        leg_length: the side's leg length, mm.
+        marker_radius: mm.
+        side: ``"L"`` or ``"R"``.
+    """
+    s = 1.0 if side == "L" else -1.0
+    x, y, z = (a + b * leg_length for a, b in zip(HARA_INTERCEPT, HARA_SLOPE, strict=True))
+    return np.array([x - marker_radius - MARKER_BASE_MM, s * y, z])
+
+
 def chord_joint_centre(
     wand: np.ndarray, proximal: np.ndarray, marker: np.ndarray, offset: float
 ) -> np.ndarray:

@@ -13,14 +13,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
 from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers
+from fuzzygait.kinematics.clusters import ClusterCalibration, ClusterChain
 from fuzzygait.kinematics.kad import StaticKneeChain, knee_method
 from fuzzygait.kinematics.progression import progression_frame
+from fuzzygait.kinematics.versions import model_version
 
 #: The Plug-in Gait lower-body angle outputs, in Vicon's names.
 ANGLE_NAMES: tuple[str, ...] = (
@@ -56,6 +58,7 @@ class CGMResult:
         progression: ``(3, 3)`` progression frame (columns forward, left, up in lab
             coordinates) of the pelvis and foot-progression angles.
         notes: remarks on the computation (measured parameters, ignored parameters...).
+        model: the model version that computed it (``"cgm1.0"``, ``"cgm2.3"``, ...).
     """
 
     angles: dict[str, np.ndarray] = field(default_factory=dict)
@@ -65,6 +68,7 @@ class CGMResult:
     unavailable: dict[str, str] = field(default_factory=dict)
     progression: np.ndarray = field(default_factory=lambda: np.full((3, 3), np.nan))
     notes: list[str] = field(default_factory=list)
+    model: str = "cgm1.0"
 
 
 def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -76,7 +80,7 @@ def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) ->
         progression: ``(3, 3)`` progression frame (pelvis and foot-progression angles).
     """
     side, joint = name[0], name[1:].removesuffix("Angles")
-    if joint == "Pelvis":
+    if joint in ("Pelvis", "PelvisROT"):
         return progression, chain.pelvis()[1]
     if joint == "Hip":
         return chain.pelvis()[1], chain.thigh(side)
@@ -92,7 +96,10 @@ def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) ->
 def angle_from_chain(chain: LowerBodyChain, name: str, progression: np.ndarray) -> np.ndarray:
     """Angle ``name`` (``(n_frames, 3)`` degrees, Plug-in Gait conventions) of ``chain``."""
     proximal, distal = angle_segments(chain, name, progression)
-    return joint_angles(proximal, distal, name[1:].removesuffix("Angles"), name[0])
+    joint = name[1:].removesuffix("Angles")
+    if joint == "Pelvis" and chain.pelvis_sequence == "ROT":
+        joint = "PelvisROT"
+    return joint_angles(proximal, distal, joint, name[0])
 
 
 def angle_markers(trial: Trial, name: str, use_medial_markers: bool = False) -> list[str]:
@@ -110,6 +117,8 @@ def compute_lower_body(
     *,
     use_medial_markers: bool | None = None,
     static_foot: str | None = None,
+    model: str = "cgm1.0",
+    clusters: ClusterCalibration | None = None,
 ) -> CGMResult:
     """Run the Plug-in Gait lower-body model on every frame of ``trial``.
 
@@ -134,16 +143,33 @@ def compute_lower_body(
             static trial with a knee alignment device then uses the KAD (and MED)
             knee and ankle centres of :mod:`fuzzygait.kinematics.kad` and exports the
             virtual ``L/RKNE``.
+        model: the model version (:mod:`fuzzygait.kinematics.versions`): ``"cgm1.0"``
+            (Plug-in Gait), ``"cgm2.1"`` (Hara hip centres) or ``"cgm2.3"`` (thigh and
+            shank tracked by their clusters; needs ``clusters``).
+        clusters: the static trial's :func:`~fuzzygait.kinematics.clusters.calibrate_clusters`
+            (``cgm2.3``).
 
     Raises:
-        ParameterError: implausible subject parameters (names them).
+        ParameterError: implausible subject parameters (names them), an unknown model or
+            ``cgm2.3`` without ``clusters``.
     """
     subject.validate()
+    version = model_version(model)
     medial = bool(use_medial_markers)
-    chain = LowerBodyChain(trial, subject, use_medial_markers=medial, static_foot=static_foot)
-    if static_foot is not None and knee_method(trial) != "plain":
+    chain: LowerBodyChain
+    if version.clusters:
+        if clusters is None:
+            raise ParameterError(
+                f"{version.name} tracks the thigh and shank clusters calibrated on a static trial; "
+                "give the static trial (--static) or its cluster calibration"
+            )
+        chain = ClusterChain(trial, subject, clusters)
+    else:
+        chain = LowerBodyChain(trial, subject, use_medial_markers=medial, static_foot=static_foot, hip=version.hip,
+                               single_tibia=version.single_tibia, pelvis_sequence=version.pelvis_sequence)  # fmt: skip
+    if static_foot is not None and knee_method(trial) != "plain" and version.name == "cgm1.0":
         chain = StaticKneeChain(trial, subject, static_foot=static_foot)
-    result = CGMResult()
+    result = CGMResult(model=version.name)
     if medial:
         result.notes.append(
             "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"

@@ -40,6 +40,7 @@ from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method
 from fuzzygait.kinematics.segments import foot_offsets
 from fuzzygait.kinematics.vectors import unit
+from fuzzygait.kinematics.versions import model_version
 
 #: The offsets (rad) a static calibration computes: ``SideParameters`` field -> Vicon
 #: ``PROCESSING`` name (after the side letter).
@@ -81,7 +82,7 @@ def check_upright(static: Trial, chain: LowerBodyChain, seen: np.ndarray) -> Non
 
 
 def static_calibration(
-    static: Trial, subject: SubjectParameters, *, flat_foot: bool = False
+    static: Trial, subject: SubjectParameters, *, flat_foot: bool = False, model: str = "cgm1.0"
 ) -> SubjectParameters:
     """Calibrate the foot offsets (and the inter-ASIS distance if unknown) on a static trial.
 
@@ -90,6 +91,11 @@ def static_calibration(
         subject: subject parameters (static offsets in it are ignored).
         flat_foot: Plug-in Gait's "foot flat" option: the sole is taken as parallel to the
             floor (HEE is moved to the height of TOE + ``SoleDelta`` along lab Z).
+        model: the model version whose foot is calibrated (:mod:`fuzzygait.kinematics.versions`):
+            CGM 1.1+ take the foot's ankle axis from the one (torsioned) tibia, CGM 2.x
+            the Hara hip centres and, for ``cgm2.3`` with KNM/MED in the static trial,
+            the knee/ankle centres on the medial lines.  The knee alignment device is
+            Plug-in Gait's (``cgm1.0``) only.
 
     Returns:
         A copy of ``subject`` with ``static_plant_flex`` and ``static_rot_off`` (rad) set
@@ -106,7 +112,13 @@ def static_calibration(
             a subject turned about the vertical is calibrated as any other).
     """
     subject.validate()
+    version = model_version(model)
     method = knee_method(static)
+    if method != "plain" and version.name != "cgm1.0":
+        raise ParameterError(
+            f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use --model cgm1.0 "
+            f"(not {version.name}) or a static trial with KNM/MED"
+        )
     labels = required_markers(static, use_medial_markers=False) + ["LHEE", "RHEE"]
     if method != "plain":
         labels = [m for m in labels if m[1:] != "KNE"] + [side + m for side in "LR" for m in KAD_MARKERS]
@@ -129,7 +141,9 @@ def static_calibration(
         calibrated = replace(subject, inter_asis_distance=iad).validate()
 
     static_foot = "flat" if flat_foot else "heel"
-    chain: LowerBodyChain = LowerBodyChain(static, calibrated, static_foot=static_foot)
+    medial = version.clusters and all(static.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
+    chain: LowerBodyChain = LowerBodyChain(static, calibrated, static_foot=static_foot, hip=version.hip,
+                                           use_medial_markers=medial, single_tibia=version.single_tibia)  # fmt: skip
     if method != "plain":
         knee_chain = StaticKneeChain(static, calibrated, static_foot=static_foot)
         for side in "LR":

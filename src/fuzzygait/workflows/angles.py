@@ -21,7 +21,9 @@ from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
+from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
 from fuzzygait.kinematics.kad import knee_method
+from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial
 from fuzzygait.mocap.gaps import Gap, Method
 
@@ -141,6 +143,7 @@ class StaticCalibration:
     method: str
     flat_foot: bool
     static: str
+    clusters: ClusterCalibration | None = None
 
     def describe(self) -> str:
         """``"static offsets calibrated from S.c3d (KAD, foot flat off, 14 mm markers)"``."""
@@ -154,6 +157,7 @@ def calibrate_static(
     *,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool = False,
+    model: str = "cgm1.0",
 ) -> StaticCalibration:
     """Fill the static trial's gaps as the walking trials' and calibrate ``subject`` on it
     (:func:`fuzzygait.kinematics.static_calibration`: every offset Nexus stores after a
@@ -167,8 +171,9 @@ def calibrate_static(
     """
     trial = static if isinstance(static, Trial) else read_c3d(static)
     clean, _ = replace(preprocessing, filter=False).apply(trial)
-    calibrated = static_calibration(clean, subject, flat_foot=flat_foot)
-    return StaticCalibration(calibrated, knee_method(clean), flat_foot, trial.name)
+    calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model)
+    clusters = calibrate_clusters(clean, calibrated) if model_version(model).clusters else None
+    return StaticCalibration(calibrated, knee_method(clean), flat_foot, trial.name, clusters)
 
 
 def run_angles(
@@ -179,6 +184,7 @@ def run_angles(
     preprocessing: Preprocessing = Preprocessing(),
     flat_foot: bool = False,
     marker_diameter: float | None = None,
+    model: str = "cgm1.0",
 ) -> AnglesRun:
     """Run the joint-angle pipeline on one dynamic trial.
 
@@ -192,16 +198,25 @@ def run_angles(
             only, see :func:`calibrate_static`).
         flat_foot: static calibration with the flat-foot option (uses SoleDelta).
         marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
+        model: a model version (:data:`fuzzygait.kinematics.versions.MODEL_VERSIONS`) or
+            ``"auto"``: the richest the markers support (the choice and why in the notes).
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
     trial, gaps = preprocessing.apply(raw)
     subject = resolve_subject(raw, subject_file, marker_diameter)
     notes = list(trial.notes)
-    if static is not None:
-        calibration = calibrate_static(static, subject, preprocessing=preprocessing, flat_foot=flat_foot)
-        subject = calibration.subject
+    static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
+    if model == "auto":
+        version, why = supported_version(raw, static_trial)
+        model = version.name
+        notes.append(f"model {model} ({why})")
+    clusters = None
+    if static_trial is not None:
+        calibration = calibrate_static(static_trial, subject, preprocessing=preprocessing, flat_foot=flat_foot,
+                                       model=model)  # fmt: skip
+        subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
-    result = compute_lower_body(trial, subject)
+    result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     notes += result.notes
     notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
     events, source = trial_gait_events(trial)
@@ -260,8 +275,9 @@ def angles_to_files(
     preprocessing: Preprocessing = Preprocessing(),
     flat_foot: bool = False,
     marker_diameter: float | None = None,
+    model: str = "cgm1.0",
 ) -> tuple[AnglesRun, list[Path]]:
     """:func:`run_angles` and then ``outputs.write``: the run and the files written."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     flat_foot=flat_foot, marker_diameter=marker_diameter)  # fmt: skip
+                     flat_foot=flat_foot, marker_diameter=marker_diameter, model=model)  # fmt: skip
     return run, outputs.write(run)

@@ -1,0 +1,187 @@
+"""CGM 2.3 thigh and shank tracked by their marker clusters.
+
+Static calibration (:func:`calibrate_clusters`): the static trial's anatomical frames
+are built as in :class:`~fuzzygait.kinematics.chain.LowerBodyChain` (Hara hip centres;
+with KNM/MED the knee/ankle centres at the KNE-KNM / ANK-MED midpoints, else the chord
+function).  Each tracking marker's position is expressed in its segment's anatomical
+frame (thigh: origin KJC; shank: the torsioned tibia, origin AJC) and averaged over the
+static frames; so is the shank's untorsioned (knee) tibia, a fixed rotation of the
+torsioned one.  The anatomical frame *is* the technical frame: a separate marker-built
+technical frame would be an intermediate rotation that cancels.
+
+Dynamic trials (:class:`ClusterChain`): per frame, the weighted least-squares rigid fit
+(:func:`~fuzzygait.kinematics.rigid.fit_rigid`) of every visible tracking marker of the
+segment to its calibrated position gives the anatomical frame and its origin (KJC,
+AJC) directly; at least three visible markers are needed, else the frame is NaN.  The
+pelvis and foot are Plug-in Gait's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.kinematics.chain import LowerBodyChain, _memo
+from fuzzygait.kinematics.rigid import MIN_MARKERS, RigidFit, fit_rigid
+from fuzzygait.kinematics.segments import long_bone_frame
+from fuzzygait.kinematics.vectors import to_local
+
+#: Tracking markers per segment (after the side letter), CGM 2.3.
+CLUSTERS: dict[str, tuple[str, ...]] = {
+    "thigh": ("THI", "THAP", "THAD", "KNE"),
+    "tibia": ("TIB", "TIAP", "TIAD", "ANK"),
+}
+
+
+@dataclass(frozen=True)
+class SegmentCluster:
+    """One segment's calibrated cluster.
+
+    Attributes:
+        markers: tracking marker labels (with the side letter) seen in the static trial.
+        local: ``(m, 3)`` mm, their positions in the segment's anatomical frame.
+        knee_tibia: ``(3, 3)`` the untorsioned tibia's axes in the torsioned tibia frame
+            (shank only; identity for the thigh).
+    """
+
+    markers: tuple[str, ...]
+    local: np.ndarray
+    knee_tibia: np.ndarray
+
+
+@dataclass(frozen=True)
+class ClusterCalibration:
+    """The calibrated clusters, keyed ``(side, "thigh"|"tibia")``."""
+
+    segments: dict[tuple[str, str], SegmentCluster]
+
+    def segment(self, side: str, name: str) -> SegmentCluster:
+        return self.segments[(side, name)]
+
+
+def _mean_local(frame: np.ndarray, origin: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Mean over the frames seen of ``points`` in ``frame`` at ``origin`` (``(3,)`` mm)."""
+    local = to_local(frame, origin, points)
+    seen = np.all(np.isfinite(local), axis=1)
+    if not seen.any():
+        return np.full(3, np.nan)
+    return np.asarray(local[seen].mean(axis=0))
+
+
+def calibrate_clusters(
+    static: Trial, subject: SubjectParameters, use_medial_markers: bool | None = None
+) -> ClusterCalibration:
+    """Each thigh and shank tracking marker in its segment's anatomical frame of the static
+    trial (module docstring).
+
+    Args:
+        static: the static trial, mm.
+        subject: subject parameters (widths, leg lengths, marker diameter).
+        use_medial_markers: knee/ankle centres on the KNE-KNM / ANK-MED lines (True) or by
+            the chord function with THI/TIB (False); None: the medial lines when the static
+            trial has KNM and MED on both sides.
+
+    Raises:
+        MarkerError: a segment with fewer than three tracking markers in the static trial
+            (names the ones missing).
+    """
+    medial = use_medial_markers
+    if medial is None:
+        medial = all(static.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
+    chain = LowerBodyChain(static, subject, use_medial_markers=medial, hip="hara")
+    segments: dict[tuple[str, str], SegmentCluster] = {}
+    for side in "LR":
+        frames = {
+            "thigh": (chain.thigh(side), chain.kjc(side)),
+            "tibia": (chain.torsioned_tibia(side), chain.ajc(side)),
+        }
+        for name, (frame, origin) in frames.items():
+            labels = tuple(side + m for m in CLUSTERS[name] if static.has_marker(side + m))
+            if len(labels) < MIN_MARKERS:
+                lacking = [side + m for m in CLUSTERS[name] if not static.has_marker(side + m)]
+                raise MarkerError(
+                    f"{static.name}: the {side} {name} cluster needs {MIN_MARKERS} of "
+                    f"{', '.join(side + m for m in CLUSTERS[name])}; {', '.join(lacking)} missing"
+                )
+            local = np.stack([_mean_local(frame, origin, static.marker(m)) for m in labels])
+            knee_tibia = np.eye(3)
+            if name == "tibia":
+                knee = long_bone_frame(chain.kjc(side), chain.ajc(side), chain.marker(side + "KNE"), side)
+                relative = np.einsum("nji,njk->nik", frame, knee)
+                seen = np.all(np.isfinite(relative), axis=(1, 2))
+                u, _, vt = np.linalg.svd(relative[seen].mean(axis=0))
+                knee_tibia = u @ vt  # the nearest rotation to the mean
+            segments[(side, name)] = SegmentCluster(labels, local, knee_tibia)
+    return ClusterCalibration(segments)
+
+
+class ClusterChain(LowerBodyChain):
+    """A dynamic trial's chain with cluster-tracked thighs and shanks (CGM 2.3).
+
+    Args:
+        trial: the dynamic trial, mm.
+        subject: subject parameters (static foot offsets included).
+        calibration: from :func:`calibrate_clusters` on the session's static trial.
+    """
+
+    def __init__(self, trial: Trial, subject: SubjectParameters, calibration: ClusterCalibration):
+        super().__init__(trial, subject, hip="hara", single_tibia=True, pelvis_sequence="ROT")
+        self.calibration = calibration
+
+    def _cluster(self, side: str, name: str) -> tuple[SegmentCluster, list[str]]:
+        cluster = self.calibration.segment(side, name)
+        return cluster, [m for m in cluster.markers if self.trial.has_marker(m)]
+
+    def missing(self, segment: str, side: str = "L") -> list[str]:
+        """Markers of ``segment`` and the chain above it missing from the trial; a thigh or
+        shank lacks markers when fewer than three of its calibrated tracking markers are
+        in the trial."""
+        lacking = super().missing("pelvis")
+        if segment == "pelvis":
+            return lacking
+        for name in CLUSTERS:
+            cluster, present = self._cluster(side, name)
+            if len(present) < MIN_MARKERS:
+                lacking += [m for m in cluster.markers if m not in present]
+            if name == segment:
+                return lacking
+        return lacking + [m for m in (side + "TOE",) if not self.trial.has_marker(m)]
+
+    @_memo
+    def fit(self, key: str) -> RigidFit:
+        """The least-squares pose of cluster ``key`` = side + segment (``"Lthigh"``)."""
+        side, name = key[0], key[1:]
+        cluster, present = self._cluster(side, name)
+        if len(present) < MIN_MARKERS:
+            raise MarkerError(f"{self.trial.name}: the {side} {name} cluster has fewer than {MIN_MARKERS} markers")
+        rows = [cluster.markers.index(m) for m in present]
+        observed = np.stack([self.marker(m) for m in present], axis=1)
+        return fit_rigid(cluster.local[rows], observed)
+
+    @_memo
+    def kjc(self, side: str) -> np.ndarray:
+        """Knee joint centre: the thigh cluster's anatomical origin, mm."""
+        return np.asarray(self.fit(side + "thigh").origin)
+
+    @_memo
+    def thigh(self, side: str) -> np.ndarray:
+        """Thigh anatomical frame from the thigh cluster fit."""
+        return np.asarray(self.fit(side + "thigh").rotation)
+
+    @_memo
+    def ajc(self, side: str) -> np.ndarray:
+        """Ankle joint centre: the shank cluster's anatomical origin, mm."""
+        return np.asarray(self.fit(side + "tibia").origin)
+
+    @_memo
+    def torsioned_tibia(self, side: str) -> np.ndarray:
+        """Torsioned tibia (ankle axis) frame from the shank cluster fit."""
+        return np.asarray(self.fit(side + "tibia").rotation)
+
+
+
+__all__ = ["CLUSTERS", "ClusterCalibration", "ClusterChain", "SegmentCluster", "calibrate_clusters"]
