@@ -6,11 +6,23 @@
   joint centre, marker placement;
 * :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the ``sample_data`` folder;
 * :mod:`~fuzzygait.synthetic.pig_options` -- opt-in knee alignment device, medial
-  malleoli, misplaced wands and tibial torsion with known values.
+  malleoli, misplaced wands and tibial torsion with known values;
+* :mod:`~fuzzygait.synthetic.cgm24` -- CGM 2.4 sessions (thigh/shank clusters, medial
+  markers, Hara or Davis HJC, a forefoot with known ForeFootAngles).
 
 Regenerate the bundled data with ``python -m fuzzygait.synthetic [OUT_DIR]``.
 """
 
+from fuzzygait.synthetic.cgm24 import (
+    CGM24_DYNAMIC_LABELS,
+    CGM24_STATIC_LABELS,
+    Cgm24Geometry,
+    cgm24_static_pose,
+    cgm24_walking_state,
+    hara_hjc,
+    make_cgm24_static,
+    make_cgm24_walking,
+)
 from fuzzygait.synthetic.gait_curves import (
     FOOT_OFF_PHASE,
     RIGHT_PHASE_SHIFT,
@@ -50,6 +62,14 @@ from fuzzygait.synthetic.leg_model import (
 from fuzzygait.synthetic.pig_options import LegOffsets, PigOptions
 
 __all__ = [
+    "CGM24_DYNAMIC_LABELS",
+    "CGM24_STATIC_LABELS",
+    "Cgm24Geometry",
+    "cgm24_static_pose",
+    "cgm24_walking_state",
+    "hara_hjc",
+    "make_cgm24_static",
+    "make_cgm24_walking",
     "DEFAULT_GAPS",
     "DYNAMIC_LABELS",
     "FOOT_OFF_PHASE",
