@@ -121,7 +121,6 @@ from fuzzygait.synthetic.leg_model import (
     SubjectGeometry,
     _apply,
     _side_factor,
-    davis_hjc,
     joint_angles_from_rotation,
     joint_rotation,
     pose_lower_body,
@@ -235,14 +234,7 @@ class Cgm24Geometry(SubjectGeometry):
             return hara_hjc(
                 self.leg_length, side, self.hara_marker_diameter, self.hara_base_plate
             )
-        return davis_hjc(
-            inter_asis_distance=self.inter_asis_distance,
-            leg_length_left=self.leg_length,
-            leg_length_right=self.leg_length,
-            asis_trocanter_distance=self.asis_trocanter_distance,
-            marker_diameter=self.marker_diameter,
-            side=side,
-        )
+        return super().hjc_local(side)
 
     def height_shift(self) -> float:
         """Standing-height difference to the Davis (Plug-in Gait) subject, mm (<= 0 Hara)."""
