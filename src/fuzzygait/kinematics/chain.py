@@ -236,10 +236,16 @@ class LowerBodyChain:
             ank, offset = self.marker(side + "ANK"), self._offset(self.subject.side(side).ankle_width)
             return ank + offset * unit(self.marker(side + "MED") - ank)
         params = self.subject.side(side)
+        return self.chord_ajc(side, params.shank_rotation, params.ankle_abadd)
+
+    def chord_ajc(self, side: str, shank_rotation: float | np.ndarray, ankle_abadd: float | np.ndarray) -> np.ndarray:
+        """Plug-in Gait's ankle centre with these offsets (rad, scalars or one per frame):
+        the chord on TIB, KJC, ANK with the TIB wand turned by ``ShankRotation``, then
+        turned about ANK by ``AnkleAbAdd``; mm."""
         tib, ank, kjc = self.marker(side + "TIB"), self.marker(side + "ANK"), self.kjc(side)
-        rotation = side_sign(side) * params.shank_rotation
-        centre = rotated_chord_joint_centre(tib, kjc, ank, self._offset(params.ankle_width), rotation)
-        return abducted_joint_centre(centre, kjc, ank, params.ankle_abadd)
+        offset = self._offset(self.subject.side(side).ankle_width)
+        centre = rotated_chord_joint_centre(tib, kjc, ank, offset, side_sign(side) * shank_rotation)
+        return abducted_joint_centre(centre, kjc, ank, ankle_abadd)
 
     @_memo
     def thigh(self, side: str) -> np.ndarray:

@@ -2,11 +2,11 @@
 
 Static calibration (:func:`calibrate_clusters`): the static trial's anatomical frames
 are built as in :class:`~fuzzygait.kinematics.chain.LowerBodyChain` (Hara hip centres;
-with KNM/MED the knee/ankle centres at the KNE-KNM / ANK-MED midpoints, else the chord
+with KNM/MED the knee/ankle centres on the KNE-KNM / ANK-MED lines, else the chord
 function).  Each tracking marker's position is expressed in its segment's anatomical
 frame (thigh: origin KJC; shank: the torsioned tibia, origin AJC) and averaged over the
-static frames; so is the shank's untorsioned (knee) tibia, a fixed rotation of the
-torsioned one.  The anatomical frame *is* the technical frame: a separate marker-built
+static frames (CGM 2.x has one tibia frame, the torsioned one, for knee, ankle and
+foot).  The anatomical frame *is* the technical frame: a separate marker-built
 technical frame would be an intermediate rotation that cancels.
 
 Dynamic trials (:class:`ClusterChain`): per frame, the weighted least-squares rigid fit
@@ -27,7 +27,6 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
 from fuzzygait.kinematics.rigid import MIN_MARKERS, RigidFit, fit_rigid
-from fuzzygait.kinematics.segments import long_bone_frame
 from fuzzygait.kinematics.vectors import to_local
 
 #: Tracking markers per segment (after the side letter), CGM 2.3.
@@ -44,13 +43,10 @@ class SegmentCluster:
     Attributes:
         markers: tracking marker labels (with the side letter) seen in the static trial.
         local: ``(m, 3)`` mm, their positions in the segment's anatomical frame.
-        knee_tibia: ``(3, 3)`` the untorsioned tibia's axes in the torsioned tibia frame
-            (shank only; identity for the thigh).
     """
 
     markers: tuple[str, ...]
     local: np.ndarray
-    knee_tibia: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -108,14 +104,7 @@ def calibrate_clusters(
                     f"{', '.join(side + m for m in CLUSTERS[name])}; {', '.join(lacking)} missing"
                 )
             local = np.stack([_mean_local(frame, origin, static.marker(m)) for m in labels])
-            knee_tibia = np.eye(3)
-            if name == "tibia":
-                knee = long_bone_frame(chain.kjc(side), chain.ajc(side), chain.marker(side + "KNE"), side)
-                relative = np.einsum("nji,njk->nik", frame, knee)
-                seen = np.all(np.isfinite(relative), axis=(1, 2))
-                u, _, vt = np.linalg.svd(relative[seen].mean(axis=0))
-                knee_tibia = u @ vt  # the nearest rotation to the mean
-            segments[(side, name)] = SegmentCluster(labels, local, knee_tibia)
+            segments[(side, name)] = SegmentCluster(labels, local)
     return ClusterCalibration(segments)
 
 
@@ -162,26 +151,21 @@ class ClusterChain(LowerBodyChain):
         observed = np.stack([self.marker(m) for m in present], axis=1)
         return fit_rigid(cluster.local[rows], observed)
 
-    @_memo
     def kjc(self, side: str) -> np.ndarray:
         """Knee joint centre: the thigh cluster's anatomical origin, mm."""
         return np.asarray(self.fit(side + "thigh").origin)
 
-    @_memo
     def thigh(self, side: str) -> np.ndarray:
         """Thigh anatomical frame from the thigh cluster fit."""
         return np.asarray(self.fit(side + "thigh").rotation)
 
-    @_memo
     def ajc(self, side: str) -> np.ndarray:
         """Ankle joint centre: the shank cluster's anatomical origin, mm."""
         return np.asarray(self.fit(side + "tibia").origin)
 
-    @_memo
     def torsioned_tibia(self, side: str) -> np.ndarray:
         """Torsioned tibia (ankle axis) frame from the shank cluster fit."""
         return np.asarray(self.fit(side + "tibia").rotation)
-
 
 
 __all__ = ["CLUSTERS", "ClusterCalibration", "ClusterChain", "SegmentCluster", "calibrate_clusters"]

@@ -57,7 +57,7 @@ from fuzzygait.core.errors import MarkerError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
-from fuzzygait.kinematics.joint_centres import abducted_joint_centre, chord_joint_centre, rotated_chord_joint_centre
+from fuzzygait.kinematics.joint_centres import chord_joint_centre
 from fuzzygait.kinematics.segments import long_bone_frame, side_sign
 from fuzzygait.kinematics.vectors import cross, dot, norm, rotate_frame, unit
 
@@ -200,15 +200,9 @@ class StaticKneeChain(LowerBodyChain):
         torsioned = self.torsioned_tibia(side)
         if not self.medial_malleoli:
             return torsioned
-        s = side_sign(side)
         per_frame = self.per_frame_offsets(side)
-        kjc, ank = self.kjc(side), self.marker(side + "ANK")
-        offset = self._offset(self.subject.side(side).ankle_width)
-        chord = rotated_chord_joint_centre(
-            self.marker(side + "TIB"), kjc, ank, offset, s * per_frame["shank_rotation"]
-        )
-        walking_ajc = abducted_joint_centre(chord, kjc, ank, per_frame["ankle_abadd"])
-        walking_tibia = long_bone_frame(kjc, walking_ajc, ank, side)
+        walking_ajc = self.chord_ajc(side, per_frame["shank_rotation"], per_frame["ankle_abadd"])
+        walking_tibia = long_bone_frame(self.kjc(side), walking_ajc, self.marker(side + "ANK"), side)
         x, z = torsioned[:, :, 0], torsioned[:, :, 2]
         turn = np.arctan2(dot(cross(x, walking_tibia[:, :, 0]), z), dot(x, walking_tibia[:, :, 0]))
         return rotate_frame(torsioned, 2, turn)
