@@ -136,7 +136,9 @@ def resolve_subject(
 @dataclass(frozen=True)
 class StaticCalibration:
     """A static calibration: the calibrated ``subject``, the knee/ankle ``method``
-    (``"plain"``, ``"KAD"`` or ``"KAD+MED"``, :func:`fuzzygait.kinematics.kad.knee_method`),
+    (``"plain"``, ``"KAD"`` or ``"KAD+MED"``, :func:`fuzzygait.kinematics.kad.knee_method`;
+    for a cluster model its name and the knee/ankle centre rule), the cluster
+    calibration (cluster models only),
     whether foot flat was on, and the static trial's name."""
 
     subject: SubjectParameters
@@ -172,8 +174,13 @@ def calibrate_static(
     trial = static if isinstance(static, Trial) else read_c3d(static)
     clean, _ = replace(preprocessing, filter=False).apply(trial)
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model)
-    clusters = calibrate_clusters(clean, calibrated) if model_version(model).clusters else None
-    return StaticCalibration(calibrated, knee_method(clean), flat_foot, trial.name, clusters)
+    method = knee_method(clean)
+    clusters = None
+    if model_version(model).clusters:
+        clusters = calibrate_clusters(clean, calibrated)
+        medial = all(clean.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
+        method = f"{model} clusters, {'KNM/MED' if medial else 'chord'} knee/ankle centres"
+    return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters)
 
 
 def run_angles(
