@@ -15,13 +15,15 @@ or radians (subject parameters).  See :mod:`fuzzygait.kinematics.model` for the 
 :mod:`fuzzygait.kinematics.virtual_markers` for Vicon's virtual segment markers.
 """
 
-from fuzzygait.kinematics.model import ANGLE_NAMES, CGMResult, compute_lower_body
+from fuzzygait.kinematics.model import ALL_ANGLE_NAMES, ANGLE_NAMES, FOREFOOT_ANGLE_NAMES, CGMResult, compute_lower_body
 from fuzzygait.kinematics.progression import progression_frame
 from fuzzygait.kinematics.static import static_calibration
 from fuzzygait.kinematics.virtual_markers import angles_from_virtual_markers
 
 __all__ = [
+    "ALL_ANGLE_NAMES",
     "ANGLE_NAMES",
+    "FOREFOOT_ANGLE_NAMES",
     "CGMResult",
     "angles_from_virtual_markers",
     "compute_lower_body",

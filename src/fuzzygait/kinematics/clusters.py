@@ -18,7 +18,7 @@ pelvis and foot are Plug-in Gait's.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -51,9 +51,19 @@ class SegmentCluster:
 
 @dataclass(frozen=True)
 class ClusterCalibration:
-    """The calibrated clusters, keyed ``(side, "thigh"|"tibia")``."""
+    """A static trial's cluster calibration (everything a dynamic trial needs besides the
+    subject parameters).
+
+    Attributes:
+        segments: ``(side, "thigh"|"tibia"|"forefoot")`` -> the segment's calibrated
+            cluster (``"forefoot"``: CGM 2.4 only; its frame is pyCGM2's forefoot
+            anatomical frame, origin vSMH).
+        forefoot_joint_centres: side -> the CGM 2.4 forefoot joint centre (FJC), ``(3,)``
+            mm in the hindfoot (Plug-in Gait foot) frame, origin AJC (CGM 2.4 only).
+    """
 
     segments: dict[tuple[str, str], SegmentCluster]
+    forefoot_joint_centres: dict[str, np.ndarray] = field(default_factory=dict)
 
     def segment(self, side: str, name: str) -> SegmentCluster:
         return self.segments[(side, name)]

@@ -29,6 +29,10 @@ ANGLE_NAMES: tuple[str, ...] = (
     "LPelvisAngles", "RPelvisAngles", "LHipAngles", "RHipAngles", "LKneeAngles",
     "RKneeAngles", "LAnkleAngles", "RAnkleAngles", "LFootProgressAngles", "RFootProgressAngles",
 )  # fmt: skip
+#: The CGM 2.4 forefoot angle outputs (forefoot relative to hindfoot), pyCGM2's names.
+FOREFOOT_ANGLE_NAMES: tuple[str, ...] = ("LForeFootAngles", "RForeFootAngles")
+#: Every angle output a model version can produce, in output order.
+ALL_ANGLE_NAMES: tuple[str, ...] = ANGLE_NAMES + FOREFOOT_ANGLE_NAMES
 
 #: Angle output -> (proximal, distal) segment whose markers it needs.
 _ANGLE_SEGMENT = {
