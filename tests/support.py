@@ -70,3 +70,15 @@ def nexus_angle_errors(angles: dict[str, np.ndarray], trial, names) -> dict[str,
         assert np.isfinite(diff).all(), name
         out[name] = (np.abs(diff).max(axis=0), np.sqrt(np.mean(diff**2, axis=0)))
     return out
+
+
+def rot_pelvis_truth(truth, side: str) -> np.ndarray:
+    """The truth pelvis angles (Plug-in Gait order: tilt, obliquity, rotation) re-decomposed
+    in CGM 1.1+'s order (rotation, obliquity, tilt), independently of fuzzygait.kinematics."""
+    x, y, z = (np.radians(truth[f"{side}PelvisAngles_{a}"].to_numpy()) for a in "XYZ")
+    s = 1.0 if side == "L" else -1.0  # L: (a, b, -c), R: (a, -b, c) of intrinsic Y-X-Z
+    from scipy.spatial.transform import Rotation
+
+    rotation = Rotation.from_euler("YXZ", np.stack([x, s * y, -s * z], axis=1))
+    c, b, a = rotation.as_euler("ZXY").T
+    return np.degrees(np.stack([a, s * b, -s * c], axis=1))

@@ -43,8 +43,7 @@ def test_model_names() -> None:
     assert model_version("2.1").name == "cgm2.1" and model_version("CGM1.0").suffix == "_CGM_1.0"
     with pytest.raises(ParameterError, match="unknown model 'cgm3'; choose one of auto, cgm1.0"):
         model_version("cgm3")
-    with pytest.raises(ParameterError, match="cgm2.4: the CGM 2.4 hindfoot/forefoot is not implemented yet"):
-        model_version("cgm2.4")
+    assert model_version("cgm2.4").forefoot and model_version("cgm2.4").suffix == "_CGM_2.4"
 
 
 def test_cluster_model_without_calibration_is_one_clear_error() -> None:
@@ -101,7 +100,7 @@ def test_hara_centres_and_rot_pelvis_match_pycgm2(pycgm2_output) -> None:
 @pytest.mark.parametrize(
     ("folder", "static", "dynamic", "expected"),
     [
-        (CGM2, "Static - CGM2 1.c3d", "Gait - CGM2 1.c3d", "cgm2.3"),
+        (CGM2, "Static - CGM2 1.c3d", "Gait - CGM2 1.c3d", "cgm2.4"),
         ("vicon", "Static_trial.c3d", "Movement_trial.c3d", "cgm1.0"),
         ("vicon", "Static_trial.c3d", "gait-pig.c3d", "cgm1.0"),
         ("pig-options", "PiGKad_Calibration.c3d", "PiGKad_Motion.c3d", "cgm1.0"),

@@ -23,6 +23,8 @@ AnkleAngles         torsioned tibia  -a - 90°, c, b
                     / foot
 FootProgressAngles  progression /    a, -c, b
                     foot
+ForeFootAngles      hindfoot /       -a, c, b
+(CGM 2.4)           forefoot
 ==================  ===============  ========================================
 
 Because the Plug-in Gait foot frame has its z axis along the foot (see
@@ -49,6 +51,8 @@ ANGLE_TABLE: dict[str, tuple[tuple[int, int, int], Triple, Triple]] = {
     "Knee": ((0, 1, 2), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)),
     "Ankle": ((0, 2, 1), (-1.0, 1.0, 1.0), (-90.0, 0.0, 0.0)),
     "FootProgress": ((0, 2, 1), (1.0, -1.0, 1.0), (0.0, 0.0, 0.0)),
+    # CGM 2.4 forefoot relative to hindfoot: the ankle's decomposition, no offset
+    "ForeFoot": ((0, 2, 1), (-1.0, 1.0, 1.0), (0.0, 0.0, 0.0)),
     # CGM 1.1+ pelvis ("ROT", Baker 2001): Z-X-Y components (0 = c about z, 1 = b, 2 = a)
     "PelvisROT": ((2, 1, 0), (1.0, -1.0, 1.0), (0.0, 0.0, 0.0)),
 }

@@ -13,7 +13,8 @@ Dynamic trials (:class:`ClusterChain`): per frame, the weighted least-squares ri
 (:func:`~fuzzygait.kinematics.rigid.fit_rigid`) of every visible tracking marker of the
 segment to its calibrated position gives the anatomical frame and its origin (KJC,
 AJC) directly; at least three visible markers are needed, else the frame is NaN.  The
-pelvis and foot are Plug-in Gait's.
+pelvis and the (hind)foot are Plug-in Gait's.  CGM 2.4 adds the forefoot, calibrated and
+tracked the same way from TOE, FMH, SMH and VMH (:mod:`fuzzygait.kinematics.forefoot`).
 """
 
 from __future__ import annotations
@@ -26,8 +27,9 @@ from fuzzygait.core.errors import MarkerError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
+from fuzzygait.kinematics.forefoot import calibrate_forefoot
 from fuzzygait.kinematics.rigid import MIN_MARKERS, RigidFit, fit_rigid
-from fuzzygait.kinematics.vectors import to_local
+from fuzzygait.kinematics.vectors import to_lab, to_local
 
 #: Tracking markers per segment (after the side letter), CGM 2.3.
 CLUSTERS: dict[str, tuple[str, ...]] = {
@@ -68,6 +70,11 @@ class ClusterCalibration:
     def segment(self, side: str, name: str) -> SegmentCluster:
         return self.segments[(side, name)]
 
+    @property
+    def has_forefoot(self) -> bool:
+        """Both CGM 2.4 forefoots are calibrated."""
+        return all((side, "forefoot") in self.segments for side in "LR")
+
 
 def _mean_local(frame: np.ndarray, origin: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Mean over the frames seen of ``points`` in ``frame`` at ``origin`` (``(3,)`` mm)."""
@@ -79,7 +86,7 @@ def _mean_local(frame: np.ndarray, origin: np.ndarray, points: np.ndarray) -> np
 
 
 def calibrate_clusters(
-    static: Trial, subject: SubjectParameters, use_medial_markers: bool | None = None
+    static: Trial, subject: SubjectParameters, use_medial_markers: bool | None = None, forefoot: bool = False
 ) -> ClusterCalibration:
     """Each thigh and shank tracking marker in its segment's anatomical frame of the static
     trial (module docstring).
@@ -90,16 +97,19 @@ def calibrate_clusters(
         use_medial_markers: knee/ankle centres on the KNE-KNM / ANK-MED lines (True) or by
             the chord function with THI/TIB (False); None: the medial lines when the static
             trial has KNM and MED on both sides.
+        forefoot: also calibrate the CGM 2.4 forefoots (:func:`~fuzzygait.kinematics.forefoot.calibrate_forefoot`;
+            ``subject`` must then carry this static trial's foot offsets).
 
     Raises:
         MarkerError: a segment with fewer than three tracking markers in the static trial
-            (names the ones missing).
+            (names the ones missing); with ``forefoot`` a forefoot marker missing.
     """
     medial = use_medial_markers
     if medial is None:
         medial = all(static.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
-    chain = LowerBodyChain(static, subject, use_medial_markers=medial, hip="hara")
+    chain = LowerBodyChain(static, subject, use_medial_markers=medial, hip="hara", single_tibia=True)
     segments: dict[tuple[str, str], SegmentCluster] = {}
+    forefoot_joint_centres: dict[str, np.ndarray] = {}
     for side in "LR":
         frames = {
             "thigh": (chain.thigh(side), chain.kjc(side)),
@@ -115,7 +125,12 @@ def calibrate_clusters(
                 )
             local = np.stack([_mean_local(frame, origin, static.marker(m)) for m in labels])
             segments[(side, name)] = SegmentCluster(labels, local)
-    return ClusterCalibration(segments)
+        if forefoot:
+            labels, local, fjc = calibrate_forefoot(static, side, chain.foot(side), chain.ajc(side),
+                                                    subject.marker_diameter)  # fmt: skip
+            segments[(side, "forefoot")] = SegmentCluster(labels, local)
+            forefoot_joint_centres[side] = fjc
+    return ClusterCalibration(segments, forefoot_joint_centres)
 
 
 class ClusterChain(LowerBodyChain):
@@ -148,7 +163,12 @@ class ClusterChain(LowerBodyChain):
                 lacking += [m for m in cluster.markers if m not in present]
             if name == segment:
                 return lacking
-        return lacking + [m for m in (side + "TOE",) if not self.trial.has_marker(m)]
+        lacking += [m for m in (side + "TOE",) if not self.trial.has_marker(m)]
+        if segment == "forefoot":
+            cluster, present = self._cluster(side, "forefoot")
+            if len(present) < MIN_MARKERS:
+                lacking += [m for m in cluster.markers if m not in present and m not in lacking]
+        return lacking
 
     @_memo
     def fit(self, key: str) -> RigidFit:
@@ -176,6 +196,16 @@ class ClusterChain(LowerBodyChain):
     def torsioned_tibia(self, side: str) -> np.ndarray:
         """Torsioned tibia (ankle axis) frame from the shank cluster fit."""
         return np.asarray(self.fit(side + "tibia").rotation)
+
+    def forefoot(self, side: str) -> np.ndarray:
+        """CGM 2.4 forefoot anatomical frame (x dorsal, y left, z posterior) from the
+        forefoot cluster fit."""
+        return np.asarray(self.fit(side + "forefoot").rotation)
+
+    @_memo
+    def fjc(self, side: str) -> np.ndarray:
+        """CGM 2.4 forefoot joint centre, fixed in the hindfoot (Plug-in Gait foot), mm."""
+        return to_lab(self.foot(side), self.ajc(side), self.calibration.forefoot_joint_centres[side])
 
 
 __all__ = ["CLUSTERS", "ClusterCalibration", "ClusterChain", "SegmentCluster", "calibrate_clusters"]

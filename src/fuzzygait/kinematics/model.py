@@ -1,4 +1,5 @@
-"""Conventional Gait Model 1.0 / Vicon Plug-in Gait lower body: the whole model of a trial.
+"""The Conventional Gait Model lower body (Plug-in Gait = CGM 1.0, and the CGM 1.1-2.4
+versions of :mod:`fuzzygait.kinematics.versions`): the whole model of a trial.
 
 :func:`compute_lower_body` runs the chain of :mod:`fuzzygait.kinematics.chain` on every
 frame at once and returns the ten Plug-in Gait lower-body angle outputs, the joint
@@ -94,6 +95,8 @@ def angle_segments(chain: LowerBodyChain, name: str, progression: np.ndarray) ->
         return chain.ankle_tibia(side), chain.foot(side)
     if joint == "FootProgress":
         return progression, chain.foot(side)
+    if joint == "ForeFoot" and isinstance(chain, ClusterChain):
+        return chain.foot(side), chain.forefoot(side)
     raise KeyError(f"unknown angle {name!r}")
 
 
@@ -148,14 +151,17 @@ def compute_lower_body(
             knee and ankle centres of :mod:`fuzzygait.kinematics.kad` and exports the
             virtual ``L/RKNE``.
         model: the model version (:mod:`fuzzygait.kinematics.versions`): ``"cgm1.0"``
-            (Plug-in Gait), ``"cgm2.1"`` (Hara hip centres) or ``"cgm2.3"`` (thigh and
-            shank tracked by their clusters; needs ``clusters``).
+            (Plug-in Gait), ``"cgm1.1"``, ``"cgm2.1"`` (Hara hip centres), ``"cgm2.3"``
+            (thigh and shank tracked by their clusters; needs ``clusters``) or
+            ``"cgm2.4"`` (also the forefoot: ``L/RForeFootAngles`` and ``L/RFJC``; needs
+            ``clusters`` calibrated with ``forefoot=True``).
         clusters: the static trial's :func:`~fuzzygait.kinematics.clusters.calibrate_clusters`
-            (``cgm2.3``).
+            (``cgm2.3``, ``cgm2.4``).
 
     Raises:
-        ParameterError: implausible subject parameters (names them), an unknown model or
-            ``cgm2.3`` without ``clusters``.
+        ParameterError: implausible subject parameters (names them), an unknown model,
+            a cluster model without ``clusters`` or ``cgm2.4`` without the forefoot
+            calibration.
     """
     subject.validate()
     version = model_version(model)
@@ -166,6 +172,11 @@ def compute_lower_body(
             raise ParameterError(
                 f"{version.name} tracks the thigh and shank clusters calibrated on a static trial; "
                 "give the static trial (--static) or its cluster calibration"
+            )
+        if version.forefoot and not clusters.has_forefoot:
+            raise ParameterError(
+                f"{version.name} needs the forefoot calibrated on the static trial (FMH, SMH, VMH, TOE); "
+                "calibrate with the cgm2.4 model, or use cgm2.3"
             )
         chain = ClusterChain(trial, subject, clusters)
     else:
@@ -232,6 +243,8 @@ def compute_lower_body(
         result.segment_frames[long + "_foot"] = foot
         for name in ("AnkleAngles", "FootProgressAngles"):
             result.angles[side + name] = angle_from_chain(chain, side + name, result.progression)
+        if version.forefoot and isinstance(chain, ClusterChain):
+            _add_forefoot(chain, side, result)
         if trial.has_marker(side + "HEE"):
             hee, toe = trial.marker(side + "HEE"), trial.marker(side + "TOE")
             length = vm.foot_bone_length(hee, toe, subject.marker_radius)
@@ -240,5 +253,18 @@ def compute_lower_body(
             result.notes.append(f"no {side}HEE marker: {side}FO*/{side}TO* virtual markers not produced")
 
     result.virtual_markers.update(result.joint_centres)
-    result.angles = {name: result.angles[name] for name in ANGLE_NAMES if name in result.angles}
+    result.angles = {name: result.angles[name] for name in ALL_ANGLE_NAMES if name in result.angles}
     return result
+
+
+def _add_forefoot(chain: ClusterChain, side: str, result: CGMResult) -> None:
+    """The CGM 2.4 forefoot of ``side``: ``ForeFootAngles``, the FJC and the forefoot
+    frame, or why not (the forefoot markers missing)."""
+    name = side + "ForeFootAngles"
+    missing = chain.missing("forefoot", side)
+    if missing:
+        result.unavailable[name] = _missing_reason(missing)
+        return
+    result.joint_centres[side + "FJC"] = chain.fjc(side)
+    result.segment_frames[("left" if side == "L" else "right") + "_forefoot"] = chain.forefoot(side)
+    result.angles[name] = angle_from_chain(chain, name, result.progression)

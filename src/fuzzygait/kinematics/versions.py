@@ -72,7 +72,7 @@ _VERSIONS = {
     "cgm2.4": ModelVersion("cgm2.4", "hara", True, True),
 }
 #: Versions not implemented yet (refused by :func:`model_version` with a clear line).
-NOT_YET = {"cgm2.4": "the CGM 2.4 hindfoot/forefoot is not implemented yet; use cgm2.3 (same markers, PiG foot)"}
+NOT_YET: dict[str, str] = {}
 
 
 def model_version(name: str) -> ModelVersion:

@@ -177,7 +177,7 @@ def calibrate_static(
     method = knee_method(clean)
     clusters = None
     if model_version(model).clusters:
-        clusters = calibrate_clusters(clean, calibrated)
+        clusters = calibrate_clusters(clean, calibrated, forefoot=model_version(model).forefoot)
         medial = all(clean.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
         method = f"{model} clusters, {'KNM/MED' if medial else 'chord'} knee/ankle centres"
     return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters)
