@@ -74,3 +74,25 @@ def test_bad_shapes_and_weights_are_refused() -> None:
         fit_rigid(CLUSTER, np.zeros((5, 3, 3)))
     with pytest.raises(ValueError, match="non-negative"):
         fit_rigid(CLUSTER, np.zeros((5, 4, 3)), weights=np.array([1.0, -1.0, 1.0, 1.0]))
+
+
+def test_polar_rotation_equals_the_svd_rotation() -> None:
+    """Second method: the SVD formula on random, ill-conditioned, reflecting and singular
+    matrices (the Newton path where det > 0, the SVD fallback elsewhere)."""
+    from fuzzygait.kinematics.rigid import polar_rotation
+
+    rng = np.random.default_rng(11)
+    matrices = rng.normal(size=(400, 3, 3))
+    u, _, vt = np.linalg.svd(matrices)
+    spread = np.array([[300.0, 40.0, 1.0], [1e3, 1.0, 1e-3], [5.0, 5.0, 5.0], [1.0, 1.0, 0.0]])
+    scaled = np.concatenate([u[k::4] @ (np.diag(spread[k])[None] @ vt[k::4]) for k in range(4)])
+    for case in (matrices, scaled):
+        u, _, vt = np.linalg.svd(case)
+        d = np.sign(np.linalg.det(u @ vt))
+        u[:, :, 2] *= d[:, None]
+        expected = u @ vt
+        got = polar_rotation(case)
+        rank_deficient = np.linalg.matrix_rank(case) < 2  # no unique rotation
+        assert np.abs(got - expected)[~rank_deficient].max() < 1e-9
+        assert np.abs(np.linalg.det(got) - 1.0).max() < 1e-12
+    assert (np.linalg.det(matrices) < 0).sum() > 100  # the reflection case was exercised
