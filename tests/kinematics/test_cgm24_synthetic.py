@@ -128,3 +128,18 @@ def test_cgm24_without_a_forefoot_calibration_is_one_clear_error(sessions) -> No
     assert calibrated.clusters is not None and not calibrated.clusters.has_forefoot
     with pytest.raises(ParameterError, match="forefoot"):
         compute_lower_body(walking, calibrated.subject, model="cgm2.4", clusters=calibrated.clusters)
+
+
+def test_tracking_by_fewer_markers_is_noted_per_frame_range(sessions) -> None:
+    static, walking, _ = sessions["hara"]
+    markers = walking.markers.copy()
+    markers[40:90, walking.marker_labels.index("RSMH")] = np.nan  # C3D frames 41-90
+    for label in ("LTIAP", "LTIAD"):
+        markers[200:205, walking.marker_labels.index(label)] = np.nan  # two of four: no pose in 201-205
+    run = run_angles(walking.with_markers(markers), static=static, preprocessing=Preprocessing(filter=False, max_gap=0),
+                     model="cgm2.4")  # fmt: skip
+    assert "right forefoot: RSMH not seen in frames 41-90; tracked by the other markers there" in run.notes
+    assert "left tibia: fewer than 3 markers seen in frames 201-205; no pose there (NaN)" in run.notes
+    knee = run.result.angles["LKneeAngles"]
+    assert np.isnan(knee[200:205]).all() and np.isfinite(knee[:200]).all() and np.isfinite(knee[205:]).all()
+    assert np.isfinite(run.result.angles["LHipAngles"]).all()

@@ -23,6 +23,7 @@ from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers
 from fuzzygait.kinematics.clusters import ClusterCalibration, ClusterChain
 from fuzzygait.kinematics.kad import StaticKneeChain, knee_method
 from fuzzygait.kinematics.progression import progression_frame
+from fuzzygait.kinematics.rigid import MIN_MARKERS
 from fuzzygait.kinematics.versions import model_version
 
 #: The Plug-in Gait lower-body angle outputs, in Vicon's names.
@@ -217,6 +218,9 @@ def compute_lower_body(
                 result.unavailable[side + name + "Angles"] = _missing_reason(missing)
         if chain.missing("thigh", side):
             continue
+        if isinstance(chain, ClusterChain):
+            tracked = ("thigh", "tibia") + (("forefoot",) if version.forefoot else ())
+            result.notes += cluster_tracking_notes(chain, side, tracked)
         kjc, thigh = chain.kjc(side), chain.thigh(side)
         result.joint_centres[side + "KJC"] = kjc
         result.segment_frames[long + "_thigh"] = thigh
@@ -255,6 +259,39 @@ def compute_lower_body(
     result.virtual_markers.update(result.joint_centres)
     result.angles = {name: result.angles[name] for name in ALL_ANGLE_NAMES if name in result.angles}
     return result
+
+
+def _frame_ranges(mask: np.ndarray, first_frame: int) -> str:
+    """``"51-120, 300"``: the C3D frame numbers where ``mask`` is True, as ranges."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    ranges = [(first_frame + a, first_frame + b - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in ranges)
+
+
+def cluster_tracking_notes(chain: ClusterChain, side: str, segments: tuple[str, ...]) -> list[str]:
+    """Per cluster segment of ``side``, the C3D frames where a calibrated tracking marker is
+    not seen (the pose from the others) and where fewer than three are (no pose, NaN)."""
+    notes = []
+    long = "left" if side == "L" else "right"
+    for name in segments:
+        cluster = chain.calibration.segment(side, name)
+        present = [m for m in cluster.markers if chain.trial.has_marker(m)]
+        if len(present) < MIN_MARKERS:
+            continue
+        fit = chain.fit(side + name)
+        seen = np.zeros((chain.trial.n_frames, len(cluster.markers)), dtype=bool)
+        seen[:, [cluster.markers.index(m) for m in present]] = fit.visible
+        too_few = seen.sum(axis=1) < MIN_MARKERS
+        for k, marker in enumerate(cluster.markers):
+            hidden = ~seen[:, k] & ~too_few
+            if marker in present and hidden.any():
+                frames = _frame_ranges(hidden, chain.trial.first_frame)
+                notes.append(f"{long} {name}: {marker} not seen in frames {frames}; tracked by the other markers there")
+        if too_few.any():
+            frames = _frame_ranges(too_few, chain.trial.first_frame)
+            notes.append(f"{long} {name}: fewer than {MIN_MARKERS} markers seen in frames {frames}; "
+                         "no pose there (NaN)")  # fmt: skip
+    return notes
 
 
 def _add_forefoot(chain: ClusterChain, side: str, result: CGMResult) -> None:
