@@ -71,8 +71,6 @@ _VERSIONS = {
     "cgm2.3": ModelVersion("cgm2.3", "hara", True, False),
     "cgm2.4": ModelVersion("cgm2.4", "hara", True, True),
 }
-#: Versions not implemented yet (refused by :func:`model_version` with a clear line).
-NOT_YET: dict[str, str] = {}
 
 
 def model_version(name: str) -> ModelVersion:
@@ -86,8 +84,6 @@ def model_version(name: str) -> ModelVersion:
     key = key if key.startswith("cgm") else "cgm" + key
     if key not in _VERSIONS:
         raise ParameterError(f"unknown model {name!r}; choose one of {', '.join(MODEL_CHOICES)}")
-    if key in NOT_YET:
-        raise ParameterError(f"model {key}: {NOT_YET[key]}")
     return _VERSIONS[key]
 
 
@@ -96,7 +92,8 @@ def _has_all(trial: Trial, names: tuple[str, ...]) -> bool:
 
 
 def supported_version(dynamic: Trial, static: Trial | None = None) -> tuple[ModelVersion, str]:
-    """The richest model version the markers support, and why (one sentence).
+    """The richest model version the markers support, and why (one phrase, without the
+    version's name).
 
     ``cgm2.4`` needs the clusters and the forefoot markers in the dynamic trial and KNM,
     MED in the static one; ``cgm2.3`` the clusters and the medial static markers;
@@ -105,18 +102,16 @@ def supported_version(dynamic: Trial, static: Trial | None = None) -> tuple[Mode
     they are chosen by name).
     """
     if static is None:
-        return _VERSIONS["cgm1.0"], "no static trial: cluster models need one (cgm1.0)"
+        return _VERSIONS["cgm1.0"], "no static trial, which cluster models need"
     clusters = _has_all(dynamic, CLUSTER_MARKERS) and _has_all(static, CLUSTER_MARKERS)
     medial = _has_all(static, MEDIAL_MARKERS)
     if not (clusters and medial):
         lacking = "thigh/shank clusters (THAP, THAD, TIAP, TIAD)" if not clusters else "static KNM/MED"
-        return _VERSIONS["cgm1.0"], f"Plug-in Gait marker set, no {lacking} (cgm1.0)"
+        return _VERSIONS["cgm1.0"], f"Plug-in Gait marker set, no {lacking}"
     forefoot = _has_all(dynamic, FOREFOOT_MARKERS) and _has_all(static, FOREFOOT_MARKERS)
-    if forefoot and "cgm2.4" not in NOT_YET:
-        return _VERSIONS["cgm2.4"], "CGM 2.4 marker set: clusters, static KNM/MED and FMH/SMH/VMH (cgm2.4)"
     if forefoot:
-        return _VERSIONS["cgm2.3"], "CGM 2.4 marker set; the 2.4 forefoot is not implemented yet (cgm2.3)"
-    return _VERSIONS["cgm2.3"], "clusters and static KNM/MED, no FMH/SMH/VMH (cgm2.3)"
+        return _VERSIONS["cgm2.4"], "CGM 2.4 marker set: clusters, static KNM/MED and FMH/SMH/VMH"
+    return _VERSIONS["cgm2.3"], "clusters and static KNM/MED, no FMH/SMH/VMH"
 
 
 __all__ = [
@@ -125,7 +120,6 @@ __all__ = [
     "MEDIAL_MARKERS",
     "MODEL_CHOICES",
     "MODEL_VERSIONS",
-    "NOT_YET",
     "ModelVersion",
     "model_version",
     "supported_version",
