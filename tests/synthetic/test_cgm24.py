@@ -68,7 +68,8 @@ def test_marker_sets(trial, static):
 
 def test_truth_columns(truth):
     expected = ["frame", "time_s", *angle_columns(), *joint_centre_columns(),
-                *forefoot_angle_columns(), *[f"{s}FJC_{a}" for s in "LR" for a in "XYZ"]]  # fmt: skip
+                *forefoot_angle_columns(), *[f"{s}FJC_{a}" for s in "LR" for a in "XYZ"],
+                *[f"{s}FootProgressAngles_{a}" for s in "LR" for a in "XYZ"]]  # fmt: skip
     assert list(truth.columns) == expected
     assert np.all(np.isfinite(truth.to_numpy()))
 
@@ -355,3 +356,44 @@ def test_hindfoot_is_the_cgm1_foot(trial, truth, side):
     angles = np.degrees(np.stack([a, cc, b], axis=-1)) * np.array([-1.0, s, -s])
     expected = truth[[f"{side}AnkleAngles_{ax}" for ax in "XYZ"]].to_numpy()
     np.testing.assert_allclose(angles, expected, atol=1e-9)
+
+
+# --------------------------------------------------------------------------- foot progression
+@pytest.mark.parametrize("side", ["L", "R"])
+def test_foot_progression_meaning(trial, truth, side):
+    """From the markers, not the definition: Z + = toes medial, X = -90 + toes-down pitch."""
+    s = 1.0 if side == "L" else -1.0
+    heading = unit(trial.marker(side + "TOE") - trial.marker(side + "HEE"))  # along the foot
+    toe_in = np.degrees(np.arctan2(-s * heading[:, 1], heading[:, 0]))
+    down = np.degrees(np.arcsin(-heading[:, 2]))
+    angles = truth[[f"{side}FootProgressAngles_{a}" for a in "XYZ"]].to_numpy()
+    # the heading's azimuth is Z only for a nearly level foot (Z is about the pitched
+    # dorsal axis); its feet roll only a few degrees
+    level = np.abs(down) < 10.0
+    assert level.sum() > 100
+    assert np.abs(angles[level, 2] - toe_in[level]).max() < 0.5
+    assert np.abs(angles[:, 0] - (down - 90.0)).max() < 5.0  # roll and yaw mix in a little
+    assert np.ptp(angles[:, 0]) > 20.0 and np.ptp(angles[:, 2]) > 5.0
+
+
+def test_foot_progression_single_turns():
+    from fuzzygait.synthetic.leg_model import foot_progression_angles, rot_y, rot_z
+
+    for side, s in (("L", 1.0), ("R", -1.0)):
+        turned = rot_z(np.radians(-s * 10.0))[None]  # toes 10 deg medial
+        np.testing.assert_allclose(foot_progression_angles(turned, side), [[-90.0, 0.0, 10.0]], atol=1e-12)
+        up = rot_y(np.radians(-15.0))[None]  # toes 15 deg up (about +y, x -> z is negative)
+        np.testing.assert_allclose(foot_progression_angles(up, side), [[-105.0, 0.0, 0.0]], atol=1e-12)
+
+
+@pytest.mark.parametrize(("hjc", "model"), [("davis", "cgm1.0"), ("hara", "cgm2.4")])
+def test_foot_progression_reproduced(hjc, model):
+    """cgm1.0 on the Davis session and cgm2.4 on the Hara session reproduce it (<= 0.01 deg)."""
+    from fuzzygait.workflows.angles import Preprocessing, run_angles
+
+    trial, truth = make_cgm24_walking(hjc=hjc)
+    run = run_angles(trial, static=make_cgm24_static(hjc=hjc), preprocessing=Preprocessing(filter=False),
+                     model=model)  # fmt: skip
+    for side in "LR":
+        expected = truth[[f"{side}FootProgressAngles_{a}" for a in "XYZ"]].to_numpy()
+        assert np.abs(run.result.angles[side + "FootProgressAngles"] - expected).max() <= 0.01

@@ -12,7 +12,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from fuzzygait.io import read_c3d
-from fuzzygait.kinematics.versions import NOT_YET
 from fuzzygait.synthetic.cgm24 import CGM24_DYNAMIC_LABELS, CGM24_STATIC_LABELS
 from fuzzygait.synthetic.cgm24_sample import (
     CGM24_SAMPLE_FILES,
@@ -83,7 +82,7 @@ def test_truth_pelvis_is_the_plug_in_gait_pelvis_in_rot_order(files, generated) 
         assert np.abs(r_tor - r_rot).max() < 1e-8
         assert np.abs(rot - tor).max() > np.radians(0.05)  # the orders do differ
         assert np.abs(xyz(truth, f"{side}PelvisAngles") - xyz(tor_csv, f"{side}PelvisAngles")).max() < 1e-8
-        for name in ("Hip", "Knee", "Ankle", "ForeFoot"):
+        for name in ("Hip", "Knee", "Ankle", "FootProgress", "ForeFoot"):
             assert np.abs(xyz(angles, f"{side}{name}Angles") - xyz(truth, f"{side}{name}Angles")).max() < 1e-8
 
 
@@ -98,17 +97,13 @@ def test_rot_pelvis_of_zero_and_of_pure_rotation() -> None:
 REPRODUCES = {
     "cgm1.0": ("Pelvis@PiG",),
     "cgm1.1": ("Pelvis",),
-    "cgm2.1": ("Pelvis", "Hip", "Knee", "Ankle", "HJC", "KJC", "AJC"),
-    "cgm2.3": ("Pelvis", "Hip", "Knee", "Ankle", "HJC", "KJC", "AJC"),
-    "cgm2.4": ("Pelvis", "Hip", "Knee", "Ankle", "ForeFoot", "HJC", "KJC", "AJC", "FJC"),
+    "cgm2.1": ("Pelvis", "Hip", "Knee", "Ankle", "FootProgress", "HJC", "KJC", "AJC"),
+    "cgm2.3": ("Pelvis", "Hip", "Knee", "Ankle", "FootProgress", "HJC", "KJC", "AJC"),
+    "cgm2.4": ("Pelvis", "Hip", "Knee", "Ankle", "FootProgress", "ForeFoot", "HJC", "KJC", "AJC", "FJC"),
 }
 
 
-def _cgm24_mark(model: str):
-    return [pytest.mark.xfail(strict=True, reason="cgm2.4 not yet")] if model in NOT_YET else []
-
-
-@pytest.mark.parametrize("model", [pytest.param(m, marks=_cgm24_mark(m)) for m in REPRODUCES])
+@pytest.mark.parametrize("model", list(REPRODUCES))
 def test_model_reproduces_its_truth_columns(files, model: str) -> None:
     static, walking, angles, centres = files
     run = run_angles(walking, static=static, subject_file=SAMPLE_DATA / "cgm24_subject.toml",
@@ -135,4 +130,4 @@ def test_model_reproduces_its_truth_columns(files, model: str) -> None:
 def test_auto_picks_the_richest_version(files) -> None:
     static, walking, _, _ = files
     run = run_angles(walking, static=static, preprocessing=NO_FILTER, model="auto")
-    assert run.result.model == ("cgm2.3" if "cgm2.4" in NOT_YET else "cgm2.4")
+    assert run.result.model == "cgm2.4"

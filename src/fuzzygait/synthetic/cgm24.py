@@ -87,7 +87,9 @@ hip, knee, ankle = shank -> hindfoot, with the conventions of
 tilt-obliquity-rotation sequence, not CGM 2.x's rotation-obliquity-tilt),
 :func:`~fuzzygait.synthetic.generate.joint_centre_columns` (HJC at the chosen
 regression, KJC, AJC; mm), :func:`forefoot_angle_columns` (``L/RForeFootAngles_X/Y/Z``,
-deg) and :func:`fjc_columns` (``L/RFJC_X/Y/Z``, pyCGM2's forefoot joint centre, mm).
+deg), :func:`fjc_columns` (``L/RFJC_X/Y/Z``, pyCGM2's forefoot joint centre, mm) and
+``L/RFootProgressAngles_X/Y/Z`` (the hindfoot in the lab = progression frame, Vicon's
+convention: :func:`~fuzzygait.synthetic.leg_model.foot_progression_angles`; deg).
 """
 
 from __future__ import annotations
@@ -121,6 +123,7 @@ from fuzzygait.synthetic.leg_model import (
     SubjectGeometry,
     _apply,
     _side_factor,
+    foot_progression_angles,
     joint_angles_from_rotation,
     joint_rotation,
     pose_lower_body,
@@ -518,6 +521,10 @@ def make_cgm24_walking(
     for side in SIDES:
         for i, axis in enumerate("XYZ"):
             columns[f"{side}FJC_{axis}"] = pose.joint_centres[side + "FJC"][:, i]
+    for side in SIDES:
+        progression = foot_progression_angles(pose.rotations[side + "HindFoot"], side)
+        for i, axis in enumerate("XYZ"):
+            columns[f"{side}FootProgressAngles_{axis}"] = progression[:, i]
     return trial, pd.DataFrame(columns)
 
 

@@ -41,7 +41,7 @@ CGM24_SAMPLE_FILES: tuple[str, ...] = (
     "cgm24_walking_truth_joint_centres.csv",
 )
 #: Angles of the CGM 2.4 truth table, per side in this order (``L`` then ``R``).
-CGM24_TRUTH_ANGLES: tuple[str, ...] = ("Pelvis", "Hip", "Knee", "Ankle", "ForeFoot")
+CGM24_TRUTH_ANGLES: tuple[str, ...] = ("Pelvis", "Hip", "Knee", "Ankle", "FootProgress", "ForeFoot")
 #: Joint centres of the CGM 2.4 truth table, per side in this order.
 CGM24_TRUTH_CENTRES: tuple[str, ...] = ("HJC", "KJC", "AJC", "FJC")
 
@@ -62,7 +62,8 @@ def rot_pelvis_angles(tor: np.ndarray, side: str) -> np.ndarray:
 
 
 def cgm24_truth_angle_columns() -> list[str]:
-    """``LPelvisAngles_X`` ... ``LForeFootAngles_Z``, then the same for ``R`` (degrees)."""
+    """``LPelvisAngles_X`` ... ``LForeFootAngles_Z`` (:data:`CGM24_TRUTH_ANGLES`), then the
+    same for ``R`` (degrees)."""
     return [f"{side}{name}Angles_{axis}" for side in SIDES for name in CGM24_TRUTH_ANGLES for axis in "XYZ"]
 
 
@@ -160,7 +161,7 @@ offset), the {n_markers} dynamic markers of the CGM 2.4 set (no KNM/MED). |
 TOE/HEE), also stored in both `cgm24_*.c3d`. |
 | `cgm24_walking_truth_angles.csv` | exact angles of `cgm24_walking.c3d`: `frame`, `time_s`, \
 `LPelvisAngles_X/Y/Z` (**CGM 2.x order**: rotation-obliquity-tilt, see below), `LHipAngles_*`, \
-`LKneeAngles_*`, `LAnkleAngles_*`, `LForeFootAngles_*`, then the same for R; degrees. |
+`LKneeAngles_*`, `LAnkleAngles_*`, `LFootProgressAngles_*`, `LForeFootAngles_*`, then the same for R; degrees. |
 | `cgm24_walking_truth_joint_centres.csv` | exact joint centres of `cgm24_walking.c3d`: `frame`, `time_s`, \
 `LHJC_X/Y/Z` (Hara), `LKJC_*`, `LAJC_*`, `LFJC_*` (forefoot joint centre), then the same for R; mm, lab frame. |
 """
@@ -193,6 +194,10 @@ curves, timing and sign conventions as the Plug-in Gait trials above, except:
   FJC (pyCGM2's): TOE + 14 mm x (unit(VMH - TOE) x unit(FMH - TOE)) on the left (- on the
   right; below TOE; the cross product is not normalised, so FJC is {fjc_depth:.3f} mm from TOE), a
   point of the hindfoot: {fjc} mm in the left hindfoot frame.
+* FootProgressAngles: the hindfoot (= the Plug-in Gait foot) in the lab, which is the
+  progression frame here (walking along +X), Vicon's convention
+  (`fuzzygait.synthetic.leg_model.foot_progression_angles`): X = -90 + the foot's pitch
+  (toes down +), Z + = toes turned medially (internal), both sides.
 * Pelvis angles in the truth table: CGM 1.1+'s order (rotation Z, obliquity Y, tilt X;
   `R = R_z(-sZ) R_x(sY) R_y(X)`, s = +1 left, -1 right), re-decomposed from the Plug-in
   Gait order (`fuzzygait.synthetic.cgm24_sample.rot_pelvis_angles`). The Plug-in
@@ -205,8 +210,8 @@ float32 markers; checked by `tests/synthetic/test_cgm24_sample.py`):
 | columns | reproduced (<= 0.01 deg, <= 1e-3 mm) by | not by |
 |---|---|---|
 | `L/RPelvisAngles_*` | `cgm1.1`, `cgm2.1`, `cgm2.3`, `cgm2.4` | `cgm1.0` (Plug-in Gait order, see above) |
-| `L/RHipAngles_*`, `KneeAngles_*`, `AnkleAngles_*`; HJC, KJC, AJC | `cgm2.1`, `cgm2.3`, `cgm2.4` | \
-`cgm1.0`, `cgm1.1`: Davis hip centres, 18 mm from Hara's, angles degrees off |
+| `L/RHipAngles_*`, `KneeAngles_*`, `AnkleAngles_*`, `FootProgressAngles_*`; HJC, KJC, AJC | `cgm2.1`, `cgm2.3`, \
+`cgm2.4` | `cgm1.0`, `cgm1.1`: Davis hip centres, 18 mm from Hara's, angles degrees off |
 | `L/RForeFootAngles_*`, FJC | `cgm2.4` only | every other version (no forefoot) |
 
 `make_cgm24_walking(hjc="davis")` / `make_cgm24_static(hjc="davis")` give the same

@@ -198,6 +198,28 @@ def joint_angles_from_rotation(rotation: np.ndarray, side: str, joint: str) -> n
     return np.degrees(euler_yxz(rotation)) * signs
 
 
+#: Plug-in Gait's foot axes (x dorsal, y left, z posterior, along the foot) in this
+#: package's foot axes (x anterior, y left, z dorsal): ``R_pig = R_here @ PIG_FOOT_AXES``
+#: (= ``R_y(-90 deg)``).
+PIG_FOOT_AXES = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+def foot_progression_angles(foot_rotation: np.ndarray, side: str) -> np.ndarray:
+    """Vicon's ``L/RFootProgressAngles`` ``(n, 3)`` (deg) of a foot frame in the lab.
+
+    The progression frame is the lab (the synthetic subject walks along +X).  As Plug-in
+    Gait defines it: the foot frame in Plug-in Gait's axes, ``R_y(a) R_x(b) R_z(c)``
+    (intrinsic Y-X-Z), output ``(a, c, -b)`` left and ``(a, -c, b)`` right -- so at a level
+    foot pointing along +X the angles are ``(-90, 0, 0)``; Z + = the toes turned medially
+    (internal foot progression) on both sides, X = ``-90 +`` the foot's pitch, toes down +
+    (Z is about the pitched foot's dorsal axis, not the heading's azimuth).
+    """
+    R = np.asarray(foot_rotation, dtype=float).reshape(-1, 3, 3) @ PIG_FOOT_AXES
+    a, b, c = np.degrees(euler_yxz(R)).T
+    s = _side_factor(side)
+    return np.stack([a, s * c, -s * b], axis=-1)
+
+
 # ------------------------------------------------------------------------- subject
 @dataclass(frozen=True)
 class SubjectGeometry:
