@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -292,13 +292,20 @@ def _subject_name(raw: RawC3D) -> str:
 
 
 # =========================================================================== writing
-def write_c3d(trial: Trial, path: str | os.PathLike[str]) -> None:
+def write_c3d(
+    trial: Trial, path: str | os.PathLike[str], *, text_parameters: Mapping[str, Mapping[str, str]] | None = None
+) -> None:
     """Write ``trial`` to a float C3D file at ``path``.
 
     Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
     of -1. Model outputs follow Vicon's conventions (angles in degrees listed in
     ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. The file appears
     atomically: on any error nothing is left at ``path``.
+
+    Args:
+        text_parameters: more parameters, ``{GROUP: {NAME: text}}`` (e.g. ``{"FUZZYGAIT":
+            {"MODEL": "cgm2.3"}}``), each a one-string character parameter; groups other
+            than the standard ones are ignored by C3D readers that do not know them.
 
     Raises:
         C3DError: the file cannot be written (names the path and the cause).
@@ -334,6 +341,9 @@ def write_c3d(trial: Trial, path: str | os.PathLike[str]) -> None:
     _write_output_lists(c, trial)
     _write_subject(c, trial)
     _write_trial_frames(c, trial)
+    for group, values in (text_parameters or {}).items():
+        for name, text in values.items():
+            c.add_parameter(group.upper(), name.upper(), [str(text)])
     for event in trial.events:
         minutes, seconds = divmod(event.time, 60.0)
         c.add_event(

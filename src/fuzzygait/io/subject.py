@@ -25,7 +25,7 @@ from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.atomic import atomic_output
-from fuzzygait.io.tomlfile import TomlValue, load_toml, toml_text
+from fuzzygait.io.tomlfile import TomlData, load_toml, toml_text
 
 #: Default marker diameter (mm) when a source does not give one.
 DEFAULT_MARKER_DIAMETER = 14.0
@@ -369,13 +369,14 @@ def write_subject(
     path: str | os.PathLike[str],
     *,
     comments: Sequence[str] = (),
-    metadata: Mapping[str, TomlValue] | None = None,
+    metadata: Mapping[str, TomlData] | None = None,
     vsk_template: str | os.PathLike[str] | None = None,
 ) -> Path:
     """Write the parameters to ``path`` by its extension, atomically (complete or not at
     all): ``.toml`` (``PROCESSING`` names at top level, ``comments`` as ``#`` lines,
-    ``metadata`` as a ``[calibration]`` table, which :func:`read_subject_toml` ignores) or
-    ``.vsk`` (:func:`subject_vsk_text`; ``metadata`` goes into the comment; with
+    ``metadata`` as a ``[calibration]`` table (sub-tables and arrays allowed), which
+    :func:`read_subject_toml` ignores) or ``.vsk`` (:func:`subject_vsk_text`; the scalars
+    of ``metadata`` go into the comment, its tables and arrays nowhere; with
     ``vsk_template``, the subject's own Nexus ``.vsk`` with the values updated).  Returns
     the path.
 
@@ -389,12 +390,13 @@ def write_subject(
         raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml or .vsk")
     subject.validate()
     if suffix == ".toml":
-        document: dict[str, TomlValue | Mapping[str, TomlValue]] = dict(subject_values(subject))
+        document: dict[str, TomlData] = dict(subject_values(subject))
         if metadata:
             document["calibration"] = dict(metadata)
         text = toml_text(document, comments)
     else:
-        details = [f"{key} = {value}" for key, value in (metadata or {}).items()]
+        scalars = {k: v for k, v in (metadata or {}).items() if isinstance(v, (str, int, float))}
+        details = [f"{key} = {value}" for key, value in scalars.items()]
         template = None
         if vsk_template is not None:
             try:
