@@ -8,7 +8,8 @@
 * :mod:`~fuzzygait.synthetic.pig_options` -- opt-in knee alignment device, medial
   malleoli, misplaced wands and tibial torsion with known values;
 * :mod:`~fuzzygait.synthetic.cgm24` -- CGM 2.4 sessions (thigh/shank clusters, medial
-  markers, Hara or Davis HJC, a forefoot with known ForeFootAngles).
+  markers, Hara or Davis HJC, a forefoot with known ForeFootAngles);
+  :mod:`~fuzzygait.synthetic.cgm24_sample` -- the one in ``sample_data`` (``cgm24_*``).
 
 Regenerate the bundled data with ``python -m fuzzygait.synthetic [OUT_DIR]``.
 """

@@ -8,7 +8,15 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``gait_cycles.png`` -- the gait-report grid,
 * ``summary.md`` -- what was done, how close the angles are to the known truth and how
   wide the knee angles' fuzzy bands are,
-* ``report/index.html`` -- the clinicians' uncertainty report of the knee angles.
+* ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
+
+and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
+clean, not low-passed) with the richest model version its markers support
+(:func:`~fuzzygait.kinematics.versions.supported_version`, what ``--model auto`` picks):
+
+* ``cgm24_angles.csv`` -- its angles per frame (degrees),
+* ``cgm24_accuracy.csv`` -- RMS and max |computed - truth| per angle component against
+  ``cgm24_walking_truth_angles.csv`` (degrees; pelvis in CGM 2.x's order, as the truth).
 """
 
 from __future__ import annotations
@@ -19,18 +27,23 @@ import numpy as np
 import pandas as pd
 from rich.console import Console
 
+from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import write_table
+from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, write_report
-from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
 #: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
 DEMO_FUZZY_ANGLES = ("LKneeAngles", "RKneeAngles")
 DEMO_ALPHAS = (0.0, 0.5, 1.0)
 
-SAMPLE_FILES = ("walking_noisy.c3d", "static.c3d", "subject.toml", "walking_truth_angles.csv")
+#: The CGM 2.4 session's files the demo reads.
+CGM24_FILES = ("cgm24_walking.c3d", "cgm24_static.c3d", "cgm24_subject.toml",
+               "cgm24_walking_truth_angles.csv", "cgm24_walking_truth_joint_centres.csv")  # fmt: skip
+SAMPLE_FILES = ("walking_noisy.c3d", "static.c3d", "subject.toml", "walking_truth_angles.csv", *CGM24_FILES)
 
 
 def _ensure_sample_data(data: Path, progress: Console | None) -> None:
@@ -44,19 +57,75 @@ def _ensure_sample_data(data: Path, progress: Console | None) -> None:
     write_sample_data(data)
 
 
-def truth_comparison(run: AnglesRun, truth: pd.DataFrame) -> pd.DataFrame:
-    """RMS and max |computed - truth| (degrees) per angle component, on common frames."""
-    table = run.angle_table().merge(truth, on="frame", suffixes=("", "_truth"))
+def truth_comparison(run: AnglesRun, truth: pd.DataFrame, pelvis_sequence: str = "TOR") -> pd.DataFrame:
+    """RMS and max |computed - truth| (degrees) of every angle component the run computed
+    and ``truth`` has (columns ``<Angle>_X/Y/Z``, rows keyed by ``frame``), on common
+    frames, in the truth's column order.
+
+    ``pelvis_sequence`` is the order of the truth's pelvis angles (``"TOR"``: Plug-in
+    Gait's, ``"ROT"``: CGM 2.x's); the pelvis is compared only when the model reports it in
+    that order.
+    """
+    at_frames = truth.set_index("frame").reindex(run.trial.frames)
+    same_pelvis = model_version(run.result.model).pelvis_sequence == pelvis_sequence
     rows = []
-    for column in truth.columns:
-        if column in ("frame", "time_s") or column not in table:
+    for column in at_frames.columns:
+        name, axis = column[:-2], column[-1:]
+        if name not in run.result.angles or axis not in AXES or (name.endswith("PelvisAngles") and not same_pelvis):
             continue
-        diff = (table[column] - table[f"{column}_truth"]).to_numpy()
+        diff = run.result.angles[name][:, AXES.index(axis)] - at_frames[column].to_numpy()
         diff = diff[np.isfinite(diff)]
         if diff.size:
             rows.append({"angle": column, "rms_deg": float(np.sqrt(np.mean(diff**2))),
                          "max_deg": float(np.max(np.abs(diff))), "frames": diff.size})  # fmt: skip
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=["angle", "rms_deg", "max_deg", "frames"])
+
+
+def _centre_error(run: AnglesRun, truth: pd.DataFrame) -> tuple[float, list[str]]:
+    """Max |computed - truth| (mm) over the joint centres both have, and their names."""
+    at_frames = truth.set_index("frame").reindex(run.trial.frames)
+    in_truth = dict.fromkeys(c[:-2] for c in truth.columns if c.endswith("_X"))
+    names = [n for n in in_truth if n in run.result.joint_centres]
+    errors = [np.nanmax(np.abs(run.result.joint_centres[n] - at_frames[[f"{n}_{a}" for a in "XYZ"]].to_numpy()))
+              for n in names]  # fmt: skip
+    return (float(max(errors)) if errors else float("nan")), names
+
+
+def cgm24_session(data: Path, out_dir: Path) -> list[str]:
+    """The CGM 2.4 part of the demo: angles and accuracy files; returns the summary lines."""
+    walking, static = read_c3d(data / "cgm24_walking.c3d"), read_c3d(data / "cgm24_static.c3d")
+    version, why = supported_version(walking, static)  # what model="auto" runs
+    run = run_angles(walking, static=static, subject_file=data / "cgm24_subject.toml",
+                     preprocessing=Preprocessing(filter=False), model="auto")  # fmt: skip
+    AngleOutputs(table=out_dir / "cgm24_angles.csv").write(run)
+    truth = pd.read_csv(data / "cgm24_walking_truth_angles.csv")
+    accuracy = truth_comparison(run, truth, pelvis_sequence="ROT")
+    # 6 significant digits: the errors are ~1e-5 deg (write_table keeps 6 decimals)
+    accuracy.assign(model=version.name).to_csv(out_dir / "cgm24_accuracy.csv", index=False, float_format="%.6g")
+    centre_mm, centres = _centre_error(run, pd.read_csv(data / "cgm24_walking_truth_joint_centres.csv"))
+    per_angle = accuracy.assign(name=accuracy["angle"].str[:-2], sq=accuracy["rms_deg"] ** 2).groupby(
+        "name", sort=False).agg(rms=("sq", "mean"), max=("max_deg", "max"))  # fmt: skip
+    lines = [
+        "",
+        "## CGM 2.4 session: `cgm24_walking.c3d` with `cgm24_static.c3d`",
+        "",
+        f"- model (`--model auto`) {run.result.model}: {why}",
+        f"- {walking.n_frames} frames, {walking.n_markers} markers; clean (no noise, not low-passed), so the angles "
+        "should equal the truth up to the C3D's float32 markers",
+        f"- joint centres {', '.join(centres)}: max {centre_mm:.5f} mm from the truth",
+        "",
+        f"Computed ({version.name}) against `cgm24_walking_truth_angles.csv` (degrees, over X/Y/Z; per component in "
+        "`cgm24_accuracy.csv`):",
+        "",
+        "| angle | RMS | max |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {name} | {np.sqrt(rms):.5f} | {top:.5f} |" for name, rms, top in per_angle.itertuples()]
+    missing = [name for name in dict.fromkeys(c[:-2] for c in truth.columns if c.endswith("_X"))
+               if name not in per_angle.index]  # fmt: skip
+    lines += [f"- truth angles not compared (not computed by {version.name}): {', '.join(missing)}"] if missing else []
+    lines += [""] + [f"- {note}" for note in run.notes if not note.startswith(("model ", "gap filling"))]
+    return lines
 
 
 def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
@@ -72,6 +141,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     write_table(stats, out_dir / "cycles.csv")
     plot_gait_cycles(stats, out_dir / "gait_cycles.png", title="Synthetic sample: joint angles (mean ± 1 SD)")
     comparison = truth_comparison(run, pd.read_csv(data / "walking_truth_angles.csv"))
+    cgm24_lines = cgm24_session(data, out_dir)
     if progress is not None:
         progress.print("fuzzy marker-error analysis of the knee angles (about 30 s)...", markup=False)
     analysis = analyse_run(run, MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES))
@@ -110,7 +180,9 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     lines += [f"| {name} | " + " | ".join(f"{v:.0f}" for v in row) + " |" for name, row in knee.iterrows()]
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
     lines += ["", "Notes:"] + [f"- {note}" for note in run.notes]
-    lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`, `report/index.html`"]
+    lines += cgm24_lines
+    lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`, `report/index.html`, "
+              "`cgm24_angles.csv`, `cgm24_accuracy.csv`"]
     summary = "\n".join(lines) + "\n"
     (out_dir / "summary.md").write_text(summary, encoding="utf-8")
     return summary
