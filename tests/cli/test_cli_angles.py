@@ -21,7 +21,8 @@ def test_angles_csv_recovers_the_synthetic_truth(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     table = pd.read_csv(out)
     expected = ["frame", "time"] + [f"{a}_{x}" for a in ANGLES for x in "XYZ"]
-    assert sorted(table.columns) == sorted(expected)
+    assert sorted(table.columns[:-1]) == sorted(expected)
+    assert table.columns[-1] == "model" and set(table["model"]) == {"cgm1.0"}  # the auto choice, named
     truth = pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
     merged = table.merge(truth, on="frame", suffixes=("", "_truth"))
     assert len(merged) == len(truth)
@@ -126,3 +127,15 @@ def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:
 def test_table_options_check_suffix(tmp_path: Path, flag: str) -> None:
     result = run("angles", SAMPLE_DATA / "walking.c3d", flag, tmp_path / "x.txt")
     assert_one_line_error(result, flag)
+
+
+def test_c3d_suffix_is_checked_before_work_and_applied(tmp_path: Path) -> None:
+    walking = SAMPLE_DATA / "walking.c3d"
+    assert_one_line_error(run("angles", walking, "--c3d-out", tmp_path / "m.c3d", "--suffix", "a b"), "--suffix")
+    assert not list(tmp_path.iterdir())
+    result = run("angles", walking, *SAMPLE_ARGS, "--model", "cgm1.0", "--c3d-out", tmp_path / "m.c3d",
+                 "--suffix", "model")  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "note: model cgm1.0 (given by name)" in result.stdout
+    model = read_c3d(tmp_path / "m.c3d")
+    assert model.output_kinds["LKneeAngles_CGM_1.0"] == "angle" and "LKneeAngles" not in model.outputs

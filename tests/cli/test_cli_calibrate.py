@@ -196,3 +196,51 @@ def test_calibrating_a_nexus_vsk_keeps_its_skeleton(tmp_path: Path) -> None:
     for side in "LR":
         for name in ("StaticPlantFlex", "StaticRotOff"):
             assert written[side + name] == pytest.approx(nexus[side + name], abs=1e-6), side + name
+
+
+@pytest.fixture(scope="module")
+def cgm24_session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """The synthetic CGM 2.4 session (static with KNM/MED, 2-cycle walking) as C3D files."""
+    from fuzzygait.synthetic.cgm24 import make_cgm24_static, make_cgm24_walking
+
+    folder = tmp_path_factory.mktemp("cgm24")
+    write_c3d(make_cgm24_static(), folder / "static.c3d")
+    write_c3d(make_cgm24_walking(n_cycles=2)[0], folder / "walking.c3d")
+    return folder / "static.c3d", folder / "walking.c3d"
+
+
+@pytest.mark.slow  # end-to-end: several CLI runs
+@pytest.mark.parametrize("suffix", [".toml", ".vsk"])
+def test_cgm23_angles_from_the_calibration_file_equal_angles_with_the_static_trial(
+    tmp_path: Path, cgm24_session: tuple[Path, Path], suffix: str
+) -> None:
+    static, walking = cgm24_session
+    calibrated = tmp_path / f"cal{suffix}"
+    result = run("calibrate", static, "--model", "cgm2.3", "--out", calibrated)
+    assert result.returncode == 0, result.stderr
+    assert f"wrote {calibrated}" in result.stdout
+    assert "model cgm2.3 (given by name)" in result.stdout and "L thigh (4 markers)" in result.stdout
+    if suffix == ".vsk":
+        assert f"wrote {tmp_path / 'cal.clusters.toml'}" in result.stdout
+    tables = {}
+    for key, args in {"static": ("--static", static), "file": ("--subject", calibrated)}.items():
+        result = run("angles", walking, *args, "--model", "cgm2.3", "--out", tmp_path / f"{key}.csv")
+        assert result.returncode == 0, result.stderr
+        assert "note: model cgm2.3 (given by name)" in result.stdout  # an explicit --model is said too
+        tables[key] = pd.read_csv(tmp_path / f"{key}.csv")
+    assert set(tables["file"]["model"]) == {"cgm2.3"}
+    pd.testing.assert_frame_equal(tables["static"], tables["file"], rtol=0, atol=1e-9)
+
+
+def test_cluster_model_without_a_cluster_calibration_is_one_line(tmp_path: Path, cgm24_session) -> None:
+    _, walking = cgm24_session
+    result = run("angles", walking, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "a.csv")
+    assert_one_line_error(result, "subject.toml: no cluster calibration for cgm2.3", "--static STATIC.c3d",
+                          "fuzzygait calibrate STATIC.c3d --model cgm2.3 --out CAL.toml")  # fmt: skip
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_cluster_calibration_of_a_plug_in_gait_static_is_one_line(tmp_path: Path) -> None:
+    result = run("calibrate", STATIC, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "cal.toml")
+    assert_one_line_error(result, "LTHAP", "missing")
+    assert not (tmp_path / "cal.toml").exists()

@@ -138,22 +138,42 @@ def calibrate(
     flat_foot: FlatFootOption = False,
     marker_diameter: MarkerDiameterOption = None,
     max_gap: MaxGapOption = 10,
+    model: Annotated[
+        str,
+        typer.Option(
+            "--model",
+            help="Model to calibrate for: cgm1.0 (Plug-in Gait; its offsets serve cgm1.1 and cgm2.1 too), "
+            "cgm2.3 (also the thigh/shank clusters) or auto: cgm2.3 when the static trial has the clusters "
+            "(THAP, THAD, TIAP, TIAD) and KNM/MED, else cgm1.0.",
+        ),
+    ] = "auto",
 ) -> None:
-    """Plug-in Gait static calibration to a subject file: every value a Nexus static run
-    stores (ThighRotation, ShankRotation, TibialTorsion, AnkleAbAdd, StaticPlantFlex,
-    StaticRotOff, InterAsisDistance when absent) and the method, plain, KAD or KAD+MED,
-    told by the static trial's markers. Gaps are filled; a static trial is not low-pass
-    filtered (each offset is a mean over its frames). `angles --subject OUT` then gives
-    what `angles --static STATIC.c3d` gives."""
+    """Static calibration to a subject file: every value a Nexus static run stores
+    (ThighRotation, ShankRotation, TibialTorsion, AnkleAbAdd, StaticPlantFlex,
+    StaticRotOff, InterAsisDistance when absent), the method (plain, KAD or KAD+MED, told
+    by the static trial's markers) and, for a cluster model, the cluster calibration (in
+    the TOML file; beside a .vsk in OUT.clusters.toml). Gaps are filled; a static trial is
+    not low-pass filtered (each offset is a mean over its frames). `angles --subject OUT`
+    then gives what `angles --static STATIC.c3d` gives."""
     from fuzzygait.workflows.angles import Preprocessing
     from fuzzygait.workflows.calibrate import calibrate_to_file
 
     with user_errors():
-        calibration = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
-                                        preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot)  # fmt: skip
+        written = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
+                                    preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot,
+                                    model=model)  # fmt: skip
+    calibration = written.calibration
+    out.print(f"model {written.model} ({written.why})", markup=False)
     out.print(calibration.describe(), markup=False)
     _print_calibrated(calibration.subject)
-    out.print(f"wrote {out_file}", markup=False)
+    if calibration.clusters is not None:
+        segments = sorted(calibration.clusters.segments.items(), key=lambda item: ("LR".index(item[0][0]), item[0][1]))
+        out.print("  clusters: " + ", ".join(f"{side} {name} ({len(cluster.markers)} markers)"
+                                             for (side, name), cluster in segments), markup=False)  # fmt: skip
+    for path in written.removed:
+        out.print(f"removed {path} (a cluster calibration of an earlier run; this one has none)", markup=False)
+    for path in written.files:
+        out.print(f"wrote {path}", markup=False)
 
 
 def _print_calibrated(subject: SubjectParameters) -> None:
@@ -191,15 +211,26 @@ def angles(
         str,
         typer.Option(
             "--model",
-            help="cgm1.0 (Plug-in Gait), cgm1.1, cgm2.1 (Hara hips), cgm2.3 (clusters; needs --static) "
-            "or auto: the richest the markers support.",
+            help="cgm1.0 (Plug-in Gait), cgm1.1, cgm2.1 (Hara hips), cgm2.3 (clusters; needs --static, or "
+            "--subject written by `calibrate --model cgm2.3`) or auto: the richest the markers support "
+            "(without --static: the model of the --subject file's cluster calibration, if any).",
         ),
     ] = "auto",
+    suffix: Annotated[
+        str,
+        typer.Option(
+            "--suffix",
+            help="Appended to the angle output names in --c3d-out (e.g. _CGM_2.3, or 'model': the model's "
+            "pyCGM2 suffix); default none: Vicon's names (LKneeAngles).",
+        ),
+    ] = "",
 ) -> None:
     """Lower-body joint angles (degrees) of a walking trial by a Conventional Gait Model
-    version (Plug-in Gait for a Plug-in Gait marker set)."""
+    version (Plug-in Gait for a Plug-in Gait marker set). Every output names the model:
+    a last column `model` in the tables (Parquet: also its metadata), the FUZZYGAIT:MODEL
+    parameter in the C3D."""
     from fuzzygait.io.tables import check_table_path
-    from fuzzygait.workflows.angles import AngleOutputs, angles_to_files
+    from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
 
     with user_errors():
         for path, option in ((out_table, "--out"), (cycles, "--cycles")):
@@ -207,9 +238,10 @@ def angles(
                 check_table_path(path, option)
         if c3d_out is not None and c3d_out.suffix.lower() != ".c3d":
             raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
+        output_suffix(suffix, "cgm1.0")  # checked before any work
         run, written = angles_to_files(
             dynamic,
-            AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out),
+            AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out, suffix=suffix),
             static=static,
             subject_file=subject,
             preprocessing=preprocessing.preprocessing(),

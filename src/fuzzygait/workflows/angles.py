@@ -1,26 +1,39 @@
 """The joint-angle pipeline shared by the CLI, the batch report and notebooks.
 
 read C3D -> fill gaps -> low-pass -> subject parameters (file, or PROCESSING group) ->
-static calibration (optional) -> Plug-in Gait lower body -> gait events -> cycles.
+static calibration (optional; or the subject file's cluster calibration) -> a CGM
+version's lower body -> gait events -> cycles.  Every file written names the model
+version (:class:`AngleOutputs`).
 """
 
 from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait import __version__
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
+from fuzzygait.io.calibration_table import sidecar_path
 from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.io.tables import write_table
-from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, static_calibration
+from fuzzygait.kinematics import (
+    ALL_ANGLE_NAMES,
+    ANGLE_NAMES,
+    FOREFOOT_ANGLE_NAMES,
+    CGMResult,
+    compute_lower_body,
+    static_calibration,
+)
+from fuzzygait.kinematics.calibration_file import StoredCalibration, read_stored_calibration
 from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
 from fuzzygait.kinematics.kad import knee_method
 from fuzzygait.kinematics.versions import model_version, supported_version
@@ -28,6 +41,8 @@ from fuzzygait.mocap import fill_trial_gaps, filter_trial
 from fuzzygait.mocap.gaps import Gap, Method
 
 AXES = ("X", "Y", "Z")
+#: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
+MAX_LABEL = 32
 #: Marker diameters (mm) taken as plausible (the subject parameters' check).
 MARKER_DIAMETER_RANGE = (1.0, 40.0)
 
@@ -89,24 +104,42 @@ class AnglesRun:
     event_source: str
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def model(self) -> str:
+        """The model version that computed the angles (``"cgm1.0"``, ``"cgm2.3"``, ...)."""
+        return self.result.model
+
+    def angle_names(self) -> list[str]:
+        """The angle outputs of the tables: every Plug-in Gait angle, and the CGM 2.4
+        forefoot angles when the model computed (or tried) them."""
+        forefoot = [n for n in FOREFOOT_ANGLE_NAMES if n in self.result.angles or n in self.result.unavailable]
+        return [*ANGLE_NAMES, *forefoot]
+
     def angle_table(self) -> pd.DataFrame:
         """One row per frame: ``frame``, ``time`` (s), then ``<Angle>_X/Y/Z`` in degrees
-        for every Plug-in Gait angle (NaN where it could not be computed)."""
+        for every angle of :meth:`angle_names` (NaN where it could not be computed);
+        ``attrs["model"]`` the model version."""
         columns: dict[str, np.ndarray] = {"frame": self.trial.frames, "time": self.trial.times}
         nan = np.full((self.trial.n_frames, 3), np.nan)
-        for name in ANGLE_NAMES:
+        for name in self.angle_names():
             values = self.result.angles.get(name, nan)
             for k, axis in enumerate(AXES):
                 columns[f"{name}_{axis}"] = values[:, k]
-        return pd.DataFrame(columns)
+        table = pd.DataFrame(columns)
+        table.attrs["model"] = self.model
+        return table
 
     def cycle_table(self) -> pd.DataFrame:
         """Gait-cycle-normalised angles, long format (angle, side, cycle, percent, value)."""
-        return normalised_angle_table(self.result.angles, self.trial, self.events)
+        table = normalised_angle_table(self.result.angles, self.trial, self.events)
+        table.attrs["model"] = self.model
+        return table
 
     def cycle_statistics(self) -> pd.DataFrame:
         """Mean and SD over cycles per angle component and percent of the cycle."""
-        return mean_sd_table(self.cycle_table())
+        table = mean_sd_table(self.cycle_table())
+        table.attrs["model"] = self.model
+        return table
 
 
 def resolve_subject(
@@ -198,7 +231,8 @@ def run_angles(
     Args:
         dynamic: the walking trial (path or :class:`Trial`).
         static: static calibration trial; without it the static offsets of the subject
-            parameters are used as they are.
+            parameters are used as they are, and a cluster model (CGM 2.3+) takes its
+            cluster calibration from ``subject_file`` (written by ``fuzzygait calibrate``).
         subject_file: ``.toml`` or ``.vsk``; without it the dynamic trial's PROCESSING
             group.
         preprocessing: gap filling and filter options (the static trial: gap filling
@@ -206,23 +240,38 @@ def run_angles(
         flat_foot: static calibration with the flat-foot option (uses SoleDelta).
         marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
         model: a model version (:data:`fuzzygait.kinematics.versions.MODEL_VERSIONS`) or
-            ``"auto"``: the richest the markers support (the choice and why in the notes).
+            ``"auto"``: the richest the markers support, or without ``static`` the model
+            of the subject file's cluster calibration (:func:`choose_model`).  The model
+            used and why is the first note.
+
+    Raises:
+        ParameterError: a cluster model with neither ``static`` nor a subject file
+            holding a cluster calibration (says what to give).
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
     trial, gaps = preprocessing.apply(raw)
     subject = resolve_subject(raw, subject_file, marker_diameter)
     notes = list(trial.notes)
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
-    if model == "auto":
-        version, why = supported_version(raw, static_trial)
-        model = version.name
-        notes.append(f"model {model} ({why})")
+    stored = StoredCalibration()
+    if static_trial is None and subject_file is not None:
+        stored = read_stored_calibration(subject_file)
+    model, why = choose_model(model, raw, static_trial, stored)
+    notes.append(f"model {model} ({why})")
     clusters = None
     if static_trial is not None:
         calibration = calibrate_static(static_trial, subject, preprocessing=preprocessing, flat_foot=flat_foot,
                                        model=model)  # fmt: skip
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
+    else:
+        if model_version(model).clusters:
+            clusters = stored_clusters(stored, subject_file, model)
+            notes.append(f"cluster calibration from {stored.source.name if stored.source else subject_file}"
+                         + (f" (static trial {stored.static})" if stored.static else ""))  # fmt: skip
+        if stored.model is not None and stored.model != model:
+            notes.append(f"{Path(subject_file or '').name} was calibrated for {stored.model}; "
+                         f"its offsets are used by {model} as they are")  # fmt: skip
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     notes += result.notes
     notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
@@ -232,13 +281,69 @@ def run_angles(
     return AnglesRun(raw, trial, subject, result, gaps, events, source, notes)
 
 
-def model_output_trial(run: AnglesRun) -> Trial:
+def choose_model(
+    model: str, dynamic: Trial, static: Trial | None, stored: StoredCalibration | None = None
+) -> tuple[str, str]:
+    """The model version to run on ``dynamic`` and why (a phrase for the notes).
+
+    ``model`` by name; ``"auto"``: with a static trial the richest version the markers
+    support (:func:`~fuzzygait.kinematics.versions.supported_version`); without one, the
+    version of the subject file's cluster calibration (``stored``) when it holds one,
+    else ``cgm1.0``.
+    """
+    if model != "auto":
+        return model_version(model).name, "given by name"
+    if static is None and stored is not None and stored.clusters is not None:
+        name = stored.model or ("cgm2.4" if stored.has_forefoot() else "cgm2.3")
+        where = stored.source.name if stored.source is not None else "the subject file"
+        return model_version(name).name, f"the model of the cluster calibration in {where}"
+    version, why = supported_version(dynamic, static)
+    return version.name, why
+
+
+def stored_clusters(
+    stored: StoredCalibration, subject_file: str | os.PathLike[str] | None, model: str
+) -> ClusterCalibration:
+    """The subject file's cluster calibration for the cluster model ``model``, or one
+    line saying what to give instead."""
+    version = model_version(model)
+    make = (f"give the static trial (--static STATIC.c3d), or calibrate once with `fuzzygait calibrate "
+            f"STATIC.c3d --model {version.name} --out CAL.toml` and use --subject CAL.toml")  # fmt: skip
+    if subject_file is None:
+        raise ParameterError(f"{version.name} tracks the thigh and shank clusters calibrated on a static trial: {make}")
+    if stored.clusters is None:
+        where = str(subject_file)
+        if Path(subject_file).suffix.lower() == ".vsk":
+            where += f" (no {sidecar_path(subject_file).name} beside it)"
+        raise ParameterError(f"{where}: no cluster calibration for {version.name}; {make}")
+    if version.forefoot and not stored.has_forefoot():
+        raise ParameterError(f"{stored.source}: its cluster calibration ({stored.model or 'cgm2.3'}) has no "
+                             f"forefoot for {version.name}; {make}")  # fmt: skip
+    return stored.clusters
+
+
+def output_suffix(suffix: str, model: str) -> str:
+    """The output-name suffix asked for: ``""`` none, ``"model"`` the version's pyCGM2
+    suffix (``"_CGM_2.3"``), else ``suffix`` itself (letters, digits, ``_ . -``)."""
+    if suffix == "model":
+        return model_version(model).suffix
+    longest = max(map(len, ALL_ANGLE_NAMES))
+    if suffix and not (re.fullmatch(r"[A-Za-z0-9_.\-]+", suffix) and len(suffix) <= MAX_LABEL - longest):
+        raise FuzzyGaitError(f"--suffix {suffix!r}: use up to {MAX_LABEL - longest} letters, digits, '_', '.' "
+                             "or '-' (e.g. _CGM_2.3; C3D labels hold 32 characters), or 'model'")  # fmt: skip
+    return suffix
+
+
+def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
     """The pre-processed trial with the computed angles and virtual markers as model
-    outputs, the subject parameters used and the events (for ``--c3d-out``)."""
+    outputs, the subject parameters used and the events (for ``--c3d-out``).  The angle
+    outputs keep Vicon's names (``LKneeAngles``) with ``suffix`` appended
+    (:func:`output_suffix`); virtual markers and joint centres are not suffixed."""
     out = run.trial.with_markers(run.trial.markers)
+    suffix = output_suffix(suffix, run.model)
     for name, values in run.result.angles.items():
-        out.outputs[name] = values
-        out.output_kinds[name] = "angle"
+        out.outputs[name + suffix] = values
+        out.output_kinds[name + suffix] = "angle"
     for name, values in run.result.virtual_markers.items():
         if name not in out.marker_labels:
             out.outputs[name] = values
@@ -248,27 +353,51 @@ def model_output_trial(run: AnglesRun) -> Trial:
     return out
 
 
+def model_parameters(run: AnglesRun, suffix: str = "") -> dict[str, dict[str, str]]:
+    """The C3D parameters naming the model of a run's outputs: group ``FUZZYGAIT``,
+    ``MODEL`` (``"cgm2.3"``), ``VERSION`` of fuzzygait and, when the angle outputs have
+    one, their ``SUFFIX`` (an empty text parameter reads back as no value)."""
+    group = {"MODEL": run.model, "VERSION": __version__}
+    if output_suffix(suffix, run.model):
+        group["SUFFIX"] = output_suffix(suffix, run.model)
+    return {"FUZZYGAIT": group}
+
+
+def table_metadata(run: AnglesRun) -> dict[str, str]:
+    """What the angle tables say about themselves: ``model`` and ``fuzzygait`` version."""
+    return {"model": run.model, "fuzzygait": __version__}
+
+
 
 @dataclass(frozen=True)
 class AngleOutputs:
     """Files to write from a run (each optional): the angles per frame (``table``, .csv or
     .parquet), their mean and SD over gait cycles (``cycles``) and the model-output C3D
-    (``c3d``, see :func:`model_output_trial`)."""
+    (``c3d``, see :func:`model_output_trial`; its angle outputs named with ``suffix``,
+    :func:`output_suffix`).
+
+    Each names the model version: the tables in a last constant column ``model`` (and
+    ``fuzzygait``, the version; Parquet also in its metadata, :func:`fuzzygait.io.tables.write_table`),
+    the C3D in its ``FUZZYGAIT`` parameter group (:func:`model_parameters`).
+    """
 
     table: Path | None = None
     cycles: Path | None = None
     c3d: Path | None = None
+    suffix: str = ""
 
     def write(self, run: AnglesRun) -> list[Path]:
         """Write the files asked for (folders created); returns them in that order."""
         written = []
+        metadata = table_metadata(run)
         for path, make in ((self.table, run.angle_table), (self.cycles, run.cycle_statistics)):
             if path is not None:
                 path.parent.mkdir(parents=True, exist_ok=True)
-                written.append(write_table(make(), path))
+                written.append(write_table(make(), path, metadata=metadata, columns=("model",)))
         if self.c3d is not None:
             self.c3d.parent.mkdir(parents=True, exist_ok=True)
-            write_c3d(model_output_trial(run), self.c3d)
+            trial = model_output_trial(run, self.suffix)
+            write_c3d(trial, self.c3d, text_parameters=model_parameters(run, self.suffix))
             written.append(self.c3d)
         return written
 

@@ -2,19 +2,27 @@
 
 The static trial is pre-processed and calibrated by the code ``angles --static`` runs
 (:func:`fuzzygait.workflows.angles.calibrate_static`), so that a walking trial processed
-with the written file gives the same angles as with the static trial itself.
+with the written file gives the same angles as with the static trial itself.  For a
+cluster model (CGM 2.3+) the file also holds the cluster calibration
+(:mod:`fuzzygait.kinematics.calibration_file`): in a TOML file its ``[calibration]``
+table, beside a ``.vsk`` (which has no place for it) a sidecar ``CAL.clusters.toml``
+(:mod:`fuzzygait.io.calibration_table`).
 """
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzygait import __version__
-from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.io import Trial, read_c3d
+from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidecar
 from fuzzygait.io.subject import write_subject
-from fuzzygait.io.tomlfile import TomlValue
+from fuzzygait.io.tomlfile import TomlData
+from fuzzygait.kinematics.calibration_file import cluster_table
+from fuzzygait.kinematics.versions import CLUSTER_MARKERS, FOREFOOT_MARKERS, MEDIAL_MARKERS, model_version
 from fuzzygait.workflows.angles import (
     DEFAULT_PREPROCESSING,
     Preprocessing,
@@ -33,6 +41,48 @@ def check_subject_path(path: Path, option: str) -> None:
         raise FuzzyGaitError(f"{path}: {option} must name a .toml or .vsk subject file")
 
 
+def _has_all(trial: Trial, names: tuple[str, ...]) -> bool:
+    return all(trial.has_marker(side + name) for side in "LR" for name in names)
+
+
+def calibration_model(static: Trial, model: str = "auto") -> tuple[str, str]:
+    """The model version to calibrate for, and why.
+
+    ``model`` by name; ``"auto"`` looks at the static trial alone (the walking trials are
+    not known yet): thigh/shank clusters (THAP, THAD, TIAP, TIAD) with the medial KNM and
+    MED on both sides -- the CGM 2.3 static marker set -- calibrate the cluster model
+    (``cgm2.4`` when FMH/SMH/VMH are there too and 2.4 is implemented); otherwise
+    Plug-in Gait (``cgm1.0``, whose offsets ``cgm1.1`` and ``cgm2.1`` read as they are).
+    """
+    if model != "auto":
+        return model_version(model).name, "given by name"
+    if not (_has_all(static, CLUSTER_MARKERS) and _has_all(static, MEDIAL_MARKERS)):
+        return "cgm1.0", "static trial without thigh/shank clusters and KNM/MED"
+    if _has_all(static, FOREFOOT_MARKERS) and _implemented("cgm2.4"):
+        return "cgm2.4", "static trial with clusters, KNM/MED and FMH/SMH/VMH"
+    return "cgm2.3", "static trial with thigh/shank clusters and KNM/MED"
+
+
+def _implemented(name: str) -> bool:
+    try:
+        model_version(name)
+    except ParameterError:
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class CalibrationFile:
+    """What :func:`calibrate_to_file` did: the calibration, its model and why, and the
+    files written (and a stale sidecar removed, if any)."""
+
+    calibration: StaticCalibration
+    model: str
+    why: str
+    files: list[Path] = field(default_factory=list)
+    removed: list[Path] = field(default_factory=list)
+
+
 def calibrate_to_file(
     static: str | os.PathLike[str] | Trial,
     out_file: str | os.PathLike[str],
@@ -41,12 +91,18 @@ def calibrate_to_file(
     marker_diameter: float | None = None,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool = False,
-) -> StaticCalibration:
+    model: str = "auto",
+) -> CalibrationFile:
     """Calibrate the subject on the static trial and write every parameter to ``out_file``
-    (``.toml`` or ``.vsk``, atomically; the method, foot flat and the static trial noted
-    in it).  A ``.vsk`` written from a ``.vsk`` subject file is that file with the values
-    updated (skeleton and marker set kept, as Nexus' own calibration does); from a TOML
-    file or the PROCESSING group it holds the parameters only.
+    (``.toml`` or ``.vsk``, atomically; the model, method, foot flat and the static trial
+    noted in it).  A ``.vsk`` written from a ``.vsk`` subject file is that file with the
+    values updated (skeleton and marker set kept, as Nexus' own calibration does); from a
+    TOML file or the PROCESSING group it holds the parameters only.
+
+    A cluster model's calibration goes into the TOML file's ``[calibration]`` table, or
+    for a ``.vsk`` into the sidecar ``<name>.clusters.toml`` beside it (written first);
+    a Plug-in Gait ``.vsk`` removes a sidecar of that name left by an earlier cluster
+    calibration to the same file (it no longer belongs to it).
 
     Args:
         static: the static trial (path or :class:`Trial`).
@@ -57,23 +113,45 @@ def calibrate_to_file(
         preprocessing: gap filling of the static trial (never low-passed, see
             :func:`fuzzygait.workflows.angles.calibrate_static`).
         flat_foot: Plug-in Gait's foot-flat option (uses ``SoleDelta``).
+        model: the model version to calibrate for, or ``"auto"`` (:func:`calibration_model`).
     """
     out_file = Path(out_file)
     check_subject_path(out_file, "--out")
     trial = static if isinstance(static, Trial) else read_c3d(static)
     subject = resolve_subject(trial, subject_file, marker_diameter)
-    calibration = calibrate_static(trial, subject, preprocessing=preprocessing, flat_foot=flat_foot)
+    name, why = calibration_model(trial, model)
+    calibration = calibrate_static(trial, subject, preprocessing=preprocessing, flat_foot=flat_foot, model=name)
     source = Path(subject_file).name if subject_file is not None else f"{trial.name} PROCESSING group"
+    static_name = Path(trial.name).name
+    title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
     comments = [
-        f"Plug-in Gait subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate`) "
-        f"from {Path(trial.name).name}, measurements from {source}.",
+        f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate --model {name}`) "
+        f"from {static_name}, measurements from {source}.",
         f"Method {calibration.method}, foot flat {'on' if flat_foot else 'off'}, "
         f"{calibration.subject.marker_diameter:g} mm markers.",
         "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
     ]
-    metadata: dict[str, TomlValue] = {"static": Path(trial.name).name, "method": calibration.method,
-                                      "flat_foot": flat_foot, "fuzzygait": __version__}  # fmt: skip
+    metadata: dict[str, TomlData] = {"model": name, "static": static_name, "method": calibration.method,
+                                     "flat_foot": flat_foot, "fuzzygait": __version__}  # fmt: skip
+    clusters = cluster_table(calibration.clusters) if calibration.clusters is not None else None
+    if clusters is not None:
+        comments.append("[calibration.clusters.*]: each tracking marker's mean static position (mm) in its "
+                        "segment's anatomical frame (= technical frame; origins KJC, AJC, vSMH), "
+                        "forefoot_joint_centres in the hindfoot frame (origin AJC).")  # fmt: skip
     out_file.parent.mkdir(parents=True, exist_ok=True)
     template = subject_file if subject_file is not None and Path(subject_file).suffix.lower() == ".vsk" else None
-    write_subject(calibration.subject, out_file, comments=comments, metadata=metadata, vsk_template=template)
-    return calibration
+    files, removed = [], []
+    if out_file.suffix.lower() == ".vsk":
+        sidecar = sidecar_path(out_file)
+        if clusters is not None:
+            files.append(write_calibration_sidecar(out_file, {**metadata, "subject_file": out_file.name, **clusters},
+                                                   comments[:1] + comments[-1:]))  # fmt: skip
+            metadata["clusters"] = sidecar.name
+        elif sidecar.is_file():
+            sidecar.unlink()
+            removed.append(sidecar)
+    elif clusters is not None:
+        metadata.update(clusters)
+    files.insert(0, write_subject(calibration.subject, out_file, comments=comments, metadata=metadata,
+                                  vsk_template=template))  # fmt: skip
+    return CalibrationFile(calibration, name, why, files, removed)

@@ -30,6 +30,7 @@ from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preproc
 
 __all__ = [
     "DEFAULT_SETTINGS",
+    "FUZZY_MODEL",
     "MarkerErrorAnalysis",
     "MarkerErrorSettings",
     "analyse_run",
@@ -38,6 +39,9 @@ __all__ = [
 ]
 
 Progress = Callable[[int, int], None]
+#: The model version of the fuzzy angles: the marker-error model
+#: (:mod:`fuzzygait.markererror.angle_model`) is Plug-in Gait's.
+FUZZY_MODEL = "cgm1.0"
 
 
 @dataclass
@@ -110,7 +114,8 @@ def analyse_run(
     """The fuzzy marker-error analysis of an already computed joint-angle run.
 
     ``progress(done, total)`` is called per angle component.  The dataset's ``trial``
-    attribute is the trial's file name; the notes are the run's plus one line on the
+    attribute is the trial's file name, ``model`` the model version of its angles
+    (:data:`FUZZY_MODEL`); the notes are the run's plus one line on the
     assumed errors.
     """
     options = settings.options()
@@ -120,6 +125,10 @@ def analyse_run(
         f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}"
     ]
     fuzzy.attrs["trial"] = Path(run.trial.name).name
+    fuzzy.attrs["model"] = FUZZY_MODEL
+    if run.result.model != FUZZY_MODEL:
+        notes.append(f"fuzzy angles by {FUZZY_MODEL} (the marker-error model is Plug-in Gait's), "
+                     f"the run's angles by {run.result.model}")  # fmt: skip
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)
 
 
