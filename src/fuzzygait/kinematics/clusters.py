@@ -2,8 +2,9 @@
 
 Static calibration (:func:`calibrate_clusters`): the static trial's anatomical frames
 are built as in :class:`~fuzzygait.kinematics.chain.LowerBodyChain` (Hara hip centres;
-with KNM/MED the knee/ankle centres on the KNE-KNM / ANK-MED lines, else the chord
-function).  Each tracking marker's position is expressed in its segment's anatomical
+the knee/ankle centres by the rule ``knee_ankle_centres`` of
+:mod:`fuzzygait.kinematics.knee_ankle`: on the KNE-KNM / ANK-MED lines, Plug-in Gait's
+chord, or pyCGM2's chord with THAP/TIAP).  Each tracking marker's position is expressed in its segment's anatomical
 frame (thigh: origin KJC; shank: the torsioned tibia, origin AJC) and averaged over the
 static frames (CGM 2.x has one tibia frame, the torsioned one, for knee, ankle and
 foot).  The anatomical frame *is* the technical frame: a separate marker-built
@@ -28,6 +29,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
 from fuzzygait.kinematics.forefoot import calibrate_forefoot
+from fuzzygait.kinematics.knee_ankle import calibration_chain, knee_ankle_rule
 from fuzzygait.kinematics.rigid import MIN_MARKERS, RigidFit, fit_rigid
 from fuzzygait.kinematics.vectors import to_lab, to_local
 
@@ -86,7 +88,7 @@ def _mean_local(frame: np.ndarray, origin: np.ndarray, points: np.ndarray) -> np
 
 
 def calibrate_clusters(
-    static: Trial, subject: SubjectParameters, use_medial_markers: bool | None = None, forefoot: bool = False
+    static: Trial, subject: SubjectParameters, knee_ankle_centres: str | None = None, forefoot: bool = False
 ) -> ClusterCalibration:
     """Each thigh and shank tracking marker in its segment's anatomical frame of the static
     trial (module docstring).
@@ -94,20 +96,21 @@ def calibrate_clusters(
     Args:
         static: the static trial, mm.
         subject: subject parameters (widths, leg lengths, marker diameter).
-        use_medial_markers: knee/ankle centres on the KNE-KNM / ANK-MED lines (True) or by
-            the chord function with THI/TIB (False); None: the medial lines when the static
-            trial has KNM and MED on both sides.
+        knee_ankle_centres: ``"medial"`` (on the KNE-KNM / ANK-MED lines), ``"chord"``
+            (Plug-in Gait's chord with THI/HJC, TIB/KJC) or ``"pycgm2"`` (the chord with
+            THI/THAP, TIB/TIAP, as pyCGM2's CGM 2.3); None: medial when the static trial
+            has KNM and MED on both sides, else chord
+            (:mod:`fuzzygait.kinematics.knee_ankle`).
         forefoot: also calibrate the CGM 2.4 forefoots (:func:`~fuzzygait.kinematics.forefoot.calibrate_forefoot`;
             ``subject`` must then carry this static trial's foot offsets).
 
     Raises:
         MarkerError: a segment with fewer than three tracking markers in the static trial
             (names the ones missing); with ``forefoot`` a forefoot marker missing.
+        ParameterError: an unknown ``knee_ankle_centres``.
     """
-    medial = use_medial_markers
-    if medial is None:
-        medial = all(static.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
-    chain = LowerBodyChain(static, subject, use_medial_markers=medial, hip="hara", single_tibia=True)
+    rule = knee_ankle_rule(static, knee_ankle_centres)
+    chain = calibration_chain(static, subject, rule, hip="hara", single_tibia=True)
     segments: dict[tuple[str, str], SegmentCluster] = {}
     forefoot_joint_centres: dict[str, np.ndarray] = {}
     for side in "LR":

@@ -38,6 +38,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method
+from fuzzygait.kinematics.knee_ankle import RULE_MARKERS, calibration_chain, knee_ankle_rule
 from fuzzygait.kinematics.segments import foot_offsets
 from fuzzygait.kinematics.vectors import unit
 from fuzzygait.kinematics.versions import model_version
@@ -82,7 +83,12 @@ def check_upright(static: Trial, chain: LowerBodyChain, seen: np.ndarray) -> Non
 
 
 def static_calibration(
-    static: Trial, subject: SubjectParameters, *, flat_foot: bool = False, model: str = "cgm1.0"
+    static: Trial,
+    subject: SubjectParameters,
+    *,
+    flat_foot: bool = False,
+    model: str = "cgm1.0",
+    knee_ankle_centres: str | None = None,
 ) -> SubjectParameters:
     """Calibrate the foot offsets (and the inter-ASIS distance if unknown) on a static trial.
 
@@ -96,6 +102,10 @@ def static_calibration(
             the Hara hip centres and, for ``cgm2.3`` with KNM/MED in the static trial,
             the knee/ankle centres on the medial lines.  The knee alignment device is
             Plug-in Gait's (``cgm1.0``) only.
+        knee_ankle_centres: a cluster model's knee/ankle centre rule (``"medial"``,
+            ``"chord"``, ``"pycgm2"``; None: medial with KNM/MED, else chord), as its
+            cluster calibration's (:mod:`fuzzygait.kinematics.knee_ankle`); the other
+            models use the chord.
 
     Returns:
         A copy of ``subject`` with ``static_plant_flex`` and ``static_rot_off`` (rad) set
@@ -114,6 +124,12 @@ def static_calibration(
     subject.validate()
     version = model_version(model)
     method = knee_method(static)
+    if not version.clusters and knee_ankle_centres not in (None, "chord"):
+        raise ParameterError(
+            f"{version.name} places the knee and ankle centres by the chord; "
+            f"knee/ankle centres {knee_ankle_centres!r} are a cluster model's (cgm2.3, cgm2.4)"
+        )
+    rule = knee_ankle_rule(static, knee_ankle_centres) if version.clusters else "chord"
     if method != "plain" and version.name != "cgm1.0":
         raise ParameterError(
             f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use --model cgm1.0 "
@@ -124,6 +140,7 @@ def static_calibration(
         labels = [m for m in labels if m[1:] != "KNE"] + [side + m for side in "LR" for m in KAD_MARKERS]
     if method == "KAD+MED":
         labels += ["LMED", "RMED"]
+    labels += [side + m for side in "LR" for m in RULE_MARKERS.get(rule, ())]
     missing = [m for m in labels if not static.has_marker(m)]
     if missing:
         raise MarkerError(
@@ -141,9 +158,8 @@ def static_calibration(
         calibrated = replace(subject, inter_asis_distance=iad).validate()
 
     static_foot = "flat" if flat_foot else "heel"
-    medial = version.clusters and all(static.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
-    chain: LowerBodyChain = LowerBodyChain(static, calibrated, static_foot=static_foot, hip=version.hip,
-                                           use_medial_markers=medial, single_tibia=version.single_tibia)  # fmt: skip
+    chain: LowerBodyChain = calibration_chain(static, calibrated, rule, static_foot=static_foot, hip=version.hip,
+                                              single_tibia=version.single_tibia)  # fmt: skip
     if method != "plain":
         knee_chain = StaticKneeChain(static, calibrated, static_foot=static_foot)
         for side in "LR":
