@@ -27,7 +27,7 @@ from fuzzygait.kinematics.joint_centres import chord_joint_centre
 from fuzzygait.kinematics.knee_ankle import ClusterChordChain, knee_ankle_rule
 from fuzzygait.kinematics.segments import side_sign
 from fuzzygait.synthetic.cgm24 import make_cgm24_static, make_cgm24_walking
-from fuzzygait.workflows.angles import resolve_subject
+from fuzzygait.workflows.angles import calibrate_static, resolve_subject
 from support import needs_shared, shared_file
 
 CGM2 = "cgm2/qualisys-cgm24-input"
@@ -210,6 +210,18 @@ def test_pycgm2_rule_puts_the_centres_on_the_thap_tiap_chord(synthetic) -> None:
         ajc = chord_joint_centre(m(side + "TIB"), m(side + "TIAP"), m(side + "ANK"), params.ankle_width / 2 + r)
         assert np.abs(tracked.kjc(side) - kjc).max() < 1e-6 and np.abs(tracked.ajc(side) - ajc).max() < 1e-6
         assert np.linalg.norm(medial.kjc(side) - kjc, axis=1).min() > 1.0
+
+
+def test_calibrate_static_takes_the_rule_and_names_it(synthetic) -> None:
+    static, _, subject = synthetic
+    run = calibrate_static(static, subject, model="cgm2.3", knee_ankle_centres="pycgm2")
+    assert run.method == "cgm2.3 clusters, pyCGM2 THAP/TIAP chord knee/ankle centres"
+    direct = calibrate_clusters(static, run.subject, "pycgm2")
+    assert run.clusters is not None
+    for key, cluster in direct.segments.items():
+        assert np.array_equal(run.clusters.segments[key].local, cluster.local), key
+    assert run.subject == static_calibration(static, subject, model="cgm2.3", knee_ankle_centres="pycgm2")
+    assert calibrate_static(static, subject, model="cgm2.3").method == "cgm2.3 clusters, KNM/MED knee/ankle centres"
 
 
 def test_unknown_rule_and_a_rule_for_plug_in_gait_are_refused(synthetic) -> None:

@@ -36,6 +36,7 @@ from fuzzygait.kinematics import (
 from fuzzygait.kinematics.calibration_file import StoredCalibration, read_stored_calibration
 from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
 from fuzzygait.kinematics.kad import knee_method
+from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial
 from fuzzygait.mocap.gaps import Gap, Method
@@ -193,6 +194,7 @@ def calibrate_static(
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool = False,
     model: str = "cgm1.0",
+    knee_ankle_centres: str | None = None,
 ) -> StaticCalibration:
     """Fill the static trial's gaps as the walking trials' and calibrate ``subject`` on it
     (:func:`fuzzygait.kinematics.static_calibration`: every offset Nexus stores after a
@@ -202,17 +204,18 @@ def calibrate_static(
     says: every offset is a mean over the standing frames already, and a Butterworth
     over a short standing trial only adds its edge transients (measured on Nexus'
     foot-flat static trial, 6 Hz: StaticPlantFlex 1.3e-4 rad off Nexus' value,
-    unfiltered 1e-8 rad).
+    unfiltered 1e-8 rad).  ``knee_ankle_centres``: a cluster model's knee/ankle centre
+    rule (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when present, else chord).
     """
     trial = static if isinstance(static, Trial) else read_c3d(static)
     clean, _ = replace(preprocessing, filter=False).apply(trial)
-    calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model)
+    calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
+                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     method = knee_method(clean)
     clusters = None
     if model_version(model).clusters:
-        clusters = calibrate_clusters(clean, calibrated, forefoot=model_version(model).forefoot)
-        medial = all(clean.has_marker(side + m) for side in "LR" for m in ("KNM", "MED"))
-        method = f"{model} clusters, {'KNM/MED' if medial else 'chord'} knee/ankle centres"
+        clusters = calibrate_clusters(clean, calibrated, knee_ankle_centres, forefoot=model_version(model).forefoot)
+        method = f"{model} clusters, {RULE_NAMES[knee_ankle_rule(clean, knee_ankle_centres)]} knee/ankle centres"
     return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters)
 
 
