@@ -139,3 +139,22 @@ def test_c3d_suffix_is_checked_before_work_and_applied(tmp_path: Path) -> None:
     assert "note: model cgm1.0 (given by name)" in result.stdout
     model = read_c3d(tmp_path / "m.c3d")
     assert model.output_kinds["LKneeAngles_CGM_1.0"] == "angle" and "LKneeAngles" not in model.outputs
+
+
+def test_knee_ankle_centre_rule_reaches_the_cluster_calibration(tmp_path: Path) -> None:
+    """On the synthetic CGM 2.4 session the KNM/MED rule (default) and the chord put the
+    knee centre where it is (both recover the truth); pyCGM2's THAP chord does not."""
+    session = [SAMPLE_DATA / "cgm24_walking.c3d", "--static", SAMPLE_DATA / "cgm24_static.c3d", "--no-filter"]
+    truth = pd.read_csv(SAMPLE_DATA / "cgm24_walking_truth_angles.csv")
+    knee = {}
+    for rule in ("medial", "chord", "pycgm2"):
+        out = tmp_path / f"{rule}.csv"
+        result = run("angles", *session, "--knee-ankle-centres", rule, "--out", out)
+        assert result.returncode == 0, result.stderr
+        assert "model cgm2.4" in result.stdout
+        knee[rule] = pd.read_csv(out)["LKneeAngles_X"].to_numpy() - truth["LKneeAngles_X"].to_numpy()
+    assert "pyCGM2 THAP/TIAP chord knee/ankle centres" in result.stdout
+    assert np.abs(knee["medial"]).max() < 0.01 and np.abs(knee["chord"]).max() < 0.01
+    assert np.abs(knee["pycgm2"]).max() > 0.5
+    bad = run("angles", *session, "--knee-ankle-centres", "lateral")
+    assert_one_line_error(bad, "--knee-ankle-centres 'lateral'", "medial, chord, pycgm2")

@@ -24,12 +24,14 @@ from fuzzygait.cli.options import (
     DEFAULT_PREPROCESSING,
     CalibrationOptions,
     FlatFootOption,
+    KneeAnkleCentresOption,
     MarkerDiameterOption,
     MarkerErrorOptions,
     MaxGapOption,
     PreprocessingOptions,
     StaticOption,
     SubjectOption,
+    check_knee_ankle_centres,
     parse_alphas,
     parse_angles,
     with_option_groups,
@@ -143,10 +145,12 @@ def calibrate(
         typer.Option(
             "--model",
             help="Model to calibrate for: cgm1.0 (Plug-in Gait; its offsets serve cgm1.1 and cgm2.1 too), "
-            "cgm2.3 (also the thigh/shank clusters) or auto: cgm2.3 when the static trial has the clusters "
-            "(THAP, THAD, TIAP, TIAD) and KNM/MED, else cgm1.0.",
+            "cgm2.3 (also the thigh/shank clusters), cgm2.4 (also the forefoot) or auto: a cluster model when "
+            "the static trial has the clusters (THAP, THAD, TIAP, TIAD) and KNM/MED (cgm2.4 with FMH/SMH/VMH), "
+            "else cgm1.0.",
         ),
     ] = "auto",
+    knee_ankle_centres: KneeAnkleCentresOption = None,
 ) -> None:
     """Static calibration to a subject file: every value a Nexus static run stores
     (ThighRotation, ShankRotation, TibialTorsion, AnkleAbAdd, StaticPlantFlex,
@@ -159,9 +163,10 @@ def calibrate(
     from fuzzygait.workflows.calibrate import calibrate_to_file
 
     with user_errors():
+        check_knee_ankle_centres(knee_ankle_centres)
         written = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
                                     preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot,
-                                    model=model)  # fmt: skip
+                                    model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     calibration = written.calibration
     out.print(f"model {written.model} ({written.why})", markup=False)
     out.print(calibration.describe(), markup=False)
@@ -212,8 +217,9 @@ def angles(
         typer.Option(
             "--model",
             help="cgm1.0 (Plug-in Gait), cgm1.1, cgm2.1 (Hara hips), cgm2.3 (clusters; needs --static, or "
-            "--subject written by `calibrate --model cgm2.3`) or auto: the richest the markers support "
-            "(without --static: the model of the --subject file's cluster calibration, if any).",
+            "--subject written by `calibrate --model cgm2.3`), cgm2.4 (also the forefoot: ForeFootAngles) or "
+            "auto: the richest the markers support (without --static: the model of the --subject file's "
+            "cluster calibration, if any).",
         ),
     ] = "auto",
     suffix: Annotated[
@@ -224,6 +230,7 @@ def angles(
             "pyCGM2 suffix); default none: Vicon's names (LKneeAngles).",
         ),
     ] = "",
+    knee_ankle_centres: KneeAnkleCentresOption = None,
 ) -> None:
     """Lower-body joint angles (degrees) of a walking trial by a Conventional Gait Model
     version (Plug-in Gait for a Plug-in Gait marker set). Every output names the model:
@@ -239,6 +246,7 @@ def angles(
         if c3d_out is not None and c3d_out.suffix.lower() != ".c3d":
             raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
         output_suffix(suffix, "cgm1.0")  # checked before any work
+        check_knee_ankle_centres(knee_ankle_centres)
         run, written = angles_to_files(
             dynamic,
             AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out, suffix=suffix),
@@ -248,6 +256,7 @@ def angles(
             flat_foot=flat_foot,
             marker_diameter=marker_diameter,
             model=model,
+            knee_ankle_centres=knee_ankle_centres,
         )
     _print_run_summary(run)
     for path in written:

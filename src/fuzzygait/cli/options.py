@@ -39,6 +39,25 @@ MarkerDiameterOption = Annotated[
 FlatFootOption = Annotated[
     bool, typer.Option("--flat-foot", help="Static calibration with Plug-in Gait's foot flat (uses SoleDelta).")
 ]
+KneeAnkleCentresOption = Annotated[
+    str | None,
+    typer.Option(
+        "--knee-ankle-centres", metavar="RULE",
+        help="Cluster models (cgm2.3, cgm2.4): where the static calibration puts the knee and ankle centres: "
+        "medial (on the KNE-KNM / ANK-MED lines), chord (Plug-in Gait's, with THI/TIB) or pycgm2 (the chord "
+        "with THAP/TIAP as pyCGM2's CGM 2.3 does); default: medial when the static trial has KNM/MED, else chord.",
+    ),
+]  # fmt: skip
+
+
+def check_knee_ankle_centres(rule: str | None) -> None:
+    """One clear error, before any work, for an unknown ``--knee-ankle-centres``."""
+    from fuzzygait.kinematics.knee_ankle import KNEE_ANKLE_CENTRES
+
+    if rule is not None and rule not in KNEE_ANKLE_CENTRES:
+        raise FuzzyGaitError(f"--knee-ankle-centres {rule!r}: choose one of {', '.join(KNEE_ANKLE_CENTRES)}")
+
+
 ErrorsOption = Annotated[
     Path | None, typer.Option("--errors", help="Marker error sizes (.toml); default: thesis Table 3.1.")
 ]

@@ -228,6 +228,7 @@ def run_angles(
     flat_foot: bool = False,
     marker_diameter: float | None = None,
     model: str = "cgm1.0",
+    knee_ankle_centres: str | None = None,
 ) -> AnglesRun:
     """Run the joint-angle pipeline on one dynamic trial.
 
@@ -246,6 +247,9 @@ def run_angles(
             ``"auto"``: the richest the markers support, or without ``static`` the model
             of the subject file's cluster calibration (:func:`choose_model`).  The model
             used and why is the first note.
+        knee_ankle_centres: a cluster model's knee/ankle centre rule in the static
+            calibration (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when the
+            static trial has them, else the chord).
 
     Raises:
         ParameterError: a cluster model with neither ``static`` nor a subject file
@@ -264,7 +268,7 @@ def run_angles(
     clusters = None
     if static_trial is not None:
         calibration = calibrate_static(static_trial, subject, preprocessing=preprocessing, flat_foot=flat_foot,
-                                       model=model)  # fmt: skip
+                                       model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
     else:
@@ -415,8 +419,10 @@ def angles_to_files(
     flat_foot: bool = False,
     marker_diameter: float | None = None,
     model: str = "cgm1.0",
+    knee_ankle_centres: str | None = None,
 ) -> tuple[AnglesRun, list[Path]]:
     """:func:`run_angles` and then ``outputs.write``: the run and the files written."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     flat_foot=flat_foot, marker_diameter=marker_diameter, model=model)  # fmt: skip
+                     flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
+                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     return run, outputs.write(run)

@@ -92,6 +92,7 @@ def calibrate_to_file(
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool = False,
     model: str = "auto",
+    knee_ankle_centres: str | None = None,
 ) -> CalibrationFile:
     """Calibrate the subject on the static trial and write every parameter to ``out_file``
     (``.toml`` or ``.vsk``, atomically; the model, method, foot flat and the static trial
@@ -114,13 +115,17 @@ def calibrate_to_file(
             :func:`fuzzygait.workflows.angles.calibrate_static`).
         flat_foot: Plug-in Gait's foot-flat option (uses ``SoleDelta``).
         model: the model version to calibrate for, or ``"auto"`` (:func:`calibration_model`).
+        knee_ankle_centres: a cluster model's knee/ankle centre rule
+            (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when the static trial
+            has them, else the chord).
     """
     out_file = Path(out_file)
     check_subject_path(out_file, "--out")
     trial = static if isinstance(static, Trial) else read_c3d(static)
     subject = resolve_subject(trial, subject_file, marker_diameter)
     name, why = calibration_model(trial, model)
-    calibration = calibrate_static(trial, subject, preprocessing=preprocessing, flat_foot=flat_foot, model=name)
+    calibration = calibrate_static(trial, subject, preprocessing=preprocessing, flat_foot=flat_foot, model=name,
+                                   knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     source = Path(subject_file).name if subject_file is not None else f"{trial.name} PROCESSING group"
     static_name = Path(trial.name).name
     title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
