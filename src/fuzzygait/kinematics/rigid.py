@@ -113,18 +113,22 @@ def _collinear(local: np.ndarray, weights: np.ndarray, visible: np.ndarray) -> n
     return flags[np.ravel(which)]
 
 
-def _cofactor(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cofactor matrices (columns b×c, c×a, a×b of the columns a, b, c) and determinants
-    of ``(n, 3, 3)`` matrices: ``x⁻ᵀ = cofactor / det``."""
-    cof = np.empty_like(x)
-    for col, (j, k) in enumerate(((1, 2), (2, 0), (0, 1))):
-        for row, (p, q) in enumerate(((1, 2), (2, 0), (0, 1))):
-            cof[:, row, col] = x[:, p, j] * x[:, q, k] - x[:, q, j] * x[:, p, k]
-    return cof, np.einsum("ni,ni->n", x[:, :, 0], cof[:, :, 0])
+Entries = list[list[np.ndarray]]
+
+
+def _cofactor(a: Entries) -> tuple[Entries, np.ndarray]:
+    """Cofactor matrix and determinant of 3×3 matrices given entry-wise (``a[i][j]`` a
+    1-D array over the matrices, contiguous: numpy's fast path): ``a⁻ᵀ = cof / det``."""
+    def minor(i: int, j: int) -> np.ndarray:
+        p, q, r, s = (i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3
+        return a[p][r] * a[q][s] - a[p][s] * a[q][r]
+
+    cof = [[minor(i, j) for j in range(3)] for i in range(3)]
+    return cof, a[0][0] * cof[0][0] + a[0][1] * cof[0][1] + a[0][2] * cof[0][2]
 
 
 #: Scaled Newton iterations of :func:`polar_rotation` (quadratic convergence: condition
-#: numbers up to ~1e6 settle within 10) and the tolerance that counts as settled.
+#: numbers up to ~1e6 settle within 10) and the entry change that counts as settled.
 POLAR_ITERATIONS = 12
 POLAR_TOLERANCE = 1e-13
 
@@ -134,34 +138,34 @@ def polar_rotation(covariance: np.ndarray) -> np.ndarray:
     matrix in ``(n, 3, 3)`` ``covariance`` (the least-squares rotation of
     :func:`fit_rigid`), by scaled Newton iteration for the polar factor where ``det > 0``
     and by the SVD elsewhere (module docstring)."""
-    x = np.array(covariance, dtype=float)
-    n = x.shape[0]
-    _, det = _cofactor(x)
-    newton = np.isfinite(det) & (det > 0.0)
-    settled = np.zeros(n, dtype=bool)
-    y = x[newton]
-    for _ in range(POLAR_ITERATIONS):
-        if not len(y):
+    covariance = np.asarray(covariance, dtype=float)
+    entries = np.ascontiguousarray(np.moveaxis(covariance, 0, -1))  # (3, 3, n)
+    _, det = _cofactor([[entries[i, j] for j in range(3)] for i in range(3)])
+    positive = np.isfinite(det) & (det > 0.0)
+    newton = np.flatnonzero(positive)
+    block = entries if positive.all() else entries[:, :, newton]
+    a = [[block[i, j] for j in range(3)] for i in range(3)]
+    out = np.empty_like(covariance)
+    previous = a
+    for _ in range(POLAR_ITERATIONS if len(newton) else 0):
+        cof, d = _cofactor(a)
+        inverse_t = [[cof[i][j] / d for j in range(3)] for i in range(3)]
+        gamma = (sum(v * v for row in inverse_t for v in row) / sum(v * v for row in a for v in row)) ** 0.25
+        previous, a = a, [[0.5 * (gamma * a[i][j] + inverse_t[i][j] / gamma) for j in range(3)] for i in range(3)]
+        if max(float(np.abs(a[i][j] - previous[i][j]).max()) for i in range(3) for j in range(3)) < POLAR_TOLERANCE:
             break
-        cof, d = _cofactor(y)
-        inv_t = cof / d[:, None, None]
-        gamma = (np.einsum("nij,nij->n", inv_t, inv_t) / np.einsum("nij,nij->n", y, y)) ** 0.25
-        y_next = 0.5 * (gamma[:, None, None] * y + inv_t / gamma[:, None, None])
-        change = np.abs(y_next - y).max(axis=(1, 2))
-        y = y_next
-        if change.max() < POLAR_TOLERANCE:
-            break
-    if len(y):
-        x[newton] = y
-        settled[newton] = np.abs(y - _cofactor(y)[0]).max(axis=(1, 2)) < 1e-9  # a rotation is its cofactor
+    settled = np.zeros(out.shape[0], dtype=bool)
+    if len(newton):
+        result = np.array(a)  # (3, 3, k)
+        settled[newton] = np.abs(result - np.array(previous)).max(axis=(0, 1)) < 1e-9
+        out[newton] = np.moveaxis(result, -1, 0)
     rest = ~settled
     if rest.any():
-        u, _, vt = np.linalg.svd(np.nan_to_num(np.asarray(covariance, dtype=float)[rest]))
-        d = np.sign(np.linalg.det(u @ vt))
-        d = np.where(d == 0.0, 1.0, d)
-        u[:, :, 2] *= d[:, None]
-        x[rest] = u @ vt
-    return x
+        u, _, vt = np.linalg.svd(np.nan_to_num(covariance[rest]))
+        sign = np.sign(np.linalg.det(u @ vt))
+        u[:, :, 2] *= np.where(sign == 0.0, 1.0, sign)[:, None]
+        out[rest] = u @ vt
+    return out
 
 
 def frame_from_points(origin: np.ndarray, along: np.ndarray, plane: np.ndarray) -> np.ndarray:
