@@ -289,7 +289,9 @@ def demo(
         Path, typer.Option("--data", help="Sample-data folder (generated when absent).")
     ] = Path("sample_data"),
 ) -> None:
-    """The main job on the bundled sample: angles, gait cycles, a plot and a summary."""
+    """The main job on the bundled sample: Plug-in Gait angles, gait cycles, fuzzy marker-error
+    bands, a report, a plot and a summary, and the CGM 2.4 session by the model --model auto
+    picks (cgm2.4) checked against its known angles."""
     from fuzzygait.workflows.demo import run_demo
 
     with user_errors():

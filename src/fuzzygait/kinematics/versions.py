@@ -9,8 +9,10 @@
 ``cgm2.1``  1.1 with Hara et al. (2016) hip centres from leg length.
 ``cgm2.3``  2.1 with the thigh and shank tracked by least-squares fits of their marker
             clusters (THI, THAP, THAD, KNE; TIB, TIAP, TIAD, ANK) to their static
-            positions; knee/ankle centres from KNM/MED in the static trial.
-``cgm2.4``  2.3 with the CGM 2.4 foot (FMH, SMH, VMH; ``L/RForeFootAngles``).
+            positions; static knee/ankle centres from KNM/MED, Plug-in Gait's chord or
+            pyCGM2's THAP/TIAP chord (:mod:`fuzzygait.kinematics.knee_ankle`).
+``cgm2.4``  2.3 with the CGM 2.4 hindfoot and forefoot (FMH, SMH, VMH;
+            ``L/RForeFootAngles``, :mod:`fuzzygait.kinematics.forefoot`).
 =========  ======================================================================
 
 CGM 2.2 and 2.5 (OpenSim inverse kinematics) are out of scope.
