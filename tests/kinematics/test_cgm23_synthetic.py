@@ -49,16 +49,6 @@ def test_plug_in_gait_on_the_same_trial_is_degrees_off(session) -> None:
     assert np.abs(knee).max() > 1.0
 
 
-def test_a_hidden_cluster_marker_is_tracked_by_the_others(session) -> None:
-    static, walking, truth = session
-    markers = walking.markers.copy()
-    markers[50:120, walking.marker_labels.index("LTHAP")] = np.nan
-    run = run_angles(walking.with_markers(markers), static=static, preprocessing=Preprocessing(filter=False, max_gap=0),
-                     model="cgm2.3")  # fmt: skip
-    expected = truth[[f"LHipAngles_{a}" for a in "XYZ"]].to_numpy()
-    assert np.abs(run.result.angles["LHipAngles"] - expected).max() <= BOUND_DEG
-
-
 def test_a_segment_with_two_markers_is_not_computed_and_named(session) -> None:
     static, walking, _ = session
     kept = [m for m in walking.marker_labels if m not in ("RTHAP", "RTHAD")]

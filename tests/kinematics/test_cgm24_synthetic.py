@@ -95,14 +95,18 @@ def test_forefoot_angles_follow_a_known_forefoot_turn(sessions) -> None:
     assert np.abs(turned[1.0][:, 1:]).max() < 1e-9
 
 
-def test_a_hidden_forefoot_marker_is_tracked_by_the_other_three(sessions) -> None:
+@pytest.mark.parametrize(
+    ("model", "hidden", "angle"),
+    [("cgm2.3", "LTHAP", "LHipAngles"), ("cgm2.4", "LTHAP", "LHipAngles"), ("cgm2.4", "RSMH", "RForeFootAngles")],
+)
+def test_a_hidden_cluster_marker_is_tracked_by_the_others(sessions, model: str, hidden: str, angle: str) -> None:
     static, walking, truth = sessions["hara"]
     markers = walking.markers.copy()
-    markers[40:90, walking.marker_labels.index("RSMH")] = np.nan
+    markers[40:120, walking.marker_labels.index(hidden)] = np.nan
     run = run_angles(walking.with_markers(markers), static=static, preprocessing=Preprocessing(filter=False, max_gap=0),
-                     model="cgm2.4")  # fmt: skip
-    expected = truth[[f"RForeFootAngles_{a}" for a in "XYZ"]].to_numpy()
-    assert np.abs(run.result.angles["RForeFootAngles"] - expected).max() <= BOUND_DEG
+                     model=model)  # fmt: skip
+    expected = truth[[f"{angle}_{a}" for a in "XYZ"]].to_numpy()
+    assert np.abs(run.result.angles[angle] - expected).max() <= BOUND_DEG
 
 
 def test_a_forefoot_with_two_markers_is_not_computed_and_named(sessions) -> None:

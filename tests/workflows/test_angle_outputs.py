@@ -11,18 +11,17 @@ import ezc3d
 import numpy as np
 import pandas as pd
 import pytest
-from support import SAMPLE_DATA
 
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.kinematics import ANGLE_NAMES, FOREFOOT_ANGLE_NAMES
-from fuzzygait.synthetic.cgm24 import make_cgm24_static, make_cgm24_walking
 from fuzzygait.uncertainty import load_result
 from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
+from support import SAMPLE_DATA
 
 SAMPLE = {"static": SAMPLE_DATA / "static.c3d", "subject_file": SAMPLE_DATA / "subject.toml"}
 
@@ -36,16 +35,6 @@ def _outputs(folder: Path, kind: str, suffix: str = "") -> AngleOutputs:
 def _fuzzygait_group(path: Path) -> dict[str, str]:
     group = ezc3d.c3d(str(path))["parameters"]["FUZZYGAIT"]
     return {name: group[name]["value"][0] for name in group if name != "__METADATA__"}
-
-
-@pytest.fixture(scope="module")
-def cgm23_session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    """The synthetic CGM 2.4 session (static, 2-cycle walking) as C3D files."""
-    folder = tmp_path_factory.mktemp("cgm24")
-    walking, _ = make_cgm24_walking(n_cycles=2)
-    write_c3d(make_cgm24_static(), folder / "static.c3d")
-    write_c3d(walking, folder / "walking.c3d")
-    return folder / "static.c3d", folder / "walking.c3d"
 
 
 def test_plug_in_gait_outputs_name_cgm10_and_keep_vicon_names(tmp_path: Path) -> None:
@@ -99,8 +88,8 @@ def test_bad_suffixes_are_refused() -> None:
             output_suffix(bad, "cgm1.0")
 
 
-def test_cgm23_outputs_name_cgm23(tmp_path: Path, cgm23_session: tuple[Path, Path]) -> None:
-    static, walking = cgm23_session
+def test_cgm23_outputs_name_cgm23(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
+    static, walking = cgm24_session
     run, _ = angles_to_files(walking, _outputs(tmp_path, "parquet", "model"), static=static, model="cgm2.3")
     assert run.model == "cgm2.3" and "model cgm2.3 (given by name)" in run.notes
     assert pd.read_parquet(tmp_path / "angles.parquet").attrs["model"] == "cgm2.3"
@@ -125,8 +114,8 @@ def test_forefoot_angles_join_the_table_when_the_result_has_them(angles_run) -> 
     assert (table["LForeFootAngles_Y"] == 1.0).all() and table["RForeFootAngles_Z"].isna().all()
 
 
-def test_cgm24_tables_have_the_forefoot_angles(cgm23_session: tuple[Path, Path]) -> None:
-    static, walking = cgm23_session
+def test_cgm24_tables_have_the_forefoot_angles(cgm24_session: tuple[Path, Path]) -> None:
+    static, walking = cgm24_session
     run = run_angles(walking, static=static, model="auto")
     if run.model != "cgm2.4":
         pytest.skip(f"auto chose {run.model}: CGM 2.4 not implemented in this tree")

@@ -10,28 +10,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import SAMPLE_DATA
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.io import read_c3d, write_c3d
+from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject, write_subject
 from fuzzygait.kinematics.calibration_file import cluster_table, clusters_from_table, read_stored_calibration
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.synthetic.cgm24 import make_cgm24_static, make_cgm24_walking
 from fuzzygait.workflows.angles import Preprocessing, calibrate_static, resolve_subject, run_angles
 from fuzzygait.workflows.calibrate import calibrate_to_file, calibration_model
+from support import SAMPLE_DATA
 
 NO_FILTER = Preprocessing(filter=False)
-
-
-@pytest.fixture(scope="module")
-def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    """The synthetic CGM 2.4 session (static with KNM/MED, 2-cycle walking) as C3D files."""
-    folder = tmp_path_factory.mktemp("cgm24")
-    walking, _ = make_cgm24_walking(n_cycles=2)
-    write_c3d(make_cgm24_static(), folder / "static.c3d")
-    write_c3d(walking, folder / "walking.c3d")
-    return folder / "static.c3d", folder / "walking.c3d"
 
 
 def _same_angles(a, b, tolerance: float = 1e-9) -> None:
@@ -44,9 +33,9 @@ def _same_angles(a, b, tolerance: float = 1e-9) -> None:
 
 @pytest.mark.parametrize("suffix", [".toml", ".vsk"])
 def test_angles_from_the_calibration_file_equal_angles_from_the_static_trial(
-    tmp_path: Path, session: tuple[Path, Path], suffix: str
+    tmp_path: Path, cgm24_session: tuple[Path, Path], suffix: str
 ) -> None:
-    static, walking = session
+    static, walking = cgm24_session
     written = calibrate_to_file(static, tmp_path / f"cal{suffix}", model="cgm2.3")
     assert written.model == "cgm2.3" and written.calibration.clusters is not None
     files = [tmp_path / f"cal{suffix}"] + ([tmp_path / "cal.clusters.toml"] if suffix == ".vsk" else [])
@@ -65,8 +54,8 @@ def test_angles_from_the_calibration_file_equal_angles_from_the_static_trial(
     _same_angles(with_static, auto)
 
 
-def test_the_file_says_which_model_and_static_trial(tmp_path: Path, session: tuple[Path, Path]) -> None:
-    static, _ = session
+def test_the_file_says_which_model_and_static_trial(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
+    static, _ = cgm24_session
     written = calibrate_to_file(static, tmp_path / "cal.toml", model="cgm2.3")
     text = (tmp_path / "cal.toml").read_text()
     assert text.startswith("# CGM 2.3 subject calibrated by fuzzygait")
@@ -85,8 +74,8 @@ def test_the_file_says_which_model_and_static_trial(tmp_path: Path, session: tup
     assert read_subject(tmp_path / "cal.toml") == written.calibration.subject
 
 
-def test_auto_calibrates_a_cluster_model_only_for_a_cluster_static_trial(tmp_path: Path, session) -> None:
-    static, _ = session
+def test_auto_calibrates_a_cluster_model_only_for_a_cluster_static_trial(tmp_path: Path, cgm24_session) -> None:
+    static, _ = cgm24_session
     name, why = calibration_model(read_c3d(static))
     assert name in ("cgm2.3", "cgm2.4") and "KNM/MED" in why
     assert calibration_model(read_c3d(SAMPLE_DATA / "static.c3d")) == (
@@ -98,12 +87,12 @@ def test_auto_calibrates_a_cluster_model_only_for_a_cluster_static_trial(tmp_pat
     assert table["model"] == "cgm1.0" and "clusters" not in table
 
 
-def test_cgm24_calibration_carries_the_forefoot(tmp_path: Path, session: tuple[Path, Path]) -> None:
+def test_cgm24_calibration_carries_the_forefoot(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
     try:
         model_version("cgm2.4")
     except ParameterError:
         pytest.skip("cgm2.4 not implemented in this tree")
-    static, walking = session
+    static, walking = cgm24_session
     calibrate_to_file(static, tmp_path / "cal24.toml", model="cgm2.4")
     table = tomllib.loads((tmp_path / "cal24.toml").read_text())["calibration"]
     assert {"LForefoot", "RForefoot"} <= set(table["clusters"]) and set(table["forefoot_joint_centres"]) == {"L", "R"}
@@ -117,8 +106,8 @@ def test_cgm24_calibration_carries_the_forefoot(tmp_path: Path, session: tuple[P
         run_angles(walking, subject_file=tmp_path / "cal23.toml", model="cgm2.4")
 
 
-def test_a_subject_file_without_clusters_says_what_to_do(tmp_path: Path, session: tuple[Path, Path]) -> None:
-    _, walking = session
+def test_a_subject_file_without_clusters_says_what_to_do(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
+    _, walking = cgm24_session
     subject = resolve_subject(read_c3d(walking), None)
     plain = write_subject(subject, tmp_path / "plain.toml")
     with pytest.raises(ParameterError, match=r"plain.toml: no cluster calibration for cgm2.3; give the static "
@@ -132,10 +121,10 @@ def test_a_subject_file_without_clusters_says_what_to_do(tmp_path: Path, session
     assert run_angles(walking, subject_file=plain, model="auto").model == "cgm1.0"  # no clusters, no static
 
 
-def test_a_calibration_from_another_marker_set_names_the_missing_markers(tmp_path: Path, session) -> None:
+def test_a_calibration_from_another_marker_set_names_the_missing_markers(tmp_path: Path, cgm24_session) -> None:
     """Markers of the calibration absent from the walking trial: those angles are not
     computed and name them, the others are (the missing-marker path of --static)."""
-    static, walking = session
+    static, walking = cgm24_session
     calibrate_to_file(static, tmp_path / "cal.toml", model="cgm2.3")
     trial = read_c3d(walking)
     other = trial.select_markers([m for m in trial.marker_labels if m not in ("LTHAP", "LTHAD")])
@@ -166,8 +155,10 @@ def test_model_mismatch_between_file_and_run_is_noted(tmp_path: Path) -> None:
     assert "pig.toml was calibrated for cgm1.0; its offsets are used by cgm2.1 as they are" in run.notes
 
 
-def test_a_plug_in_gait_vsk_removes_the_sidecar_of_an_earlier_cluster_calibration(tmp_path: Path, session) -> None:
-    static, walking = session
+def test_a_plug_in_gait_vsk_removes_the_sidecar_of_an_earlier_cluster_calibration(
+    tmp_path: Path, cgm24_session: tuple[Path, Path]
+) -> None:
+    static, walking = cgm24_session
     calibrate_to_file(static, tmp_path / "cal.vsk", model="cgm2.3")
     assert (tmp_path / "cal.clusters.toml").is_file()
     written = calibrate_to_file(static, tmp_path / "cal.vsk", model="cgm1.0")
@@ -191,8 +182,8 @@ def _table(static: Path) -> dict:
     (lambda t: t["clusters"]["LThigh"].__setitem__("markers", "LTHI"), "list of marker labels"),
     (lambda t: t.__setitem__("forefoot_joint_centres", {"L": [0.0, 0.0, 0.0]}), "or neither"),
 ])  # fmt: skip
-def test_malformed_cluster_tables_are_one_clear_error(session, change, message: str) -> None:
-    static, _ = session
+def test_malformed_cluster_tables_are_one_clear_error(cgm24_session, change, message: str) -> None:
+    static, _ = cgm24_session
     table = _table(static)
     assert clusters_from_table(table, "cal.toml") is not None and clusters_from_table({}, "x") is None
     change(table)
