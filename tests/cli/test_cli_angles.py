@@ -141,6 +141,7 @@ def test_c3d_suffix_is_checked_before_work_and_applied(tmp_path: Path) -> None:
     assert model.output_kinds["LKneeAngles_CGM_1.0"] == "angle" and "LKneeAngles" not in model.outputs
 
 
+@pytest.mark.slow
 def test_knee_ankle_centre_rule_reaches_the_cluster_calibration(tmp_path: Path) -> None:
     """On the synthetic CGM 2.4 session the KNM/MED rule (default) and the chord put the
     knee centre where it is (both recover the truth); pyCGM2's THAP chord does not."""
