@@ -314,7 +314,10 @@ def test_dataset_layout_and_missing_markers(angles_run: AnglesRun, frames: np.nd
                                ["LPelvisAngles", "LKneeAngles"])  # fmt: skip
 
     components = [f"{n}_{a}" for n in ("LPelvisAngles", "LKneeAngles") for a in AXES]
-    assert set(fuzzy.data_vars) == {"hull", "deviation", "ball_radius"}
+    assert set(fuzzy.data_vars) == {"hull", "undetermined", "deviation", "ball_radius"}
+    assert fuzzy["undetermined"].dims == ("component", "alpha", "frame") and fuzzy["undetermined"].dtype == bool
+    assert fuzzy["label"].sel(component="LKneeAngles_X") == "Left knee, sagittal (+ flexion)"
+    assert fuzzy.attrs["model"] == "cgm1.0" and fuzzy["hull"].attrs["long_name"]
     assert angle_components(fuzzy) == components
     assert fuzzy["angle"].to_numpy().tolist() == [c[:-2] for c in components]
     assert fuzzy["axis"].to_numpy().tolist() == [c[-1] for c in components]
@@ -436,3 +439,41 @@ def test_two_frames_are_enough(angles_run: AnglesRun) -> None:
     assert np.isfinite(hull[:, keep]).all() and np.isnan(hull[:, ~keep]).all()
     measured = angles_run.result.angles["LKneeAngles"][keep, 0]
     assert np.all(hull[0, keep] < measured) and np.all(measured < hull[1, keep])
+
+
+# ---------------------------------------------------------------------------- continuous bands
+def test_a_band_across_180_degrees_is_one_band(angles_run: AnglesRun, sparse_trial: Trial) -> None:
+    """Turning the progression frame by 180° about the vertical moves the pelvis rotation
+    (Z) to about ±180°: wrapped, its band would be 360° wide; on the continuous branch it
+    is the band of the unturned trial moved by 180° (same width), and determined."""
+    import dataclasses
+
+    from fuzzygait.kinematics.angles import joint_angles
+    from fuzzygait.kinematics.vectors import axis_rotation
+
+    result = angles_run.result
+    turned_progression = result.progression @ axis_rotation(2, np.pi)
+    pelvis = result.segment_frames["pelvis"]
+    turned = dataclasses.replace(result, progression=turned_progression,
+                                 angles={"LPelvisAngles": joint_angles(turned_progression, pelvis, "Pelvis", "L")})  # fmt: skip
+    options = FuzzyAngleOptions(alphas=(0.0,), sources=("measurement",))
+    plain = fuzzy_joint_angles(sparse_trial, angles_run.subject, result, options, ["LPelvisAngles"])
+    across = fuzzy_joint_angles(sparse_trial, angles_run.subject, turned, options, ["LPelvisAngles"])
+    hull, hull_turned = component_hull(plain, "LPelvisAngles_Z"), component_hull(across, "LPelvisAngles_Z")
+    measured = hull_turned.sel(alpha=1.0, bound="upper")
+    assert np.nanmin(np.abs(np.abs(measured) - 180.0)) < 10.0  # the measured angle is near ±180
+    width = (hull.sel(bound="upper") - hull.sel(bound="lower")).sel(alpha=0.0)
+    width_turned = (hull_turned.sel(bound="upper") - hull_turned.sel(bound="lower")).sel(alpha=0.0)
+    assert float(width.max()) > 0.5  # a real band
+    np.testing.assert_allclose(width_turned.dropna("frame"), width.dropna("frame"), atol=1e-6)
+    assert not bool(across["undetermined"].any())
+
+
+def test_undetermined_marks_bounds_more_than_a_quarter_turn_away() -> None:
+    from fuzzygait.markererror.angle_model import UNDETERMINED_DEG, undetermined
+
+    measured = np.array([10.0, 10.0, 10.0, 170.0])
+    lower = np.array([-79.0, -81.0, 5.0, 100.0])
+    upper = np.array([99.0, 20.0, 101.0, 260.5])
+    assert UNDETERMINED_DEG == 90.0
+    assert undetermined(lower, upper, measured).tolist() == [False, True, True, True]

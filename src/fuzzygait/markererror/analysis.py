@@ -17,9 +17,17 @@ a ``component`` dimension, on the trial's frames:
 * ``deviation (component, alpha, bound, frame, marker)``: Euclidean norm (mm) of each
   marker's deviation that produces the hull value (Fig. 5.12); NaN for markers the
   component does not use;
+* ``undetermined (component, alpha, frame)``: True where the band is not a band — a
+  bound more than 90° from the measured angle on its continuous branch (the segment frame
+  can flip inside the ball, :func:`~fuzzygait.markererror.angle_model.undetermined`);
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
-* attributes: ``trial``, ``sources``, ``method``, ``starts``, ``output``, ``units``,
-  ``strategy``, ``forward_simulations``, ``node_evaluations`` (in total), ``seconds``.
+* attributes: ``trial``, ``model`` (the model version), ``sources``, ``method``,
+  ``starts``, ``output``, ``units``, ``strategy``, ``forward_simulations``,
+  ``node_evaluations`` (in total), ``seconds``.
+
+Hulls are taken of each angle on the continuous branch through the measured angle
+(:class:`~fuzzygait.markererror.angle_model.JointAngleModel` ``reference``), so a band
+that passes ±180° is one band, not a 360° one.
 """
 
 from __future__ import annotations
@@ -36,8 +44,19 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
-from fuzzygait.markererror.angle_model import AXES, JointAngleModel, SphericalDeviationModel, fixed_subject
-from fuzzygait.markererror.result import angle_components, component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.angle_model import (
+    AXES,
+    JointAngleModel,
+    SphericalDeviationModel,
+    fixed_subject,
+    undetermined,
+)
+from fuzzygait.markererror.result import (
+    angle_components,
+    component_hull,
+    component_undetermined,
+    fuzzy_angles_dataset,
+)
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
@@ -78,8 +97,8 @@ class FuzzyAngleOptions:
 
 def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
     """One angle component: hull (alpha, bound, n_valid), deviation norms and counts."""
-    trial, subject, progression, name, axis, frames, markers, radii, options = args
-    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers)
+    trial, subject, progression, name, axis, frames, markers, radii, options, reference = args
+    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference)
     if options.method == "cartesian":
         params: FuzzyBalls | FuzzyVector = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
         fuzzy_model: JointAngleModel | SphericalDeviationModel = model
@@ -142,7 +161,9 @@ def fuzzy_joint_angles(
         radii = np.array([options.error_model.radius(m, sources) for m in model_markers])
         markers_all += [m for m in model_markers if m not in markers_all]
         for axis in range(3):
-            tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options))
+            reference = result.angles[name][frames, axis]
+            tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options,
+                          reference))  # fmt: skip
 
     start = time.perf_counter()
     if evaluator is None:
@@ -150,7 +171,9 @@ def fuzzy_joint_angles(
             outputs = own.map(_component_task, tasks, progress)
     else:
         outputs = evaluator.map(_component_task, tasks, progress)
-    return _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
+    fuzzy = _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
+    fuzzy.attrs["model"] = result.model
+    return fuzzy
 
 
 def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: list[str],
@@ -172,15 +195,33 @@ def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: l
     attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method,
              "starts": options.starts, "output": "joint angle", "strategy": BatchedDirect.name, **totals,
              "seconds": round(seconds, 3)}  # fmt: skip
+    measured_index = int(np.argmin(np.abs(alphas - 1.0)))
+    flags = {column: undetermined(hull[:, 0], hull[:, 1], hull[measured_index, 1][None, :])
+             for column, hull in hulls.items()}  # fmt: skip
     return fuzzy_angles_dataset(
         hulls, alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
         ball_radius=[options.error_model.radius(m, sources) for m in markers], deviations=deviations, attrs=attrs,
+        undetermined=flags,
     )  # fmt: skip
+
+
+def undetermined_levels(fuzzy: xr.Dataset) -> pd.DataFrame:
+    """Per angle component (rows) and α-level < 1 (columns): True when the band is
+    undetermined at some frame (ΔΦ is then "undetermined", not a number)."""
+    rows = {}
+    for name in angle_components(fuzzy):
+        mask = component_undetermined(fuzzy, name)
+        rows[name] = {float(a): bool(mask.sel(alpha=a).any()) for a in fuzzy["alpha"].to_numpy() if a < 1.0}
+    table = pd.DataFrame.from_dict(rows, orient="index")
+    table.index.name = "angle"
+    return table[sorted(table.columns, reverse=True)]
 
 
 def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     """ΔΦ of Eq. 5.3 in % per angle component (rows) and α-level < 1 (columns):
-    ``max_t (upper − lower) / max_t |Φ(t)|`` with Φ the measured angle (α = 1).
+    ``max_t (upper − lower) / max_t |Φ(t)|`` with Φ the measured angle (α = 1), the
+    maximum over the frames where the band is determined (:func:`undetermined_levels`
+    says where an α-level is undetermined somewhere: report "undetermined" there).
 
     The thesis divides by the largest angle; the magnitude is used here so angles that
     stay negative get a positive reference.
@@ -190,7 +231,8 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
         hull = component_hull(fuzzy, name)
         measured = hull.sel(alpha=1.0, bound="upper")
         reference = float(np.nanmax(np.abs(measured)))
-        width = (hull.sel(bound="upper") - hull.sel(bound="lower")).max("frame", skipna=True)
+        spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~component_undetermined(fuzzy, name))
+        width = spread.max("frame", skipna=True)
         rows[name] = {float(a): 100.0 * float(width.sel(alpha=a)) / reference
                       for a in fuzzy["alpha"].to_numpy() if a < 1.0}  # fmt: skip
     table = pd.DataFrame.from_dict(rows, orient="index")

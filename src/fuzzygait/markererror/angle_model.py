@@ -11,6 +11,13 @@ in one vectorised pass of the model.
 Subject measures stay fixed: the inter-ASIS distance and the progression frame are
 those of the unperturbed trial (the thesis does not propagate the anthropometric
 measures, §3.6).
+
+Continuous branch: with ``reference`` (the measured angle component at each frame) the
+model returns ``reference + wrap(angle - reference)`` with ``wrap`` into (-180°, 180°]:
+the angle on the branch through the measured one, never the ±180° representation, so a
+band that passes 180° stays one band.  Where a deviation inside the ball turns the
+segment frame so far that this excursion approaches ±180° (the frame can flip) the
+hull is not a band any more; :func:`undetermined` marks it.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ import numpy as np
 
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.kinematics.angles import wrap_degrees
 from fuzzygait.kinematics.chain import LowerBodyChain
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance
@@ -49,6 +57,8 @@ class JointAngleModel:
         frames: sample indices (0-based) of the trial used as time nodes.
         markers: labels whose deviations are the parameters (default: all the angle
             depends on).
+        reference: the measured angle component (degrees) at each of ``frames``; given,
+            the outputs are on its continuous branch (module docstring).
     """
 
     trial: Trial
@@ -59,6 +69,7 @@ class JointAngleModel:
     frames: np.ndarray
     markers: list[str] = field(default_factory=list)
     use_medial_markers: bool = False
+    reference: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not self.markers:
@@ -91,13 +102,32 @@ class JointAngleModel:
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """Angle component at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
         positions = self._base[nodes] + np.asarray(P, dtype=float).reshape(len(nodes), -1, 3)
-        return self.angles_of(positions)[:, self.axis]
+        angle = self.angles_of(positions)[:, self.axis]
+        if self.reference is None:
+            return angle
+        reference = np.asarray(self.reference, dtype=float)[nodes]
+        return reference + wrap_degrees(angle - reference)
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """The angle component over all time nodes with one deviation ``p`` (n_p,); no
         sensitivities (the engine's direct strategies use finite differences)."""
         nodes = np.arange(self.frames.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+#: Excursion (degrees) of a hull bound from the measured angle beyond which the band is
+#: *undetermined*: the segment frame turns more than a quarter turn inside the ball, which
+#: for a frame built from two markers and a joint centre means it can flip (the angle
+#: then jumps by about 180°; a bound found on the far side of the jump is not an extreme
+#: of a continuous band).
+UNDETERMINED_DEG = 90.0
+
+
+def undetermined(lower: np.ndarray, upper: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Where a band ``[lower, upper]`` around ``measured`` (degrees, broadcasting) is
+    undetermined: a bound more than :data:`UNDETERMINED_DEG` from the measured angle."""
+    with np.errstate(invalid="ignore"):
+        return (np.asarray(upper) - measured > UNDETERMINED_DEG) | (measured - np.asarray(lower) > UNDETERMINED_DEG)
 
 
 def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:

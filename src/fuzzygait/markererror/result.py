@@ -13,6 +13,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.kinematics.labels import component_label
 
 
 def fuzzy_angles_dataset(
@@ -25,6 +26,7 @@ def fuzzy_angles_dataset(
     ball_radius: Sequence[float] | NDArray[np.float64],
     deviations: Mapping[str, NDArray[np.float64]] | None = None,
     attrs: Mapping[str, object] | None = None,
+    undetermined: Mapping[str, NDArray[np.bool_]] | None = None,
 ) -> xr.Dataset:
     """Build the dataset.
 
@@ -38,20 +40,29 @@ def fuzzy_angles_dataset(
         deviations: component → deviation norms ``(alpha, bound, frame, marker)`` in mm
             (NaN for markers the component does not use); None: no ``deviation`` variable.
         attrs: dataset attributes (``units`` is set to ``"deg"``).
+        undetermined: component -> ``(alpha, frame)`` True where the band is undetermined;
+            None: all False.
     """
     components = list(hulls)
+    shape = (len(components), len(alphas), len(frames))
+    flags = np.zeros(shape, dtype=bool) if undetermined is None else np.stack([undetermined[c] for c in components])
     data: dict[str, tuple] = {
         "hull": (("component", "alpha", "bound", "frame"), np.stack([hulls[c] for c in components]),
-                 {"units": "deg"}),
-        "ball_radius": (("marker",), np.asarray(ball_radius, dtype=float), {"units": "mm"}),
+                 {"units": "deg", "long_name": "joint angle bounds of the α-level (continuous branch)"}),
+        "undetermined": (("component", "alpha", "frame"), flags,
+                         {"long_name": "band undetermined: a bound more than 90 deg from the measured angle"}),
+        "ball_radius": (("marker",), np.asarray(ball_radius, dtype=float),
+                        {"units": "mm", "long_name": "marker error ball radius at α = 0"}),
     }  # fmt: skip
     if deviations is not None:
         stacked = np.stack([deviations[c] for c in components])
-        data["deviation"] = (("component", "alpha", "bound", "frame", "marker"), stacked, {"units": "mm"})
+        data["deviation"] = (("component", "alpha", "bound", "frame", "marker"), stacked,
+                             {"units": "mm", "long_name": "marker deviation norm at the bound"})  # fmt: skip
     return xr.Dataset(
         data,
         coords={
-            "component": components,
+            "component": ("component", components, {"long_name": "angle component"}),
+            "label": ("component", [component_label(c) for c in components]),
             "angle": ("component", [c.rsplit("_", 1)[0] for c in components]),
             "axis": ("component", [c.rsplit("_", 1)[-1] for c in components]),
             "alpha": np.asarray(alphas, dtype=float),
@@ -83,6 +94,16 @@ def component_hull(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
     """Hull of one component in degrees, dims ``(alpha, bound, frame)``."""
     _require_layout(fuzzy)
     return fuzzy["hull"].sel(component=component, drop=True)
+
+
+def component_undetermined(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
+    """Where the band of one component is undetermined, dims ``(alpha, frame)`` (all
+    False for datasets written before the flag existed)."""
+    _require_layout(fuzzy)
+    if "undetermined" not in fuzzy.data_vars:
+        hull = component_hull(fuzzy, component)
+        return xr.zeros_like(hull.isel(bound=0, drop=True), dtype=bool)
+    return fuzzy["undetermined"].sel(component=component, drop=True)
 
 
 def component_deviation(fuzzy: xr.Dataset, component: str) -> xr.DataArray | None:

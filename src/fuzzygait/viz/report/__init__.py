@@ -36,7 +36,8 @@ numbers), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.page
 and CSS) and :mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
 """
 
-from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry, component_label, cycle_bands
+from fuzzygait.kinematics.labels import component_label
+from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry, cycle_bands
 from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
 from fuzzygait.viz.report.writer import ReportItem, ReportWriter, write_report
 

@@ -17,8 +17,9 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles
+from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.result import angle_components, component_hull
-from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
+from fuzzygait.viz.layout import ANGLE_ROWS, SIDE_STYLE
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -30,9 +31,6 @@ if TYPE_CHECKING:
 
 #: Samples per normalised gait cycle (0, 1, ..., 100 %).
 N_POINTS = 101
-SIDE_NAMES = {"L": "Left", "R": "Right"}
-_ROW_TITLES = dict(ANGLE_ROWS)
-_PLANE_INFO = {axis: (plane, meaning) for axis, plane, meaning in PLANES}
 #: α-levels closer to 1 than this count as the measured curve.
 _ALPHA_ONE = 1.0 - 1e-9
 
@@ -74,28 +72,6 @@ class TrialAnalysis(Protocol):
 
 
 # ============================================================================ labels
-def parse_component(name: str) -> tuple[str, str, str] | None:
-    """``"LKneeAngles_X"`` -> ``("L", "KneeAngles", "X")``; None for other names."""
-    match = re.fullmatch(r"([LR])(\w+?)_([XYZ])", name)
-    return (match[1], match[2], match[3]) if match else None
-
-
-def component_label(name: str) -> str:
-    """Clinical label of an angle component: ``"LKneeAngles_X"`` -> ``"Left knee,
-    sagittal (+ flexion)"``; unknown names are returned unchanged."""
-    parsed = parse_component(name)
-    if parsed is None:
-        return name
-    side, base, axis = parsed
-    row = _ROW_TITLES.get(base)
-    plane, meaning = _PLANE_INFO[axis]
-    if row is None:
-        return f"{SIDE_NAMES[side]} {base}, {plane}"
-    positive = meaning.get(row, "")
-    label = f"{SIDE_NAMES[side]} {row.lower()}, {plane}"
-    return label + (f" (+ {positive})" if positive else "")
-
-
 def alpha_text(alpha: float) -> str:
     """An α-level as written in the report (``0.25``, ``0``)."""
     return f"{alpha:g}"

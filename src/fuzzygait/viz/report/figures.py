@@ -18,8 +18,9 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from fuzzygait.gait.cycles import percent_points  # noqa: E402
+from fuzzygait.kinematics.labels import SIDE_NAMES  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
-from fuzzygait.viz.report.bands import N_POINTS, SIDE_NAMES, TrialData, alpha_text, cycle_bands  # noqa: E402
+from fuzzygait.viz.report.bands import N_POINTS, TrialData, alpha_text, cycle_bands  # noqa: E402
 
 __all__ = ["plot_cycle_bands", "plot_time_series"]
 

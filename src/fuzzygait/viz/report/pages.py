@@ -15,17 +15,16 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait import __version__
+from fuzzygait.kinematics.labels import SIDE_NAMES, component_label
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.report.bands import (
-    SIDE_NAMES,
     ReportRun,
     TrialAnalysis,
     TrialData,
     TrialEntry,
     alpha_text,
-    component_label,
     grid_components,
 )
 
