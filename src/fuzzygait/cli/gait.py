@@ -28,10 +28,12 @@ from fuzzygait.cli.options import (
     MarkerDiameterOption,
     MarkerErrorOptions,
     MaxGapOption,
+    ModelOption,
     PreprocessingOptions,
     StaticOption,
     SubjectOption,
     check_knee_ankle_centres,
+    check_model,
     parse_alphas,
     parse_angles,
     with_option_groups,
@@ -311,9 +313,11 @@ def uncertainty(
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
     workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
+    model: ModelOption = "auto",
 ) -> None:
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
-    every angle component over all marker deviations inside the α-level balls."""
+    every angle component over all marker deviations inside the α-level balls, by the
+    model version of the angles (--model; the dataset's `model` attribute names it)."""
     from fuzzygait.uncertainty.storage import SUFFIXES
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
 
@@ -323,6 +327,7 @@ def uncertainty(
         if rrd is not None and rrd.suffix.lower() != ".rrd":
             raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
         _check_workers(workers)
+        check_model(model)
         selected = parse_angles(marker_errors.angle_names)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
@@ -333,9 +338,11 @@ def uncertainty(
             analysis = analyse_to_files(
                 dynamic, out_file, rrd=rrd, static=calibration.static, subject_file=calibration.subject,
                 marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                preprocessing=preprocessing.preprocessing(), progress=bar.update,
+                preprocessing=preprocessing.preprocessing(), model=model, progress=bar.update,
             )  # fmt: skip
     _print_run_summary(analysis.run)
+    for note in analysis.notes[len(analysis.run.notes) :]:
+        out.print(f"  note: {note}", markup=False)
     out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|:", markup=False)
     out.print(analysis.delta_phi.round(1).to_string(), markup=False)
     out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
@@ -355,6 +362,7 @@ def report(
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
+    model: ModelOption = "auto",
 ) -> None:
     """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
     bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
@@ -372,6 +380,7 @@ def report(
     with user_errors():
         alpha_levels = parse_alphas(marker_errors.alphas)
         _check_workers(workers)
+        check_model(model)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=workers)  # fmt: skip
@@ -379,7 +388,7 @@ def report(
             result = write_batch_report(
                 inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
                 marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                preprocessing=preprocessing.preprocessing(),
+                preprocessing=preprocessing.preprocessing(), model=model,
                 strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
             )  # fmt: skip
     out.print(f"report: {result.n_ok} of {len(result.entries)} trials OK"

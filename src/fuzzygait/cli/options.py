@@ -49,6 +49,27 @@ KneeAnkleCentresOption = Annotated[
     ),
 ]  # fmt: skip
 
+ModelOption = Annotated[
+    str,
+    typer.Option(
+        "--model",
+        help="Model version of the angles and of their marker-error model: cgm1.0 (Plug-in Gait), cgm1.1, cgm2.1, "
+        "cgm2.3 (clusters; their static calibration held fixed, needs --static or a --subject written by "
+        "`calibrate`), cgm2.4 (also the forefoot) or auto: the richest the markers support.",
+    ),
+]
+
+
+def check_model(model: str) -> None:
+    """One clear error, before any work, for an unknown ``--model``."""
+    from fuzzygait.kinematics.versions import MODEL_CHOICES, model_version
+
+    if model != "auto":
+        try:
+            model_version(model)
+        except FuzzyGaitError:
+            raise FuzzyGaitError(f"--model {model!r}: choose one of {', '.join(MODEL_CHOICES)}") from None
+
 
 def check_knee_ankle_centres(rule: str | None) -> None:
     """One clear error, before any work, for an unknown ``--knee-ankle-centres``."""
@@ -150,16 +171,17 @@ def with_option_groups(command: Callable[..., None]) -> Callable[..., None]:
 
 
 def parse_angles(text: str | None) -> list[str] | None:
-    """``"LKneeAngles,RKneeAngles"`` -> validated angle names (None: all)."""
-    from fuzzygait.kinematics import ANGLE_NAMES
+    """``"LKneeAngles,RKneeAngles"`` -> validated angle names (None: all; the CGM 2.4
+    ``L/RForeFootAngles`` included)."""
+    from fuzzygait.kinematics import ALL_ANGLE_NAMES
 
     if text is None:
         return None
     selected = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in selected if n not in ANGLE_NAMES]
+    unknown = [n for n in selected if n not in ALL_ANGLE_NAMES]
     if unknown or not selected:
         raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(text)}; "
-                             f"choose from {', '.join(ANGLE_NAMES)}")  # fmt: skip
+                             f"choose from {', '.join(ALL_ANGLE_NAMES)}")  # fmt: skip
     return selected
 
 

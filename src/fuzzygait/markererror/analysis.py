@@ -43,7 +43,8 @@ import xarray as xr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.kinematics import ANGLE_NAMES, CGMResult
+from fuzzygait.kinematics import ALL_ANGLE_NAMES, CGMResult
+from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.angle_model import (
     AXES,
     JointAngleModel,
@@ -97,8 +98,9 @@ class FuzzyAngleOptions:
 
 def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
     """One angle component: hull (alpha, bound, n_valid), deviation norms and counts."""
-    trial, subject, progression, name, axis, frames, markers, radii, options, reference = args
-    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference)
+    trial, subject, progression, name, axis, frames, markers, radii, options, reference, version, clusters = args
+    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference,
+                            model=version, clusters=clusters)  # fmt: skip
     if options.method == "cartesian":
         params: FuzzyBalls | FuzzyVector = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
         fuzzy_model: JointAngleModel | SphericalDeviationModel = model
@@ -118,6 +120,8 @@ def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str,
         norms = np.abs(extremiser[..., 0])
     else:
         norms = np.linalg.norm(extremiser, axis=-1)
+    # a cluster marker missing at a frame (the pose from the others) has no deviation there
+    norms = np.where(model.seen(), norms, np.nan)
     counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations")}
     return f"{name}_{AXES[axis]}", result["hull"].to_numpy(), norms, counts
 
@@ -130,23 +134,36 @@ def fuzzy_joint_angles(
     angles: Sequence[str] | None = None,
     progress: Progress | None = None,
     evaluator: Evaluator | None = None,
+    clusters: ClusterCalibration | None = None,
 ) -> xr.Dataset:
     """Fuzzy joint angles of a trial (see the module docstring for the layout).
+
+    The marker-error model is that of the version that computed ``result``
+    (``result.model``, :class:`~fuzzygait.markererror.angle_model.JointAngleModel`): for
+    ``cgm2.3`` / ``cgm2.4`` the cluster chain with the static calibration ``clusters``
+    held fixed, perturbing the dynamic markers each angle is computed from.
 
     Args:
         trial: the pre-processed trial the angles were computed from.
         subject: the subject parameters used (static offsets included).
         result: the deterministic model output of ``trial``.
         options: α-levels, error sources, method, optimiser settings.
-        angles: angle names (default: every angle ``result`` holds).
+        angles: angle names (default: every angle ``result`` holds, the CGM 2.4
+            forefoot's included).
         progress: called as ``progress(done, total)`` per angle component.
         evaluator: where the components are computed (default: serial, or a local pool
             of ``options.workers`` processes); the hulls are the same either way.
+        clusters: the static cluster calibration ``result`` was computed with (cluster
+            models only; :attr:`fuzzygait.workflows.angles.AnglesRun.clusters`).
+
+    Raises:
+        ParameterError: an unknown method, no requested angle computed, or a cluster
+            model without ``clusters``.
     """
     if options.method not in METHODS:
         raise ParameterError(f"method must be one of {METHODS}; got {options.method!r}")
     sources = parse_sources(options.sources)
-    names = [n for n in (angles or ANGLE_NAMES) if n in result.angles]
+    names = [n for n in (angles or ALL_ANGLE_NAMES) if n in result.angles]
     if not names:
         raise ParameterError(f"{trial.name}: none of the requested angles could be computed")
     fixed = fixed_subject(trial, subject)
@@ -155,15 +172,21 @@ def fuzzy_joint_angles(
 
     tasks, markers_all = [], []
     for name in names:
-        model_markers = JointAngleModel(trial, fixed, result.progression, name, 0, np.array([0])).markers
-        values = np.column_stack([trial.marker(m) for m in model_markers] + [result.angles[name]])
-        frames = np.flatnonzero(np.all(np.isfinite(values), axis=1))
+        # frames where the angle is measured and the model computes it (a Plug-in Gait
+        # angle needs every marker; a cluster pose three of its cluster's)
+        every = np.arange(trial.n_frames)
+        zero = JointAngleModel(trial, fixed, result.progression, name, 0, every, model=result.model,
+                               clusters=clusters)  # fmt: skip
+        model_markers = zero.markers
+        computed = zero.measured_angles()
+        usable = np.all(np.isfinite(result.angles[name]), axis=1) & np.all(np.isfinite(computed), axis=1)
+        frames = np.flatnonzero(usable)
         radii = np.array([options.error_model.radius(m, sources) for m in model_markers])
         markers_all += [m for m in model_markers if m not in markers_all]
         for axis in range(3):
             reference = result.angles[name][frames, axis]
             tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options,
-                          reference))  # fmt: skip
+                          reference, result.model, clusters))  # fmt: skip
 
     start = time.perf_counter()
     if evaluator is None:

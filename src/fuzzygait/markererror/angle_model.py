@@ -1,4 +1,4 @@
-"""One Plug-in Gait joint-angle component as a model of marker deviations, for the
+"""One joint-angle component of a CGM version as a model of marker deviations, for the
 uncertainty engine (thesis §3.7.3).
 
 The parameters are the deviations ``p = [p_1, …, p_m]`` (mm, lab frame, 3 per marker) of
@@ -8,9 +8,30 @@ frame of a trajectory (so one evaluation is a whole angle curve), and
 :meth:`JointAngleModel.evaluate_nodes` evaluates any number of (deviation, frame) pairs
 in one vectorised pass of the model.
 
-Subject measures stay fixed: the inter-ASIS distance and the progression frame are
-those of the unperturbed trial (the thesis does not propagate the anthropometric
-measures, §3.6).
+Model versions (:mod:`fuzzygait.kinematics.versions`): the angle is computed by the chain
+of the version that computed the measured angles — Plug-in Gait's (``cgm1.0``), its
+CGM 1.1 / 2.1 variants (tibia, pelvis sequence, Hara hips) or, for ``cgm2.3`` and
+``cgm2.4``, the :class:`~fuzzygait.kinematics.clusters.ClusterChain` with the session's
+static cluster calibration.  The markers perturbed are the dynamic markers that chain
+reads for the angle (:func:`model_angle_markers`); for the cluster models:
+
+=================  ==================================================================
+angle              markers (per side; those of the calibrated clusters in the trial)
+=================  ==================================================================
+Pelvis             LASI, RASI, SACR (or LPSI, RPSI)
+Hip                pelvis + thigh cluster THI, THAP, THAD, KNE
+Knee               thigh cluster + shank cluster TIB, TIAP, TIAD, ANK (no pelvis: the
+                   cluster fits give KJC and AJC directly)
+Ankle, FootProg.   shank cluster + TOE (hindfoot: TOE, AJC, the shank's ankle axis and
+                   the static offsets; HEE is not used by the dynamic foot)
+ForeFoot (2.4)     shank cluster + TOE, FMH, SMH, VMH (forefoot cluster fit; FJC fixed
+                   in the hindfoot)
+=================  ==================================================================
+
+Fixed (thesis §3.6: the anthropometric measures are not propagated): the subject
+parameters with the inter-ASIS distance of the unperturbed trial, the static offsets,
+the static cluster calibration (the static-only markers KNM and MED are never
+parameters) and the progression frame of the unperturbed trial.
 
 Continuous branch: with ``reference`` (the measured angle component at each frame) the
 model returns ``reference + wrap(angle - reference)`` with ``wrap`` into (-180°, 180°]:
@@ -26,15 +47,86 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.angles import wrap_degrees
-from fuzzygait.kinematics.chain import LowerBodyChain
+from fuzzygait.kinematics.chain import LowerBodyChain, pelvis_markers
+from fuzzygait.kinematics.clusters import ClusterCalibration, ClusterChain
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers
 from fuzzygait.kinematics.pelvis import inter_asis_distance
+from fuzzygait.kinematics.versions import ModelVersion, model_version
 from fuzzygait.uncertainty.protocol import NODES, Evaluation, Output
 
 AXES = ("X", "Y", "Z")
+
+
+def _check_clusters(version: ModelVersion, clusters: ClusterCalibration | None, name: str) -> ClusterCalibration:
+    if clusters is None:
+        raise ParameterError(
+            f"{version.name} tracks the thigh and shank clusters calibrated on the static trial: the marker-error "
+            "model needs that cluster calibration (give the static trial, --static)"
+        )
+    if name[1:] == "ForeFootAngles" and (name[0], "forefoot") not in clusters.segments:
+        raise ParameterError(f"{name} needs the CGM 2.4 forefoot calibration (calibrate with the cgm2.4 model)")
+    return clusters
+
+
+def model_angle_markers(
+    trial: Trial,
+    name: str,
+    model: str = "cgm1.0",
+    clusters: ClusterCalibration | None = None,
+    use_medial_markers: bool = False,
+) -> list[str]:
+    """The dynamic markers the angle ``name`` of model version ``model`` is computed from
+    (module docstring): the parameters of its marker-error model.
+
+    Raises:
+        ParameterError: an unknown model, a cluster model without ``clusters``, or an angle
+            the version does not compute (``ForeFootAngles`` before ``cgm2.4``).
+    """
+    version = model_version(model)
+    side, joint = name[0], name[1:].removesuffix("Angles")
+    if joint == "ForeFoot" and not version.forefoot:
+        raise ParameterError(f"{name} is a CGM 2.4 output; {version.name} does not compute it")
+    if not version.clusters:
+        return angle_markers(trial, name, use_medial_markers)
+    calibration = _check_clusters(version, clusters, name)
+
+    def tracked(segment: str) -> list[str]:
+        return [m for m in calibration.segment(side, segment).markers if trial.has_marker(m)]
+
+    hindfoot = tracked("tibia") + [side + "TOE"]
+    needed = {
+        "Pelvis": pelvis_markers(trial),
+        "Hip": pelvis_markers(trial) + tracked("thigh"),
+        "Knee": tracked("thigh") + tracked("tibia"),
+        "Ankle": hindfoot,
+        "FootProgress": hindfoot,
+    }
+    if joint == "ForeFoot":
+        return hindfoot + [m for m in tracked("forefoot") if m not in hindfoot]
+    if joint not in needed:
+        raise ParameterError(f"unknown angle {name!r}")
+    return needed[joint]
+
+
+def model_chain(
+    trial: Trial,
+    subject: SubjectParameters,
+    model: str = "cgm1.0",
+    clusters: ClusterCalibration | None = None,
+    use_medial_markers: bool = False,
+) -> LowerBodyChain:
+    """The dynamic-trial chain of model version ``model`` on ``trial`` (as
+    :func:`~fuzzygait.kinematics.model.compute_lower_body` builds it)."""
+    version = model_version(model)
+    if version.clusters:
+        assert clusters is not None
+        return ClusterChain(trial, subject, clusters)
+    return LowerBodyChain(trial, subject, use_medial_markers=use_medial_markers, hip=version.hip,
+                          single_tibia=version.single_tibia, pelvis_sequence=version.pelvis_sequence)  # fmt: skip
 
 
 def fixed_subject(trial: Trial, subject: SubjectParameters) -> SubjectParameters:
@@ -52,13 +144,18 @@ class JointAngleModel:
         trial: the (pre-processed) trial; only frames ``frames`` are used.
         subject: subject parameters with a fixed inter-ASIS distance.
         progression: ``(3, 3)`` progression frame of the unperturbed trial.
-        name: Plug-in Gait angle, e.g. ``"LKneeAngles"``.
+        name: angle output, e.g. ``"LKneeAngles"`` (``"LForeFootAngles"``: cgm2.4).
         axis: 0, 1, 2 for X (sagittal), Y (frontal), Z (transverse).
         frames: sample indices (0-based) of the trial used as time nodes.
-        markers: labels whose deviations are the parameters (default: all the angle
-            depends on).
+        markers: labels whose deviations are the parameters (default: every marker the
+            angle depends on, :func:`model_angle_markers`); the angle's other markers stay
+            at their measured positions.  A marker the angle does not depend on (e.g. a
+            static-only KNM) is refused.
         reference: the measured angle component (degrees) at each of ``frames``; given,
             the outputs are on its continuous branch (module docstring).
+        model: the model version that computed the measured angles (``"cgm1.0"`` …
+            ``"cgm2.4"``).
+        clusters: the static cluster calibration (``cgm2.3``, ``cgm2.4``), held fixed.
     """
 
     trial: Trial
@@ -70,12 +167,25 @@ class JointAngleModel:
     markers: list[str] = field(default_factory=list)
     use_medial_markers: bool = False
     reference: np.ndarray | None = None
+    model: str = "cgm1.0"
+    clusters: ClusterCalibration | None = None
 
     def __post_init__(self) -> None:
+        self.model = model_version(self.model).name
+        needed = model_angle_markers(self.trial, self.name, self.model, self.clusters, self.use_medial_markers)
         if not self.markers:
-            self.markers = angle_markers(self.trial, self.name, self.use_medial_markers)
+            self.markers = list(needed)
+        unused = [m for m in self.markers if m not in needed]
+        if unused:
+            raise ParameterError(
+                f"{', '.join(unused)}: not a marker {self.name} of {self.model} is computed from (static-only "
+                f"markers and the static calibration are fixed); its markers are {', '.join(needed)}"
+            )
+        self.fixed_markers = [m for m in needed if m not in self.markers]
         self.frames = np.asarray(self.frames, dtype=int)
         self._base = np.stack([self.trial.marker(m)[self.frames] for m in self.markers], axis=1)
+        self._fixed = np.stack([self.trial.marker(m)[self.frames] for m in self.fixed_markers], axis=1) \
+            if self.fixed_markers else np.zeros((self.frames.size, 0, 3))
         self.times = self.trial.times[self.frames]
 
     @property
@@ -93,16 +203,32 @@ class JointAngleModel:
 
     capabilities = frozenset({NODES})
 
-    def angles_of(self, positions: np.ndarray) -> np.ndarray:
-        """All three components (degrees) for marker positions ``(k, n_markers, 3)``."""
-        rows = Trial(markers=positions, marker_labels=list(self.markers), rate=self.trial.rate)
-        chain = LowerBodyChain(rows, self.subject, use_medial_markers=self.use_medial_markers)
+    def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
+        """All three components (degrees) for marker positions ``(k, n_markers, 3)``
+        (``fixed``: the positions ``(k, n_fixed, 3)`` of :attr:`fixed_markers`)."""
+        if self.fixed_markers:
+            if fixed is None:
+                raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
+            positions = np.concatenate([positions, fixed], axis=1)
+        rows = Trial(markers=positions, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
+        chain = model_chain(rows, self.subject, self.model, self.clusters, self.use_medial_markers)
         return angle_from_chain(chain, self.name, self.progression)
+
+    def measured_angles(self) -> np.ndarray:
+        """All three components (degrees) at zero deviation, ``(n_frames, 3)`` on
+        :attr:`frames`: the measured angle where the model reproduces it."""
+        return self.angles_of(self._base, self._fixed)
+
+    def seen(self) -> np.ndarray:
+        """``(n_frames, n_markers)`` True where a perturbed marker is measured (a cluster
+        marker may be missing at a frame: its pose is then from the others)."""
+        return np.all(np.isfinite(self._base), axis=-1)
 
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """Angle component at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
+        nodes = np.asarray(nodes, dtype=int)
         positions = self._base[nodes] + np.asarray(P, dtype=float).reshape(len(nodes), -1, 3)
-        angle = self.angles_of(positions)[:, self.axis]
+        angle = self.angles_of(positions, self._fixed[nodes])[:, self.axis]
         if self.reference is None:
             return angle
         reference = np.asarray(self.reference, dtype=float)[nodes]

@@ -94,6 +94,8 @@ class AnglesRun:
         events: gait events used for the cycles.
         event_source: ``"file"`` or how they were detected.
         notes: data-quality notes for reports.
+        clusters: the static cluster calibration of a cluster model (cgm2.3, cgm2.4; the
+            marker-error analysis holds it fixed), else None.
     """
 
     raw: Trial
@@ -104,6 +106,7 @@ class AnglesRun:
     events: list[Event]
     event_source: str
     notes: list[str] = field(default_factory=list)
+    clusters: ClusterCalibration | None = None
 
     @property
     def model(self) -> str:
@@ -285,7 +288,7 @@ def run_angles(
     events, source = trial_gait_events(trial)
     if source != "file":
         notes.append(f"gait events {source}")
-    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes)
+    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters)
 
 
 def choose_model(

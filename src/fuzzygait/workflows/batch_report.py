@@ -91,6 +91,7 @@ def write_batch_report(
     flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
+    model: str = "auto",
     strict: bool = False,
     trials: StageProgress = SILENT,
     components: StageProgress = SILENT,
@@ -106,6 +107,8 @@ def write_batch_report(
         static, subject_file, marker_diameter, flat_foot, preprocessing: as for
             :func:`~fuzzygait.workflows.angles.run_angles`, the same for every trial.
         settings: the marker-error analysis.
+        model: the model version of the angles and of their marker-error model, or
+            ``"auto"`` (per trial, as :func:`~fuzzygait.workflows.angles.run_angles`).
         strict: re-raise a trial's error instead of listing it as failed (debugging).
         trials: progress over the trials; ``components``: over a trial's angle components.
         on_failure: called as ``on_failure(path, error)`` for every failed trial.
@@ -114,7 +117,7 @@ def write_batch_report(
 
     def analyse(path: Path) -> MarkerErrorAnalysis:
         run = run_angles(path, static=static, subject_file=subject_file, marker_diameter=marker_diameter,
-                         flat_foot=flat_foot, preprocessing=preprocessing)  # fmt: skip
+                         flat_foot=flat_foot, preprocessing=preprocessing, model=model)  # fmt: skip
         return analyse_run(run, settings, components.update)
 
     with ReportWriter(out_dir, strict=strict) as writer:

@@ -30,7 +30,6 @@ from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preproc
 
 __all__ = [
     "DEFAULT_SETTINGS",
-    "FUZZY_MODEL",
     "MarkerErrorAnalysis",
     "MarkerErrorSettings",
     "analyse_run",
@@ -39,9 +38,6 @@ __all__ = [
 ]
 
 Progress = Callable[[int, int], None]
-#: The model version of the fuzzy angles: the marker-error model
-#: (:mod:`fuzzygait.markererror.angle_model`) is Plug-in Gait's.
-FUZZY_MODEL = "cgm1.0"
 
 
 @dataclass
@@ -113,22 +109,22 @@ def analyse_run(
 ) -> MarkerErrorAnalysis:
     """The fuzzy marker-error analysis of an already computed joint-angle run.
 
-    ``progress(done, total)`` is called per angle component.  The dataset's ``trial``
-    attribute is the trial's file name, ``model`` the model version of its angles
-    (:data:`FUZZY_MODEL`); the notes are the run's plus one line on the
-    assumed errors.
+    ``progress(done, total)`` is called per angle component.  The marker-error model is
+    the run's model version (a cluster model with the run's static cluster calibration
+    held fixed).  The dataset's ``trial`` attribute is the trial's file name, ``model``
+    that version; the notes are the run's plus one line on the assumed errors.
     """
     options = settings.options()
-    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress)
+    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress,
+                               clusters=run.clusters)  # fmt: skip
+    fixed = "static cluster calibration, " if run.clusters is not None else ""
     notes = list(run.notes) + [
         f"marker errors: {', '.join(options.sources)} ({settings.error_model.source}), {options.method} "
-        f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}"
+        f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}; {run.model} marker "
+        f"model ({fixed}static offsets and subject measures fixed)"
     ]
     fuzzy.attrs["trial"] = Path(run.trial.name).name
-    fuzzy.attrs["model"] = FUZZY_MODEL
-    if run.result.model != FUZZY_MODEL:
-        notes.append(f"fuzzy angles by {FUZZY_MODEL} (the marker-error model is Plug-in Gait's), "
-                     f"the run's angles by {run.result.model}")  # fmt: skip
+    fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)
 
 
@@ -140,15 +136,17 @@ def analyse_trial(
     marker_diameter: float | None = None,
     flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
+    model: str = "auto",
     progress: Progress | None = None,
     **settings: Unpack[SettingsArguments],
 ) -> MarkerErrorAnalysis:
-    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` followed by the fuzzy
-    marker-error analysis of every computed angle (or ``angles``); ``settings`` are the
-    arguments of :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``,
-    ``alphas``, ``angles``, ``method``, ``workers``)."""
+    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` (``model``: a model
+    version or ``"auto"``, as there) followed by the fuzzy marker-error analysis of every
+    computed angle (or ``angles``) by the same version; ``settings`` are the arguments of
+    :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``, ``alphas``,
+    ``angles``, ``method``, ``workers``)."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     marker_diameter=marker_diameter, flat_foot=flat_foot)  # fmt: skip
+                     marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
     return analyse_run(run, MarkerErrorSettings.create(**settings), progress)
 
 
@@ -163,15 +161,17 @@ def analyse_to_files(
     flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
+    model: str = "auto",
     progress: Progress | None = None,
 ) -> MarkerErrorAnalysis:
-    """Run the pipeline and the marker-error analysis of one trial, save the fuzzy angles
-    to ``out_file`` (.nc or .zarr) and, with ``rrd``, a Rerun recording of the trial with
-    its bands (folders created)."""
+    """Run the pipeline (``model``: a model version or ``"auto"``, see
+    :func:`~fuzzygait.workflows.angles.run_angles`) and the marker-error analysis of one
+    trial by that version, save the fuzzy angles to ``out_file`` (.nc or .zarr) and,
+    with ``rrd``, a Rerun recording of the trial with its bands (folders created)."""
     from fuzzygait.uncertainty.storage import save_result
 
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     marker_diameter=marker_diameter, flat_foot=flat_foot)  # fmt: skip
+                     marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
     analysis = analyse_run(run, settings, progress)
     out_file.parent.mkdir(parents=True, exist_ok=True)
     save_result(analysis.fuzzy, out_file)
