@@ -1,0 +1,525 @@
+"""Allowable marker error — the inverse question of thesis §5.5.2: how small must the
+marker errors be for an angle component to be known within a tolerance?
+
+The fuzzy joint-angle band at level α is the Graph Follower hull for balls of radius
+``(1 − α)·Σ_i`` around every marker ``i`` (Σ_i: the marker's cumulative error, Table 3.1
+with the selected sources, :mod:`fuzzygait.markererror.sources`). So the **error scale**
+``s = 1 − α`` is a fraction of Table 3.1, the same for every marker, and ``s·Σ_segment``
+(mm) is how far every marker of that segment may be from where it was measured.
+
+The band of a component is **within the tolerance τ** (degrees) at scale ``s`` when, over
+the frames of the trial where the angle exists, neither bound is further than τ from the
+measured angle and the band is determined (:func:`band_excursion`):
+``max_t max(upper(t) − Φ(t), Φ(t) − lower(t)) ≤ τ``. The **allowable scale** is the
+largest ``s`` for which it is.
+
+The balls are nested in ``s``, so the true excursion grows monotonically with ``s``; the
+search (:func:`allowable_errors`) brackets the allowable scale between the dataset's
+α-levels (``s = 0`` always passes), then refines the bracket on α for each component
+alone — interpolation of the excursion (quadratic through the nearest evaluated levels,
+else the chord), with a bisection step whenever the bracket has not halved in two steps
+— until the bracket is narrower than ``resolution`` mm on the component's largest ball.
+Every α-level evaluated is kept in the returned dataset (``refined_*`` variables, one
+block per component; :func:`refined_levels`), and the hulls of each component are made
+nested over all its levels (an optimum over a ball cannot be worse than over a smaller
+one; the Graph Follower's are local optima, so this only widens them).
+
+Cost: each refinement step is one Graph Follower run of one component at one α-level
+(the components of a step side by side on the evaluator); near α = 1 the balls are small
+and the runs cheap.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.trial import Trial
+from fuzzygait.io.subject import SubjectParameters
+from fuzzygait.kinematics import CGMResult
+from fuzzygait.kinematics.clusters import ClusterCalibration
+from fuzzygait.kinematics.labels import component_label
+from fuzzygait.markererror.analysis import FuzzyAngleOptions, _component_task, fuzzy_joint_angles
+from fuzzygait.markererror.angle_model import AXES, JointAngleModel, fixed_subject, undetermined
+from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
+from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
+from fuzzygait.uncertainty.execution import Evaluator
+from fuzzygait.uncertainty.postprocess import repair_nesting
+
+#: Default tolerance (degrees, either side of the measured angle).
+DEFAULT_TOLERANCE = 2.5
+#: Default resolution (mm on the component's largest ball radius) of the allowable error.
+DEFAULT_RESOLUTION = 0.1
+#: Refinement runs per component at most.
+MAX_EVALUATIONS = 12
+#: Segments in the table's per-segment columns (Table 3.1 order).
+SEGMENTS = tuple(TABLE_3_1)
+
+
+# ---------------------------------------------------------------------------- excursion
+def band_excursion(fuzzy: xr.Dataset, component: str) -> pd.Series:
+    """Largest distance (degrees) of the band of ``component`` from the measured angle over
+    the trial, per α-level (index, ascending; refined levels included,
+    :func:`refined_levels`): ``max_t max(upper − Φ, Φ − lower)``.
+
+    ``inf`` where the band is undetermined at some frame (the segment frame can flip: no
+    tolerance holds); NaN where the level was not evaluated for this component (or the
+    angle has no frame). α = 1 gives 0.
+    """
+    levels = refined_levels(fuzzy, component)
+    hull = levels["hull"]
+    measured = hull.sel(alpha=1.0, bound="upper")
+    sides = xr.concat([hull.sel(bound="upper") - measured, measured - hull.sel(bound="lower")], "side")
+    largest = sides.max(["side", "frame"], skipna=True).to_numpy().astype(float)
+    largest[levels["undetermined"].any("frame").to_numpy()] = np.inf
+    return pd.Series(largest, index=hull["alpha"].to_numpy().astype(float), name=component)
+
+
+# ---------------------------------------------------------------------------- the search
+@dataclass
+class ScaleSearch:
+    """Bracketing search of the largest error scale ``s`` (fraction of Σ) whose excursion
+    ``E(s)`` (degrees) is at most ``tolerance``, for one component.
+
+    ``points`` maps every evaluated scale to its excursion (``inf``: undetermined); ``s = 0``
+    (the measured angle) passes. :meth:`propose` gives the next scale to evaluate (None when
+    the bracket is narrower than ``step`` or nothing fails); :meth:`record` adds a result.
+    """
+
+    tolerance: float
+    step: float
+    points: dict[float, float] = field(default_factory=dict)
+    history: list[bool] = field(default_factory=list)
+    widths: list[float] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.points.setdefault(0.0, 0.0)
+
+    def excursions(self) -> dict[float, float]:
+        """The excursions made monotone in the scale (ascending): the band at a scale
+        contains the bands of all smaller scales (nested balls), so ``E(s)`` is at least
+        every ``E(s')`` with ``s' < s`` — the hulls' nesting repair, in one number."""
+        out, running = {}, 0.0
+        for scale in sorted(self.points):
+            running = max(running, self.points[scale])
+            out[scale] = running
+        return out
+
+    def bracket(self) -> tuple[float, float | None]:
+        """(largest passing scale, smallest failing scale or None)."""
+        excursions = self.excursions()
+        passing = max(s for s, e in excursions.items() if e <= self.tolerance)
+        failing = [s for s, e in excursions.items() if not e <= self.tolerance]
+        return passing, (min(failing) if failing else None)
+
+    def done(self) -> bool:
+        lo, hi = self.bracket()
+        return hi is None or hi - lo <= self.step
+
+    def record(self, scale: float, excursion: float) -> None:
+        self.points[scale] = excursion
+        self.history.append(excursion <= self.tolerance)
+
+    def propose(self) -> float | None:
+        lo, hi = self.bracket()
+        if hi is None or hi - lo <= self.step:
+            return None
+        self.widths.append(hi - lo)
+        if len(self.widths) >= 3 and self.widths[-1] > 0.5 * self.widths[-3]:
+            scale = 0.5 * (lo + hi)  # interpolation stalls: bisect
+        else:
+            estimate = self._interpolate(lo, hi)
+            scale = 0.5 * (lo + hi) if estimate is None else estimate
+            if estimate is not None and self.history:  # a little past the estimate, towards the side not moved last
+                scale += 0.5 * self.step if self.history[-1] else -0.5 * self.step
+        half = 0.5 * self.step
+        return float(min(max(scale, lo + half), hi - half))
+
+    def _interpolate(self, lo: float, hi: float) -> float | None:
+        """Scale where the excursion reaches the tolerance: the quadratic through the
+        bracket's ends and the nearest other evaluated scale when it has one root inside
+        the bracket, else the chord; None when the failing end is undetermined."""
+        excursions = self.excursions()
+        e_lo, e_hi = excursions[lo], excursions[hi]
+        if not math.isfinite(e_hi) or e_hi <= e_lo:
+            return None
+        others = [s for s, e in excursions.items() if s not in (lo, hi) and math.isfinite(e)]
+        if others:
+            third = min(others, key=lambda s: min(abs(s - lo), abs(s - hi)))
+            coefficients = np.polyfit([lo, hi, third], [e_lo, e_hi, excursions[third]], 2)
+            coefficients[-1] -= self.tolerance
+            roots = [r.real for r in np.roots(coefficients) if abs(r.imag) < 1e-12 and lo < r.real < hi]
+            if len(roots) == 1:
+                return float(roots[0])
+        return lo + (self.tolerance - e_lo) / (e_hi - e_lo) * (hi - lo)
+
+
+# ---------------------------------------------------------------------------- GFA runs
+@dataclass(frozen=True)
+class _Setup:
+    """What one component's Graph Follower task needs (mirrors fuzzy_joint_angles)."""
+
+    name: str
+    axis: int
+    frames: np.ndarray
+    markers: list[str]
+    radii: np.ndarray
+    reference: np.ndarray
+
+
+def _setup(trial: Trial, fixed: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
+           sources: Sequence[str], component: str, clusters: ClusterCalibration | None) -> _Setup:  # fmt: skip
+    name, axis_letter = component.rsplit("_", 1)
+    axis = AXES.index(axis_letter)
+    every = np.arange(trial.n_frames)
+    zero = JointAngleModel(trial, fixed, result.progression, name, 0, every, model=result.model, clusters=clusters)
+    usable = np.all(np.isfinite(result.angles[name]), axis=1) & np.all(np.isfinite(zero.measured_angles()), axis=1)
+    frames = np.flatnonzero(usable)
+    radii = np.array([options.error_model.radius(m, sources) for m in zero.markers])
+    return _Setup(name, axis, frames, list(zero.markers), radii, result.angles[name][frames, axis])
+
+
+def _evaluate(trial: Trial, fixed: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
+              setups: Sequence[_Setup], alphas: Sequence[float], clusters: ClusterCalibration | None,
+              evaluator: Evaluator) -> list[tuple[str, np.ndarray, np.ndarray, dict[str, int]]]:  # fmt: skip
+    """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
+    deg, deviation norms (2, bound, n_valid, n_markers) mm, counts."""
+    tasks = []
+    for setup, alpha in zip(setups, alphas, strict=True):
+        task_options = FuzzyAngleOptions(**{**options.__dict__, "alphas": (float(alpha), 1.0)})
+        tasks.append((trial, fixed, result.progression, setup.name, setup.axis, setup.frames, setup.markers,
+                      setup.radii, task_options, setup.reference, result.model, clusters))  # fmt: skip
+    return evaluator.map(_component_task, tasks)
+
+
+# ---------------------------------------------------------------------------- dataset
+def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict[str, _Setup]) -> xr.Dataset:
+    """The dataset with the refinement's levels in a block of their own (dim
+    ``refinement``: each component's evaluated levels, ascending, NaN-padded), the hulls of
+    each component nested over all its levels (plain and refined), undetermined updated.
+
+    Not along ``alpha``: every component refines at its own levels, so a shared ``alpha``
+    would be mostly NaN (and the deviation norms, ``(component, alpha, bound, frame,
+    marker)``, ten times the size); :func:`refined_levels` merges one component's levels
+    along ``alpha``."""
+    alphas = fuzzy["alpha"].to_numpy().astype(float)
+    components = angle_components(fuzzy)
+    markers = [str(m) for m in fuzzy["marker"].to_numpy()]
+    levels = {c: sorted(a for (name, a) in runs if name == c) for c in components}
+    n_levels = max([len(v) for v in levels.values()] + [0])
+    n_c, n_f = len(components), fuzzy.sizes["frame"]
+    hull, flags = fuzzy["hull"].to_numpy().copy(), fuzzy["undetermined"].to_numpy().astype(bool).copy()
+    refined_alpha = np.full((n_c, n_levels), np.nan)
+    refined_hull = np.full((n_c, n_levels, 2, n_f), np.nan)
+    refined_flags = np.zeros((n_c, n_levels, n_f), dtype=bool)
+    has_deviation = "deviation" in fuzzy.data_vars
+    refined_deviation = np.full((n_c, n_levels, 2, n_f, len(markers)), np.nan) if has_deviation else None
+    measured_index = int(np.argmin(np.abs(alphas - 1.0)))
+    for c, component in enumerate(components):
+        setup = setups.get(component)
+        for k, alpha in enumerate(levels[component]):
+            assert setup is not None
+            _, values, norms, _ = runs[(component, alpha)]
+            refined_alpha[c, k] = alpha
+            refined_hull[c, k][:, setup.frames] = values[0]
+            if refined_deviation is not None:
+                columns = np.asarray([markers.index(m) for m in setup.markers])
+                refined_deviation[c, k][:, setup.frames[:, None], columns[None, :]] = norms[0]
+        if not levels[component]:
+            continue
+        # nesting over plain + refined levels, in ascending α
+        every = np.concatenate([alphas, refined_alpha[c, : len(levels[component])]])
+        order = np.argsort(every, kind="stable")
+        stacked = np.concatenate([hull[c], refined_hull[c, : len(levels[component])]])[order]
+        finite = np.isfinite(stacked).any(axis=(1, 2))
+        stacked[finite] = repair_nesting(stacked[finite])
+        measured = hull[c, measured_index, 1][None, :]
+        unsorted = np.empty_like(stacked)
+        unsorted[order] = stacked
+        hull[c], refined_hull[c, : len(levels[component])] = unsorted[: alphas.size], unsorted[alphas.size :]
+        flags[c] |= undetermined(hull[c, :, 0], hull[c, :, 1], measured)
+        refined_flags[c] = undetermined(refined_hull[c, :, 0], refined_hull[c, :, 1], measured)
+    merged = fuzzy.copy()
+    merged["hull"] = fuzzy["hull"].copy(data=hull)
+    merged["undetermined"] = fuzzy["undetermined"].copy(data=flags)
+    merged["refined_alpha"] = (
+        ("component", "refinement"),
+        refined_alpha,
+        {"units": "1", "long_name": "α-level evaluated by the allowable-error refinement"},
+    )
+    merged["refined_hull"] = (
+        ("component", "refinement", "bound", "frame"),
+        refined_hull,
+        {"units": "deg", "long_name": "joint angle bounds at the refined α-level"},
+    )
+    merged["refined_undetermined"] = (
+        ("component", "refinement", "frame"),
+        refined_flags,
+        {"long_name": "band undetermined at the refined α-level"},
+    )
+    if refined_deviation is not None:
+        merged["refined_deviation"] = (
+            ("component", "refinement", "bound", "frame", "marker"),
+            refined_deviation,
+            {"units": "mm", "long_name": "marker deviation norm at the bound"},
+        )
+    return merged  # fmt: skip
+
+
+def refined_levels(fuzzy: xr.Dataset, component: str) -> xr.Dataset:
+    """One component's plain and refined α-levels merged along ``alpha`` (ascending):
+    ``hull (alpha, bound, frame)`` deg, ``undetermined (alpha, frame)`` and the coordinate
+    ``refined (alpha)``; the plain levels only for a dataset without refinement."""
+    hull = component_hull(fuzzy, component)
+    flags = component_undetermined(fuzzy, component)
+    plain = xr.Dataset({"hull": hull, "undetermined": flags}).assign_coords(
+        refined=("alpha", np.zeros(hull.sizes["alpha"], dtype=bool))
+    )
+    if "refined_alpha" not in fuzzy.data_vars:
+        return plain
+    alphas = fuzzy["refined_alpha"].sel(component=component, drop=True).to_numpy()
+    keep = np.flatnonzero(np.isfinite(alphas))
+    extra = (
+        xr.Dataset(
+            {
+                "hull": fuzzy["refined_hull"].sel(component=component, drop=True).isel(refinement=keep),
+                "undetermined": fuzzy["refined_undetermined"].sel(component=component, drop=True).isel(refinement=keep),
+            }
+        )
+        .rename({"refinement": "alpha"})
+        .assign_coords(alpha=alphas[keep], refined=("alpha", np.ones(keep.size, bool)))
+    )
+    return xr.concat([plain, extra], "alpha").sortby("alpha")  # fmt: skip
+
+
+# ---------------------------------------------------------------------------- the table
+def _segment_radii(markers: Sequence[str], radii: Sequence[float] | np.ndarray) -> dict[str, float]:
+    """Largest Σ (mm) per segment of Table 3.1 (a marker without a segment counts as its own)."""
+    out: dict[str, float] = {}
+    for marker, radius in zip(markers, radii, strict=True):
+        try:
+            segment = marker_segment(marker)
+        except ParameterError:
+            segment = marker
+        out[segment] = max(out.get(segment, 0.0), float(radius))
+    return out
+
+
+def allowable_sentence(label: str, tolerance: float, scale: float, segments: dict[str, float], source: str,
+                       full_passes: bool, smallest_fails: bool, failing: float) -> str:  # fmt: skip
+    """One sentence for the report, e.g. "Left knee, sagittal (+ flexion): known within
+    ±2.5° if every marker stays within 2.3 mm of where it was measured (7 % of Table 3.1:
+    pelvis 2.3, thigh 2.3, shank 2.2, ankle 1.4 mm)."
+
+    Args:
+        label: the component's label (:func:`~fuzzygait.kinematics.labels.component_label`).
+        tolerance: degrees.
+        scale: the allowable scale (fraction of Σ); NaN: the angle has no frame.
+        segments: the largest Σ (mm) per segment the component uses.
+        source: what Σ is (``"Table 3.1"``, an errors file, the sources).
+        full_passes: α = 0 is within the tolerance.
+        smallest_fails: no scale tried is; ``failing`` is the smallest tried (fraction).
+    """
+    if not segments or not math.isfinite(scale):
+        return f"{label}: no frame with every marker it needs."
+    largest = max(segments.values())
+    if full_passes:
+        return (f"{label}: known within ±{tolerance:g}° even with the full errors of {source} "
+                f"(every marker within {largest:.0f} mm); larger errors were not tried.")  # fmt: skip
+    if smallest_fails:
+        return (f"{label}: not known within ±{tolerance:g}° even if every marker stays within "
+                f"{failing * largest:.2f} mm of where it was measured (the smallest error tried).")  # fmt: skip
+    parts = ", ".join(f"{name} {scale * mm:.1f}" for name, mm in segments.items())
+    return (f"{label}: known within ±{tolerance:g}° if every marker stays within {scale * largest:.1f} mm "
+            f"of where it was measured ({100 * scale:.0f} % of {source}: {parts} mm).")  # fmt: skip
+
+
+def _row(component: str, search: ScaleSearch, setup: _Setup, tolerance: float, source: str,
+         evaluations: int) -> dict[str, object]:  # fmt: skip
+    segments = _segment_radii(setup.markers, setup.radii)
+    lo, hi = search.bracket()
+    no_data = setup.frames.size == 0
+    full_passes, smallest_fails = hi is None and not no_data, lo == 0.0 and hi is not None
+    scale = math.nan if no_data else lo
+    row: dict[str, object] = {
+        "label": component_label(component),
+        "tolerance_deg": tolerance,
+        "allowable_scale": scale,
+        "allowable_mm": scale * max(setup.radii, default=math.nan),
+        "alpha": 1.0 - scale,
+        "excursion_deg": search.excursions()[lo] if not no_data else math.nan,
+        "failing_scale": math.nan if hi is None else hi,
+        "full_table_passes": full_passes,
+        "smallest_fails": smallest_fails,
+        "evaluations": evaluations,
+    }
+    for segment in SEGMENTS:
+        row[f"{segment}_mm"] = scale * segments[segment] if segment in segments else math.nan
+    row["text"] = allowable_sentence(row["label"], tolerance, scale, segments, source,  # type: ignore[arg-type]
+                                     full_passes, smallest_fails, math.nan if hi is None else hi)  # fmt: skip
+    return row
+
+
+def _components(fuzzy: xr.Dataset, angles: Sequence[str] | None) -> list[str]:
+    available = angle_components(fuzzy)
+    if angles is None:
+        return available
+    wanted = [c for a in angles for c in ([a] if "_" in a else [f"{a}_{x}" for x in AXES])]
+    missing = [c for c in wanted if c not in available]
+    if missing:
+        raise ParameterError(f"the fuzzy result has no components {missing}; it holds {available}")
+    return list(dict.fromkeys(wanted))
+
+
+def _check_consistent(fuzzy: xr.Dataset, options: FuzzyAngleOptions, sources: Sequence[str]) -> None:
+    if fuzzy.attrs.get("sources") != ",".join(sources):
+        raise ParameterError(f"the fuzzy result used sources {fuzzy.attrs.get('sources')!r}, the options "
+                             f"{','.join(sources)!r}: refine it with the options it was computed with")  # fmt: skip
+    for marker, radius in zip(fuzzy["marker"].to_numpy(), fuzzy["ball_radius"].to_numpy(), strict=True):
+        if not math.isclose(options.error_model.radius(str(marker), sources), float(radius), abs_tol=1e-9):
+            raise ParameterError(f"the fuzzy result's ball radius of {marker} ({radius} mm) is not the error "
+                                 f"model's: refine it with the error model it was computed with")  # fmt: skip
+
+
+def allowable_errors(
+    trial: Trial,
+    subject: SubjectParameters,
+    result: CGMResult,
+    options: FuzzyAngleOptions | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+    angles: Sequence[str] | None = None,
+    resolution: float = DEFAULT_RESOLUTION,
+    *,
+    fuzzy: xr.Dataset | None = None,
+    evaluator: Evaluator | None = None,
+    clusters: ClusterCalibration | None = None,
+    max_evaluations: int = MAX_EVALUATIONS,
+) -> tuple[pd.DataFrame, xr.Dataset]:
+    """The largest marker error for which each angle component stays within ``tolerance``.
+
+    Args:
+        trial, subject, result: as for :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`.
+        options: α-levels of the plain run (the starting bracket), error sources and model,
+            optimiser settings, workers (default :class:`FuzzyAngleOptions()`).
+        tolerance: τ in degrees, either side of the measured angle.
+        angles: angle names (``"LKneeAngles"``: its three components) or components
+            (``"LKneeAngles_X"``); default every component of the fuzzy result.
+        resolution: mm; the search stops when the allowable error of the component's
+            largest ball is bracketed this closely.
+        fuzzy: the plain run's dataset (computed with ``options``); None: computed here.
+        evaluator: where the Graph Follower runs (default: ``options.workers`` processes).
+        clusters: the static cluster calibration (cluster models, as for
+            :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`).
+        max_evaluations: refinement runs per component at most.
+
+    Returns:
+        ``(table, dataset)``. ``table`` has one row per component (index ``component``):
+        ``label``; ``tolerance_deg``; ``allowable_scale`` (fraction of Σ, Table 3.1 with
+        the selected sources: the largest scale found within the tolerance, 0 if none);
+        ``allowable_mm`` (that scale on the component's largest Σ, mm); ``alpha``
+        (``1 − scale``); ``excursion_deg`` (the band's largest distance from the measured
+        angle there); ``failing_scale`` (smallest scale found outside the tolerance, NaN if
+        none); ``full_table_passes`` (even α = 0 is within the tolerance: the allowable
+        error is at least Table 3.1's); ``smallest_fails`` (even the smallest scale tried
+        fails); ``evaluations`` (refinement runs); ``<segment>_mm`` (the allowable error of
+        each segment the component uses, NaN otherwise); ``text`` (a sentence for the
+        report). ``dataset`` is the fuzzy result with every refinement level kept —
+        ``refined_alpha (component, refinement)`` (NaN-padded), ``refined_hull
+        (component, refinement, bound, frame)`` deg, ``refined_undetermined``,
+        ``refined_deviation`` mm (:func:`refined_levels` merges one component's levels
+        along ``alpha``) — the hulls nested over all levels, ``allowable_scale``,
+        ``allowable_alpha`` and ``allowable_mm (component)``, and the attributes
+        ``tolerance_deg``, ``allowable_seconds`` (refinement wall time),
+        ``allowable_runs`` and ``allowable_node_evaluations``.
+    """
+    if not tolerance > 0:
+        raise ParameterError(f"tolerance must be > 0 degrees; got {tolerance}")
+    if not resolution > 0:
+        raise ParameterError(f"resolution must be > 0 mm; got {resolution}")
+    options = FuzzyAngleOptions() if options is None else options
+    sources = parse_sources(options.sources)
+    own = Evaluator(workers=max(1, int(options.workers))) if evaluator is None else None
+    runner = own if own is not None else evaluator
+    assert runner is not None
+    try:
+        if fuzzy is None:
+            names = None if angles is None else list(dict.fromkeys(a.rsplit("_", 1)[0] if "_" in a else a
+                                                                   for a in angles))  # fmt: skip
+            fuzzy = fuzzy_joint_angles(trial, subject, result, options, names, evaluator=runner, clusters=clusters)
+        _check_consistent(fuzzy, options, sources)
+        components = _components(fuzzy, angles)
+        fixed = fixed_subject(trial, subject)
+        setups = {c: _setup(trial, fixed, result, options, sources, c, clusters) for c in components}
+        searches = {}
+        for c in components:
+            largest = max(setups[c].radii, default=0.0)
+            excursion = band_excursion(fuzzy, c)
+            points = {
+                round(1.0 - float(a), 9): float(e)  # type: ignore[arg-type]
+                for a, e in excursion.items()
+                if not np.isnan(e)
+            }
+            searches[c] = ScaleSearch(tolerance, resolution / largest if largest > 0 else 1.0, points)
+        runs: dict[tuple[str, float], tuple] = {}
+        counts = {c: 0 for c in components}
+        start, node_evaluations = time.perf_counter(), 0
+        while True:
+            pending = []
+            for c in components:
+                scale = searches[c].propose() if setups[c].frames.size and counts[c] < max_evaluations else None
+                if scale is not None:
+                    pending.append((c, round(scale, 9)))
+            if not pending:
+                break
+            outputs = _evaluate(trial, fixed, result, options, [setups[c] for c, _ in pending],
+                                [round(1.0 - s, 9) for _, s in pending], clusters, runner)  # fmt: skip
+            for (c, scale), output in zip(pending, outputs, strict=True):
+                runs[(c, round(1.0 - scale, 9))] = output
+                counts[c] += 1
+                node_evaluations += output[3]["node_evaluations"]
+                searches[c].record(scale, _run_excursion(output[1], setups[c]))
+        seconds = time.perf_counter() - start
+    finally:
+        if own is not None:
+            own.close()
+
+    source = options.error_model.source + ("" if set(sources) == set(SOURCES) else f" ({', '.join(sources)})")
+    rows = {c: _row(c, searches[c], setups[c], tolerance, source, counts[c]) for c in components}
+    table = pd.DataFrame.from_dict(rows, orient="index")
+    table.index.name = "component"
+    merged = _merge(fuzzy, runs, setups)
+    scale_of = {c: float(rows[c]["allowable_scale"]) for c in components}  # type: ignore[arg-type]
+    every = angle_components(merged)
+    long_name = f"allowable error scale (fraction of Σ) for ±{tolerance:g} deg"
+    merged["allowable_scale"] = (("component",), np.array([scale_of.get(c, np.nan) for c in every]),
+                                 {"units": "1", "long_name": long_name})  # fmt: skip
+    merged["allowable_alpha"] = 1.0 - merged["allowable_scale"]
+    merged["allowable_alpha"].attrs = {"units": "1", "long_name": "α-level of the allowable error"}
+    mm_of = {c: float(rows[c]["allowable_mm"]) for c in components}  # type: ignore[arg-type]
+    merged["allowable_mm"] = (
+        ("component",),
+        np.array([mm_of.get(c, np.nan) for c in every]),
+        {"units": "mm", "long_name": "allowable error of the component's largest ball"},
+    )
+    merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_seconds": round(seconds, 3),
+                         "allowable_runs": int(sum(counts.values())),
+                         "allowable_node_evaluations": int(node_evaluations)})  # fmt: skip
+    table.attrs.update({"tolerance_deg": float(tolerance), "resolution_mm": float(resolution), "source": source})
+    return table, merged
+
+
+def _run_excursion(values: np.ndarray, setup: _Setup) -> float:
+    """Excursion (deg) of one refinement run's hull ``(2, bound, n_valid)`` at its α-level."""
+    lower, upper = values[0, 0], values[0, 1]
+    if lower.size == 0:
+        return math.nan
+    if np.any(undetermined(lower, upper, setup.reference)):
+        return math.inf
+    return float(np.max(np.maximum(upper - setup.reference, setup.reference - lower)))
