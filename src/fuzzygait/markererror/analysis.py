@@ -35,6 +35,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -96,7 +97,37 @@ class FuzzyAngleOptions:
     seed: int = 0
 
 
-def _component_task(args: tuple) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
+class ComponentTask(NamedTuple):
+    """One angle component's α-level optimisation, as :func:`fuzzy_joint_angles` maps it.
+
+    Attributes:
+        trial, subject: the trial and the subject with its inter-ASIS distance fixed.
+        progression: ``(3, 3)`` progression frame of the unperturbed trial.
+        name, axis: the angle (``"LKneeAngles"``) and its component (0, 1, 2 = X, Y, Z).
+        frames: 0-based samples where the angle is measured and computable.
+        markers: the markers whose deviations are the parameters.
+        radii: their α = 0 ball radii Σ, mm.
+        options: the analysis options (its ``alphas`` ascending, 1 included).
+        reference: the measured angle component at ``frames``, degrees.
+        version: the model version; clusters: its static cluster calibration (cluster
+            models).
+    """
+
+    trial: Trial
+    subject: SubjectParameters
+    progression: np.ndarray
+    name: str
+    axis: int
+    frames: np.ndarray
+    markers: list[str]
+    radii: np.ndarray
+    options: FuzzyAngleOptions
+    reference: np.ndarray
+    version: str
+    clusters: ClusterCalibration | None
+
+
+def _component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
     """One angle component: hull (alpha, bound, n_valid), deviation norms and counts."""
     trial, subject, progression, name, axis, frames, markers, radii, options, reference, version, clusters = args
     model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference,
@@ -166,11 +197,36 @@ def fuzzy_joint_angles(
     names = [n for n in (angles or ALL_ANGLE_NAMES) if n in result.angles]
     if not names:
         raise ParameterError(f"{trial.name}: none of the requested angles could be computed")
-    fixed = fixed_subject(trial, subject)
     alphas = np.union1d(np.asarray(options.alphas, dtype=float), [1.0])
     options = FuzzyAngleOptions(**{**options.__dict__, "alphas": tuple(alphas)})
+    tasks, markers_all = component_tasks(trial, subject, result, options, names, clusters)
 
-    tasks, markers_all = [], []
+    start = time.perf_counter()
+    if evaluator is None:
+        with Evaluator(workers=max(1, int(options.workers))) as own:
+            outputs = own.map(_component_task, tasks, progress)
+    else:
+        outputs = evaluator.map(_component_task, tasks, progress)
+    fuzzy = _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
+    fuzzy.attrs["model"] = result.model
+    return fuzzy
+
+
+def component_tasks(
+    trial: Trial,
+    subject: SubjectParameters,
+    result: CGMResult,
+    options: FuzzyAngleOptions,
+    names: Sequence[str],
+    clusters: ClusterCalibration | None = None,
+) -> tuple[list[ComponentTask], list[str]]:
+    """The tasks :func:`fuzzy_joint_angles` maps (per angle in ``names``, X, Y, Z) and
+    every marker they perturb, in first-use order.  ``options.alphas`` are used as given
+    (ascending, 1 included)."""
+    sources = parse_sources(options.sources)
+    fixed = fixed_subject(trial, subject)
+    tasks: list[ComponentTask] = []
+    markers_all: list[str] = []
     for name in names:
         # frames where the angle is measured and the model computes it (a Plug-in Gait
         # angle needs every marker; a cluster pose three of its cluster's)
@@ -185,21 +241,12 @@ def fuzzy_joint_angles(
         markers_all += [m for m in model_markers if m not in markers_all]
         for axis in range(3):
             reference = result.angles[name][frames, axis]
-            tasks.append((trial, fixed, result.progression, name, axis, frames, model_markers, radii, options,
-                          reference, result.model, clusters))  # fmt: skip
-
-    start = time.perf_counter()
-    if evaluator is None:
-        with Evaluator(workers=max(1, int(options.workers))) as own:
-            outputs = own.map(_component_task, tasks, progress)
-    else:
-        outputs = evaluator.map(_component_task, tasks, progress)
-    fuzzy = _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
-    fuzzy.attrs["model"] = result.model
-    return fuzzy
+            tasks.append(ComponentTask(trial, fixed, result.progression, name, axis, frames, model_markers, radii,
+                                       options, reference, result.model, clusters))  # fmt: skip
+    return tasks, markers_all
 
 
-def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: list[str],
+def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], markers: list[str],
               alphas: np.ndarray, options: FuzzyAngleOptions, sources: Sequence[str],
               seconds: float) -> xr.Dataset:  # fmt: skip
     n_frames = trial.n_frames
@@ -207,7 +254,7 @@ def _assemble(trial: Trial, tasks: list[tuple], outputs: list[tuple], markers: l
     deviations: dict[str, np.ndarray] = {}
     totals = {"forward_simulations": 0, "node_evaluations": 0}
     for task, (column, values, norms, counts) in zip(tasks, outputs, strict=True):
-        frames, used = task[5], task[6]
+        frames, used = task.frames, task.markers
         hulls[column] = np.full((alphas.size, 2, n_frames), np.nan)
         hulls[column][:, :, frames] = values
         deviations[column] = np.full((alphas.size, 2, n_frames, len(markers)), np.nan)
