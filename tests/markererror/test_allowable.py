@@ -225,6 +225,23 @@ def test_table_and_refined_dataset(knee, plain: xr.Dataset) -> None:  # noqa: AN
     xr.testing.assert_identical(component_hull(fuzzy, "LKneeAngles_Z"), component_hull(plain, "LKneeAngles_Z"))
 
 
+def test_table_survives_saving(knee, tmp_path) -> None:  # noqa: ANN001
+    """The table is rebuilt from the saved dataset (the report reads the .nc file)."""
+    from fuzzygait.markererror.allowable import allowable_table
+    from fuzzygait.uncertainty.storage import load_result, save_result
+
+    table, fuzzy = knee
+    save_result(fuzzy, tmp_path / "fuzzy.nc")
+    again = load_result(tmp_path / "fuzzy.nc")
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(allowable_table(again), table, check_dtype=False)
+    xr.testing.assert_allclose(refined_levels(again, KNEE)["hull"], refined_levels(fuzzy, KNEE)["hull"])
+    assert fuzzy["allowable_status"].to_numpy().tolist() == ["within", "", ""]  # only X was asked for
+    with pytest.raises(ParameterError, match="no allowable-error refinement"):
+        allowable_table(fuzzy.drop_vars("allowable_status"))
+
+
 def test_full_table_passes_and_smallest_fails(angles_run: AnglesRun, sparse_trial: Trial, plain: xr.Dataset) -> None:
     # 2 mm balls (measurement only): knee flexion is within ±2.5° even at α = 0
     options = FuzzyAngleOptions(alphas=(0.0,), sources=("measurement",))

@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -46,8 +46,14 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.labels import component_label
-from fuzzygait.markererror.analysis import FuzzyAngleOptions, _component_task, fuzzy_joint_angles
-from fuzzygait.markererror.angle_model import AXES, JointAngleModel, fixed_subject, undetermined
+from fuzzygait.markererror.analysis import (
+    ComponentTask,
+    FuzzyAngleOptions,
+    _component_task,
+    component_tasks,
+    fuzzy_joint_angles,
+)
+from fuzzygait.markererror.angle_model import AXES, undetermined
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
 from fuzzygait.uncertainty.execution import Evaluator
@@ -162,45 +168,25 @@ class ScaleSearch:
 
 
 # ---------------------------------------------------------------------------- GFA runs
-@dataclass(frozen=True)
-class _Setup:
-    """What one component's Graph Follower task needs (mirrors fuzzy_joint_angles)."""
-
-    name: str
-    axis: int
-    frames: np.ndarray
-    markers: list[str]
-    radii: np.ndarray
-    reference: np.ndarray
+def _tasks(trial: Trial, subject: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
+           components: Sequence[str], clusters: ClusterCalibration | None) -> dict[str, ComponentTask]:  # fmt: skip
+    """The Graph Follower task of each component (as fuzzy_joint_angles builds it)."""
+    names = list(dict.fromkeys(c.rsplit("_", 1)[0] for c in components))
+    tasks, _ = component_tasks(trial, subject, result, options, names, clusters)
+    by_component = {f"{t.name}_{AXES[t.axis]}": t for t in tasks}
+    return {c: by_component[c] for c in components}
 
 
-def _setup(trial: Trial, fixed: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
-           sources: Sequence[str], component: str, clusters: ClusterCalibration | None) -> _Setup:  # fmt: skip
-    name, axis_letter = component.rsplit("_", 1)
-    axis = AXES.index(axis_letter)
-    every = np.arange(trial.n_frames)
-    zero = JointAngleModel(trial, fixed, result.progression, name, 0, every, model=result.model, clusters=clusters)
-    usable = np.all(np.isfinite(result.angles[name]), axis=1) & np.all(np.isfinite(zero.measured_angles()), axis=1)
-    frames = np.flatnonzero(usable)
-    radii = np.array([options.error_model.radius(m, sources) for m in zero.markers])
-    return _Setup(name, axis, frames, list(zero.markers), radii, result.angles[name][frames, axis])
-
-
-def _evaluate(trial: Trial, fixed: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
-              setups: Sequence[_Setup], alphas: Sequence[float], clusters: ClusterCalibration | None,
+def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float],
               evaluator: Evaluator) -> list[tuple[str, np.ndarray, np.ndarray, dict[str, int]]]:  # fmt: skip
     """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
     deg, deviation norms (2, bound, n_valid, n_markers) mm, counts."""
-    tasks = []
-    for setup, alpha in zip(setups, alphas, strict=True):
-        task_options = FuzzyAngleOptions(**{**options.__dict__, "alphas": (float(alpha), 1.0)})
-        tasks.append((trial, fixed, result.progression, setup.name, setup.axis, setup.frames, setup.markers,
-                      setup.radii, task_options, setup.reference, result.model, clusters))  # fmt: skip
-    return evaluator.map(_component_task, tasks)
+    runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
+    return evaluator.map(_component_task, runs)
 
 
 # ---------------------------------------------------------------------------- dataset
-def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict[str, _Setup]) -> xr.Dataset:
+def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict[str, ComponentTask]) -> xr.Dataset:
     """The dataset with the refinement's levels in a block of their own (dim
     ``refinement``: each component's evaluated levels, ascending, NaN-padded), the hulls of
     each component nested over all its levels (plain and refined), undetermined updated.
@@ -341,30 +327,88 @@ def allowable_sentence(label: str, tolerance: float, scale: float, segments: dic
             f"of where it was measured ({100 * scale:.0f} % of {source}: {parts} mm).")  # fmt: skip
 
 
-def _row(component: str, search: ScaleSearch, setup: _Setup, tolerance: float, source: str,
-         evaluations: int) -> dict[str, object]:  # fmt: skip
-    segments = _segment_radii(setup.markers, setup.radii)
-    lo, hi = search.bracket()
-    no_data = setup.frames.size == 0
-    full_passes, smallest_fails = hi is None and not no_data, lo == 0.0 and hi is not None
-    scale = math.nan if no_data else lo
-    row: dict[str, object] = {
-        "label": component_label(component),
-        "tolerance_deg": tolerance,
-        "allowable_scale": scale,
-        "allowable_mm": scale * max(setup.radii, default=math.nan),
-        "alpha": 1.0 - scale,
-        "excursion_deg": search.excursions()[lo] if not no_data else math.nan,
-        "failing_scale": math.nan if hi is None else hi,
-        "full_table_passes": full_passes,
-        "smallest_fails": smallest_fails,
-        "evaluations": evaluations,
+#: ``allowable_status`` values: bracketed, α = 0 passes, no scale tried passes, no frame.
+STATUSES = ("within", "full table passes", "smallest fails", "no data")
+
+
+def _store(merged: xr.Dataset, searches: dict[str, ScaleSearch], setups: dict[str, ComponentTask],
+           counts: dict[str, int]) -> xr.Dataset:  # fmt: skip
+    """Each search's outcome as ``allowable_* (component)`` variables and the segments'
+    Σ as ``segment_radius (component, segment)`` (NaN / "" for components not analysed)."""
+    every = angle_components(merged)
+    radii = {c: _segment_radii(setups[c].markers, setups[c].radii) for c in searches}
+    segments = list(SEGMENTS) + sorted({k for r in radii.values() for k in r} - set(SEGMENTS))
+    n = len(every)
+    scale, failing, excursion = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    status, evaluations = np.full(n, "", dtype=object), np.zeros(n, dtype=int)
+    radius = np.full((n, len(segments)), np.nan)
+    for i, c in enumerate(every):
+        if c not in searches:
+            continue
+        lo, hi = searches[c].bracket()
+        failing[i], evaluations[i] = (np.nan if hi is None else hi), counts[c]
+        if setups[c].frames.size == 0:
+            status[i] = "no data"
+        else:
+            status[i] = "full table passes" if hi is None else "smallest fails" if lo == 0.0 else "within"
+            scale[i], excursion[i] = lo, searches[c].excursions()[lo]
+        for segment, value in radii[c].items():
+            radius[i, segments.index(segment)] = value
+    largest = np.nanmax(np.where(np.isnan(radius), 0.0, radius), axis=1)
+    variables = {
+        "allowable_scale": (scale, "1", "allowable error scale (fraction of Σ)"),
+        "allowable_alpha": (1.0 - scale, "1", "α-level of the allowable error"),
+        "allowable_mm": (scale * largest, "mm", "allowable error on the component's largest ball"),
+        "allowable_failing_scale": (failing, "1", "smallest error scale found outside the tolerance"),
+        "allowable_excursion": (excursion, "deg", "largest distance of the band from the measured angle there"),
+        "allowable_evaluations": (evaluations, "1", "refinement runs"),
+        "allowable_status": (status.astype(str), "", "one of " + ", ".join(STATUSES)),
     }
-    for segment in SEGMENTS:
-        row[f"{segment}_mm"] = scale * segments[segment] if segment in segments else math.nan
-    row["text"] = allowable_sentence(row["label"], tolerance, scale, segments, source,  # type: ignore[arg-type]
-                                     full_passes, smallest_fails, math.nan if hi is None else hi)  # fmt: skip
-    return row
+    for name, (values, units, long_name) in variables.items():
+        merged[name] = (("component",), values, {"long_name": long_name, **({"units": units} if units else {})})
+    merged["segment_radius"] = (
+        ("component", "segment"),
+        radius,
+        {"units": "mm", "long_name": "largest Σ of the segment's markers the component uses"},
+    )
+    return merged.assign_coords(segment=segments)  # fmt: skip
+
+
+def allowable_table(fuzzy: xr.Dataset) -> pd.DataFrame:
+    """The allowable-error table of a refined dataset (the one :func:`allowable_errors`
+    returns, also after saving and loading it); columns described there."""
+    if "allowable_status" not in fuzzy.data_vars:
+        raise ParameterError(f"{fuzzy.attrs.get('trial', 'the dataset')} has no allowable-error refinement; "
+                             "compute it with allowable_errors")  # fmt: skip
+    tolerance, source = float(fuzzy.attrs["tolerance_deg"]), str(fuzzy.attrs["allowable_source"])
+    step_mm = float(fuzzy.attrs["allowable_resolution_mm"])
+    rows = {}
+    for c in angle_components(fuzzy):
+        status = str(fuzzy["allowable_status"].sel(component=c).item())
+        if not status:
+            continue
+        keys = ("scale", "mm", "alpha", "failing_scale", "excursion")
+        value = {k: float(fuzzy[f"allowable_{k}"].sel(component=c)) for k in keys}
+        radii = fuzzy["segment_radius"].sel(component=c)
+        pairs = zip(radii["segment"].to_numpy(), radii.to_numpy().astype(float))
+        segments = {str(k): float(v) for k, v in pairs if np.isfinite(v)}
+        label = component_label(c)
+        full, smallest = status == "full table passes", status == "smallest fails"
+        row: dict[str, object] = {
+            "label": label, "tolerance_deg": tolerance, "allowable_scale": value["scale"],
+            "allowable_mm": value["mm"], "alpha": value["alpha"], "excursion_deg": value["excursion"],
+            "failing_scale": value["failing_scale"], "full_table_passes": full, "smallest_fails": smallest,
+            "evaluations": int(fuzzy["allowable_evaluations"].sel(component=c)),
+        }  # fmt: skip
+        for segment in SEGMENTS:
+            row[f"{segment}_mm"] = value["scale"] * segments[segment] if segment in segments else math.nan
+        row["text"] = allowable_sentence(label, tolerance, value["scale"], segments, source, full, smallest,
+                                         value["failing_scale"])  # fmt: skip
+        rows[c] = row
+    table = pd.DataFrame.from_dict(rows, orient="index")
+    table.index.name = "component"
+    table.attrs.update({"tolerance_deg": tolerance, "resolution_mm": step_mm, "source": source})
+    return table
 
 
 def _components(fuzzy: xr.Dataset, angles: Sequence[str] | None) -> list[str]:
@@ -434,9 +478,12 @@ def allowable_errors(
         ``refined_alpha (component, refinement)`` (NaN-padded), ``refined_hull
         (component, refinement, bound, frame)`` deg, ``refined_undetermined``,
         ``refined_deviation`` mm (:func:`refined_levels` merges one component's levels
-        along ``alpha``) — the hulls nested over all levels, ``allowable_scale``,
-        ``allowable_alpha`` and ``allowable_mm (component)``, and the attributes
-        ``tolerance_deg``, ``allowable_seconds`` (refinement wall time),
+        along ``alpha``) — the hulls nested over all levels, the outcome per component
+        (``allowable_scale``, ``_alpha``, ``_mm``, ``_failing_scale``, ``_excursion`` deg,
+        ``_evaluations``, ``_status`` (:data:`STATUSES`; "" where not analysed),
+        ``segment_radius (component, segment)`` mm; :func:`allowable_table` rebuilds the
+        table from them) and the attributes ``tolerance_deg``, ``allowable_resolution_mm``,
+        ``allowable_source``, ``allowable_seconds`` (refinement wall time),
         ``allowable_runs`` and ``allowable_node_evaluations``.
     """
     if not tolerance > 0:
@@ -455,8 +502,7 @@ def allowable_errors(
             fuzzy = fuzzy_joint_angles(trial, subject, result, options, names, evaluator=runner, clusters=clusters)
         _check_consistent(fuzzy, options, sources)
         components = _components(fuzzy, angles)
-        fixed = fixed_subject(trial, subject)
-        setups = {c: _setup(trial, fixed, result, options, sources, c, clusters) for c in components}
+        setups = _tasks(trial, subject, result, options, components, clusters)
         searches = {}
         for c in components:
             largest = max(setups[c].radii, default=0.0)
@@ -478,8 +524,7 @@ def allowable_errors(
                     pending.append((c, round(scale, 9)))
             if not pending:
                 break
-            outputs = _evaluate(trial, fixed, result, options, [setups[c] for c, _ in pending],
-                                [round(1.0 - s, 9) for _, s in pending], clusters, runner)  # fmt: skip
+            outputs = _evaluate([setups[c] for c, _ in pending], [round(1.0 - s, 9) for _, s in pending], runner)
             for (c, scale), output in zip(pending, outputs, strict=True):
                 runs[(c, round(1.0 - scale, 9))] = output
                 counts[c] += 1
@@ -489,33 +534,16 @@ def allowable_errors(
     finally:
         if own is not None:
             own.close()
-
     source = options.error_model.source + ("" if set(sources) == set(SOURCES) else f" ({', '.join(sources)})")
-    rows = {c: _row(c, searches[c], setups[c], tolerance, source, counts[c]) for c in components}
-    table = pd.DataFrame.from_dict(rows, orient="index")
-    table.index.name = "component"
-    merged = _merge(fuzzy, runs, setups)
-    scale_of = {c: float(rows[c]["allowable_scale"]) for c in components}  # type: ignore[arg-type]
-    every = angle_components(merged)
-    long_name = f"allowable error scale (fraction of Σ) for ±{tolerance:g} deg"
-    merged["allowable_scale"] = (("component",), np.array([scale_of.get(c, np.nan) for c in every]),
-                                 {"units": "1", "long_name": long_name})  # fmt: skip
-    merged["allowable_alpha"] = 1.0 - merged["allowable_scale"]
-    merged["allowable_alpha"].attrs = {"units": "1", "long_name": "α-level of the allowable error"}
-    mm_of = {c: float(rows[c]["allowable_mm"]) for c in components}  # type: ignore[arg-type]
-    merged["allowable_mm"] = (
-        ("component",),
-        np.array([mm_of.get(c, np.nan) for c in every]),
-        {"units": "mm", "long_name": "allowable error of the component's largest ball"},
-    )
-    merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_seconds": round(seconds, 3),
+    merged = _store(_merge(fuzzy, runs, setups), searches, setups, counts)
+    merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_resolution_mm": float(resolution),
+                         "allowable_source": source, "allowable_seconds": round(seconds, 3),
                          "allowable_runs": int(sum(counts.values())),
                          "allowable_node_evaluations": int(node_evaluations)})  # fmt: skip
-    table.attrs.update({"tolerance_deg": float(tolerance), "resolution_mm": float(resolution), "source": source})
-    return table, merged
+    return allowable_table(merged), merged
 
 
-def _run_excursion(values: np.ndarray, setup: _Setup) -> float:
+def _run_excursion(values: np.ndarray, setup: ComponentTask) -> float:
     """Excursion (deg) of one refinement run's hull ``(2, bound, n_valid)`` at its α-level."""
     lower, upper = values[0, 0], values[0, 1]
     if lower.size == 0:
