@@ -119,6 +119,41 @@ def _missing_reason(missing: list[str]) -> str:
     return f"marker{'s' if len(missing) > 1 else ''} {', '.join(missing)} missing"
 
 
+def model_chain(
+    trial: Trial,
+    subject: SubjectParameters,
+    model: str = "cgm1.0",
+    clusters: ClusterCalibration | None = None,
+    *,
+    use_medial_markers: bool = False,
+    static_foot: str | None = None,
+) -> LowerBodyChain:
+    """The chain of model version ``model`` on ``trial``: Plug-in Gait's with the
+    version's hip regression, tibia and pelvis sequence, or for ``cgm2.3``/``cgm2.4``
+    the :class:`~fuzzygait.kinematics.clusters.ClusterChain` of the static ``clusters``.
+
+    Raises:
+        ParameterError: an unknown model, a cluster model without ``clusters`` or
+            ``cgm2.4`` without the forefoot calibration.
+    """
+    version = model_version(model)
+    if not version.clusters:
+        return LowerBodyChain(trial, subject, use_medial_markers=use_medial_markers, static_foot=static_foot,
+                              hip=version.hip, single_tibia=version.single_tibia,
+                              pelvis_sequence=version.pelvis_sequence)  # fmt: skip
+    if clusters is None:
+        raise ParameterError(
+            f"{version.name} tracks the thigh and shank clusters calibrated on a static trial; "
+            "give the static trial (--static) or its cluster calibration"
+        )
+    if version.forefoot and not clusters.has_forefoot:
+        raise ParameterError(
+            f"{version.name} needs the forefoot calibrated on the static trial (FMH, SMH, VMH, TOE); "
+            "calibrate with the cgm2.4 model, or use cgm2.3"
+        )
+    return ClusterChain(trial, subject, clusters)
+
+
 def compute_lower_body(
     trial: Trial,
     subject: SubjectParameters,
@@ -167,22 +202,7 @@ def compute_lower_body(
     subject.validate()
     version = model_version(model)
     medial = bool(use_medial_markers)
-    chain: LowerBodyChain
-    if version.clusters:
-        if clusters is None:
-            raise ParameterError(
-                f"{version.name} tracks the thigh and shank clusters calibrated on a static trial; "
-                "give the static trial (--static) or its cluster calibration"
-            )
-        if version.forefoot and not clusters.has_forefoot:
-            raise ParameterError(
-                f"{version.name} needs the forefoot calibrated on the static trial (FMH, SMH, VMH, TOE); "
-                "calibrate with the cgm2.4 model, or use cgm2.3"
-            )
-        chain = ClusterChain(trial, subject, clusters)
-    else:
-        chain = LowerBodyChain(trial, subject, use_medial_markers=medial, static_foot=static_foot, hip=version.hip,
-                               single_tibia=version.single_tibia, pelvis_sequence=version.pelvis_sequence)  # fmt: skip
+    chain = model_chain(trial, subject, version.name, clusters, use_medial_markers=medial, static_foot=static_foot)
     if static_foot is not None and knee_method(trial) != "plain" and version.name == "cgm1.0":
         chain = StaticKneeChain(trial, subject, static_foot=static_foot)
     result = CGMResult(model=version.name)
