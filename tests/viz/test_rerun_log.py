@@ -240,3 +240,32 @@ def test_missing_samples(angles_run, tmp_path):
     assert foot.column("Arrows3D:vectors").to_pylist()[7] == [] and len(foot.column("Arrows3D:vectors")[8]) == 3
     knee = scalars(temporal_rows(path, "/angles/LKneeAngles/X/deterministic"))
     assert np.isnan(knee[9]) and np.isfinite(knee[8])
+
+
+def test_undetermined_frames(angles_run, tmp_path):
+    """An undetermined alpha-cut: its bounds are gaps (NaN) there, and an
+    ``undetermined`` point series marks those frames at the measured angle."""
+    trial, result = angles_run.trial, angles_run.result
+    knee = result.angles["LKneeAngles"][:, 0]
+    alphas = np.array([0.0, 0.5, 1.0])
+    flag = np.zeros((alphas.size, trial.n_frames), dtype=bool)
+    flag[0, 20:30] = True
+    half = np.where(flag, 175.0, (1.0 - alphas)[:, None] * 2.0)  # the frame flipped there
+    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": np.stack([knee - half, knee + half], axis=1)}, alphas=alphas,
+                                 frames=trial.frames, times=trial.times, markers=trial.marker_labels,
+                                 ball_radius=np.full(trial.n_markers, 20.0), attrs={"trial": trial.name},
+                                 undetermined={"LKneeAngles_X": flag})  # fmt: skip
+    path = write_recording(tmp_path / "undetermined.rrd", trial, result, fuzzy)
+    upper = scalars(temporal_rows(path, "/angles/LKneeAngles/X/alpha_0/upper"))
+    assert upper.size == trial.n_frames
+    assert np.isnan(upper[20:30]).all() and np.isfinite(upper[:20]).all() and np.isfinite(upper[30:]).all()
+    assert np.isfinite(scalars(temporal_rows(path, "/angles/LKneeAngles/X/alpha_0.5/lower"))).all()
+    points = temporal_rows(path, "/angles/LKneeAngles/X/alpha_0/undetermined")
+    np.testing.assert_array_equal(points.column("frame").to_numpy(), trial.frames[20:30])
+    np.testing.assert_allclose(scalars(points), knee[20:30], rtol=1e-6)
+    (style,) = rr.chunk.RrdReader(path).stream().filter(
+        content="/angles/LKneeAngles/X/alpha_0/undetermined", is_static=True).to_chunks()  # fmt: skip
+    batch = style.to_record_batch()
+    assert batch.column("SeriesPoints:names").to_pylist() == [["Left α=0 undetermined"]]
+    assert "SeriesPoints:markers" in batch.schema.names
+    assert "/angles/LKneeAngles/X/alpha_0.5/undetermined" not in entity_paths(path)

@@ -36,10 +36,19 @@ Entity layout::
     angles/<Angle>/<X|Y|Z>/alpha_<a>/lower  of the alpha-cut ``a`` (``alpha_0``,
                                             ``alpha_0.5``, ...; formatted with ``:g``)
                                             for each shown alpha < 1, on the fuzzy
-                                            result's own frames
+                                            result's own frames; NaN (a gap in the
+                                            line) where the band is undetermined
+    angles/<Angle>/<X|Y|Z>/alpha_<a>/undetermined
+                                            (only when there are some) Scalars drawn as
+                                            points (SeriesPoints, crosses in the side's
+                                            dark colour) at the measured angle, on the
+                                            frames where the alpha-cut is undetermined
+                                            (the segment frame can flip: the bounds mean
+                                            nothing there)
 
 Series colours follow the gait-report convention (left red, right green); the envelope
-lines of an alpha-cut use the side's colour lightened the more the lower the alpha.
+lines of an alpha-cut use the side's colour lightened the more the lower the alpha, the
+undetermined markers the side's colour darkened.
 
 Blueprint (stored in the file as the default blueprint of the application id, so the
 viewer opens on it): tab "Joint angles" (active) = a 5 x 3 grid of time-series plots,
@@ -66,7 +75,7 @@ from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.kinematics.model import CGMResult
-from fuzzygait.markererror.result import angle_components, ball_radius, component_hull
+from fuzzygait.markererror.result import angle_components, ball_radius, component_hull, component_undetermined
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -91,6 +100,8 @@ _BALL_COLOUR = (90, 160, 255, 70)  # RGBA; alpha is honoured by solid ellipsoids
 _ARROW_RADIUS_MM = 3.0
 _DETERMINISTIC_WIDTH = 2.5
 _ENVELOPE_WIDTH = 1.0
+_UNDETERMINED_MARKER = "cross"
+_UNDETERMINED_SIZE = 3.0
 
 
 def _import_rerun() -> tuple[Any, Any]:
@@ -194,6 +205,11 @@ def _envelope_colour(side_colour: tuple[int, int, int], alpha: float) -> tuple[i
     return _lighten(side_colour, 0.2 + 0.55 * (1.0 - alpha))
 
 
+def _darken(colour: tuple[int, int, int], amount: float) -> tuple[int, int, int]:
+    """``colour`` blended towards black by ``amount`` in [0, 1]."""
+    return tuple(int(round(c * (1.0 - amount))) for c in colour)  # type: ignore[return-value]
+
+
 # ----------------------------------------------------------------------------- logging
 def _log_points(rec: Any, rr: Any, entity: str, indexes: list[Any], positions: np.ndarray,
                 labels: list[str], radius: float, colour: tuple[int, int, int]) -> None:  # fmt: skip
@@ -290,6 +306,28 @@ def _log_series(
     )
 
 
+def _log_undetermined(
+    rec: Any, rr: Any, entity: str, frames: np.ndarray, times: np.ndarray, values: np.ndarray, name: str,
+    colour: tuple[int, int, int],
+) -> None:  # fmt: skip
+    """Points (crosses) at ``values`` on the given frames only: where a band is undetermined."""
+    rec.log(entity, rr.SeriesPoints(names=name, colors=[colour], markers=_UNDETERMINED_MARKER,
+                                    marker_sizes=_UNDETERMINED_SIZE), static=True, strict=True)  # fmt: skip
+    rec.send_columns(
+        entity,
+        indexes=[rr.TimeColumn("frame", sequence=frames), rr.TimeColumn("time", duration=times)],
+        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
+        strict=True,
+    )
+
+
+def _measured_angle(data: xr.DataArray) -> np.ndarray:
+    """The measured angle of a hull ``(alpha, bound, frame)``: the midpoint of its highest
+    α-level (α = 1, where both bounds are the measured angle)."""
+    top = data.sel(alpha=float(data["alpha"].max()))
+    return np.asarray(0.5 * (top.sel(bound="lower") + top.sel(bound="upper")).transpose("frame").values, dtype=float)
+
+
 def _side_style(angle: str) -> tuple[str, tuple[int, int, int]]:
     return _SIDES.get(angle[:1], (angle, (120, 120, 120)))
 
@@ -315,14 +353,23 @@ def _log_angles(
             continue
         side_name, colour = _side_style(angle)
         data = component_hull(fuzzy, variable)
+        flags = component_undetermined(fuzzy, variable)
+        measured = _measured_angle(data)
         for alpha in alphas:
             cut = data.sel(alpha=alpha)
+            mask = np.asarray(flags.sel(alpha=alpha).transpose("frame").values, dtype=bool)
             envelope_colour = _envelope_colour(colour, alpha)
+            entity = f"angles/{angle}/{axis}/alpha_{_alpha_label(alpha)}"
             for bound in ("upper", "lower"):
+                values = np.asarray(cut.sel(bound=bound).transpose("frame").values, dtype=float)
                 _log_series(
-                    rec, rr, f"angles/{angle}/{axis}/alpha_{_alpha_label(alpha)}/{bound}", fuzzy_indexes,
-                    cut.sel(bound=bound).transpose("frame").values,
+                    rec, rr, f"{entity}/{bound}", fuzzy_indexes, np.where(mask, np.nan, values),
                     f"{side_name} α={_alpha_label(alpha)} {bound}", envelope_colour, _ENVELOPE_WIDTH,
+                )  # fmt: skip
+            if mask.any():
+                _log_undetermined(
+                    rec, rr, f"{entity}/undetermined", frames[mask], times[mask], measured[mask],
+                    f"{side_name} α={_alpha_label(alpha)} undetermined", _darken(colour, 0.45),
                 )  # fmt: skip
 
 
@@ -414,7 +461,8 @@ def write_recording(
         result: :func:`~fuzzygait.kinematics.compute_lower_body` output for ``trial``.
         fuzzy: fuzzy joint-angle result (:mod:`fuzzygait.markererror.analysis`: hulls in
             degrees per angle component, ball radii in mm); adds the alpha-cut envelope
-            series and the marker balls. The deviation norms are not logged.
+            series (broken, with "undetermined" points, where a band is undetermined)
+            and the marker balls. The deviation norms are not logged.
         alphas_to_show: alpha levels of ``fuzzy`` whose envelopes are logged; None for
             every level below 1 (alpha = 1 is the deterministic series, always logged;
             ignored without ``fuzzy``).

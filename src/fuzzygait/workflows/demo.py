@@ -7,7 +7,8 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``cycles.csv`` -- mean and SD over gait cycles,
 * ``gait_cycles.png`` -- the gait-report grid,
 * ``summary.md`` -- what was done, how close the angles are to the known truth and how
-  wide the knee angles' fuzzy bands are,
+  wide the knee angles' fuzzy bands are (determined bands first; "undetermined" where a
+  segment frame can flip),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
 
 and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
@@ -29,10 +30,12 @@ from rich.console import Console
 
 from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import write_table
+from fuzzygait.kinematics.labels import component_label
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.figures import plot_gait_cycles
-from fuzzygait.viz.report import ReportItem, write_report
+from fuzzygait.viz.report import ReportItem, TrialAnalysis, write_report
+from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
@@ -128,6 +131,55 @@ def cgm24_session(data: Path, out_dir: Path) -> list[str]:
     return lines
 
 
+UNDETERMINED_TEXT = (
+    '"undetermined": at that α-level the marker errors let the thigh or shank frame flip on some frames '
+    "(a bound more than 90° from the measured angle), so the angle is not known there at all; ΔΦ is taken over "
+    "the determined frames only."
+)
+
+
+def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
+    """The summary's fuzzy part: the determined bands first (largest flexion ΔΦ), then
+    what is undetermined, then the ΔΦ table ("undetermined" where an α-level is
+    undetermined at some frame) -- the numbers of the report's first screen."""
+    table = delta_phi_table(analysis, TrialData.of(analysis))
+    head = headline(table)
+    alphas = table.alphas
+    lines = [
+        "",
+        "How far to trust the knee angles: relative width ΔΦ (Eq. 5.3, %) of their fuzzy bands when every "
+        "marker may be off by (1 − α) times its Table 3.1 error (measurement + placement + soft tissue). "
+        + UNDETERMINED_TEXT,
+        "",
+    ]
+    if head.largest is not None:
+        value, name, alpha = head.largest
+        lines.append(f"- determined bands: largest flexion ΔΦ {value:.0f} % at α = {alpha:g} "
+                     f"({name}, {component_label(name).lower()})")  # fmt: skip
+    else:
+        lines.append("- no flexion band is determined at every frame at any α-level")
+    if head.alpha is not None and head.undetermined:
+        lowest = head.alpha
+        text = f"- undetermined at α = {lowest:g}: {len(head.undetermined)} of {head.n_components} components"
+        if head.flexion_undetermined:
+            where = ", ".join(f"{n} on {table.frames_undetermined(n, lowest)}" for n in head.flexion_undetermined)
+            text += f", flexion among them ({where} of {table.n_frames} frames)"
+        lines.append(text)
+    elif head.alpha is not None:
+        lines.append(f"- every band is determined at α = {head.alpha:g}")
+    lowest_alpha = min(alphas) if alphas else None
+    extra = f" undetermined frames at α = {lowest_alpha:g} |" if lowest_alpha is not None else ""
+    lines += ["", "| angle | " + " | ".join(f"α = {a:g}" for a in alphas) + " |" + extra,
+              "|---|" + "---|" * (len(alphas) + (1 if extra else 0))]  # fmt: skip
+    for name in table.components:
+        cells = ["undetermined" if table.is_undetermined(name, a) else f"{table.value(name, a):.0f}" for a in alphas]
+        if lowest_alpha is not None:
+            count = table.frames_undetermined(name, lowest_alpha)
+            cells.append(f"{count} of {table.n_frames}" if count else "none")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     """Run the demo; returns the summary text (also written to ``summary.md``)."""
     data, out_dir = Path(data), Path(out_dir)
@@ -146,7 +198,6 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
         progress.print("fuzzy marker-error analysis of the knee angles (about 30 s)...", markup=False)
     analysis = analyse_run(run, MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES))
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
-    knee = analysis.delta_phi.loc[["LKneeAngles_X", "RKneeAngles_X"]]
 
     n_cycles = {side: int(stats[stats["angle"].str.startswith(side)]["n_cycles"].max())
                 for side in ("L", "R")}  # fmt: skip
@@ -169,15 +220,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
         "|---|---|---|",
     ]
     lines += [f"| {r.angle} | {r.rms_deg:.3f} | {r.max_deg:.3f} |" for r in comparison.itertuples()]
-    lines += [
-        "",
-        "How far to trust the knee flexion: relative width ΔΦ (Eq. 5.3, %) of its fuzzy band when every "
-        "marker may be off by (1 − α) times its Table 3.1 error (measurement + placement + soft tissue):",
-        "",
-        "| angle | " + " | ".join(f"α = {a:g}" for a in knee.columns) + " |",
-        "|---|" + "---|" * len(knee.columns),
-    ]
-    lines += [f"| {name} | " + " | ".join(f"{v:.0f}" for v in row) + " |" for name, row in knee.iterrows()]
+    lines += uncertainty_lines(analysis)
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
     lines += ["", "Notes:"] + [f"- {note}" for note in run.notes]
     lines += cgm24_lines

@@ -24,6 +24,18 @@ drawn, and it keeps the α-levels nested.  Min/max over cycles would mix the str
 stride variability (the SD of the classic report) into the measurement uncertainty.  At
 each percentage only cycles where the angle and every hull are available are used.
 
+Undetermined bands
+------------------
+Where an α-level's band is undetermined (the marker errors let a segment frame flip, a
+bound more than 90° from the measured angle; ``undetermined`` in the dataset) the band
+is not drawn: a hatched strip in the side's colour along the top of the panel marks
+those points, the y-limits come from the curves and the determined bands only.  A
+cycle point is undetermined when it is in *any* cycle used there (a mean with one
+meaningless bound is meaningless).  ΔΦ cells read "undetermined" where an α-level is
+undetermined at some frame; the key numbers (trial page, index) are of the bands
+determined at every frame, with the number of components undetermined at the smallest
+α beside them (a determined band is at most 180° wide).
+
 Atomicity
 ---------
 Everything is written into a hidden staging folder beside ``OUT`` and moved into place

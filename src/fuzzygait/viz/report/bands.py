@@ -1,12 +1,12 @@
-"""The report's numbers: gait-cycle bands, the ΔΦ table and the summary numbers of a
-trial, and the clinical labels of the angle components.
+"""The report's numbers: gait-cycle bands (undetermined points left out), the ΔΦ table
+and the key numbers of a trial (determined bands first), and the order of the angle
+components.
 
 The fuzzy marker-error dataset is read only through :mod:`fuzzygait.markererror.result`.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -16,9 +16,10 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 import pandas as pd
 
-from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles
+from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points
 from fuzzygait.kinematics.labels import parse_component
-from fuzzygait.markererror.result import angle_components, component_hull
+from fuzzygait.markererror.analysis import undetermined_levels
+from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
 from fuzzygait.viz.layout import ANGLE_ROWS, SIDE_STYLE
 
 if TYPE_CHECKING:
@@ -93,26 +94,69 @@ def grid_components() -> list[str]:
 
 
 # ============================================================================ bands
-def _hulls(fuzzy: xr.Dataset, name: str, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(alphas < 1 ascending, hull (n_alpha, 2 [lower, upper], n_frames) deg)`` of one
-    angle component on ``frames``, or None when the analysis did not cover it."""
+def _levels(fuzzy: xr.Dataset, name: str, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(alphas < 1 ascending, hull (n_alpha, 2 [lower, upper], n_frames) deg,
+    undetermined (n_alpha, n_frames) bool)`` of one angle component on ``frames``, or
+    None when the analysis did not cover it."""
     if name not in angle_components(fuzzy):
         return None
     data = component_hull(fuzzy, name)
+    flags = component_undetermined(fuzzy, name)
     if "frame" in data.dims and "frame" in fuzzy.coords:
         data = data.reindex(frame=np.asarray(frames))
+        flags = flags.reindex(frame=np.asarray(frames), fill_value=False)
     data = data.sel(bound=["lower", "upper"]).transpose("alpha", "bound", "frame")
+    flags = flags.transpose("alpha", "frame")
     alphas = np.asarray(data["alpha"].values, dtype=float)
     keep = alphas < _ALPHA_ONE
     if not keep.any():
         return None
     order = np.argsort(alphas[keep])
     values = np.asarray(data.values, dtype=float)[keep][order]
-    return alphas[keep][order], values
+    mask = np.asarray(flags.values, dtype=bool)[keep][order]
+    return alphas[keep][order], values, mask
+
+
+def _quiet_undetermined(signal: np.ndarray, hull: np.ndarray, undetermined: np.ndarray) -> np.ndarray:
+    """``hull`` with its undetermined bounds replaced by the measured angle plus the band
+    offset interpolated linearly from the determined frames of the same α-level and bound,
+    so the cycle splines do not carry the meaningless bounds into the neighbouring
+    percentages (those points are marked undetermined anyway)."""
+    out = np.array(hull, dtype=float, copy=True)
+    frames = np.arange(signal.size)
+    for k in range(out.shape[0]):
+        bad = undetermined[k]
+        if not bad.any():
+            continue
+        for b in range(out.shape[1]):
+            offset = out[k, b] - signal
+            good = ~bad & np.isfinite(offset)
+            fill = np.interp(frames[bad], frames[good], offset[good]) if good.any() else 0.0
+            out[k, b, bad] = signal[bad] + fill
+    return out
+
+
+def _cycle_flags(flags: np.ndarray, cycles: Sequence[GaitCycle], n_points: int) -> np.ndarray:
+    """``(n_cycles, n_points, n_alpha)``: a normalised point is flagged when either
+    frame around its sample (``start + p/100 (end - start)``) is flagged in ``flags``
+    ``(n_frames, n_alpha)``."""
+    percent = percent_points(n_points)
+    last = flags.shape[0] - 1
+    out = np.zeros((len(cycles), percent.size, flags.shape[1]), dtype=bool)
+    for c, cycle in enumerate(cycles):
+        sample = cycle.start + percent / 100.0 * (cycle.end - cycle.start)
+        low = np.clip(np.floor(sample + 1e-9).astype(int), 0, last)
+        high = np.clip(np.ceil(sample - 1e-9).astype(int), 0, last)
+        out[c] = flags[low] | flags[high]
+    return out
 
 
 def cycle_bands(
-    signal: np.ndarray, hull: np.ndarray, cycles: Sequence[GaitCycle], n_points: int = N_POINTS
+    signal: np.ndarray,
+    hull: np.ndarray,
+    cycles: Sequence[GaitCycle],
+    n_points: int = N_POINTS,
+    undetermined: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Gait-cycle-normalised mean curve and fuzzy bands of one angle component.
 
@@ -120,18 +164,29 @@ def cycle_bands(
         signal: ``(n_frames,)`` measured angle (deg).
         hull: ``(n_alpha, 2, n_frames)`` lower/upper hull per α-level (deg).
         cycles: the side's gait cycles (:func:`gait_cycles`).
+        undetermined: ``(n_alpha, n_frames)`` True where the α-level's band is
+            undetermined (the segment frame can flip); None: everywhere determined.
 
     Returns:
         ``(mean (n_points,), band (n_alpha, 2, n_points), n_cycles)``: the mean over
         cycles of the normalised angle and of the normalised lower and upper hulls,
         using at each percentage only the cycles where the angle and all hulls are
-        finite; ``n_cycles`` is the largest number of cycles used.
+        finite; ``n_cycles`` is the largest number of cycles used.  The band is NaN at
+        a percentage where the α-level is undetermined in *any* cycle used there (a
+        mean with one meaningless bound is meaningless; the mean curve itself is
+        unaffected): where the mean curve is finite, a NaN band means "undetermined".
     """
     n_alpha = hull.shape[0]
     if not cycles:
         return np.full(n_points, np.nan), np.full((n_alpha, 2, n_points), np.nan), 0
-    curve = normalise_cycles(np.asarray(signal, dtype=float), cycles, n_points)  # (c, p)
-    hulls = normalise_cycles(np.moveaxis(np.asarray(hull, dtype=float), -1, 0), cycles, n_points)
+    signal = np.asarray(signal, dtype=float)
+    hull = np.asarray(hull, dtype=float)
+    flags = None
+    if undetermined is not None and n_alpha and np.any(undetermined):
+        flags = np.asarray(undetermined, dtype=bool)
+        hull = _quiet_undetermined(signal, hull, flags)
+    curve = normalise_cycles(signal, cycles, n_points)  # (c, p)
+    hulls = normalise_cycles(np.moveaxis(hull, -1, 0), cycles, n_points)  # (c, p, a, 2)
     valid = np.isfinite(curve) & np.isfinite(hulls).all(axis=(2, 3))  # (c, p)
     count = valid.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -139,7 +194,18 @@ def cycle_bands(
         band = np.where(valid[:, :, None, None], hulls, 0.0).sum(axis=0) / count[:, None, None]
     mean[count == 0] = np.nan
     band[count == 0] = np.nan
+    if flags is not None:
+        flagged = (_cycle_flags(flags.T, cycles, n_points) & valid[:, :, None]).any(axis=0)  # (p, a)
+        band[flagged] = np.nan
     return mean, np.moveaxis(band, 0, -1), int(count.max())
+
+
+def band_undetermined(curve: np.ndarray, band: np.ndarray | None) -> np.ndarray | None:
+    """``(n_alpha, n_points)`` True where :func:`cycle_bands` left the band out as
+    undetermined (curve finite, band NaN); None without a band."""
+    if band is None:
+        return None
+    return np.isfinite(curve)[None, :] & ~np.isfinite(band).all(axis=1)
 
 
 @dataclass
@@ -172,18 +238,37 @@ class TrialData:
         column = np.asarray(values, dtype=float)[:, "XYZ".index(axis)]
         return None if not np.isfinite(column).any() else column
 
-    def hull(self, name: str) -> np.ndarray | None:
-        """``(n_alpha, 2, n_frames)`` hull of ``name`` at the report's α-levels, or None
-        when it was not analysed."""
-        found = _hulls(self.fuzzy, name, self.run.trial.frames)
+    def _report_levels(self, name: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """Hull and undetermined mask of ``name`` at the report's α-levels."""
+        found = _levels(self.fuzzy, name, self.run.trial.frames)
         if found is None:
             return None
-        alphas, values = found
+        alphas, values, mask = found
         if alphas.shape != self.alphas.shape or not np.allclose(alphas, self.alphas):
             # only the α-levels common to the whole report
             index = [int(np.argmin(abs(alphas - a))) for a in self.alphas]
-            values = values[index]
-        return values
+            values, mask = values[index], mask[index]
+        return values, mask
+
+    def hull(self, name: str) -> np.ndarray | None:
+        """``(n_alpha, 2, n_frames)`` hull of ``name`` at the report's α-levels (as
+        computed, undetermined bounds included), or None when it was not analysed."""
+        found = self._report_levels(name)
+        return None if found is None else found[0]
+
+    def undetermined(self, name: str) -> np.ndarray | None:
+        """``(n_alpha, n_frames)`` True where the band of ``name`` is undetermined (the
+        segment frame can flip within the α-level's balls), or None when not analysed."""
+        found = self._report_levels(name)
+        return None if found is None else found[1]
+
+    def determined_hull(self, name: str) -> np.ndarray | None:
+        """:meth:`hull` with NaN where the band is undetermined: what is drawn."""
+        found = self._report_levels(name)
+        if found is None:
+            return None
+        values, mask = found
+        return np.where(mask[:, None, :], np.nan, values)
 
     def n_cycles(self) -> dict[str, int]:
         """Gait cycles per side."""
@@ -191,55 +276,160 @@ class TrialData:
 
 
 # ============================================================================ numbers
-def delta_phi_table(analysis: TrialAnalysis, data: TrialData) -> pd.DataFrame:
-    """ΔΦ rows in report order, α columns descending (as Table 5.2), plus the reference
-    max |Φ| of the measured angle and the widest band at the smallest α."""
-    table = analysis.delta_phi.copy()
-    table.columns = [float(c) for c in table.columns]
-    table = table[sorted(table.columns, reverse=True)]
-    table = table.loc[sorted(table.index, key=component_order)]
-    peak, widest = [], []
-    lowest = data.alphas[0] if data.alphas.size else None
-    for name in table.index:
+FLEXION = re.compile(r"[LR](Hip|Knee|Ankle)Angles_X")
+
+
+@dataclass
+class DeltaPhiTable:
+    """The ΔΦ table of a trial: rows in report order, α columns descending (as Table
+    5.2).
+
+    Attributes:
+        values: ΔΦ (%) over the determined frames (NaN: not available).
+        undetermined: True where the α-level is undetermined at some frame
+            (:func:`~fuzzygait.markererror.analysis.undetermined_levels`): the cell reads
+            "undetermined", whatever ``values`` holds.
+        widest: widest band (deg) over the determined frames per α-level (NaN: none).
+        undetermined_frames: frames undetermined per α-level.
+        peak: reference max |Φ| (deg) of the measured angle per row.
+        n_frames: frames of the trial.
+    """
+
+    values: pd.DataFrame
+    undetermined: pd.DataFrame
+    widest: pd.DataFrame
+    undetermined_frames: pd.DataFrame
+    peak: pd.Series
+    n_frames: int
+
+    @property
+    def alphas(self) -> list[float]:
+        """The α-levels of the columns (descending)."""
+        return [float(a) for a in self.values.columns]
+
+    @property
+    def components(self) -> list[str]:
+        """The rows (angle components, report order)."""
+        return [str(n) for n in self.values.index]
+
+    def is_undetermined(self, name: str, alpha: float) -> bool:
+        """Whether ``name``'s band at ``alpha`` is undetermined at some frame."""
+        return bool(self.undetermined[alpha][name])
+
+    def value(self, name: str, alpha: float) -> float:
+        """ΔΦ (%) of ``name`` at ``alpha`` over the determined frames (NaN: none)."""
+        return float(self.values[alpha][name])
+
+    def widest_band(self, name: str, alpha: float) -> float:
+        """Widest band (deg) of ``name`` at ``alpha`` over the determined frames."""
+        return float(self.widest[alpha][name])
+
+    def frames_undetermined(self, name: str, alpha: float) -> int:
+        """Frames where ``name``'s band at ``alpha`` is undetermined."""
+        return int(self.undetermined_frames[alpha][name])
+
+    def determined(self, alpha: float) -> pd.Series:
+        """ΔΦ at ``alpha`` of the rows determined at every frame with a finite value."""
+        column = self.values[alpha].astype(float)
+        keep = ~self.undetermined[alpha].astype(bool) & np.isfinite(column)
+        return column[keep]
+
+
+def delta_phi_table(analysis: TrialAnalysis, data: TrialData) -> DeltaPhiTable:
+    """The ΔΦ table of a trial (:class:`DeltaPhiTable`) from its analysis' ΔΦ (Eq. 5.3,
+    over determined frames) and undetermined α-levels."""
+    values = analysis.delta_phi.copy()
+    alphas = sorted((float(c) for c in values.columns), reverse=True)
+    values.columns = pd.Index([float(c) for c in values.columns])
+    names = sorted((str(n) for n in values.index), key=component_order)
+    values = values.reindex(index=names, columns=alphas)
+    levels = undetermined_levels(analysis.fuzzy)
+    level_alphas = [float(c) for c in levels.columns]
+    flags = np.zeros((len(names), len(alphas)), dtype=bool)
+    widest = np.full((len(names), len(alphas)), np.nan)
+    frames = np.zeros((len(names), len(alphas)), dtype=int)
+    peak = np.full(len(names), np.nan)
+    for i, name in enumerate(names):
+        for j, alpha in enumerate(alphas):
+            match = [k for k, c in enumerate(level_alphas) if abs(c - alpha) <= 1e-9]
+            if name in levels.index and match:
+                flags[i, j] = bool(levels.loc[name].iloc[match[0]])
         signal = data.angle(name)
-        peak.append(float(np.nanmax(np.abs(signal))) if signal is not None else math.nan)
-        hull = data.hull(name)
-        if hull is None or lowest is None:
-            widest.append(math.nan)
-        else:
-            width = hull[0, 1] - hull[0, 0]
-            widest.append(float(np.nanmax(width)) if np.isfinite(width).any() else math.nan)
-    table["peak"] = peak
-    table["widest"] = widest
-    return table
+        if signal is not None:
+            peak[i] = float(np.nanmax(np.abs(signal)))
+        hull, mask = data.determined_hull(name), data.undetermined(name)
+        if hull is None or mask is None:
+            continue
+        for k, alpha in enumerate(data.alphas):
+            column = [j for j, c in enumerate(alphas) if abs(c - alpha) <= 1e-9]
+            if not column:
+                continue
+            j = column[0]
+            width = hull[k, 1] - hull[k, 0]
+            if np.isfinite(width).any():
+                widest[i, j] = float(np.nanmax(width))
+            frames[i, j] = int(mask[k].sum())
+            flags[i, j] = flags[i, j] or bool(mask[k].any())
+    return DeltaPhiTable(
+        values,
+        pd.DataFrame(flags, index=names, columns=alphas),
+        pd.DataFrame(widest, index=names, columns=alphas),
+        pd.DataFrame(frames, index=names, columns=alphas),
+        pd.Series(peak, index=names, dtype=float),
+        data.run.trial.n_frames,
+    )
 
 
 #: A summary number: (value, component, α-level).
 Summary = tuple[float, str, float]
 
 
-def summary_numbers(table: pd.DataFrame) -> tuple[Summary | None, Summary | None]:
-    """Largest ΔΦ at the smallest α (sagittal hip/knee/ankle when present, as in
-    Table 5.2, else any angle) and the widest band (deg) at the smallest α."""
-    alpha_columns = [c for c in table.columns if isinstance(c, float)]
-    if not alpha_columns or table.empty:
-        return None, None
-    lowest = float(min(alpha_columns))
-    column = table[lowest].astype(float)
-    flexion = [n for n in table.index if re.fullmatch(r"[LR](Hip|Knee|Ankle)Angles_X", n)]
-    candidates = column.loc[flexion] if flexion else column
-    candidates = candidates[np.isfinite(candidates)]
-    largest = None
-    if not candidates.empty:
-        name = str(candidates.idxmax())
-        largest = (float(candidates[name]), name, lowest)
-    widths = table["widest"].astype(float)
-    widths = widths[np.isfinite(widths)]
-    widest = None
-    if not widths.empty:
-        name = str(widths.idxmax())
-        widest = (float(widths[name]), name, lowest)
-    return largest, widest
+@dataclass
+class Headline:
+    """The key numbers of a trial, determined bands first.
+
+    Attributes:
+        largest: largest ΔΦ (%) among the hip/knee/ankle flexion angles (as Table 5.2;
+            any angle when none was analysed) whose band is determined at every frame,
+            at the smallest α-level where one is.
+        widest: widest band (deg) among the angles determined at every frame, at the
+            smallest α-level where one is.
+        alpha: the smallest α-level of the trial.
+        undetermined: angle components undetermined at ``alpha`` (report order).
+        n_components: angle components analysed.
+        flexion_undetermined: the flexion angles among ``undetermined``.
+    """
+
+    largest: Summary | None = None
+    widest: Summary | None = None
+    alpha: float | None = None
+    undetermined: list[str] = field(default_factory=list)
+    n_components: int = 0
+    flexion_undetermined: list[str] = field(default_factory=list)
+
+
+def headline(table: DeltaPhiTable) -> Headline:
+    """The key numbers of a trial (:class:`Headline`) from its ΔΦ table."""
+    alphas = sorted(table.alphas)
+    if not alphas or not table.components:
+        return Headline()
+    flexion = [n for n in table.components if FLEXION.fullmatch(n)]
+    largest = widest = None
+    for alpha in alphas:
+        determined = table.determined(alpha)
+        candidates = determined.loc[[n for n in flexion if n in determined.index]] if flexion else determined
+        if largest is None and not candidates.empty:
+            name = str(candidates.idxmax())
+            largest = (float(candidates[name]), name, alpha)
+        widths = table.widest[alpha].astype(float)
+        widths = widths[~table.undetermined[alpha].astype(bool) & np.isfinite(widths)]
+        if widest is None and not widths.empty:
+            name = str(widths.idxmax())
+            widest = (float(widths[name]), name, alpha)
+    lowest = alphas[0]
+    undetermined = [n for n in table.components if table.is_undetermined(n, lowest)]
+    return Headline(largest, widest, lowest, undetermined, len(table.components),
+                    [n for n in undetermined if n in flexion])  # fmt: skip
 
 
 @dataclass
@@ -254,19 +444,27 @@ class TrialEntry:
     cycles: dict[str, int] = field(default_factory=dict)
     gaps_filled: int = 0
     gaps_left: int = 0
-    max_delta_phi: Summary | None = None  # (value %, component, alpha)
-    widest_band: Summary | None = None  # (deg, component, alpha)
+    headline: Headline = field(default_factory=Headline)
 
     @property
     def ok(self) -> bool:
         """Whether the trial has a page (no error)."""
         return self.error is None
 
+    @property
+    def max_delta_phi(self) -> Summary | None:
+        """Largest determined flexion ΔΦ: (value %, component, α)."""
+        return self.headline.largest
+
+    @property
+    def widest_band(self) -> Summary | None:
+        """Widest determined band: (deg, component, α)."""
+        return self.headline.widest
+
     @classmethod
-    def of(cls, source: Path, page: str, data: TrialData, table: pd.DataFrame) -> TrialEntry:
+    def of(cls, source: Path, page: str, data: TrialData, table: DeltaPhiTable) -> TrialEntry:
         """The index entry of a trial drawn on ``page`` from ``data`` and its ΔΦ table."""
         run = data.run
-        largest, widest = summary_numbers(table)
         filled = sum(g.filled for g in run.gaps)
         return cls(
             source=source,
@@ -276,6 +474,5 @@ class TrialEntry:
             cycles=data.n_cycles(),
             gaps_filled=filled,
             gaps_left=len(run.gaps) - filled,
-            max_delta_phi=largest,
-            widest_band=widest,
+            headline=headline(table),
         )

@@ -12,14 +12,16 @@ from typing import TYPE_CHECKING
 from urllib.parse import quote
 
 import numpy as np
-import pandas as pd
 
 from fuzzygait import __version__
-from fuzzygait.kinematics.labels import SIDE_NAMES, component_label
+from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, component_label, parse_component
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.report.bands import (
+    FLEXION,
+    DeltaPhiTable,
+    Headline,
     ReportRun,
     TrialAnalysis,
     TrialData,
@@ -80,6 +82,9 @@ figure { margin: .6rem 0 1rem; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e2e2e2; }
 figcaption { font-size: .9rem; color: #444; margin-top: .3rem; }
 .small { font-size: .85rem; color: #555; }
+.undet { color: #6b4a00; font-style: italic; }
+span.wrap { display: inline-block; max-width: 11rem; white-space: normal; }
+.nowrap { white-space: nowrap; }
 ul.notes li { margin: .15rem 0; }
 footer { margin-top: 2.5rem; border-top: 1px solid #ddd; padding-top: .6rem; font-size: .85rem; color: #666; }
 """
@@ -98,6 +103,16 @@ DELTA_PHI_SENTENCE = (
     "angle (thesis Eq. 5.3 and Table 5.2; the magnitude keeps angles that stay negative "
     "comparable)."
 )
+
+UNDETERMINED_SENTENCE = (
+    "“Undetermined” means that at that α-level the assumed marker errors let a segment's "
+    "coordinate frame flip (a bound lies more than 90° from the measured angle), so the "
+    "angle is not known there at all: such bands are not drawn (a hatched strip along the "
+    "top of the panel marks where), and ΔΦ and band widths are taken over the determined "
+    "frames only."
+)
+#: What the report writes for an undetermined number.
+UNDETERMINED = "undetermined"
 
 _CYCLES_ALT = (
     "Grid of joint angles (pelvis, hip, knee, ankle, foot progression; sagittal, frontal, "
@@ -291,33 +306,89 @@ def _assumptions_section(analysis: TrialAnalysis) -> str:
     return "".join(parts)
 
 
-def _delta_phi_section(table: pd.DataFrame, data: TrialData) -> str:
-    """The ΔΦ table (rows in report order, α columns descending) with its explanation."""
-    alpha_columns = [c for c in table.columns if isinstance(c, float)]
-    lowest = data.alphas[0] if data.alphas.size else None
-    header = [("Angle", False)] + [(f"α = {alpha_text(float(a))}", True) for a in alpha_columns]
+def _delta_phi_section(table: DeltaPhiTable, data: TrialData) -> str:
+    """The ΔΦ table (rows in report order, α columns descending) with its explanation;
+    "undetermined" where the α-level is undetermined at some frame."""
+    alphas = table.alphas
+    lowest = min(alphas) if alphas else None
+    header = [("Angle", False)] + [(f"α = {alpha_text(a)}", True) for a in alphas]
     header += [("Reference<br>max |Φ| (deg)", True)]
     if lowest is not None:
-        header += [(f"Widest band<br>α = {alpha_text(lowest)} (deg)", True)]
+        header += [(f"Widest determined<br>band α = {alpha_text(lowest)} (deg)", True),
+                   (f"Undetermined<br>frames α = {alpha_text(lowest)}", True)]  # fmt: skip
     rows = []
-    for name, row in table.iterrows():
-        cells = [(f"{_esc(component_label(str(name)))} <span class=\"small mono\">{_esc(name)}</span>", False)]
-        cells += [(_fmt(float(row[a]), 0), True) for a in alpha_columns]
-        cells += [(_fmt(float(row["peak"]), 1), True)]
+    for name in table.components:
+        cells = [(f"{_esc(component_label(name))} <span class=\"small mono\">{_esc(name)}</span>", False)]
+        for alpha in alphas:
+            if table.is_undetermined(name, alpha):
+                cells.append((f"<span class=\"undet\">{UNDETERMINED}</span>", True))
+            else:
+                cells.append((_fmt(table.value(name, alpha), 0), True))
+        cells += [(_fmt(float(table.peak[name]), 1), True)]
         if lowest is not None:
-            cells += [(_fmt(float(row["widest"]), 1), True)]
+            count = table.frames_undetermined(name, lowest)
+            if count and not np.isfinite(table.widest_band(name, lowest)):  # no determined frame
+                cells.append((f"<span class=\"undet\">{UNDETERMINED}</span>", True))
+            else:
+                cells.append((_fmt(table.widest_band(name, lowest), 1), True))
+            cells.append((f"{count} of {table.n_frames}" if count else "none", True))
         rows.append(cells)
     return (
         "<h2 id=\"delta-phi\">Relative envelope width ΔΦ (%)</h2>"
         f"<p>{DELTA_PHI_SENTENCE} Values are large for angles whose largest value is "
         "small or near zero (e.g. frontal and transverse planes); read them together with "
         "the band width in degrees. “–”: not available.</p>"
+        f"<p>{UNDETERMINED_SENTENCE}</p>"
         + _table(header, rows)
     )
 
 
+def _names(components: Sequence[str]) -> str:
+    """Angle components as a short list, sides grouped: ``"knee flexion (L, R), ankle
+    frontal (L)"`` (sagittal hip/knee/ankle: "flexion", else the plane)."""
+    groups: dict[str, list[str]] = {}
+    for name in components:
+        parsed = parse_component(name)
+        if parsed is None:
+            groups.setdefault(name, [])
+            continue
+        side, base, axis = parsed
+        row = ROW_TITLES.get(base, base).lower()
+        plane = "flexion" if FLEXION.fullmatch(name) else dict((a, p) for a, p, _ in PLANES).get(axis, axis)
+        groups.setdefault(f"{row} {plane}", []).append(side)
+    nbsp = ",\u00a0"  # the sides stay together
+    return ", ".join(f"{what} ({nbsp.join(sides)})" if sides else what for what, sides in groups.items())
+
+
+def headline_lines(head: Headline) -> list[str]:
+    """The key numbers of a trial as HTML lines, determined bands first."""
+    lines = []
+    if head.largest is not None:
+        value, name, alpha = head.largest
+        what = "hip/knee/ankle flexion" if FLEXION.fullmatch(name) else "the analysed angles"
+        lines.append(f"Largest ΔΦ of {what} (determined bands): <b>{_fmt(value, 0)} %</b> at "
+                     f"α = {alpha_text(alpha)} – {_esc(component_label(name))}")  # fmt: skip
+    elif head.n_components:
+        lines.append("Largest ΔΦ: <b>undetermined</b> – no flexion band is determined at any α-level")
+    if head.alpha is not None and head.n_components:
+        lowest = alpha_text(head.alpha)
+        if head.undetermined:
+            text = (f"Undetermined at α = {lowest}: <b>{len(head.undetermined)} of {head.n_components}</b> "
+                    "angle components (a segment frame can flip; hatched in the figures)")  # fmt: skip
+            if head.flexion_undetermined:
+                text += f", among them {_esc(_names(head.flexion_undetermined))}"
+            lines.append(text)
+        else:
+            lines.append(f"Every band is determined at α = {lowest} ({head.n_components} angle components).")
+    if head.widest is not None:
+        value, name, alpha = head.widest
+        lines.append(f"Widest determined band: <b>{_fmt(value, 1)}°</b> at α = {alpha_text(alpha)} "
+                     f"– {_esc(component_label(name))}")  # fmt: skip
+    return lines
+
+
 def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
-                table: pd.DataFrame, files: str, source: Path) -> str:  # fmt: skip
+                table: DeltaPhiTable, files: str, source: Path) -> str:  # fmt: skip
     """The page of one trial: figures, ΔΦ table, data quality, assumptions, subject."""
     run = analysis.run
     trial = run.trial
@@ -340,15 +411,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
     ]  # fmt: skip
     if _sources_text(analysis.fuzzy):
         facts.append(("Error sources", _esc(_sources_text(analysis.fuzzy))))
-    key = []
-    if entry.max_delta_phi is not None:
-        value, name, alpha = entry.max_delta_phi
-        key.append(f"Largest ΔΦ at α = {alpha_text(alpha)}: <b>{_fmt(value, 0)} %</b> "
-                   f"– {_esc(component_label(name))}")  # fmt: skip
-    if entry.widest_band is not None:
-        value, name, alpha = entry.widest_band
-        key.append(f"Widest band at α = {alpha_text(alpha)}: <b>{_fmt(value, 1)}°</b> "
-                   f"– {_esc(component_label(name))}")  # fmt: skip
+    key = headline_lines(entry.headline)
     filled = sum(g.filled for g in run.gaps)
     key.append(f"Gaps: {filled} filled, {len(run.gaps) - filled} left open; "
                f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
@@ -376,7 +439,8 @@ mean curve drawn; the stride-to-stride variability is not included. A note such 
 <figure>
 <a href="{figs}/cycles.svg"><img src="{figs}/cycles.png" width="1100" height="1260"
 alt="{_CYCLES_ALT}"></a>
-<figcaption>Mean over gait cycles with α-bands. Click for the scalable version
+<figcaption>Mean over gait cycles with α-bands; hatched strips along the top of a panel:
+undetermined there (no band drawn). Click for the scalable version
 (<a href="{figs}/cycles.svg">SVG</a>, <a href="{figs}/cycles.png">PNG</a>).</figcaption>
 </figure>
 {_delta_phi_section(table, data)}
@@ -398,6 +462,28 @@ alt="Grid of joint angles over time for the whole trial with uncertainty bands p
     return _page(f"{source.name} – fuzzygait report", body)
 
 
+def _index_numbers(head: Headline) -> tuple[str, str, str]:
+    """The index cells of a trial: largest determined flexion ΔΦ, undetermined components
+    at the smallest α, widest determined band."""
+    dphi = widest = "–"
+    if head.largest is not None:
+        value, name, alpha = head.largest
+        dphi = (f"{_fmt(value, 0)} % at α = {alpha_text(alpha)}<br>"
+                f"<span class=\"small\">{_esc(component_label(name))}</span>")  # fmt: skip
+    elif head.n_components:
+        dphi = f"<span class=\"undet\">{UNDETERMINED}</span>"
+    if head.widest is not None:
+        value, name, alpha = head.widest
+        widest = (f"{_fmt(value, 1)}° at α = {alpha_text(alpha)}<br>"
+                  f"<span class=\"small\">{_esc(component_label(name))}</span>")  # fmt: skip
+    undet = "–"
+    if head.n_components:
+        undet = f"{len(head.undetermined)} of {head.n_components}"
+        if head.flexion_undetermined:
+            undet += f"<br><span class=\"small wrap\">incl. {_esc(_names(head.flexion_undetermined))}</span>"
+    return dphi, undet, widest
+
+
 def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
     """The index of the batch: every trial with status, key numbers or its error."""
     n_ok = sum(e.ok for e in entries)
@@ -409,29 +495,25 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
             status = "<span class=\"ok\">OK</span>"
             frames = f"{e.n_frames} @ {e.rate:g} Hz" if e.n_frames is not None and e.rate else "–"
             cycles = f"{e.cycles.get('L', 0)} / {e.cycles.get('R', 0)}"
-            if e.max_delta_phi is not None:
-                value, comp, alpha = e.max_delta_phi
-                dphi = (f"{_fmt(value, 0)} %<br><span class=\"small\">"
-                        f"{_esc(component_label(comp))}</span>")  # fmt: skip
-            else:
-                dphi = "–"
-            widest = f"{_fmt(e.widest_band[0], 1)}°" if e.widest_band is not None else "–"
+            dphi, undet, widest = _index_numbers(e.headline)
             gaps = f"{e.gaps_filled} filled" + (f", {e.gaps_left} open" if e.gaps_left else "")
-            detail = (f"<a href=\"{quote(e.page or '')}\">report page</a><br>"
-                      f"<span class=\"small\">gaps: {_esc(gaps)}</span>")  # fmt: skip
+            detail = (f"<a class=\"nowrap\" href=\"{quote(e.page or '')}\">report page</a><br>"
+                      f"<span class=\"small nowrap\">gaps: {_esc(gaps)}</span>")  # fmt: skip
             rows.append([(str(i), True), (name, False), (status, False), (frames, True),
-                         (cycles, True), (dphi, True), (widest, True), (detail, False)])  # fmt: skip
+                         (cycles, True), (dphi, True), (undet, True), (widest, True),
+                         (detail, False)])  # fmt: skip
             classes.append("")
         else:
             rows.append([(str(i), True), (_esc(e.source.name), False),
                          ("<span class=\"failed\">failed</span>", False), ("–", True), ("–", True),
-                         ("–", True), ("–", True),
+                         ("–", True), ("–", True), ("–", True),
                          (f'<span class="mono error">{_esc(e.error)}</span>', False)])  # fmt: skip
             classes.append("failed-row")
     lowest = alpha_text(min(alphas)) if alphas else "0"
     header = [("#", True), ("Trial", False), ("Status", False), ("Frames", True),
-              ("Gait cycles L / R", True), (f"Largest ΔΦ at α = {lowest}", True),
-              (f"Widest band at α = {lowest}", True), ("Details / error", False)]  # fmt: skip
+              ("Gait cycles<br>L / R", True), ("Largest ΔΦ, flexion<br>(determined bands)", True),
+              (f"Undetermined<br>at α = {lowest}", True), ("Widest<br>determined band", True),
+              ("Details / error", False)]  # fmt: skip
     table = _table(header, rows, row_classes=classes)
     failed_text = f', <span class="failed">{n_failed} failed</span>' if n_failed else ""
     sources = "".join(f"<li><span class=\"mono\">{_esc(e.source)}</span></li>" for e in entries)
@@ -446,9 +528,11 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
 <p>Each trial page shows the Plug-in Gait joint angles over the gait cycle and over the
 whole trial, with shaded bands for the uncertainty caused by marker position errors
 (measurement system, marker placement, soft-tissue artefact). {ALPHA_SENTENCE}</p>
-<p>{DELTA_PHI_SENTENCE} The index shows the largest ΔΦ among hip, knee and ankle
-flexion (as in the thesis' Table 5.2), and the widest band in degrees among all
-angles.</p>
+<p>{DELTA_PHI_SENTENCE} Of the bands that are determined at every frame, the index
+shows the largest ΔΦ among hip, knee and ankle flexion (as in the thesis' Table 5.2) and
+the widest band in degrees among all angles, each at the smallest α-level where there is
+one, and how many angle components are undetermined at the smallest α.</p>
+<p>{UNDETERMINED_SENTENCE}</p>
 </div>
 <h2>Trials</h2>
 {table}
