@@ -127,8 +127,9 @@ class ComponentTask(NamedTuple):
     clusters: ClusterCalibration | None
 
 
-def _component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
-    """One angle component: hull (alpha, bound, n_valid), deviation norms and counts."""
+def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
+    """Run one angle component's task: ``(component name, hull (alpha, bound, n_valid) in
+    degrees, deviation norms (alpha, bound, n_valid, n_markers) in mm, work counts)``."""
     trial, subject, progression, name, axis, frames, markers, radii, options, reference, version, clusters = args
     model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference,
                             model=version, clusters=clusters)  # fmt: skip
@@ -204,9 +205,9 @@ def fuzzy_joint_angles(
     start = time.perf_counter()
     if evaluator is None:
         with Evaluator(workers=max(1, int(options.workers))) as own:
-            outputs = own.map(_component_task, tasks, progress)
+            outputs = own.map(run_component_task, tasks, progress)
     else:
-        outputs = evaluator.map(_component_task, tasks, progress)
+        outputs = evaluator.map(run_component_task, tasks, progress)
     fuzzy = _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
     fuzzy.attrs["model"] = result.model
     return fuzzy
