@@ -51,25 +51,14 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.angles import wrap_degrees
-from fuzzygait.kinematics.chain import LowerBodyChain, pelvis_markers
-from fuzzygait.kinematics.clusters import ClusterCalibration, ClusterChain
-from fuzzygait.kinematics.model import angle_from_chain, angle_markers
+from fuzzygait.kinematics.chain import pelvis_markers
+from fuzzygait.kinematics.clusters import ClusterCalibration
+from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
-from fuzzygait.kinematics.versions import ModelVersion, model_version
+from fuzzygait.kinematics.versions import model_version
 from fuzzygait.uncertainty.protocol import NODES, Evaluation, Output
 
 AXES = ("X", "Y", "Z")
-
-
-def _check_clusters(version: ModelVersion, clusters: ClusterCalibration | None, name: str) -> ClusterCalibration:
-    if clusters is None:
-        raise ParameterError(
-            f"{version.name} tracks the thigh and shank clusters calibrated on the static trial: the marker-error "
-            "model needs that cluster calibration (give the static trial, --static)"
-        )
-    if name[1:] == "ForeFootAngles" and (name[0], "forefoot") not in clusters.segments:
-        raise ParameterError(f"{name} needs the CGM 2.4 forefoot calibration (calibrate with the cgm2.4 model)")
-    return clusters
 
 
 def model_angle_markers(
@@ -92,7 +81,10 @@ def model_angle_markers(
         raise ParameterError(f"{name} is a CGM 2.4 output; {version.name} does not compute it")
     if not version.clusters:
         return angle_markers(trial, name, use_medial_markers)
-    calibration = _check_clusters(version, clusters, name)
+    if clusters is None:
+        raise ParameterError(f"the {version.name} markers of {name} are those of the static cluster calibration: "
+                             "give it (clusters)")  # fmt: skip
+    calibration = clusters
 
     def tracked(segment: str) -> list[str]:
         return [m for m in calibration.segment(side, segment).markers if trial.has_marker(m)]
@@ -110,23 +102,6 @@ def model_angle_markers(
     if joint not in needed:
         raise ParameterError(f"unknown angle {name!r}")
     return needed[joint]
-
-
-def model_chain(
-    trial: Trial,
-    subject: SubjectParameters,
-    model: str = "cgm1.0",
-    clusters: ClusterCalibration | None = None,
-    use_medial_markers: bool = False,
-) -> LowerBodyChain:
-    """The dynamic-trial chain of model version ``model`` on ``trial`` (as
-    :func:`~fuzzygait.kinematics.model.compute_lower_body` builds it)."""
-    version = model_version(model)
-    if version.clusters:
-        assert clusters is not None
-        return ClusterChain(trial, subject, clusters)
-    return LowerBodyChain(trial, subject, use_medial_markers=use_medial_markers, hip=version.hip,
-                          single_tibia=version.single_tibia, pelvis_sequence=version.pelvis_sequence)  # fmt: skip
 
 
 def fixed_subject(trial: Trial, subject: SubjectParameters) -> SubjectParameters:
@@ -172,6 +147,7 @@ class JointAngleModel:
 
     def __post_init__(self) -> None:
         self.model = model_version(self.model).name
+        model_chain(self.trial, self.subject, self.model, self.clusters)  # its errors: no calibration, no forefoot
         needed = model_angle_markers(self.trial, self.name, self.model, self.clusters, self.use_medial_markers)
         if not self.markers:
             self.markers = list(needed)
@@ -211,7 +187,7 @@ class JointAngleModel:
                 raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
             positions = np.concatenate([positions, fixed], axis=1)
         rows = Trial(markers=positions, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
-        chain = model_chain(rows, self.subject, self.model, self.clusters, self.use_medial_markers)
+        chain = model_chain(rows, self.subject, self.model, self.clusters, use_medial_markers=self.use_medial_markers)
         return angle_from_chain(chain, self.name, self.progression)
 
     def measured_angles(self) -> np.ndarray:
