@@ -49,9 +49,9 @@ from fuzzygait.kinematics.labels import component_label
 from fuzzygait.markererror.analysis import (
     ComponentTask,
     FuzzyAngleOptions,
-    _component_task,
     component_tasks,
     fuzzy_joint_angles,
+    run_component_task,
 )
 from fuzzygait.markererror.angle_model import AXES, undetermined
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
@@ -182,7 +182,7 @@ def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float],
     """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
     deg, deviation norms (2, bound, n_valid, n_markers) mm, counts."""
     runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
-    return evaluator.map(_component_task, runs)
+    return evaluator.map(run_component_task, runs)
 
 
 # ---------------------------------------------------------------------------- dataset
@@ -256,7 +256,7 @@ def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict
             refined_deviation,
             {"units": "mm", "long_name": "marker deviation norm at the bound"},
         )
-    return merged  # fmt: skip
+    return merged
 
 
 def refined_levels(fuzzy: xr.Dataset, component: str) -> xr.Dataset:
