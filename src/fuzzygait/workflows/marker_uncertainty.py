@@ -9,6 +9,7 @@ out) is :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -18,7 +19,9 @@ from typing import TypedDict, Unpack
 import pandas as pd
 import xarray as xr
 
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
+from fuzzygait.markererror.allowable import DEFAULT_TOLERANCE, allowable_errors
 from fuzzygait.markererror.analysis import (
     DEFAULT_ALPHAS,
     FuzzyAngleOptions,
@@ -26,6 +29,7 @@ from fuzzygait.markererror.analysis import (
     relative_envelope_width,
 )
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
+from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
 
 __all__ = [
@@ -42,12 +46,15 @@ Progress = Callable[[int, int], None]
 
 @dataclass
 class MarkerErrorAnalysis:
-    """A trial's deterministic run, its fuzzy angles and their ΔΦ table."""
+    """A trial's deterministic run, its fuzzy angles, their ΔΦ table and the
+    allowable-marker-error table (:func:`fuzzygait.markererror.allowable.allowable_table`;
+    None when no tolerance was set)."""
 
     run: AnglesRun
     fuzzy: xr.Dataset
     delta_phi: pd.DataFrame
     notes: list[str]
+    allowable: pd.DataFrame | None = None
 
 
 class SettingsArguments(TypedDict, total=False):
@@ -59,6 +66,8 @@ class SettingsArguments(TypedDict, total=False):
     angles: Sequence[str] | None
     method: str
     workers: int | None
+    tolerance: float | None
+    allowable_angles: Sequence[str] | None
 
 
 @dataclass(frozen=True)
@@ -72,6 +81,9 @@ class MarkerErrorSettings:
         angles: angle names to analyse (None: every computed angle).
         method: ``"cartesian"`` or ``"spherical"`` marker deviations.
         workers: processes for the angle components (None: up to 2).
+        tolerance: ± degrees of the allowable-marker-error refinement
+            (:func:`~fuzzygait.markererror.allowable.allowable_errors`; None: none).
+        allowable_angles: angle names or components to refine (None: every analysed one).
     """
 
     error_model: ErrorModel = field(default_factory=ErrorModel)
@@ -80,6 +92,13 @@ class MarkerErrorSettings:
     angles: tuple[str, ...] | None = None
     method: str = "cartesian"
     workers: int | None = None
+    tolerance: float | None = DEFAULT_TOLERANCE
+    allowable_angles: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.tolerance is not None and not (math.isfinite(self.tolerance) and self.tolerance > 0):
+            raise ParameterError(f"tolerance must be a finite number of degrees > 0 (or None: no "
+                                 f"allowable-error table); got {self.tolerance}")  # fmt: skip
 
     @classmethod
     def create(cls, **arguments: Unpack[SettingsArguments]) -> MarkerErrorSettings:
@@ -89,9 +108,11 @@ class MarkerErrorSettings:
         errors_file = arguments.get("errors_file")
         error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()
         angles = arguments.get("angles")
+        refined = arguments.get("allowable_angles")
         return cls(error_model, names, tuple(arguments.get("alphas", DEFAULT_ALPHAS)),
                    None if angles is None else tuple(angles), arguments.get("method", "cartesian"),
-                   arguments.get("workers"))  # fmt: skip
+                   arguments.get("workers"), arguments.get("tolerance", DEFAULT_TOLERANCE),
+                   None if refined is None else tuple(refined))  # fmt: skip
 
     def options(self) -> FuzzyAngleOptions:
         """The options of :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`."""
@@ -100,7 +121,8 @@ class MarkerErrorSettings:
                                  method=self.method, workers=workers)  # fmt: skip
 
 
-#: The default analysis: Table 3.1 errors, all sources, α = 0, 0.25, 0.5, 0.75 (and 1).
+#: The default analysis: Table 3.1 errors, all sources, α = 0, 0.25, 0.5, 0.75 (and 1),
+#: the allowable marker error for ±2.5°.
 DEFAULT_SETTINGS = MarkerErrorSettings()
 
 
@@ -111,21 +133,36 @@ def analyse_run(
 
     ``progress(done, total)`` is called per angle component.  The marker-error model is
     the run's model version (a cluster model with the run's static cluster calibration
-    held fixed).  The dataset's ``trial`` attribute is the trial's file name, ``model``
-    that version; the notes are the run's plus one line on the assumed errors.
+    held fixed).  With ``settings.tolerance`` the allowable-marker-error refinement
+    (:func:`~fuzzygait.markererror.allowable.allowable_errors`) follows on the same
+    evaluator, and the dataset is the refined one (its ``refined_*`` levels and
+    ``allowable_*`` outcome; the hulls nested over every level).  The dataset's ``trial``
+    attribute is the trial's file name, ``model`` that version; the notes are the run's
+    plus one line on the assumed errors (and one on the refinement's runs and time).
     """
     options = settings.options()
-    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress,
-                               clusters=run.clusters)  # fmt: skip
+    allowable = None
+    with Evaluator(workers=max(1, int(options.workers))) as evaluator:
+        fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress,
+                                   evaluator=evaluator, clusters=run.clusters)  # fmt: skip
+        if settings.tolerance is not None:
+            allowable, fuzzy = allowable_errors(run.trial, run.subject, run.result, options, settings.tolerance,
+                                                settings.allowable_angles, fuzzy=fuzzy, evaluator=evaluator,
+                                                clusters=run.clusters)  # fmt: skip
     fixed = "static cluster calibration, " if run.clusters is not None else ""
     notes = list(run.notes) + [
         f"marker errors: {', '.join(options.sources)} ({settings.error_model.source}), {options.method} "
         f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}; {run.model} marker "
         f"model ({fixed}static offsets and subject measures fixed)"
     ]
+    if allowable is not None:
+        which = "" if settings.allowable_angles is None else f" ({', '.join(settings.allowable_angles)})"
+        runs, seconds = fuzzy.attrs["allowable_runs"], fuzzy.attrs["allowable_seconds"]
+        notes.append(f"allowable marker error for ±{settings.tolerance:g}°{which}: {runs} refinement runs, "
+                     f"{seconds:.1f} s")  # fmt: skip
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
-    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes)
+    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable)
 
 
 def analyse_trial(
@@ -144,7 +181,7 @@ def analyse_trial(
     version or ``"auto"``, as there) followed by the fuzzy marker-error analysis of every
     computed angle (or ``angles``) by the same version; ``settings`` are the arguments of
     :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``, ``alphas``,
-    ``angles``, ``method``, ``workers``)."""
+    ``angles``, ``method``, ``workers``, ``tolerance``, ``allowable_angles``)."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
                      marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
     return analyse_run(run, MarkerErrorSettings.create(**settings), progress)
