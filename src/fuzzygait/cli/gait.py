@@ -41,6 +41,9 @@ from fuzzygait.cli.options import (
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
+
     from fuzzygait.io.subject import SubjectParameters
     from fuzzygait.workflows.angles import AnglesRun
 
@@ -317,7 +320,8 @@ def uncertainty(
 ) -> None:
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
     every angle component over all marker deviations inside the α-level balls, by the
-    model version of the angles (--model; the dataset's `model` attribute names it)."""
+    model version of the angles (--model; the dataset's `model` attribute names it), and
+    the allowable marker error of each (--tolerance; its refined α-levels saved too)."""
     from fuzzygait.uncertainty.storage import SUFFIXES
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
 
@@ -331,7 +335,8 @@ def uncertainty(
         selected = parse_angles(marker_errors.angle_names)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
-                                              method=method, workers=workers)  # fmt: skip
+                                              method=method, workers=workers,
+                                              tolerance=marker_errors.tolerance_deg())  # fmt: skip
         with progress_bars() as bars:
             bar = StageBars(bars)
             bar.stage("fuzzy angles")
@@ -343,9 +348,50 @@ def uncertainty(
     _print_run_summary(analysis.run)
     for note in analysis.notes[len(analysis.run.notes) :]:
         out.print(f"  note: {note}", markup=False)
-    out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|:", markup=False)
-    out.print(analysis.delta_phi.round(1).to_string(), markup=False)
+    out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|, over the determined frames "
+              '("undetermined": a segment frame can flip at that α-level):', markup=False)  # fmt: skip
+    out.print(_delta_phi_text(analysis.fuzzy, analysis.delta_phi), markup=False)
+    if (allowable := _allowable_text(analysis.fuzzy)) is not None:
+        out.print(allowable, markup=False)
     out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
+
+
+def _delta_phi_text(fuzzy: xr.Dataset, delta_phi: pd.DataFrame) -> str:
+    """The ΔΦ table, 1 decimal; "undetermined" where the α-level is undetermined at some
+    frame (:func:`~fuzzygait.markererror.analysis.undetermined_levels`), "–" where no
+    frame has a band."""
+    import math
+
+    import pandas as pd
+
+    from fuzzygait.markererror.analysis import undetermined_levels
+
+    flags = undetermined_levels(fuzzy).reindex(index=delta_phi.index, columns=delta_phi.columns, fill_value=False)
+    values, undetermined = delta_phi.to_numpy(dtype=float), flags.to_numpy(dtype=bool)
+    cells = [["undetermined" if flag else f"{value:.1f}" if math.isfinite(value) else "–"
+              for value, flag in zip(row, row_flags, strict=True)]
+             for row, row_flags in zip(values, undetermined, strict=True)]  # fmt: skip
+    columns = [f"α = {float(a):g}" for a in delta_phi.columns]
+    return pd.DataFrame(cells, index=delta_phi.index, columns=columns).to_string()
+
+
+def _allowable_text(fuzzy: xr.Dataset) -> str | None:
+    """The allowable-marker-error table (None without the refinement): per component the
+    largest error on its largest ball (mm) and as % of Table 3.1, with its status."""
+    from fuzzygait.viz.report.allowable import allowable_summary
+
+    summary = allowable_summary(fuzzy)
+    if summary is None or not summary.rows:
+        return None
+    header = ("", "angle", "mm", f"% of {summary.source}", "")
+    rows = [header] + [(r.component, r.label, r.mm, r.percent, r.note) for r in summary.rows]
+    widths = [max(len(row[k]) for row in rows) for k in range(len(header))]
+    align = ("<", "<", ">", ">", "<")
+    lines = ["  ".join(f"{cell:{a}{w}}" for cell, a, w in zip(row, align, widths, strict=True)).rstrip()
+             for row in rows]  # fmt: skip
+    title = (f"Allowable marker error for ±{summary.tolerance:g}°, the largest for which the angle stays within "
+             f"it over the trial (mm on the largest ball, % of {summary.source}):")  # fmt: skip
+    return "\n".join([title, *lines])
 
 
 # --------------------------------------------------------------------------- report
@@ -364,8 +410,10 @@ def report(
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     model: ModelOption = "auto",
 ) -> None:
-    """Clinicians' HTML report: joint angles over the gait cycle with fuzzy uncertainty
-    bands from marker errors, the ΔΦ table and data-quality notes, one page per trial.
+    """Clinicians' HTML report: per trial the allowable marker error first (--tolerance,
+    ±2.5°: knee flexion "known within ±2.5° if every marker stays within X mm"), joint
+    angles over the gait cycle with fuzzy uncertainty bands from marker errors, the ΔΦ
+    table and data-quality notes, one page per trial.
 
     A trial that fails is listed in the index with its error; the others are still
     reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
@@ -383,7 +431,7 @@ def report(
         check_model(model)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
-                                              workers=workers)  # fmt: skip
+                                              workers=workers, tolerance=marker_errors.tolerance_deg())  # fmt: skip
         with progress_bars() as bars:
             result = write_batch_report(
                 inputs, out_dir, static=calibration.static, subject_file=calibration.subject,

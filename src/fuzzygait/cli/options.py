@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import inspect
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -89,21 +90,36 @@ AlphasOption = Annotated[
 AnglesOption = Annotated[
     str | None, typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles); default: all.")
 ]
+ToleranceOption = Annotated[
+    float,
+    typer.Option(
+        "--tolerance", metavar="DEG",
+        help="Angle tolerance, ± degrees, for the allowable-marker-error table (the largest marker error for "
+        "which each angle stays within it); 0 turns it off.",
+    ),
+]  # fmt: skip
 NoFilterOption = Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")]
 MaxGapOption = Annotated[int, typer.Option(help="Longest gap (frames) to fill.")]
 CutoffOption = Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")]
 DEFAULT_SOURCES = "measurement,placement,sta"
 DEFAULT_ALPHAS = "0,0.25,0.5,0.75"
+DEFAULT_TOLERANCE = 2.5
 
 
 @dataclass(frozen=True)
 class MarkerErrorOptions:
-    """``--errors``, ``--sources``, ``--alphas`` and ``--angles`` as given (text)."""
+    """``--errors``, ``--sources``, ``--alphas``, ``--angles`` (text, as given) and
+    ``--tolerance``."""
 
     errors: ErrorsOption = None
     sources: SourcesOption = DEFAULT_SOURCES
     alphas: AlphasOption = DEFAULT_ALPHAS
     angle_names: AnglesOption = None
+    tolerance: ToleranceOption = DEFAULT_TOLERANCE
+
+    def tolerance_deg(self) -> float | None:
+        """``--tolerance`` checked: degrees, None for 0 (no allowable-error table)."""
+        return parse_tolerance(self.tolerance)
 
 
 @dataclass(frozen=True)
@@ -183,6 +199,14 @@ def parse_angles(text: str | None) -> list[str] | None:
         raise FuzzyGaitError(f"--angles: unknown angle {', '.join(unknown) or repr(text)}; "
                              f"choose from {', '.join(ALL_ANGLE_NAMES)}")  # fmt: skip
     return selected
+
+
+def parse_tolerance(value: float) -> float | None:
+    """``--tolerance``: degrees > 0, or None for 0 (off); one clear error otherwise."""
+    if not math.isfinite(value) or value < 0:
+        raise FuzzyGaitError(f"--tolerance must be a number of degrees ≥ 0 (0 turns the allowable-error table "
+                             f"off), e.g. 2.5; got {value:g}")  # fmt: skip
+    return None if value == 0 else float(value)
 
 
 def parse_alphas(text: str) -> tuple[float, ...]:

@@ -6,9 +6,10 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``angles.csv`` -- Plug-in Gait angles per frame (degrees),
 * ``cycles.csv`` -- mean and SD over gait cycles,
 * ``gait_cycles.png`` -- the gait-report grid,
-* ``summary.md`` -- what was done, how close the angles are to the known truth and how
-  wide the knee angles' fuzzy bands are (determined bands first; "undetermined" where a
-  segment frame can flip),
+* ``summary.md`` -- what was done, how close the angles are to the known truth, how
+  small the marker errors must be for knee flexion to be known within ±2.5° (the
+  allowable marker error) and how wide the knee angles' fuzzy bands are (determined
+  bands first; "undetermined" where a segment frame can flip),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
 
 and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
@@ -35,6 +36,7 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, TrialAnalysis, write_report
+from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
@@ -42,6 +44,10 @@ from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_
 #: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
 DEMO_FUZZY_ANGLES = ("LKneeAngles", "RKneeAngles")
 DEMO_ALPHAS = (0.0, 0.5, 1.0)
+#: The allowable marker error for ±2.5° of knee flexion only (fast: the refinement of all
+#: six knee components would add ~70 % to the demo's time; the CLI refines every angle).
+DEMO_TOLERANCE: float | None = 2.5
+DEMO_ALLOWABLE: tuple[str, ...] | None = ("LKneeAngles_X", "RKneeAngles_X")
 
 #: The CGM 2.4 session's files the demo reads.
 CGM24_FILES = ("cgm24_walking.c3d", "cgm24_static.c3d", "cgm24_subject.toml",
@@ -138,14 +144,35 @@ UNDETERMINED_TEXT = (
 )
 
 
+def allowable_lines(analysis: TrialAnalysis) -> list[str]:
+    """The summary's allowable-marker-error part: the knee-flexion sentences, then the
+    table (mm on the largest ball, % of Table 3.1) -- what leads the report's first screen;
+    nothing without the refinement."""
+    summary = allowable_summary(analysis.fuzzy)
+    if summary is None or not summary.rows:
+        return []
+    tau = f"±{summary.tolerance:g}°"
+    flexion = {r.component for r in summary.rows} <= {"LKneeAngles_X", "RKneeAngles_X"}
+    which = "knee flexion" if flexion else "the knee angles"
+    lines = ["", f"How small the marker errors must be for {which} to be known within {tau} over the whole trial "
+             "(the allowable marker error: the largest for which the band stays within the tolerance at every "
+             "frame):", ""]
+    lines += [f"- {sentence}" for sentence in summary.lead_sentences()]
+    lines += ["", f"| angle | allowable error (mm) | % of {summary.source} |", "|---|---|---|"]
+    lines += [f"| {row.component} ({row.label.lower()}) | {row.mm} | {row.percent} |"
+              + (f" {row.note}" if row.note else "") for row in summary.rows]  # fmt: skip
+    return lines
+
+
 def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
-    """The summary's fuzzy part: the determined bands first (largest flexion ΔΦ), then
-    what is undetermined, then the ΔΦ table ("undetermined" where an α-level is
-    undetermined at some frame) -- the numbers of the report's first screen."""
+    """The summary's fuzzy part: the allowable marker error of knee flexion
+    (:func:`allowable_lines`), the determined bands (largest flexion ΔΦ), then what is
+    undetermined, then the ΔΦ table ("undetermined" where an α-level is undetermined at
+    some frame) -- the numbers of the report's first screen."""
     table = delta_phi_table(analysis, TrialData.of(analysis))
     head = headline(table)
     alphas = table.alphas
-    lines = [
+    lines = allowable_lines(analysis) + [
         "",
         "How far to trust the knee angles: relative width ΔΦ (Eq. 5.3, %) of their fuzzy bands when every "
         "marker may be off by (1 − α) times its Table 3.1 error (measurement + placement + soft tissue). "
@@ -195,8 +222,11 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     comparison = truth_comparison(run, pd.read_csv(data / "walking_truth_angles.csv"))
     cgm24_lines = cgm24_session(data, out_dir)
     if progress is not None:
-        progress.print("fuzzy marker-error analysis of the knee angles (about 30 s)...", markup=False)
-    analysis = analyse_run(run, MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES))
+        progress.print("fuzzy marker-error analysis of the knee angles and the allowable error of knee flexion "
+                       "(about 20 s)...", markup=False)
+    settings = MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES, tolerance=DEMO_TOLERANCE,
+                                   allowable_angles=DEMO_ALLOWABLE)  # fmt: skip
+    analysis = analyse_run(run, settings)
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
 
     n_cycles = {side: int(stats[stats["angle"].str.startswith(side)]["n_cycles"].max())

@@ -43,9 +43,19 @@ when the report is complete: pages first, ``index.html`` last.  On an error (or 
 the staging folder is removed and ``OUT`` is untouched.  Pages of trials from earlier
 runs that are not part of this batch stay in ``OUT`` but are not linked.
 
+Allowable marker error
+----------------------
+A dataset refined by :func:`fuzzygait.markererror.allowable.allowable_errors` (what
+``uncertainty`` / ``report`` compute for ``--tolerance``, default ±2.5°) leads the trial
+page with the sentences of left and right knee flexion ("known within ±2.5° if every
+marker stays within 2.3 mm of where it was measured ..."), followed by the table of every
+angle (largest error mm, % of Table 3.1, mm per segment); the index shows knee flexion's.
+
 Modules: :mod:`~fuzzygait.viz.report.bands` (the numbers: cycle bands, ΔΦ table, summary
-numbers), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.pages` (HTML
-and CSS) and :mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
+numbers), :mod:`~fuzzygait.viz.report.allowable` (the allowable-error table and its
+HTML), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.pages` (HTML
+and CSS, :mod:`~fuzzygait.viz.report.markup` its building blocks) and
+:mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
 """
 
 from fuzzygait.kinematics.labels import component_label

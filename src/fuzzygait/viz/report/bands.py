@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from fuzzygait.io.subject import SubjectParameters
     from fuzzygait.kinematics import CGMResult
     from fuzzygait.mocap.gaps import Gap
+    from fuzzygait.viz.report.allowable import AllowableSummary
 
 #: Samples per normalised gait cycle (0, 1, ..., 100 %).
 N_POINTS = 101
@@ -445,6 +446,7 @@ class TrialEntry:
     gaps_filled: int = 0
     gaps_left: int = 0
     headline: Headline = field(default_factory=Headline)
+    allowable: AllowableSummary | None = None
 
     @property
     def ok(self) -> bool:
@@ -462,8 +464,10 @@ class TrialEntry:
         return self.headline.widest
 
     @classmethod
-    def of(cls, source: Path, page: str, data: TrialData, table: DeltaPhiTable) -> TrialEntry:
-        """The index entry of a trial drawn on ``page`` from ``data`` and its ΔΦ table."""
+    def of(cls, source: Path, page: str, data: TrialData, table: DeltaPhiTable,
+           allowable: AllowableSummary | None = None) -> TrialEntry:  # fmt: skip
+        """The index entry of a trial drawn on ``page`` from ``data``, its ΔΦ table and its
+        allowable-marker-error table (:mod:`~fuzzygait.viz.report.allowable`)."""
         run = data.run
         filled = sum(g.filled for g in run.gaps)
         return cls(
@@ -475,4 +479,5 @@ class TrialEntry:
             gaps_filled=filled,
             gaps_left=len(run.gaps) - filled,
             headline=headline(table),
+            allowable=allowable,
         )

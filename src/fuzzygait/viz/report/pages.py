@@ -4,9 +4,8 @@ resources), one per trial and the index of the batch."""
 from __future__ import annotations
 
 import datetime as _dt
-import html
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import quote
@@ -18,6 +17,7 @@ from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, componen
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
+from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
     FLEXION,
     DeltaPhiTable,
@@ -29,16 +29,13 @@ from fuzzygait.viz.report.bands import (
     alpha_text,
     grid_components,
 )
+from fuzzygait.viz.report.markup import escape as _esc
+from fuzzygait.viz.report.markup import html_table as _table
 
 if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["index_page", "trial_page"]
-
-
-def _esc(value: object) -> str:
-    """``value`` as HTML text (quotes escaped too)."""
-    return html.escape(str(value), quote=True)
 
 
 def _fmt(value: float | None, digits: int = 1) -> str:
@@ -72,6 +69,11 @@ thead th { background: #f2f4f7; }
 td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 table.kv th { background: #f7f7f7; font-weight: 600; white-space: nowrap; }
 .cols { display: flex; flex-wrap: wrap; gap: 0 2.5rem; align-items: flex-start; }
+.lead-box { background: #eef6ee; border: 1px solid #bcd9bf; border-radius: 6px; padding: .6rem 1rem;
+            margin: .6rem 0; font-size: 1.05rem; }
+.lead-box p { margin: .25rem 0; }
+.index-table table { font-size: .86rem; }
+.index-table th, .index-table td { padding: .25rem .4rem; }
 .box { background: #f5f8fc; border: 1px solid #cfdcec; border-radius: 6px; padding: .7rem 1rem; margin: .8rem 0; }
 .ok { color: #17692e; font-weight: 700; }
 .failed { color: #b3261e; font-weight: 700; }
@@ -153,19 +155,6 @@ def _kv_table(rows: Sequence[tuple[str, str]], caption: str | None = None) -> st
     cap = f"<caption class=\"small\">{_esc(caption)}</caption>" if caption else ""
     body = "".join(f"<tr><th scope=\"row\">{_esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
     return f"<table class=\"kv\">{cap}<tbody>{body}</tbody></table>"
-
-
-def _table(header: Sequence[tuple[str, bool]], rows: Iterable[Sequence[tuple[str, bool]]],
-           row_classes: Sequence[str] | None = None) -> str:  # fmt: skip
-    """``header``/cells are (html, numeric) pairs; the html must already be escaped."""
-    num = ' class="num"'
-    head = "".join(f'<th scope="col"{num if n else ""}>{h}</th>' for h, n in header)
-    lines = []
-    for i, row in enumerate(rows):
-        rc = f' class="{row_classes[i]}"' if row_classes and row_classes[i] else ""
-        cells = "".join(f"<td{num if n else ''}>{v}</td>" for v, n in row)
-        lines.append(f"<tr{rc}>{cells}</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(lines)}</tbody></table>"
 
 
 def _deg(rad: float) -> str:
@@ -417,7 +406,8 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
                f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
     figs = quote(files)
     body = f"""
-<nav><a href="index.html">← All trials (index)</a> · <a href="#cycles">Gait cycle</a> ·
+<nav><a href="index.html">← All trials (index)</a> · <a href="#allowable">Allowable error</a> ·
+<a href="#cycles">Gait cycle</a> ·
 <a href="#delta-phi">ΔΦ table</a> · <a href="#time-series">Whole trial</a> ·
 <a href="#quality">Data quality</a> · <a href="#subject">Subject</a></nav>
 <header>
@@ -426,7 +416,8 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
 marker position errors</p>
 </header>
 <main>
-<div class="cols">{_kv_table(facts)}<div class="box">{'<br>'.join(key)}</div></div>
+{lead_box(entry.allowable)}<div class="cols">{_kv_table(facts)}<div class="box">{'<br>'.join(key)}</div></div>
+{allowable_section(entry.allowable)}
 <h2 id="cycles">Joint angles over the gait cycle</h2>
 <p>{ALPHA_SENTENCE} Left side red, right side green; all angles in degrees, positive
 direction as labelled on each axis.</p>
@@ -469,13 +460,13 @@ def _index_numbers(head: Headline) -> tuple[str, str, str]:
     if head.largest is not None:
         value, name, alpha = head.largest
         dphi = (f"{_fmt(value, 0)} % at α = {alpha_text(alpha)}<br>"
-                f"<span class=\"small\">{_esc(component_label(name))}</span>")  # fmt: skip
+                f"<span class=\"small wrap\">{_esc(component_label(name))}</span>")  # fmt: skip
     elif head.n_components:
         dphi = f"<span class=\"undet\">{UNDETERMINED}</span>"
     if head.widest is not None:
         value, name, alpha = head.widest
         widest = (f"{_fmt(value, 1)}° at α = {alpha_text(alpha)}<br>"
-                  f"<span class=\"small\">{_esc(component_label(name))}</span>")  # fmt: skip
+                  f"<span class=\"small wrap\">{_esc(component_label(name))}</span>")  # fmt: skip
     undet = "–"
     if head.n_components:
         undet = f"{len(head.undetermined)} of {head.n_components}"
@@ -500,18 +491,19 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
             detail = (f"<a class=\"nowrap\" href=\"{quote(e.page or '')}\">report page</a><br>"
                       f"<span class=\"small nowrap\">gaps: {_esc(gaps)}</span>")  # fmt: skip
             rows.append([(str(i), True), (name, False), (status, False), (frames, True),
-                         (cycles, True), (dphi, True), (undet, True), (widest, True),
-                         (detail, False)])  # fmt: skip
+                         (cycles, True), (index_cell(e.allowable), True), (dphi, True), (undet, True),
+                         (widest, True), (detail, False)])  # fmt: skip
             classes.append("")
         else:
             rows.append([(str(i), True), (_esc(e.source.name), False),
                          ("<span class=\"failed\">failed</span>", False), ("–", True), ("–", True),
-                         ("–", True), ("–", True), ("–", True),
+                         ("–", True), ("–", True), ("–", True), ("–", True),
                          (f'<span class="mono error">{_esc(e.error)}</span>', False)])  # fmt: skip
             classes.append("failed-row")
     lowest = alpha_text(min(alphas)) if alphas else "0"
     header = [("#", True), ("Trial", False), ("Status", False), ("Frames", True),
-              ("Gait cycles<br>L / R", True), ("Largest ΔΦ, flexion<br>(determined bands)", True),
+              ("Gait cycles<br>L / R", True), ("Allowable<br>error", True),
+              ("Largest ΔΦ, flexion<br>(determined bands)", True),
               (f"Undetermined<br>at α = {lowest}", True), ("Widest<br>determined band", True),
               ("Details / error", False)]  # fmt: skip
     table = _table(header, rows, row_classes=classes)
@@ -533,9 +525,12 @@ shows the largest ΔΦ among hip, knee and ankle flexion (as in the thesis' Tabl
 the widest band in degrees among all angles, each at the smallest α-level where there is
 one, and how many angle components are undetermined at the smallest α.</p>
 <p>{UNDETERMINED_SENTENCE}</p>
+<p>Allowable marker error: the largest marker error (mm; % of the assumed errors) for which the angle is
+known within the tolerance over the whole trial — the index shows knee flexion, each trial page every
+angle.</p>
 </div>
 <h2>Trials</h2>
-{table}
+<div class="index-table">{table}</div>
 <h2>Input files</h2>
 <ol class="small">{sources}</ol>
 </main>

@@ -16,6 +16,7 @@ from types import TracebackType
 import matplotlib.pyplot as plt
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialAnalysis, TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
 from fuzzygait.viz.report.pages import index_page, trial_page
@@ -134,7 +135,7 @@ class ReportWriter:
         plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)")
         plot_time_series(data, folder / "time_series", title + " (whole trial)")
         table = delta_phi_table(analysis, data)
-        entry = TrialEntry.of(source, f"{name}.html", data, table)
+        entry = TrialEntry.of(source, f"{name}.html", data, table, allowable_summary(analysis.fuzzy))
         page = trial_page(analysis, data, entry, table, files, source)
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
