@@ -29,7 +29,7 @@ perturbed alone (the others held at their measured positions).
 
 from __future__ import annotations
 
-from _setup import ROOT, one_thread
+from _setup import one_thread
 
 one_thread()
 
@@ -38,11 +38,11 @@ import os  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
-from dataclasses import dataclass, replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from _sessions import Case, cases, load, subset  # noqa: E402
 
 from fuzzygait.core.trial import Trial  # noqa: E402
 from fuzzygait.kinematics.model import angle_segments, model_chain  # noqa: E402
@@ -57,14 +57,8 @@ from fuzzygait.markererror.comparison import monte_carlo_envelope  # noqa: E402
 from fuzzygait.markererror.result import component_hull, component_undetermined  # noqa: E402
 from fuzzygait.markererror.sources import ErrorModel, marker_segment  # noqa: E402
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower  # noqa: E402
-from fuzzygait.workflows.angles import AnglesRun, run_angles  # noqa: E402
+from fuzzygait.workflows.angles import AnglesRun  # noqa: E402
 
-SAMPLE = ROOT / "sample_data"
-SESSION = ROOT.parent / "shared" / "data" / "cgm2" / "qualisys-cgm24-input"
-#: session.xml of the real CGM 2.4 session (metres there, mm here).
-SESSION_SUBJECT = {"Bodymass": 70.0, "Height": 1800.0, "LLegLength": 1000.0, "RLegLength": 1000.0,
-                   "LKneeWidth": 95.0, "RKneeWidth": 95.0, "LAnkleWidth": 65.0, "RAnkleWidth": 65.0,
-                   "MarkerDiameter": 14.0}  # fmt: skip
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
 LEVELS = (0.75, 0.5, 0.25, 0.0)
 JOINTS = ("Hip", "Knee", "Ankle")
@@ -72,38 +66,6 @@ JOINTS = ("Hip", "Knee", "Ankle")
 THESIS = {"Hip": (27, 54, 81, 107), "Knee": (17, 35, 51, 68), "Ankle": (96, 199, 303, 425)}
 MODELS = ("cgm2.4", "cgm1.0")
 MC_SAMPLES = 2000
-
-
-@dataclass
-class Case:
-    name: str
-    dynamic: Path
-    static: Path
-    subject: Path
-    step: int
-    flat_foot: bool = False
-
-
-def cases(tmp: Path) -> list[Case]:
-    out = [Case("synthetic CGM 2.4", SAMPLE / "cgm24_walking.c3d", SAMPLE / "cgm24_static.c3d",
-                SAMPLE / "cgm24_subject.toml", 4)]  # fmt: skip
-    if SESSION.is_dir():
-        subject = tmp / "session_subject.toml"
-        subject.write_text("".join(f"{k} = {v}\n" for k, v in SESSION_SUBJECT.items()))
-        out.append(Case("real CGM 2.4 session", SESSION / "Gait - CGM2 1.c3d", SESSION / "Static - CGM2 1.c3d",
-                        subject, 2, flat_foot=True))  # fmt: skip
-    else:
-        print(f"(skipped the real session: {SESSION} is absent)")
-    return out
-
-
-def subset(run: AnglesRun, step: int) -> tuple[AnglesRun, np.ndarray]:
-    """The run with every marker NaN outside every ``step``-th frame (the analysis then
-    works on those frames only)."""
-    keep = np.arange(0, run.trial.n_frames, step)
-    markers = np.full_like(run.trial.markers, np.nan)
-    markers[keep] = run.trial.markers[keep]
-    return replace(run, trial=run.trial.with_markers(markers)), keep
 
 
 def model_of(run: AnglesRun, name: str, axis: int, frames: np.ndarray, **kwargs) -> JointAngleModel:
@@ -198,8 +160,7 @@ def segment_attribution(run: AnglesRun, frames: np.ndarray) -> list[str]:
 
 
 def analyse(case: Case, model: str, workers: int, quick: bool) -> dict:
-    run = run_angles(case.dynamic, static=case.static, subject_file=case.subject, model=model,
-                     flat_foot=case.flat_foot)  # fmt: skip
+    run = load(case, model)
     step = case.step * (4 if quick else 1)
     sparse, keep = subset(run, step)
     names = [f"{s}{j}Angles" for s in "LR" for j in JOINTS] + (
