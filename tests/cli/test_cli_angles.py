@@ -129,6 +129,7 @@ def test_table_options_check_suffix(tmp_path: Path, flag: str) -> None:
     assert_one_line_error(result, flag)
 
 
+@pytest.mark.slow
 def test_c3d_suffix_is_checked_before_work_and_applied(tmp_path: Path) -> None:
     walking = SAMPLE_DATA / "walking.c3d"
     assert_one_line_error(run("angles", walking, "--c3d-out", tmp_path / "m.c3d", "--suffix", "a b"), "--suffix")

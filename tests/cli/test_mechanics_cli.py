@@ -107,6 +107,7 @@ def test_simulate_non_convergence_writes_nothing(tmp_path: Path) -> None:
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_simulate_all_outputs_or_none(tmp_path: Path) -> None:
     """The .nc is removed again when a later output (here the recording) cannot be written."""
     env = {**os.environ, "RERUN": "off"}

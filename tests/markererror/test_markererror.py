@@ -66,6 +66,7 @@ def balls(model: JointAngleModel, sources: tuple[str, ...] = ("measurement", "pl
 
 
 # ---------------------------------------------------------------------------- soundness
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["L", "R"])
 def test_hulls_contain_monte_carlo(angles_run: AnglesRun, frames: np.ndarray, side: str) -> None:
     """At α = 0 and 0.5, for every hip/knee/ankle component, the Graph Follower hull
@@ -142,6 +143,7 @@ def test_two_marker_angle_worst_case_is_arcsin() -> None:
 
 
 # ---------------------------------------------------------------------------- formulations
+@pytest.mark.slow
 def test_cartesian_and_spherical_give_the_same_envelopes(angles_run: AnglesRun, sparse_trial: Trial,
                                                          frames: np.ndarray) -> None:  # fmt: skip
     """Thesis §3.7.2: the norm-constrained Cartesian deviations and the box-constrained

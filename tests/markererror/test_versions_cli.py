@@ -40,6 +40,7 @@ def test_uncertainty_runs_the_model_version(tmp_path: Path, short_walk: Path, mo
     assert "LTHAP" in fuzzy["marker"].to_numpy().tolist() and "LKNM" not in fuzzy["marker"].to_numpy().tolist()
 
 
+@pytest.mark.slow
 def test_unknown_model_is_one_line_before_work(tmp_path: Path) -> None:
     for command, out in (("uncertainty", tmp_path / "x.nc"), ("report", tmp_path / "rep")):
         result = run(command, tmp_path / "absent.c3d", "--model", "cgm3", "--out", out)

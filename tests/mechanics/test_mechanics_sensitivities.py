@@ -103,6 +103,7 @@ def test_swing_sensitivity_dataset_is_consistent(swing):
     )
 
 
+@pytest.mark.slow
 def test_cantilever_tip_sensitivity_to_E():
     length, width, thickness = 1.0, 0.05, 0.01
     E, nu, rho = 1e9, 0.3, 1000.0

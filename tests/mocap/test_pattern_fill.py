@@ -259,6 +259,7 @@ def test_gait_pig_single_marker_ten_frame_gaps():
 
 
 # --------------------------------------------------------------------------- CLI
+@pytest.mark.slow
 def test_cli_fill_method(tmp_path: Path):
     bad = run("preprocess", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "x.c3d",
               "--fill-method", "linear")
