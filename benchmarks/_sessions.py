@@ -8,9 +8,9 @@
 * Movement_trial: ``../shared/data/vicon/Movement_trial.c3d`` with ``Static_trial.c3d``,
   its subject from the trial's PROCESSING group (a Plug-in Gait session).
 
-The shared sessions are skipped (with a line saying so) when the data is absent.  Also
-:func:`task_model`: the model of one angle component the analysis optimises, for the Monte
-Carlo checks.
+The shared sessions are skipped (with a line saying so) when the data is absent.  The
+model of one angle component the analysis optimises, for the Monte Carlo checks, is
+:meth:`fuzzygait.markererror.analysis.ComponentTask.angle_model`.
 """
 
 from __future__ import annotations
@@ -21,8 +21,6 @@ from pathlib import Path
 import numpy as np
 from _setup import ROOT, VICON
 
-from fuzzygait.markererror.analysis import ComponentTask
-from fuzzygait.markererror.angle_model import JointAngleModel
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 
 SAMPLE = ROOT / "sample_data"
@@ -90,9 +88,3 @@ def subset(run: AnglesRun, step: int) -> tuple[AnglesRun, np.ndarray]:
     return sparse_run(run, keep), keep
 
 
-def task_model(task: ComponentTask) -> JointAngleModel:
-    """The JointAngleModel :func:`~fuzzygait.markererror.analysis.run_component_task`
-    optimises for ``task`` (on the branch through the measured angle)."""
-    return JointAngleModel(task.trial, task.subject, task.progression, task.name, task.axis, task.frames,
-                           task.markers, reference=task.reference, model=task.version,
-                           clusters=task.clusters)  # fmt: skip

@@ -39,7 +39,7 @@ import zlib  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _sessions import Case, cases, load, movement_case, sparse_run, task_model  # noqa: E402
+from _sessions import Case, cases, load, movement_case, sparse_run  # noqa: E402
 
 from fuzzygait.kinematics.angles import ANGLE_TABLE  # noqa: E402
 from fuzzygait.markererror.analysis import (  # noqa: E402
@@ -76,7 +76,7 @@ def spread_frames(angles: dict[str, np.ndarray], n: int) -> np.ndarray:
 def sample(job: tuple[ComponentTask, int, int]) -> list[tuple[np.ndarray, np.ndarray]]:
     """Monte Carlo envelope ``(lower, upper)`` on the task's frames per checked α."""
     task, n_samples, seed = job
-    model = task_model(task)
+    model = task.angle_model()
     return [monte_carlo_envelope(model, (1.0 - alpha) * task.radii, n_samples, seed=seed + k)
             for k, alpha in enumerate(CHECKED)]  # fmt: skip
 

@@ -34,7 +34,6 @@ import time  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _sessions import task_model  # noqa: E402
 
 from fuzzygait.markererror.analysis import (  # noqa: E402
     ComponentTask,
@@ -59,7 +58,7 @@ THESIS_TABLE_5_2 = {"Hip": (27, 54, 81, 107), "Knee": (17, 35, 51, 68), "Ankle":
 
 def _monte_carlo_task(args: tuple[ComponentTask, float, int]) -> tuple[str, np.ndarray, np.ndarray, int, int, float]:
     task, seconds, seed = args
-    model = task_model(task)
+    model = task.angle_model()
     start = time.perf_counter()
     lower, upper, samples = monte_carlo_timed(model, task.radii, seconds, seed=seed, per_frame=True)
     return (f"{task.name}_{AXES[task.axis]}", lower, upper, samples, samples * task.frames.size,

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, fuzzy_joint_angles
-from fuzzygait.markererror.angle_model import AXES, JointAngleModel
+from fuzzygait.markererror.angle_model import AXES
 from fuzzygait.markererror.comparison import monte_carlo_envelope
 from fuzzygait.markererror.result import component_hull, component_undetermined
 from fuzzygait.workflows.angles import run_angles
@@ -48,9 +48,7 @@ def test_monte_carlo_lies_in_the_hull_or_at_an_undetermined_frame(version: str) 
     for i, task in enumerate(tasks):
         np.testing.assert_array_equal(task.frames, FRAMES)
         component = f"{task.name}_{AXES[task.axis]}"
-        model = JointAngleModel(task.trial, task.subject, task.progression, task.name, task.axis, task.frames,
-                                task.markers, reference=task.reference, model=task.version,
-                                clusters=task.clusters)  # fmt: skip
+        model = task.angle_model()
         for k, alpha in enumerate(ALPHAS):
             lower, upper = monte_carlo_envelope(model, (1.0 - alpha) * task.radii, SAMPLES, seed=150 + 2 * i + k)
             hull = component_hull(fuzzy, component).sel(alpha=alpha).to_numpy()[:, FRAMES]

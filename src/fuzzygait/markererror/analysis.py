@@ -126,13 +126,19 @@ class ComponentTask(NamedTuple):
     version: str
     clusters: ClusterCalibration | None
 
+    def angle_model(self) -> JointAngleModel:
+        """The model :func:`run_component_task` optimises (the angle component on the
+        branch through the measured angle, parameters the deviations of ``markers``)."""
+        return JointAngleModel(self.trial, self.subject, self.progression, self.name, self.axis, self.frames,
+                               self.markers, reference=self.reference, model=self.version,
+                               clusters=self.clusters)  # fmt: skip
+
 
 def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
     """Run one angle component's task: ``(component name, hull (alpha, bound, n_valid) in
     degrees, deviation norms (alpha, bound, n_valid, n_markers) in mm, work counts)``."""
-    trial, subject, progression, name, axis, frames, markers, radii, options, reference, version, clusters = args
-    model = JointAngleModel(trial, subject, progression, name, axis, frames, markers, reference=reference,
-                            model=version, clusters=clusters)  # fmt: skip
+    markers, radii, options = args.markers, args.radii, args.options
+    model = args.angle_model()
     if options.method == "cartesian":
         params: FuzzyBalls | FuzzyVector = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
         fuzzy_model: JointAngleModel | SphericalDeviationModel = model
@@ -155,7 +161,7 @@ def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray
     # a cluster marker missing at a frame (the pose from the others) has no deviation there
     norms = np.where(model.seen(), norms, np.nan)
     counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations")}
-    return f"{name}_{AXES[axis]}", result["hull"].to_numpy(), norms, counts
+    return f"{args.name}_{AXES[args.axis]}", result["hull"].to_numpy(), norms, counts
 
 
 def fuzzy_joint_angles(
