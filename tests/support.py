@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -82,3 +84,29 @@ def rot_pelvis_truth(truth, side: str) -> np.ndarray:
     rotation = Rotation.from_euler("YXZ", np.stack([x, s * y, -s * z], axis=1))
     c, b, a = rotation.as_euler("ZXY").T
     return np.degrees(np.stack([a, s * b, -s * c], axis=1))
+
+
+@dataclass
+class FakeAnalysis:
+    """Stands in for ``fuzzygait.workflows.marker_uncertainty.MarkerErrorAnalysis`` (a run,
+    a fuzzy dataset made up by the test, its ΔΦ table, notes)."""
+
+    run: Any
+    fuzzy: Any
+    delta_phi: Any
+    notes: list[str] = field(default_factory=list)
+
+
+def sparse_knee_analysis(angles_run: Any, n_frames: int = 6) -> Any:
+    """The real marker-error analysis (α = 0, 0.5, ±2.5° allowable error) of the left knee
+    on ``n_frames`` frames spread over ``angles_run``'s trial (the other frames' markers NaN)."""
+    import dataclasses
+
+    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
+
+    trial = angles_run.trial
+    frames = np.linspace(0, trial.n_frames - 1, n_frames).round().astype(int)
+    markers = np.full_like(trial.markers, np.nan)
+    markers[frames] = trial.markers[frames]
+    sparse = dataclasses.replace(angles_run, trial=trial.with_markers(markers))
+    return analyse_run(sparse, MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1))

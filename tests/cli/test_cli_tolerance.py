@@ -23,8 +23,8 @@ from fuzzygait.markererror.allowable import allowable_table
 from fuzzygait.markererror.analysis import relative_envelope_width, undetermined_levels
 from fuzzygait.uncertainty import load_result
 from fuzzygait.workflows.angles import AnglesRun
-from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis, MarkerErrorSettings, analyse_run
-from support import SAMPLE_DATA, assert_one_line_error, run
+from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
+from support import SAMPLE_DATA, assert_one_line_error, run, sparse_knee_analysis
 
 SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
 
@@ -47,11 +47,7 @@ def test_parse_tolerance() -> None:
 
 @pytest.fixture(scope="module")
 def analysis(angles_run: AnglesRun) -> MarkerErrorAnalysis:
-    frames = np.linspace(0, angles_run.trial.n_frames - 1, 6).round().astype(int)
-    markers = np.full_like(angles_run.trial.markers, np.nan)
-    markers[frames] = angles_run.trial.markers[frames]
-    sparse = dataclasses.replace(angles_run, trial=angles_run.trial.with_markers(markers))
-    return analyse_run(sparse, MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1))
+    return sparse_knee_analysis(angles_run)
 
 
 def _cells(text: str) -> dict[str, list[str]]:

@@ -12,15 +12,13 @@ import re
 import shutil
 import subprocess
 import tempfile
-from dataclasses import dataclass, field
 from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-import xarray as xr
-from support import SAMPLE_DATA, assert_one_line_error, run
+from support import FakeAnalysis, SAMPLE_DATA, assert_one_line_error, run
 
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.markererror.result import fuzzy_angles_dataset
@@ -31,14 +29,6 @@ CHROMIUM = Path("/usr/bin/chromium")
 HAS_ANALYSIS = importlib.util.find_spec("fuzzygait.markererror.analysis") is not None
 
 
-@dataclass
-class FakeAnalysis:
-    """Stands in for ``fuzzygait.markererror.analysis.MarkerErrorAnalysis``."""
-
-    run: AnglesRun
-    fuzzy: xr.Dataset
-    delta_phi: pd.DataFrame
-    notes: list[str] = field(default_factory=list)
 
 
 def spread(name: str) -> float:

@@ -9,7 +9,6 @@ The analysis is real but small: the sample trial cut to 6 frames, left knee, α 
 
 from __future__ import annotations
 
-import dataclasses
 import html
 import re
 from pathlib import Path
@@ -22,17 +21,13 @@ from fuzzygait.markererror.allowable import allowable_table
 from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.workflows.angles import AnglesRun
-from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis, MarkerErrorSettings, analyse_run
-from support import SAMPLE_DATA
+from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
+from support import SAMPLE_DATA, sparse_knee_analysis
 
 
 @pytest.fixture(scope="module")
 def analysis(angles_run: AnglesRun) -> MarkerErrorAnalysis:
-    frames = np.linspace(0, angles_run.trial.n_frames - 1, 6).round().astype(int)
-    markers = np.full_like(angles_run.trial.markers, np.nan)
-    markers[frames] = angles_run.trial.markers[frames]
-    sparse = dataclasses.replace(angles_run, trial=angles_run.trial.with_markers(markers))
-    return analyse_run(sparse, MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1))
+    return sparse_knee_analysis(angles_run)
 
 
 @pytest.fixture(scope="module")

@@ -9,13 +9,10 @@ nothing depends on the optimiser.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
-import xarray as xr
 
 from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.markererror.analysis import relative_envelope_width
@@ -24,7 +21,7 @@ from fuzzygait.viz.report import ReportItem, cycle_bands, write_report
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
 from fuzzygait.workflows.angles import AnglesRun, run_angles
-from support import SAMPLE_DATA
+from support import FakeAnalysis, SAMPLE_DATA
 
 ALPHAS = np.array([0.0, 0.5, 1.0])
 #: α = 0 of left knee flexion is undetermined on these frames (0-based).
@@ -32,12 +29,6 @@ STRETCH = slice(150, 190)
 FLIP = 175.0  # deg: a bound this far from the measured angle (the frame flipped)
 
 
-@dataclass
-class FakeAnalysis:
-    run: AnglesRun
-    fuzzy: xr.Dataset
-    delta_phi: pd.DataFrame
-    notes: list[str] = field(default_factory=list)
 
 
 @pytest.fixture(scope="module")

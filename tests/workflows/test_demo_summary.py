@@ -4,28 +4,19 @@ end to end in tests/cli/test_cli_angles.py)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 import pytest
-import xarray as xr
 
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.result import fuzzy_angles_dataset
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.workflows.demo import uncertainty_lines
-from support import SAMPLE_DATA
+from support import FakeAnalysis, SAMPLE_DATA
 
 ALPHAS = np.array([0.0, 0.5, 1.0])
 
 
-@dataclass
-class FakeAnalysis:
-    run: AnglesRun
-    fuzzy: xr.Dataset
-    delta_phi: pd.DataFrame
-    notes: list[str] = field(default_factory=list)
 
 
 def knee_analysis(run: AnglesRun, undetermined: dict[str, slice]) -> FakeAnalysis:
