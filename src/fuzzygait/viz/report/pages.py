@@ -517,7 +517,7 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
 </header>
 <main>
 <div class="box">
-<p>Each trial page shows the Plug-in Gait joint angles over the gait cycle and over the
+<p>Each trial page shows the joint angles (by the model version named in its header) over the gait cycle and over the
 whole trial, with shaded bands for the uncertainty caused by marker position errors
 (measurement system, marker placement, soft-tissue artefact). {ALPHA_SENTENCE}</p>
 <p>{DELTA_PHI_SENTENCE} Of the bands that are determined at every frame, the index
