@@ -320,8 +320,9 @@ def uncertainty(
 ) -> None:
     """Fuzzy joint angles from fuzzy marker errors: per frame and α-level the range of
     every angle component over all marker deviations inside the α-level balls, by the
-    model version of the angles (--model; the dataset's `model` attribute names it), and
-    the allowable marker error of each (--tolerance; its refined α-levels saved too)."""
+    model version of the angles (--model; the dataset's `model` attribute names it), the
+    allowable marker error of each (--tolerance; its refined α-levels saved too) and the
+    flexion bands of each error source alone (--per-source, the default)."""
     from fuzzygait.uncertainty.storage import SUFFIXES
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
 
@@ -336,14 +337,15 @@ def uncertainty(
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
                                               method=method, workers=workers,
-                                              tolerance=marker_errors.tolerance_deg())  # fmt: skip
+                                              tolerance=marker_errors.tolerance_deg(),
+                                              per_source=marker_errors.per_source)  # fmt: skip
         with progress_bars() as bars:
             bar = StageBars(bars)
-            bar.stage("fuzzy angles")
+            bar.stage("joint angles")
             analysis = analyse_to_files(
                 dynamic, out_file, rrd=rrd, static=calibration.static, subject_file=calibration.subject,
                 marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                preprocessing=preprocessing.preprocessing(), model=model, progress=bar.update,
+                preprocessing=preprocessing.preprocessing(), model=model, stages=bar,
             )  # fmt: skip
     _print_run_summary(analysis.run)
     for note in analysis.notes[len(analysis.run.notes) :]:
@@ -353,6 +355,8 @@ def uncertainty(
     out.print(_delta_phi_text(analysis.fuzzy, analysis.delta_phi), markup=False)
     if (allowable := _allowable_text(analysis.fuzzy)) is not None:
         out.print(allowable, markup=False)
+    if (sources := _per_source_text(analysis.fuzzy)) is not None:
+        out.print(sources, markup=False)
     out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
 
 
@@ -394,6 +398,36 @@ def _allowable_text(fuzzy: xr.Dataset) -> str | None:
     return "\n".join([title, *lines])
 
 
+def _per_source_text(fuzzy: xr.Dataset) -> str | None:
+    """The widest band of each flexion component per error source alone and all together
+    (deg, over the determined frames; "undetermined (n)" when no frame is determined), and
+    the source that dominates; None without per-source bands."""
+    import math
+
+    from fuzzygait.markererror.per_source import ALL, has_source_bands, widest_source_bands
+
+    if not has_source_bands(fuzzy):
+        return None
+    table = widest_source_bands(fuzzy)
+    columns = [*table.sources, ALL]
+    header = ("", *columns, "dominates")
+    rows = [header]
+    for component in table.widths.index:
+        cells = []
+        for source in columns:
+            width, flipped = table.width(component, source), table.frames_undetermined(component, source)
+            text = f"{width:.1f}" if math.isfinite(width) else "undetermined" if flipped else "–"
+            cells.append(text + (f" ({flipped} undet.)" if flipped and math.isfinite(width) else ""))
+        rows.append((str(component), *cells, table.dominant(str(component)) or "–"))
+    widths = [max(len(row[k]) for row in rows) for k in range(len(header))]
+    lines = ["  ".join(f"{cell:{'<' if k in (0, len(header) - 1) else '>'}{w}}"
+                       for k, (cell, w) in enumerate(zip(row, widths, strict=True))).rstrip()
+             for row in rows]  # fmt: skip
+    title = (f"Widest α = {table.alpha:g} band per error source alone and all together (deg, determined frames; "
+             "Fig. 5.9):")  # fmt: skip
+    return "\n".join([title, *lines])
+
+
 # --------------------------------------------------------------------------- report
 @app.command()
 @with_option_groups
@@ -413,7 +447,8 @@ def report(
     """Clinicians' HTML report: per trial the allowable marker error first (--tolerance,
     ±2.5°: knee flexion "known within ±2.5° if every marker stays within X mm"), joint
     angles over the gait cycle with fuzzy uncertainty bands from marker errors, the ΔΦ
-    table and data-quality notes, one page per trial.
+    table, the flexion bands of each error source alone (--per-source) and data-quality
+    notes, one page per trial.
 
     A trial that fails is listed in the index with its error; the others are still
     reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
@@ -431,7 +466,8 @@ def report(
         check_model(model)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
-                                              workers=workers, tolerance=marker_errors.tolerance_deg())  # fmt: skip
+                                              workers=workers, tolerance=marker_errors.tolerance_deg(),
+                                              per_source=marker_errors.per_source)  # fmt: skip
         with progress_bars() as bars:
             result = write_batch_report(
                 inputs, out_dir, static=calibration.static, subject_file=calibration.subject,

@@ -98,6 +98,15 @@ ToleranceOption = Annotated[
         "which each angle stays within it); 0 turns it off.",
     ),
 ]  # fmt: skip
+PerSourceOption = Annotated[
+    bool,
+    typer.Option(
+        "--per-source/--no-per-source",
+        help="Also the hip/knee/ankle flexion bands of each error source alone (measurement, placement, "
+        "soft-tissue artefact) at the smallest α-level, so the report shows which one dominates (thesis Fig. 5.9); "
+        "one Graph Follower run per source and flexion component more.",
+    ),
+]
 NoFilterOption = Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")]
 MaxGapOption = Annotated[int, typer.Option(help="Longest gap (frames) to fill.")]
 CutoffOption = Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")]
@@ -108,14 +117,15 @@ DEFAULT_TOLERANCE = 2.5
 
 @dataclass(frozen=True)
 class MarkerErrorOptions:
-    """``--errors``, ``--sources``, ``--alphas``, ``--angles`` (text, as given) and
-    ``--tolerance``."""
+    """``--errors``, ``--sources``, ``--alphas``, ``--angles`` (text, as given),
+    ``--tolerance`` and ``--per-source/--no-per-source``."""
 
     errors: ErrorsOption = None
     sources: SourcesOption = DEFAULT_SOURCES
     alphas: AlphasOption = DEFAULT_ALPHAS
     angle_names: AnglesOption = None
     tolerance: ToleranceOption = DEFAULT_TOLERANCE
+    per_source: PerSourceOption = True
 
     def tolerance_deg(self) -> float | None:
         """``--tolerance`` checked: degrees, None for 0 (no allowable-error table)."""

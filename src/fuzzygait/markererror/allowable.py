@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -67,6 +67,8 @@ DEFAULT_RESOLUTION = 0.1
 MAX_EVALUATIONS = 12
 #: Segments in the table's per-segment columns (Table 3.1 order).
 SEGMENTS = tuple(TABLE_3_1)
+
+Progress = Callable[[int, int], None]
 
 
 # ---------------------------------------------------------------------------- excursion
@@ -129,6 +131,14 @@ class ScaleSearch:
         lo, hi = self.bracket()
         return hi is None or hi - lo <= self.step
 
+    def remaining(self) -> int:
+        """Runs still expected (at most): the bisection steps from the bracket's width to
+        ``step`` (the interpolation usually needs fewer); 0 when done."""
+        lo, hi = self.bracket()
+        if hi is None or hi - lo <= self.step:
+            return 0
+        return max(1, math.ceil(math.log2((hi - lo) / self.step)))
+
     def record(self, scale: float, excursion: float) -> None:
         self.points[scale] = excursion
         self.history.append(excursion <= self.tolerance)
@@ -177,12 +187,16 @@ def _tasks(trial: Trial, subject: SubjectParameters, result: CGMResult, options:
     return {c: by_component[c] for c in components}
 
 
-def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float],
-              evaluator: Evaluator) -> list[tuple[str, np.ndarray, np.ndarray, dict[str, int]]]:  # fmt: skip
+Run = tuple[str, np.ndarray, np.ndarray, dict[str, int]]
+
+
+def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator: Evaluator,
+              progress: Progress | None = None) -> list[Run]:  # fmt: skip
     """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
-    deg, deviation norms (2, bound, n_valid, n_markers) mm, counts."""
+    deg, deviation norms (2, bound, n_valid, n_markers) mm, counts; ``progress(done, n)``
+    as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it."""
     runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
-    return evaluator.map(run_component_task, runs)
+    return evaluator.map(run_component_task, runs, progress)
 
 
 # ---------------------------------------------------------------------------- dataset
@@ -445,6 +459,7 @@ def allowable_errors(
     evaluator: Evaluator | None = None,
     clusters: ClusterCalibration | None = None,
     max_evaluations: int = MAX_EVALUATIONS,
+    progress: Progress | None = None,
 ) -> tuple[pd.DataFrame, xr.Dataset]:
     """The largest marker error for which each angle component stays within ``tolerance``.
 
@@ -462,6 +477,10 @@ def allowable_errors(
         clusters: the static cluster calibration (cluster models, as for
             :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`).
         max_evaluations: refinement runs per component at most.
+        progress: called as ``progress(done, total)`` over the refinement runs (at least
+            once per round of runs); ``total`` is the runs done plus those still expected
+            (:meth:`ScaleSearch.remaining`, at most ``max_evaluations`` per component), so
+            it can shrink as the searches converge; a last ``progress(n, n)`` at the end.
 
     Returns:
         ``(table, dataset)``. ``table`` has one row per component (index ``component``):
@@ -524,13 +543,26 @@ def allowable_errors(
                     pending.append((c, round(scale, 9)))
             if not pending:
                 break
-            outputs = _evaluate([setups[c] for c, _ in pending], [round(1.0 - s, 9) for _, s in pending], runner)
+            done = sum(counts.values())
+            expected = done + sum(min(max_evaluations - counts[c], searches[c].remaining())
+                                  for c in components if setups[c].frames.size)  # fmt: skip
+            expected = max(expected, done + len(pending))
+
+            def step(k: int, _n: int, done: int = done, expected: int = expected) -> None:
+                if progress is not None:
+                    progress(done + k, expected)
+
+            step(0, len(pending))
+            outputs = _evaluate([setups[c] for c, _ in pending], [round(1.0 - s, 9) for _, s in pending], runner,
+                                step)  # fmt: skip
             for (c, scale), output in zip(pending, outputs, strict=True):
                 runs[(c, round(1.0 - scale, 9))] = output
                 counts[c] += 1
                 node_evaluations += output[3]["node_evaluations"]
                 searches[c].record(scale, _run_excursion(output[1], setups[c]))
         seconds = time.perf_counter() - start
+        if progress is not None:
+            progress(sum(counts.values()), sum(counts.values()))
     finally:
         if own is not None:
             own.close()

@@ -18,7 +18,7 @@ from fuzzygait.workflows.marker_uncertainty import (
     MarkerErrorSettings,
     analyse_run,
 )
-from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.progress import SILENT, Prefixed, StageProgress
 
 __all__ = ["BatchReport", "report_inputs", "write_batch_report"]
 
@@ -110,7 +110,9 @@ def write_batch_report(
         model: the model version of the angles and of their marker-error model, or
             ``"auto"`` (per trial, as :func:`~fuzzygait.workflows.angles.run_angles`).
         strict: re-raise a trial's error instead of listing it as failed (debugging).
-        trials: progress over the trials; ``components``: over a trial's angle components.
+        trials: progress over the trials; ``components``: over the stages of a trial's
+            analysis (:func:`~fuzzygait.workflows.marker_uncertainty.analyse_run`: fuzzy
+            angles, allowable marker error, per-source bands), named after the trial.
         on_failure: called as ``on_failure(path, error)`` for every failed trial.
     """
     paths = report_inputs(inputs, static)
@@ -118,12 +120,12 @@ def write_batch_report(
     def analyse(path: Path) -> MarkerErrorAnalysis:
         run = run_angles(path, static=static, subject_file=subject_file, marker_diameter=marker_diameter,
                          flat_foot=flat_foot, preprocessing=preprocessing, model=model)  # fmt: skip
-        return analyse_run(run, settings, components.update)
+        return analyse_run(run, settings, stages=Prefixed(components, f"{path.name}: "))
 
     with ReportWriter(out_dir, strict=strict) as writer:
         trials.stage("trials", len(paths))
         for done, path in enumerate(paths, 1):
-            components.stage(f"{path.name}: angle components")
+            components.stage(f"{path.name}: joint angles")
             item = _report_item(path, analyse, strict)
             entry = writer.add(item)
             trials.update(done)

@@ -8,8 +8,9 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``gait_cycles.png`` -- the gait-report grid,
 * ``summary.md`` -- what was done, how close the angles are to the known truth, how
   small the marker errors must be for knee flexion to be known within ±2.5° (the
-  allowable marker error) and how wide the knee angles' fuzzy bands are (determined
-  bands first; "undetermined" where a segment frame can flip),
+  allowable marker error), how wide the knee angles' fuzzy bands are (determined
+  bands first; "undetermined" where a segment frame can flip) and which marker error
+  source dominates knee flexion (each source alone, thesis Fig. 5.9),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
 
 and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
@@ -38,6 +39,7 @@ from fuzzygait.viz.figures import plot_gait_cycles
 from fuzzygait.viz.report import ReportItem, TrialAnalysis, write_report
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
+from fuzzygait.viz.report.sources import dominant_sentence
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
@@ -168,7 +170,8 @@ def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
     """The summary's fuzzy part: the allowable marker error of knee flexion
     (:func:`allowable_lines`), the determined bands (largest flexion ΔΦ), then what is
     undetermined, then the ΔΦ table ("undetermined" where an α-level is undetermined at
-    some frame) -- the numbers of the report's first screen."""
+    some frame) -- the numbers of the report's first screen -- and, with per-source bands,
+    the sentence naming the error source that dominates knee flexion."""
     table = delta_phi_table(analysis, TrialData.of(analysis))
     head = headline(table)
     alphas = table.alphas
@@ -204,6 +207,8 @@ def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
             count = table.frames_undetermined(name, lowest_alpha)
             cells.append(f"{count} of {table.n_frames}" if count else "none")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    if (sentence := dominant_sentence(analysis.fuzzy, "Knee")) is not None:
+        lines += ["", f"Which marker error source dominates, each alone (thesis Fig. 5.9): {sentence}"]
     return lines
 
 

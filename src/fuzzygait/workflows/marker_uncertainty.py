@@ -28,9 +28,12 @@ from fuzzygait.markererror.analysis import (
     fuzzy_joint_angles,
     relative_envelope_width,
 )
+from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, per_source_bands
+from fuzzygait.markererror.result import angle_components
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
+from fuzzygait.workflows.progress import SILENT, StageProgress
 
 __all__ = [
     "DEFAULT_SETTINGS",
@@ -68,6 +71,7 @@ class SettingsArguments(TypedDict, total=False):
     workers: int | None
     tolerance: float | None
     allowable_angles: Sequence[str] | None
+    per_source: bool
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,10 @@ class MarkerErrorSettings:
         tolerance: ± degrees of the allowable-marker-error refinement
             (:func:`~fuzzygait.markererror.allowable.allowable_errors`; None: none).
         allowable_angles: angle names or components to refine (None: every analysed one).
+        per_source: also the bands of each selected error source alone for the analysed
+            hip/knee/ankle flexion components, at the smallest α-level (thesis Fig. 5.9;
+            :func:`~fuzzygait.markererror.per_source.per_source_bands`); nothing when one
+            source is selected or no flexion component is analysed.
     """
 
     error_model: ErrorModel = field(default_factory=ErrorModel)
@@ -94,6 +102,7 @@ class MarkerErrorSettings:
     workers: int | None = None
     tolerance: float | None = DEFAULT_TOLERANCE
     allowable_angles: tuple[str, ...] | None = None
+    per_source: bool = True
 
     def __post_init__(self) -> None:
         if self.tolerance is not None and not (math.isfinite(self.tolerance) and self.tolerance > 0):
@@ -112,7 +121,7 @@ class MarkerErrorSettings:
         return cls(error_model, names, tuple(arguments.get("alphas", DEFAULT_ALPHAS)),
                    None if angles is None else tuple(angles), arguments.get("method", "cartesian"),
                    arguments.get("workers"), arguments.get("tolerance", DEFAULT_TOLERANCE),
-                   None if refined is None else tuple(refined))  # fmt: skip
+                   None if refined is None else tuple(refined), bool(arguments.get("per_source", True)))  # fmt: skip
 
     def options(self) -> FuzzyAngleOptions:
         """The options of :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`."""
@@ -122,39 +131,71 @@ class MarkerErrorSettings:
 
 
 #: The default analysis: Table 3.1 errors, all sources, α = 0, 0.25, 0.5, 0.75 (and 1),
-#: the allowable marker error for ±2.5°.
+#: the allowable marker error for ±2.5°, the flexion angles' bands per source at α = 0.
 DEFAULT_SETTINGS = MarkerErrorSettings()
 
 
 def analyse_run(
-    run: AnglesRun, settings: MarkerErrorSettings = DEFAULT_SETTINGS, progress: Progress | None = None
+    run: AnglesRun,
+    settings: MarkerErrorSettings = DEFAULT_SETTINGS,
+    progress: Progress | None = None,
+    *,
+    stages: StageProgress = SILENT,
 ) -> MarkerErrorAnalysis:
     """The fuzzy marker-error analysis of an already computed joint-angle run.
 
-    ``progress(done, total)`` is called per angle component.  The marker-error model is
-    the run's model version (a cluster model with the run's static cluster calibration
-    held fixed).  With ``settings.tolerance`` the allowable-marker-error refinement
-    (:func:`~fuzzygait.markererror.allowable.allowable_errors`) follows on the same
-    evaluator, and the dataset is the refined one (its ``refined_*`` levels and
-    ``allowable_*`` outcome; the hulls nested over every level).  The dataset's ``trial``
-    attribute is the trial's file name, ``model`` that version; the notes are the run's
-    plus one line on the assumed errors (and one on the refinement's runs and time).
+    ``progress(done, total)`` is called per angle component of the first stage; ``stages``
+    sees the whole run: ``"fuzzy angles"`` (per angle component), ``"allowable marker
+    error"`` (per refinement run, its total an estimate that shrinks as the searches
+    converge) and ``"per-source bands"`` (per source × flexion component).  The
+    marker-error model is the run's model version (a cluster model with the run's static
+    cluster calibration held fixed).  With ``settings.tolerance`` the allowable-marker-error
+    refinement (:func:`~fuzzygait.markererror.allowable.allowable_errors`) follows on the
+    same evaluator, and the dataset is the refined one (its ``refined_*`` levels and
+    ``allowable_*`` outcome; the hulls nested over every level); with
+    ``settings.per_source`` then the per-source bands of the flexion angles
+    (:func:`~fuzzygait.markererror.per_source.per_source_bands`, ``source_*`` variables).
+    The dataset's ``trial`` attribute is the trial's file name, ``model`` that version; the
+    notes are the run's plus one line on the assumed errors (and one each on the
+    per-source runs and the refinement's, the latter last, with their runs and time).
     """
     options = settings.options()
     allowable = None
+
+    def components(done: int, total: int) -> None:
+        if progress is not None:
+            progress(done, total)
+        stages.update(done, total)
+
+    per_source_note = None
     with Evaluator(workers=max(1, int(options.workers))) as evaluator:
-        fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, progress,
+        stages.stage("fuzzy angles")
+        fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, components,
                                    evaluator=evaluator, clusters=run.clusters)  # fmt: skip
         if settings.tolerance is not None:
+            stages.stage("allowable marker error")
             allowable, fuzzy = allowable_errors(run.trial, run.subject, run.result, options, settings.tolerance,
                                                 settings.allowable_angles, fuzzy=fuzzy, evaluator=evaluator,
-                                                clusters=run.clusters)  # fmt: skip
+                                                clusters=run.clusters, progress=stages.update)  # fmt: skip
+        if settings.per_source:
+            flexion = [c for c in FLEXION_COMPONENTS if c in angle_components(fuzzy)]
+            if len(options.sources) < 2:
+                per_source_note = "per-source bands: not computed (a single error source is selected)"
+            elif not flexion or not any(a < 1.0 for a in fuzzy["alpha"].to_numpy()):
+                per_source_note = "per-source bands: not computed (no hip/knee/ankle flexion analysed)"
+            else:
+                stages.stage("per-source bands", len(options.sources) * len(flexion))
+                fuzzy = per_source_bands(run.trial, run.subject, run.result, fuzzy, options, evaluator=evaluator,
+                                         clusters=run.clusters, progress=stages.update)  # fmt: skip
+                per_source_note = _per_source_note(fuzzy, len(flexion))
     fixed = "static cluster calibration, " if run.clusters is not None else ""
     notes = list(run.notes) + [
         f"marker errors: {', '.join(options.sources)} ({settings.error_model.source}), {options.method} "
         f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}; {run.model} marker "
         f"model ({fixed}static offsets and subject measures fixed)"
     ]
+    if per_source_note is not None:
+        notes.append(per_source_note)
     if allowable is not None:
         which = "" if settings.allowable_angles is None else f" ({', '.join(settings.allowable_angles)})"
         runs, seconds = fuzzy.attrs["allowable_runs"], fuzzy.attrs["allowable_seconds"]
@@ -163,6 +204,20 @@ def analyse_run(
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable)
+
+
+def _per_source_note(fuzzy: xr.Dataset, n_components: int) -> str:
+    """The notes line of the per-source runs: what, how many, how long, and whether a
+    source's band reaches beyond the all-sources band (it should not: nested balls)."""
+    alphas = str(fuzzy.attrs["source_alphas"]).split(",")
+    text = (f"per-source bands (Fig. 5.9): {str(fuzzy.attrs['sources']).replace(',', ', ')} each alone for "
+            f"{n_components} flexion components at α = {alphas[0]}: {fuzzy.attrs['source_runs']} runs, "
+            f"{float(fuzzy.attrs['source_seconds']):.1f} s")  # fmt: skip
+    excess = float(fuzzy.attrs["source_nesting_excess_deg"])
+    if excess > 0.01:
+        text += (f"; a single source's band reaches up to {excess:.2f}° beyond the all-sources band (the "
+                 "all-sources optimum is a local one there)")  # fmt: skip
+    return text
 
 
 def analyse_trial(
@@ -175,16 +230,18 @@ def analyse_trial(
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     model: str = "auto",
     progress: Progress | None = None,
+    stages: StageProgress = SILENT,
     **settings: Unpack[SettingsArguments],
 ) -> MarkerErrorAnalysis:
     """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` (``model``: a model
     version or ``"auto"``, as there) followed by the fuzzy marker-error analysis of every
     computed angle (or ``angles``) by the same version; ``settings`` are the arguments of
     :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``, ``alphas``,
-    ``angles``, ``method``, ``workers``, ``tolerance``, ``allowable_angles``)."""
+    ``angles``, ``method``, ``workers``, ``tolerance``, ``allowable_angles``,
+    ``per_source``); ``progress`` and ``stages`` as for :func:`analyse_run`."""
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
                      marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
-    return analyse_run(run, MarkerErrorSettings.create(**settings), progress)
+    return analyse_run(run, MarkerErrorSettings.create(**settings), progress, stages=stages)
 
 
 def analyse_to_files(
@@ -200,16 +257,18 @@ def analyse_to_files(
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
     model: str = "auto",
     progress: Progress | None = None,
+    stages: StageProgress = SILENT,
 ) -> MarkerErrorAnalysis:
     """Run the pipeline (``model``: a model version or ``"auto"``, see
     :func:`~fuzzygait.workflows.angles.run_angles`) and the marker-error analysis of one
     trial by that version, save the fuzzy angles to ``out_file`` (.nc or .zarr) and,
-    with ``rrd``, a Rerun recording of the trial with its bands (folders created)."""
+    with ``rrd``, a Rerun recording of the trial with its bands (folders created);
+    ``progress`` and ``stages`` as for :func:`analyse_run`."""
     from fuzzygait.uncertainty.storage import save_result
 
     run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
                      marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
-    analysis = analyse_run(run, settings, progress)
+    analysis = analyse_run(run, settings, progress, stages=stages)
     out_file.parent.mkdir(parents=True, exist_ok=True)
     save_result(analysis.fuzzy, out_file)
     if rrd is not None:

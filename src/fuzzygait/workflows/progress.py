@@ -29,3 +29,19 @@ class NoProgress:
 
 #: The progress of a caller that does not want any.
 SILENT = NoProgress()
+
+
+class Prefixed:
+    """The stages of ``progress`` with ``prefix`` before each description (e.g. the trial
+    of a batch: ``"walking.c3d: fuzzy angles"``)."""
+
+    def __init__(self, progress: StageProgress, prefix: str) -> None:
+        self.progress, self.prefix = progress, prefix
+
+    def stage(self, description: str, total: int | None = None) -> None:
+        """A new stage of ``progress``, its description prefixed."""
+        self.progress.stage(self.prefix + description, total)
+
+    def update(self, completed: int, total: int | None = None) -> None:
+        """As ``progress.update``."""
+        self.progress.update(completed, total)

@@ -6,6 +6,8 @@ Layout of the output folder::
     OUT/<trial>.html                   one page per successful trial
     OUT/<trial>_files/cycles.png|svg   angles over the gait cycle with fuzzy α-bands
     OUT/<trial>_files/time_series.png|svg   the whole trial with its α-bands
+    OUT/<trial>_files/sources.png|svg  flexion with the α = 0 band of each error source
+                                       (with per-source bands only)
 
 The pages are plain HTML5 with inline CSS: no JavaScript, no external resources; the
 figures are referenced by relative paths, so the folder can be zipped, mailed or opened
@@ -51,9 +53,20 @@ page with the sentences of left and right knee flexion ("known within ±2.5° if
 marker stays within 2.3 mm of where it was measured ..."), followed by the table of every
 angle (largest error mm, % of Table 3.1, mm per segment); the index shows knee flexion's.
 
+Error sources
+-------------
+A dataset with per-source bands (:func:`fuzzygait.markererror.per_source.per_source_bands`,
+``--per-source``, the default) gets a section after the ΔΦ table (thesis Fig. 5.9): per
+joint (hip, knee, ankle) and side the measured flexion over the gait cycle with the α = 0
+band of each error source alone and of all together (opaque fills drawn widest first, so
+each ring shows its source's colour; undetermined bands hatched as above), and the table
+of the widest α = 0 band per source with the source that dominates (a source whose band
+is undetermined somewhere counts as dominating).
+
 Modules: :mod:`~fuzzygait.viz.report.bands` (the numbers: cycle bands, ΔΦ table, summary
 numbers), :mod:`~fuzzygait.viz.report.allowable` (the allowable-error table and its
-HTML), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.pages` (HTML
+HTML), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.sources` (the
+per-source figure, table and sentence), :mod:`~fuzzygait.viz.report.pages` (HTML
 and CSS, :mod:`~fuzzygait.viz.report.markup` its building blocks) and
 :mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
 """

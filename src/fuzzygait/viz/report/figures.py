@@ -130,16 +130,18 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def _draw_undetermined(ax: Axes, x: np.ndarray, strips: list[tuple[int, str, np.ndarray]]) -> None:
-    """Hatched strips along the top of the panel, one per side (``slot`` 0, 1, ...),
-    where ``mask (n_alpha, n_points)`` is undetermined; each α-level adds a layer, so
-    the strip is darker where higher α-levels are undetermined too.  The y-limits are
-    frozen first (with headroom for the strips): the strips never stretch the axis."""
+def _draw_undetermined(ax: Axes, x: np.ndarray, strips: list[tuple[int, str, np.ndarray]],
+                       n_slots: int = len(SIDE_STYLE)) -> None:  # fmt: skip
+    """Hatched strips along the top of the panel, one per side (``slot`` 0, 1, ... of
+    ``n_slots``), where ``mask (n_alpha, n_points)`` is undetermined; each α-level adds a
+    layer, so the strip is darker where higher α-levels are undetermined too.  The
+    y-limits are frozen first (with headroom for the strips): the strips never stretch the
+    axis."""
     if not strips:
         return
     ax.autoscale_view()
     bottom, top = ax.get_ylim()
-    ax.set_ylim(bottom, top + (top - bottom) * (len(SIDE_STYLE) * STRIP + 0.02) / (1.0 - len(SIDE_STYLE) * STRIP))
+    ax.set_ylim(bottom, top + (top - bottom) * (n_slots * STRIP + 0.02) / (1.0 - n_slots * STRIP))
     step = float(np.median(np.diff(x))) if x.size > 1 else 1.0
     half = max(step / 2, 0.004 * float(x[-1] - x[0]))  # a single frame stays visible
     for slot, colour, mask in strips:

@@ -31,6 +31,7 @@ from fuzzygait.viz.report.bands import (
 )
 from fuzzygait.viz.report.markup import escape as _esc
 from fuzzygait.viz.report.markup import html_table as _table
+from fuzzygait.viz.report.sources import has_source_bands, sources_section
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -378,7 +379,9 @@ def headline_lines(head: Headline) -> list[str]:
 
 def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
                 table: DeltaPhiTable, files: str, source: Path) -> str:  # fmt: skip
-    """The page of one trial: figures, ΔΦ table, data quality, assumptions, subject."""
+    """The page of one trial: the allowable marker error first, figures, ΔΦ table, the
+    flexion bands per error source (with per-source bands), data quality, assumptions,
+    subject."""
     run = analysis.run
     trial = run.trial
     last = trial.first_frame + trial.n_frames - 1
@@ -405,10 +408,11 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
     key.append(f"Gaps: {filled} filled, {len(run.gaps) - filled} left open; "
                f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
     figs = quote(files)
+    sources_link = ' <a href="#sources">Error sources</a> ·' if has_source_bands(analysis.fuzzy) else ""
     body = f"""
 <nav><a href="index.html">← All trials (index)</a> · <a href="#allowable">Allowable error</a> ·
 <a href="#cycles">Gait cycle</a> ·
-<a href="#delta-phi">ΔΦ table</a> · <a href="#time-series">Whole trial</a> ·
+<a href="#delta-phi">ΔΦ table</a> ·{sources_link} <a href="#time-series">Whole trial</a> ·
 <a href="#quality">Data quality</a> · <a href="#subject">Subject</a></nav>
 <header>
 <h1>{_esc(source.name)}</h1>
@@ -435,6 +439,7 @@ undetermined there (no band drawn). Click for the scalable version
 (<a href="{figs}/cycles.svg">SVG</a>, <a href="{figs}/cycles.png">PNG</a>).</figcaption>
 </figure>
 {_delta_phi_section(table, data)}
+{sources_section(analysis.fuzzy, figs)}
 <h2 id="time-series">Whole trial</h2>
 <p>The same angles over the whole recording (not normalised), with the α-bands frame by
 frame. Dotted vertical lines mark foot strikes (red left, green right).</p>

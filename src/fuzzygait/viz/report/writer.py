@@ -20,6 +20,7 @@ from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialAnalysis, TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
 from fuzzygait.viz.report.pages import index_page, trial_page
+from fuzzygait.viz.report.sources import has_source_bands, plot_source_bands
 
 __all__ = ["ReportItem", "ReportWriter", "write_report"]
 
@@ -134,6 +135,8 @@ class ReportWriter:
         title = f"{source.name}: joint angles with fuzzy α-bands"
         plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)")
         plot_time_series(data, folder / "time_series", title + " (whole trial)")
+        if has_source_bands(analysis.fuzzy):
+            plot_source_bands(data, folder / "sources", f"{source.name}: flexion with the bands of each error source")
         table = delta_phi_table(analysis, data)
         entry = TrialEntry.of(source, f"{name}.html", data, table, allowable_summary(analysis.fuzzy))
         page = trial_page(analysis, data, entry, table, files, source)

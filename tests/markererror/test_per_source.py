@@ -1,0 +1,247 @@
+"""Per-source bands of the flexion angles (issue 15 Deliver 4, thesis Fig. 5.9): each error
+source of Table 3.1 alone beside all sources together.
+
+Independent truths: the analytic two-marker case (balls r around two markers at distance d
+turn the line by arcsin(2r/d) either way) for each source's Table 3.1 radius; on the sample
+trial the nesting of the balls (a source's ball lies inside the sum's, so its band lies
+inside the all-sources band), the 2 mm measurement balls giving the narrowest band, and the
+same numbers as ``fuzzy_joint_angles(sources=(s,))``. Also the save/load round trip, the
+progress callbacks (per-source runs and the allowable refinement) and bad input.
+
+Speed: the sample trial cut to 6 frames (markers NaN elsewhere), left leg, α = 0 and 0.5.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.markererror.allowable import allowable_errors
+from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
+from fuzzygait.markererror.per_source import (
+    ALL,
+    attach_source_hulls,
+    per_source_bands,
+    source_components,
+    source_hull,
+    source_names,
+    source_undetermined,
+    widest_source_bands,
+)
+from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, ErrorModel
+from fuzzygait.uncertainty import BatchedDirect, Evaluation, FuzzyBalls, Output, graph_follower
+from fuzzygait.uncertainty.storage import load_result, save_result
+from fuzzygait.workflows.angles import AnglesRun
+
+N_FRAMES = 6
+ALPHAS = (0.0, 0.5)
+LEFT_FLEXION = ["LHipAngles_X", "LKneeAngles_X", "LAnkleAngles_X"]
+
+
+@pytest.fixture(scope="module")
+def sparse_run(angles_run: AnglesRun) -> AnglesRun:
+    """The sample run with every marker NaN outside 6 frames spread over the trial."""
+    trial = angles_run.trial
+    frames = np.linspace(0, trial.n_frames - 1, N_FRAMES).round().astype(int)
+    markers = np.full_like(trial.markers, np.nan)
+    markers[frames] = trial.markers[frames]
+    return dataclasses.replace(angles_run, trial=trial.with_markers(markers))
+
+
+@pytest.fixture(scope="module")
+def options() -> FuzzyAngleOptions:
+    return FuzzyAngleOptions(alphas=ALPHAS, workers=1)
+
+
+@pytest.fixture(scope="module")
+def plain(sparse_run: AnglesRun, options: FuzzyAngleOptions) -> xr.Dataset:
+    return fuzzy_joint_angles(sparse_run.trial, sparse_run.subject, sparse_run.result, options,
+                              ["LHipAngles", "LKneeAngles", "LAnkleAngles"])  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def banded(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> xr.Dataset:
+    return per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options)
+
+
+def _valid(fuzzy: xr.Dataset) -> np.ndarray:
+    """The frames (dataset index) with a band."""
+    hull = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.0, bound="upper")
+    return np.flatnonzero(np.isfinite(hull.to_numpy()))
+
+
+# ---------------------------------------------------------------------------- analytic
+class TwoMarkerLine:
+    """The direction (deg) of the line from A(t) = LTHI to B(t) = LKNE in the x-y plane;
+    6 parameters (deviations of the two markers, mm)."""
+
+    parameter_names = ("LTHI_x", "LTHI_y", "LTHI_z", "LKNE_x", "LKNE_y", "LKNE_z")
+    output = Output("direction", "deg")
+    capabilities = frozenset({"nodes"})
+
+    def __init__(self, n: int = 24) -> None:
+        t = np.linspace(0.0, 1.0, n)
+        self.times = t
+        self.distance = 250.0 + 100.0 * np.sin(2 * np.pi * t)  # mm
+        direction = 0.5 * np.sin(2.3 * np.pi * t)
+        self.a = np.stack([40.0 * t, 10.0 * np.cos(3 * t), 3.0 * t], axis=1)
+        self.b = self.a + self.distance[:, None] * np.stack([np.cos(direction), np.sin(direction), 0 * t], axis=1)
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        P = np.asarray(P, dtype=float).reshape(len(nodes), 2, 3)
+        v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
+        return np.degrees(np.arctan2(v[:, 1], v[:, 0]))
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+def test_two_markers_per_source_give_arcsin_2r_over_d() -> None:
+    """Two thigh markers (Table 3.1 thigh: measurement 2, placement 10, STA 20, all 32 mm)
+    at distance d: the band of each source alone is 2·arcsin(2r/d) wide, widest where d is
+    smallest; the table reads it to 1e-6 rad, nested, and names the soft-tissue artefact."""
+    model, markers = TwoMarkerLine(), ("LTHI", "LKNE")
+    levels = np.array([0.0, 1.0])
+
+    def hull(radius: float) -> np.ndarray:
+        balls = FuzzyBalls(np.zeros((2, 3)), [radius, radius], markers)
+        result = graph_follower(model, balls, levels, strategy=BatchedDirect())
+        return result["hull"].transpose("alpha", "bound", "time").to_numpy()
+
+    total = ErrorModel().radius("LTHI")
+    assert total == 32.0
+    frames = np.arange(1, model.times.size + 1)
+    main = fuzzy_angles_dataset({"LKneeAngles_X": hull(total)}, alphas=levels, frames=frames, times=model.times,
+                                markers=list(markers), ball_radius=[total, total])  # fmt: skip
+    radii = {s: TABLE_3_1["thigh"][s] for s in SOURCES}
+    fuzzy = attach_source_hulls(main, {s: {"LKneeAngles_X": hull(r)} for s, r in radii.items()}, levels,
+                                radii={s: [r, r] for s, r in radii.items()})  # fmt: skip
+    table = widest_source_bands(fuzzy)
+    assert table.alpha == 0.0 and table.sources == list(SOURCES)
+    for source, radius in [*radii.items(), (ALL, total)]:
+        exact = np.max(2 * np.arcsin(2 * radius / model.distance))
+        assert math.radians(table.width("LKneeAngles_X", source)) == pytest.approx(exact, abs=1e-6), source
+        measured = model.evaluate(np.zeros(6)).values
+        band = source_hull(fuzzy, source, "LKneeAngles_X").sel(source_alpha=0.0)
+        np.testing.assert_allclose(np.radians(band.sel(bound="upper") - measured),
+                                   np.arcsin(2 * radius / model.distance), atol=1e-6)  # fmt: skip
+    assert table.dominant("LKneeAngles_X") == "sta"
+    assert fuzzy.attrs["source_nesting_excess_deg"] <= 1e-6
+    np.testing.assert_array_equal(fuzzy["source_ball_radius"].sel(source="placement"), [10.0, 10.0])
+
+
+# ---------------------------------------------------------------------------- the sample trial
+def test_layout_and_main_result_unaffected(plain: xr.Dataset, banded: xr.Dataset) -> None:
+    assert source_names(banded) == list(SOURCES)
+    assert source_components(banded) == LEFT_FLEXION  # flexion only, no frontal/transverse runs
+    assert banded["source_hull"].dims == ("source", "source_component", "source_alpha", "bound", "frame")
+    assert banded["source_hull"].attrs["units"] == "deg" and banded["source_ball_radius"].attrs["units"] == "mm"
+    assert all("long_name" in banded[v].attrs for v in ("source_hull", "source_undetermined", "source_ball_radius"))
+    np.testing.assert_array_equal(banded["source_alpha"], [0.0, 1.0])  # the smallest level (and 1) only
+    assert banded.attrs["source_runs"] == 9 and banded.attrs["source_alphas"] == "0,1"
+    # the main result's variables and coordinates as they were
+    main = banded[list(plain.data_vars)]
+    main.attrs = {k: v for k, v in main.attrs.items() if not k.startswith("source_")}
+    xr.testing.assert_identical(main, plain)
+    # the measured curve at α = 1 of every source is the main one's
+    for source in SOURCES:
+        np.testing.assert_array_equal(source_hull(banded, source, "LKneeAngles_X").sel(source_alpha=1.0),
+                                      component_hull(plain, "LKneeAngles_X").sel(alpha=1.0))  # fmt: skip
+
+
+def test_each_source_band_nests_inside_all_sources(sparse_run: AnglesRun, options: FuzzyAngleOptions,
+                                                   plain: xr.Dataset) -> None:  # fmt: skip
+    """A source's ball lies inside the sum's, so its band lies inside the all-sources band
+    at the same α (where both are determined; at α = 0 the all-sources ankle band is
+    undetermined on every frame, so α = 0.5 too), and the 2 mm measurement band is the
+    narrowest."""
+    banded = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options,
+                              alphas=(0.0, 0.5))  # fmt: skip
+    np.testing.assert_array_equal(banded["source_alpha"], [0.0, 0.5, 1.0])
+    valid = _valid(banded)
+    assert valid.size == N_FRAMES
+    for component in LEFT_FLEXION:
+        for alpha in (0.0, 0.5):
+            outer = source_hull(banded, ALL, component).sel(source_alpha=alpha).isel(frame=valid)
+            outer_flags = source_undetermined(banded, ALL, component).sel(source_alpha=alpha).isel(frame=valid)
+            widths = {}
+            for source in SOURCES:
+                inner = source_hull(banded, source, component).sel(source_alpha=alpha).isel(frame=valid)
+                flags = source_undetermined(banded, source, component).sel(source_alpha=alpha).isel(frame=valid)
+                keep = ~(flags | outer_flags).to_numpy()
+                assert keep.any() or alpha == 0.0, (component, source, alpha)  # the check is not vacuous
+                upper, lower = inner.sel(bound="upper").to_numpy(), inner.sel(bound="lower").to_numpy()
+                assert np.all(upper[keep] <= outer.sel(bound="upper").to_numpy()[keep] + 1e-6), (component, source)
+                assert np.all(lower[keep] >= outer.sel(bound="lower").to_numpy()[keep] - 1e-6), (component, source)
+                widths[source] = upper - lower
+            for source in ("placement", "sta"):  # 2 mm on every marker against 5-20 mm
+                assert np.all(widths["measurement"] < widths[source]), (component, source, alpha)
+    assert banded.attrs["source_nesting_excess_deg"] <= 1e-6
+    table = widest_source_bands(banded)
+    for component in LEFT_FLEXION:
+        assert table.width(component, "measurement") < table.width(component, "placement")
+        assert table.dominant(component) in ("placement", "sta")
+
+
+def test_the_same_bands_as_fuzzy_joint_angles_with_one_source(sparse_run: AnglesRun, banded: xr.Dataset) -> None:
+    for source in ("measurement", "sta"):
+        one = FuzzyAngleOptions(alphas=(0.0,), sources=(source,), workers=1)
+        alone = fuzzy_joint_angles(sparse_run.trial, sparse_run.subject, sparse_run.result, one, ["LKneeAngles"])
+        expected = component_hull(alone, "LKneeAngles_X").rename(alpha="source_alpha")
+        np.testing.assert_allclose(source_hull(banded, source, "LKneeAngles_X"), expected, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(banded["source_ball_radius"].sel(source=source, marker=alone["marker"]),
+                                      alone["ball_radius"])  # fmt: skip
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_round_trip(banded: xr.Dataset, tmp_path, suffix: str) -> None:  # noqa: ANN001
+    loaded = load_result(save_result(banded, tmp_path / f"fuzzy{suffix}"))
+    for name in ("source_hull", "source_undetermined", "source_ball_radius", "hull", "undetermined"):
+        np.testing.assert_array_equal(loaded[name].to_numpy(), banded[name].to_numpy())
+        assert loaded[name].dims == banded[name].dims and loaded[name].attrs == banded[name].attrs
+    assert loaded["source_undetermined"].dtype == bool
+    assert source_names(loaded) == list(SOURCES) and source_components(loaded) == LEFT_FLEXION
+    before, after = widest_source_bands(banded), widest_source_bands(loaded)
+    assert after.widths.equals(before.widths) and after.undetermined.equals(before.undetermined)
+    np.testing.assert_array_equal(loaded["alpha"], banded["alpha"])  # the main levels untouched
+
+
+def test_progress_of_the_per_source_runs(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> None:
+    calls: list[tuple[int, int]] = []
+    per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options,
+                     components=["LKneeAngles_X"],
+                     progress=lambda done, total: calls.append((done, total)))  # fmt: skip
+    assert calls == [(1, 3), (2, 3), (3, 3)]  # serial: per run, one run per source
+
+
+def test_progress_of_the_allowable_refinement(sparse_run: AnglesRun, options: FuzzyAngleOptions,
+                                              plain: xr.Dataset) -> None:  # fmt: skip
+    calls: list[tuple[int, int]] = []
+    _, refined = allowable_errors(sparse_run.trial, sparse_run.subject, sparse_run.result, options,
+                                  angles=["LKneeAngles_X"], fuzzy=plain,
+                                  progress=lambda done, total: calls.append((done, total)))  # fmt: skip
+    runs = refined.attrs["allowable_runs"]
+    assert runs > 0 and calls[-1] == (runs, runs)
+    done = [d for d, _ in calls]
+    assert done == sorted(done) and all(0 <= d <= t for d, t in calls)
+
+
+def test_bad_input(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> None:
+    run = (sparse_run.trial, sparse_run.subject, sparse_run.result)
+    with pytest.raises(ParameterError, match="components"):
+        per_source_bands(*run, plain, options, components=["RKneeAngles_X"])
+    with pytest.raises(ParameterError, match="alphas"):
+        per_source_bands(*run, plain, options, alphas=(0.25,))
+    with pytest.raises(ParameterError, match="no flexion"):
+        per_source_bands(*run, plain.sel(component=["LKneeAngles_Y"]), options)
+    with pytest.raises(ParameterError, match="sources"):
+        per_source_bands(*run, plain, options, sources=("magic",))
+    with pytest.raises(ParameterError, match="no per-source bands"):
+        widest_source_bands(plain)
