@@ -2,16 +2,19 @@
 inside the Graph Follower hull, or at a frame marked undetermined?
 
 Run:  .venv/bin/python benchmarks/markererror_soundness.py [--workers 2] [--frames 20]
-      [--samples 10000] [--starts 3] [--iterations 25] [--trials NAME ...] [--angles NAME ...]
+      [--samples 10000] [--starts 3] [--iterations 25] [--stride 8] [--follow 5]
+      [--only-checked-frames] [--trials NAME ...] [--angles NAME ...]
 
 Trials (:mod:`_sessions`): the synthetic CGM 2.4 session and the real CGM 2.4 session with
 model ``cgm2.4`` (static cluster calibration fixed), Movement_trial with ``cgm1.0``; per
 trial ``--frames`` frames spread evenly over the frames where every angle is computed.
 The hulls are those of :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles` (Table
 3.1 radii, all three sources, Cartesian, ``BatchedDirect``, the default α-levels 0, 0.25,
-0.5, 0.75, 1) on a copy of the trial holding only those frames, for every angle
-component the model computes (both sides; cgm2.4 with ForeFootAngles).  The Monte Carlo
-uses the very models the analysis optimised
+0.5, 0.75, 1) on the whole trial — as a user runs it: between its full optimisations at
+every ``--stride``-th frame the Graph Follower follows the optima from frame to frame —
+(``--only-checked-frames``: on a copy of the trial holding only the checked frames, each
+then optimised in full), for every angle component the model computes (both sides;
+cgm2.4 with ForeFootAngles).  The Monte Carlo uses the very models the analysis optimised
 (:func:`~fuzzygait.markererror.analysis.component_tasks`: the same markers, fixed subject
 and calibration, ``reference`` = the measured angle, so every sample is unwrapped onto the
 branch through the measured angle as the hull is):
@@ -114,10 +117,12 @@ def run_trial(case: Case, model: str, args: argparse.Namespace, evaluator: Evalu
     names = [n for n in run.result.angles if not args.angles or n in args.angles]
     frames = spread_frames(run.result.angles, args.frames)
     sparse = sparse_run(run, frames)
-    options = FuzzyAngleOptions(alphas=DEFAULT_ALPHAS, starts=args.starts, iterations=args.iterations)
+    options = FuzzyAngleOptions(alphas=DEFAULT_ALPHAS, starts=args.starts, iterations=args.iterations,
+                                stride=args.stride, follow=args.follow)  # fmt: skip
+    analysed = sparse if args.only_checked_frames else run
     start = time.perf_counter()
-    fuzzy = fuzzy_joint_angles(sparse.trial, sparse.subject, sparse.result, options, names, evaluator=evaluator,
-                               clusters=sparse.clusters)  # fmt: skip
+    fuzzy = fuzzy_joint_angles(analysed.trial, analysed.subject, analysed.result, options, names,
+                               evaluator=evaluator, clusters=analysed.clusters)  # fmt: skip
     gfa_seconds = time.perf_counter() - start
     tasks, _ = component_tasks(sparse.trial, sparse.subject, sparse.result, options, names, sparse.clusters)
     start = time.perf_counter()
@@ -202,12 +207,18 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=10_000)
     parser.add_argument("--starts", type=int, default=FuzzyAngleOptions.starts)
     parser.add_argument("--iterations", type=int, default=FuzzyAngleOptions.iterations)
+    parser.add_argument("--stride", type=int, default=FuzzyAngleOptions.stride)
+    parser.add_argument("--follow", type=int, default=FuzzyAngleOptions.follow)
+    parser.add_argument("--only-checked-frames", action="store_true",
+                        help="analyse only the checked frames (each optimised in full), not the whole trial")
     parser.add_argument("--trials", nargs="*", default=[], help="substrings of the trial names to run")
     parser.add_argument("--angles", nargs="*", default=[], help="angle names (default: all the model computes)")
     args = parser.parse_args()
     print(f"command: .venv/bin/python benchmarks/markererror_soundness.py {' '.join(sys.argv[1:])}   "
           f"({os.cpu_count()} cores, Python {sys.version.split()[0]}, load {os.getloadavg()[0]:.2f}); "
-          f"starts={args.starts}, iterations={args.iterations}, {args.samples:,} MC samples per frame")  # fmt: skip
+          f"starts={args.starts}, iterations={args.iterations}, stride={args.stride}, follow={args.follow}, "
+          f"{'checked frames only' if args.only_checked_frames else 'whole trials'}, {args.samples:,} MC samples "
+          "per frame")  # fmt: skip
     total = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp, Evaluator(workers=args.workers) as evaluator:
         for case, model in trials(Path(tmp)):

@@ -19,7 +19,10 @@ a ``component`` dimension, on the trial's frames:
   component does not use;
 * ``undetermined (component, alpha, frame)``: True where the band is not a band — a
   bound more than 90° from the measured angle on its continuous branch (the segment frame
-  can flip inside the ball, :func:`~fuzzygait.markererror.angle_model.undetermined`);
+  can flip inside the ball, :func:`~fuzzygait.markererror.angle_model.undetermined`), or,
+  for an angle's first and third Cardan components, its middle component's band within
+  15° of ±90° (the Cardan singularity,
+  :func:`~fuzzygait.markererror.angle_model.gimbal_undetermined`);
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
 * attributes: ``trial``, ``model`` (the model version), ``sources``, ``method``,
   ``starts``, ``output``, ``units``, ``strategy``, ``forward_simulations``,
@@ -51,6 +54,7 @@ from fuzzygait.markererror.angle_model import (
     JointAngleModel,
     SphericalDeviationModel,
     fixed_subject,
+    gimbal_undetermined,
     undetermined,
 )
 from fuzzygait.markererror.result import (
@@ -82,6 +86,10 @@ class FuzzyAngleOptions:
         starts: multistart points per frame (deterministic, higher α-level's optimum,
             then random).
         iterations: optimiser iterations per start at most.
+        stride: frames between full multistart optimisations; the frames in between are
+            followed from their neighbours' optima (the Graph Follower's warm starts,
+            :class:`~fuzzygait.uncertainty.BatchedDirect`) with ``follow`` iterations.
+        follow: optimiser iterations at the followed frames.
         workers: processes for the angle components (1: in this process), when no
             :class:`~fuzzygait.uncertainty.execution.Evaluator` is given.
         seed: seed of the random starting points.
@@ -93,6 +101,8 @@ class FuzzyAngleOptions:
     method: str = "cartesian"
     starts: int = 3
     iterations: int = 25
+    stride: int = 8
+    follow: int = 5
     workers: int = 1
     seed: int = 0
 
@@ -151,7 +161,8 @@ def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray
                 FuzzyNumber(np.array([0.0, 1.0]), np.array([-np.pi, -np.pi]), np.array([np.pi, np.pi]), f"{label}_phi"),
             ]
         params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(model)
-    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed)
+    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
+                             stride=options.stride, follow=options.follow)  # fmt: skip
     result = graph_follower(fuzzy_model, params, options.alphas, strategy=strategy)
     extremiser = result["extremiser"].to_numpy().reshape(*result["hull"].shape, len(markers), 3)
     if options.method == "spherical":
@@ -275,6 +286,7 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
     measured_index = int(np.argmin(np.abs(alphas - 1.0)))
     flags = {column: undetermined(hull[:, 0], hull[:, 1], hull[measured_index, 1][None, :])
              for column, hull in hulls.items()}  # fmt: skip
+    gimbal_undetermined(hulls, flags, measured_index)
     return fuzzy_angles_dataset(
         hulls, alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
         ball_radius=[options.error_model.radius(m, sources) for m in markers], deviations=deviations, attrs=attrs,

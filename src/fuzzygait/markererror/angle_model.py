@@ -50,7 +50,7 @@ import numpy as np
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
-from fuzzygait.kinematics.angles import wrap_degrees
+from fuzzygait.kinematics.angles import ANGLE_TABLE, wrap_degrees
 from fuzzygait.kinematics.chain import pelvis_markers
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
@@ -163,6 +163,8 @@ class JointAngleModel:
         self._fixed = np.stack([self.trial.marker(m)[self.frames] for m in self.fixed_markers], axis=1) \
             if self.fixed_markers else np.zeros((self.frames.size, 0, 3))
         self.times = self.trial.times[self.frames]
+        #: Sampling period of the trial, s (frames further apart are not neighbours).
+        self.time_step = 1.0 / self.trial.rate
 
     @property
     def n_parameters(self) -> int:
@@ -232,6 +234,49 @@ def undetermined(lower: np.ndarray, upper: np.ndarray, measured: np.ndarray) -> 
         return (np.asarray(upper) - measured > UNDETERMINED_DEG) | (measured - np.asarray(lower) > UNDETERMINED_DEG)
 
 
+#: Margin (degrees) from the Cardan singularity: where the band of an angle's middle
+#: Cardan component (the ``asin`` one, within ±90°) comes this close to ±90°, its first
+#: and third components are *undetermined* at that α-level and frame.  At the singularity
+#: only their sum or difference is defined — each alone can take any value inside the
+#: ball — and close to it they turn so fast that the extremes sit in slivers of the ball
+#: the local optimiser does not reliably find (benchmarks/RESULTS.md, "Soundness": every
+#: missed extreme of the real CGM 2.4 session had its middle angle at 75.7-89°).
+GIMBAL_MARGIN_DEG = 15.0
+
+
+def middle_component(name: str) -> int:
+    """Output index (0, 1, 2 = X, Y, Z) of the middle Cardan angle of ``name``
+    (``"LKneeAngles"``: Y; ankle, foot progression, forefoot: Z)."""
+    joint = name[1:].removesuffix("Angles")
+    return ANGLE_TABLE[joint][0].index(1)
+
+
+def near_gimbal_lock(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Where a middle Cardan component's band ``[lower, upper]`` (degrees) comes within
+    :data:`GIMBAL_MARGIN_DEG` of ±90°."""
+    with np.errstate(invalid="ignore"):
+        return (np.asarray(upper) > 90.0 - GIMBAL_MARGIN_DEG) | (np.asarray(lower) < GIMBAL_MARGIN_DEG - 90.0)
+
+
+def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarray], measured_index: int) -> None:
+    """Mark, in place, the first and third components of every angle whose three
+    components are in ``hulls`` (``{"LKneeAngles_X": (alpha, bound, frame)}``, degrees)
+    undetermined in ``flags`` (``(alpha, frame)`` bool) where the middle component's band
+    is near the Cardan singularity (:func:`near_gimbal_lock`); the α-level
+    ``measured_index`` (α = 1, the measured angle) is left as it is."""
+    for name in dict.fromkeys(column.rsplit("_", 1)[0] for column in hulls):
+        columns = [f"{name}_{a}" for a in AXES]
+        if not all(c in hulls and c in flags for c in columns):
+            continue
+        middle = middle_component(name)
+        band = hulls[columns[middle]]
+        lock = near_gimbal_lock(band[:, 0], band[:, 1])
+        lock[measured_index] = False
+        for i, column in enumerate(columns):
+            if i != middle:
+                flags[column] = flags[column] | lock
+
+
 def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:
     """Deviations given per marker as (r, θ, φ) — radius mm, polar and azimuthal angles
     in rad — to Cartesian (x, y, z) mm; any leading shape, last axis 3 per marker."""
@@ -253,6 +298,10 @@ class SphericalDeviationModel:
     @property
     def times(self) -> np.ndarray:
         return self.cartesian.times
+
+    @property
+    def time_step(self) -> float:
+        return self.cartesian.time_step
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

@@ -170,43 +170,80 @@ def optimisation_nodes(n_time: int, stride: int) -> np.ndarray:
     return np.unique(np.append(np.arange(0, n_time, stride), n_time - 1))
 
 
+def followed_nodes(times: np.ndarray, stride: int, time_step: float | None = None) -> np.ndarray:
+    """The nodes of :func:`optimisation_nodes` taken within each run of evenly spaced
+    ``times`` (s): a step longer than 1.5 ``time_step`` (the sampling period, s; default:
+    the median step) starts a new run — frames left out, e.g. a marker gap or a sparse
+    selection —, whose first and last node are optimisation nodes too, so a node is only
+    followed from neighbours of its own run."""
+    times = np.asarray(times, dtype=float)
+    if stride == 1 or times.size < 3:
+        return np.arange(times.size)
+    step = np.diff(times)
+    period = float(np.median(step)) if time_step is None else float(time_step)
+    breaks = np.flatnonzero(step > 1.5 * period) + 1
+    runs = np.split(np.arange(times.size), breaks)
+    return np.concatenate([run[optimisation_nodes(run.size, stride)] for run in runs])
+
+
+def follow_nodes(objective: BatchedObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
+                 points: np.ndarray, others: np.ndarray, extra: list[np.ndarray], iterations: int,
+                 tolerance: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Optima at the nodes ``others`` between the optimisation nodes ``nodes`` (optima
+    ``points``): each starts from the best of its two bracketing optima and the
+    candidates ``extra`` (``(len(others), n_p)`` each, e.g. the higher α-level's optimum
+    there) and is refined by ``iterations`` first-order iterations (0: the best start as
+    it is) — the Graph Follower's idea of starting a node from its neighbours' optima."""
+    right = np.minimum(np.searchsorted(nodes, others), nodes.size - 1)
+    left = np.maximum(right - 1, 0)
+    candidates = [points[left], points[right]] + [domain.project(c) for c in extra]
+    values = np.stack([objective.values(c, others) for c in candidates])  # (n_candidates, len(others))
+    pick = np.argmax(values, axis=0)
+    start = np.stack(candidates)[pick, np.arange(others.size)]
+    if iterations == 0:
+        return start, values[pick, np.arange(others.size)]
+    return maximise(objective, domain, others, [start], iterations, tolerance)
+
+
 def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
                 strategy: BatchedDirect, progress: Progress | None) -> dict[str, object]:  # fmt: skip
     """The :class:`BatchedDirect` strategy: hulls ``(alpha, bound, time)`` (before the
     nesting repair), extremisers, the deterministic trajectory and the counts."""
     deterministic = model.trajectory(params.deterministic)
     n_time, rng = model.n_time, np.random.default_rng(strategy.seed)
-    nodes = optimisation_nodes(n_time, strategy.stride)
+    nodes = followed_nodes(np.asarray(model.model.times, dtype=float), strategy.stride,
+                           getattr(model.model, "time_step", None))  # fmt: skip
     others = np.setdiff1d(np.arange(n_time), nodes)
+    everywhere = np.arange(n_time)
     counts = BatchCounts()
     hull = np.empty((levels.size, 2, n_time))
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
     tolerance = 1e-7 * max(float(np.max(np.abs(deterministic))), 1.0)
-    previous: dict[str, np.ndarray] = {}
+    previous: dict[str, np.ndarray] = {}  # the higher level's optima, every node
     previous_domain = params.domain(1.0)
     below_one = np.arange(levels.size - 1)[::-1]
     for step, a in enumerate(below_one):
         domain = params.domain(float(levels[a]))
         for b, bound in enumerate(BOUNDS):
             objective = BatchedObjective(model, SENSES[bound], params.scale, 1e-6, counts)
-            first = [np.tile(params.deterministic, (nodes.size, 1))]
+            higher: list[np.ndarray] = []
             if bound in previous:  # the higher level's optimum, as it is and scaled out
-                first += [previous[bound], domain.rescale_from(previous_domain, previous[bound])]  # type: ignore[arg-type]
+                higher = [previous[bound], domain.rescale_from(previous_domain, previous[bound])]  # type: ignore[arg-type]
+            first = [np.tile(params.deterministic, (nodes.size, 1))] + [h[nodes] for h in higher]
             extra = screened_starts(objective, domain, nodes, rng, max(0, strategy.starts - len(first)),
                                     strategy.screen)  # fmt: skip
-            points, values = maximise(objective, domain, nodes, first + extra, strategy.iterations, tolerance)
-            points, values = neighbour_pass(objective, nodes, points, values, strategy.window)
+            points = np.empty((n_time, params.dim))
+            values = np.empty(n_time)
+            points[nodes], values[nodes] = maximise(objective, domain, nodes, first + extra, strategy.iterations,
+                                                    tolerance)  # fmt: skip
+            if others.size:  # nodes between optimisation nodes: started from the bracketing optima
+                points[others], values[others] = follow_nodes(objective, domain, nodes, points[nodes], others,
+                                                              [h[others] for h in higher], strategy.follow,
+                                                              tolerance)  # fmt: skip
+            points, values = neighbour_pass(objective, everywhere, points, values, strategy.window)
             previous[bound] = points
-            hull[a, b, nodes], extremiser[a, b, nodes] = SENSES[bound] * values, points
-            if others.size:  # nodes between optimisation nodes: the bracketing optima
-                right = np.minimum(np.searchsorted(nodes, others), nodes.size - 1)
-                left = np.maximum(right - 1, 0)
-                v_left = objective.values(points[left], others)
-                v_right = objective.values(points[right], others)
-                use_right = v_right > v_left
-                hull[a, b, others] = SENSES[bound] * np.where(use_right, v_right, v_left)
-                extremiser[a, b, others] = np.where(use_right[:, None], points[right], points[left])
+            hull[a, b], extremiser[a, b] = SENSES[bound] * values, points
             if progress is not None:
                 progress(2 * step + b + 1, 2 * below_one.size)
         previous_domain = domain

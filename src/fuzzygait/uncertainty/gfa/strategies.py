@@ -98,8 +98,12 @@ class BatchedDirect:
     """All optimisation nodes solved side by side (needs the ``"nodes"`` capability).
 
     Attributes:
-        stride: optimise at every ``stride``-th time node (and the last); the nodes in
-            between take the better of the two bracketing optima.
+        stride: optimise at every ``stride``-th time node (and the last) with the full
+            multistart; the nodes in between start from the best of the two bracketing
+            optima (and the higher α-level's optimum there) — the Graph Follower's
+            neighbour starts — and are refined by ``follow`` iterations.
+        follow: iterations at the nodes between optimisation nodes (0: they take the
+            better bracketing optimum as it is).
         starts: starting points per node (the deterministic parameters, the higher
             α-level's optimum as it is and scaled out, then screened random points).
         iterations: first-order iterations at most.
@@ -115,11 +119,13 @@ class BatchedDirect:
     window: int = 2
     screen: int = 64
     seed: int = 0
+    follow: int = 0
 
     name = "batched-direct"
 
     def __post_init__(self) -> None:
         _whole("stride", self.stride, 1)
+        _whole("follow", self.follow, 0)
         _whole("starts", self.starts, 1)
         _whole("iterations", self.iterations, 1)
         _whole("window", self.window, 0)
