@@ -168,3 +168,25 @@ def test_section_renders_in_chromium(report: Path, tmp_path: Path) -> None:
     # the page is drawn all the way down past the per-source figure (its purple and orange bands)
     purple = (np.abs(pixels - np.array(_tint("sta"))).max(axis=-1) < 0.04).sum(axis=1)  # the STA bands' fill
     assert purple[:1600].sum() == 0 and purple[1600:].sum() > 10_000, "no per-source figure after the first screen"
+
+
+def test_a_far_wider_all_sources_band_leaves_the_axis() -> None:
+    """The sources alone stay readable: the all-sources band widens the y-axis by at most
+    half the sources' range, and a note says how far it reaches."""
+    from fuzzygait.viz.report.sources import _limit
+
+    x = np.linspace(0, 100, 11)
+    curve = np.sin(x / 20)
+    fig, ax = plt.subplots()
+    try:
+        bands = {"sta": np.stack([curve - 5, curve + 5]), "all": np.stack([curve - 85, curve + 8])}
+        _limit(ax, curve, bands)
+        low, high = ax.get_ylim()
+        span = (curve + 5).max() - (curve - 5).min()
+        assert low >= (curve - 5).min() - 0.5 * span - 0.1 * span and high >= (curve + 8).max()
+        assert [t.get_text() for t in ax.texts] == ["all together reaches -86° to 9° (beyond the axis)"]
+        ax.texts[0].remove()
+        _limit(ax, curve, {"sta": bands["sta"], "all": np.stack([curve - 8, curve + 8])})  # within: no note
+        assert not ax.texts and ax.get_ylim()[0] < (curve - 8).min()
+    finally:
+        plt.close(fig)

@@ -31,8 +31,10 @@ existing consumer of ``hull``/``alpha``/``component`` is unaffected):
 
 Cost: one Graph Follower run per source and flexion component at the per-source α-levels;
 by default only the smallest α-level of the result (α = 0: what the figure and the table
-show), i.e. 3 sources × 6 components × 1 level against the main run's 18 components × 4
-levels: about a quarter of the main run's work more.
+show; every further level costs about as much again), i.e. 3 sources × 6 components × 1
+level: measured +5.5 % (Plug-in Gait) and +6.5 % (CGM 2.4) wall time on the default
+``fuzzygait uncertainty`` run of the sample trials (benchmarks/RESULTS.md, "Per-source
+bands").
 """
 
 from __future__ import annotations

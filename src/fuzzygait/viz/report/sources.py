@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -117,6 +118,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
                 continue
             strips: list[tuple[int, str, np.ndarray]] = []
             curve: np.ndarray | None = None
+            drawn: dict[str, np.ndarray] = {}
             x = percent_points(N_POINTS) if cycles else np.asarray(data.run.trial.times, dtype=float)
             for slot, source in enumerate(order):
                 hull, mask = _band(data, source, name)
@@ -127,6 +129,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
                     curve, band = signal, np.where(mask[:, None, :], np.nan, hull)
                     flags = mask & np.isfinite(signal)[None, :]
                 colour = _colour(source)
+                drawn[source] = band[0]
                 ax.fill_between(x, band[0, 0], band[0, 1], color=_tint(source), lw=0)
                 for bound in (0, 1):
                     ax.plot(x, band[0, bound], color=colour, lw=0.8, alpha=0.9)
@@ -135,6 +138,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
                     hatched = True
             if curve is not None:
                 ax.plot(x, curve, color="black", lw=1.3)
+                _limit(ax, curve, drawn)
             _draw_undetermined(ax, x, strips, n_slots=len(order))
             if cycles:
                 ax.set_xlim(0, 100)
@@ -159,6 +163,33 @@ def source_figure(data: TrialData, title: str) -> Figure:
     return fig
 
 
+#: How far (fraction of the sources' range) the band of all together may widen the y-axis.
+ALL_HEADROOM = 0.5
+
+
+def _limit(ax: Axes, curve: np.ndarray, bands: dict[str, np.ndarray]) -> None:
+    """y-limits from the curve and the bands of the sources alone, widened by the band of
+    all together by at most :data:`ALL_HEADROOM` of that range each way (where it is far
+    wider, e.g. a bound near the 90° of "undetermined", it leaves the panel and a note
+    says how far it reaches): the sources stay readable."""
+    inner = np.concatenate([curve, *(b.ravel() for s, b in bands.items() if s != ALL)])
+    inner = inner[np.isfinite(inner)]
+    if inner.size == 0:
+        return
+    low, high = float(inner.min()), float(inner.max())
+    span = max(high - low, 1.0)
+    outer = bands.get(ALL)
+    outer = outer[np.isfinite(outer)] if outer is not None else np.array([])
+    reach = (float(outer.min()), float(outer.max())) if outer.size else (low, high)
+    bottom = max(min(low, reach[0]), low - ALL_HEADROOM * span)
+    top = min(max(high, reach[1]), high + ALL_HEADROOM * span)
+    pad = 0.05 * (top - bottom)
+    ax.set_ylim(bottom - pad, top + pad)
+    if reach[0] < bottom - pad or reach[1] > top + pad:
+        ax.text(0.99, 0.02, f"all together reaches {reach[0]:.0f}° to {reach[1]:.0f}° (beyond the axis)",
+                transform=ax.transAxes, ha="right", va="bottom", fontsize=6.5, color="0.3")  # fmt: skip
+
+
 def plot_source_bands(data: TrialData, stem: Path, title: str) -> None:
     """The per-source figure (:func:`source_figure`); writes ``stem.png`` and ``stem.svg``."""
     _save(source_figure(data, title), stem)
@@ -178,7 +209,9 @@ def _radius_text(fuzzy: xr.Dataset, source: str) -> str:
 def _cell(table: SourceWidths, component: str, source: str, strong: bool) -> str:
     width, flipped = table.width(component, source), table.frames_undetermined(component, source)
     if not math.isfinite(width):
-        return '<span class="undet">undetermined</span>' if flipped else "–"
+        if not flipped:
+            return "–"
+        return '<b class="undet">undetermined</b>' if strong else '<span class="undet">undetermined</span>'
     text = f"<b>{width:.1f}</b>" if strong else f"{width:.1f}"
     if flipped:
         of = int(table.n_frames[component])
