@@ -58,6 +58,29 @@ class Event:
         return self.time * rate + 1.0
 
 
+@dataclass(frozen=True)
+class AnalysisValue:
+    """One value of the C3D ``ANALYSIS`` group, where Vicon Nexus stores the
+    spatio-temporal parameters it computed (``Generate Gait Cycle Parameters``).
+
+    Attributes:
+        name: parameter name as stored, e.g. ``"Cadence"``, ``"Stride Length"``.
+        context: ``"Left"``, ``"Right"`` or ``"General"``.
+        unit: the unit string as stored (e.g. ``"steps/min"``, ``"m"``; older Vicon
+            software wrote ``"1/s"``, ``"mm"``, ``"%"``); ``""`` when absent.
+        value: the number in that unit (NaN when the file holds none for it).
+        subject: subject name the value belongs to (may be empty).
+        description: free text (may be empty).
+    """
+
+    name: str
+    context: str
+    unit: str
+    value: float
+    subject: str = ""
+    description: str = ""
+
+
 @dataclass
 class Trial:
     """Markers, model outputs, events and subject parameters of one trial.
@@ -73,6 +96,9 @@ class Trial:
         events: gait events sorted by time.
         parameters: subject parameters (C3D ``PROCESSING`` group): lengths in mm,
             angles in rad, mass in kg.
+        analysis: the C3D ``ANALYSIS`` group (values another program, e.g. Vicon Nexus,
+            computed: spatio-temporal parameters), in the file's order and units; empty
+            when the file has none.
         subject: subject name, if the file names one.
         label_prefix: subject prefix stripped from the labels (e.g. ``"A22:"``), or ``""``.
         source: file the trial was read from, if any.
@@ -88,6 +114,7 @@ class Trial:
     output_kinds: dict[str, str] = field(default_factory=dict)
     events: list[Event] = field(default_factory=list)
     parameters: dict[str, float] = field(default_factory=dict)
+    analysis: list[AnalysisValue] = field(default_factory=list)
     subject: str = ""
     label_prefix: str = ""
     source: Path | None = None
@@ -182,6 +209,7 @@ class Trial:
             output_kinds=dict(self.output_kinds),
             events=list(self.events),
             parameters=dict(self.parameters),
+            analysis=list(self.analysis),
             notes=notes,
         )
 

@@ -3,8 +3,9 @@
 :func:`read_c3d` gives a :class:`~fuzzygait.core.trial.Trial` with markers in mm (NaN for
 missing samples), subject prefixes removed from the labels, model outputs (Plug-in Gait
 angles, forces, moments, powers, modelled and segment-frame virtual markers) kept apart
-from the markers, the ``EVENT`` group as :class:`~fuzzygait.core.trial.Event` objects and the
-``PROCESSING`` group as subject parameters.
+from the markers, the ``EVENT`` group as :class:`~fuzzygait.core.trial.Event` objects, the ``PROCESSING`` group
+as subject parameters and the ``ANALYSIS`` group (Vicon Nexus' spatio-temporal parameters)
+as :class:`~fuzzygait.core.trial.AnalysisValue` objects.
 
 :func:`write_c3d` writes a trial back as a float C3D that Vicon Nexus, Mokka and ezc3d
 open: markers, model outputs (with Vicon's ``POINT:ANGLES`` etc. type lists), events,
@@ -25,7 +26,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
-from fuzzygait.core.trial import OUTPUT_UNITS, Event, Trial
+from fuzzygait.core.trial import OUTPUT_UNITS, AnalysisValue, Event, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
 
@@ -150,6 +151,7 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
         output_kinds=kinds,
         events=_events(path, raw, notes),
         parameters=_processing_parameters(raw),
+        analysis=_analysis_values(raw, notes),
         subject=_subject_name(raw),
         label_prefix=prefix,
         source=path,
@@ -254,8 +256,8 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
             notes.append("events taken from the C3D header (no EVENT group); context unknown")
         return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
     times = np.asarray(raw.get("EVENT", "TIMES"), dtype=float)
-    if times.ndim == 1:  # a single event stored as a flat (minutes, seconds) pair
-        times = times.reshape(2, -1)
+    if times.ndim == 1:  # stored flat: (minutes, seconds) pairs one after the other
+        times = times.reshape(2, -1, order="F")
     if times.shape[-1] < n:
         raise _fail(path, f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}")
     seconds = times[0, :n] * 60.0 + times[1, :n]
@@ -284,6 +286,49 @@ def _processing_parameters(raw: RawC3D) -> dict[str, float]:
             continue
         result[name] = float(np.ravel(value)[0])
     return result
+
+
+def _analysis_values(raw: RawC3D, notes: list[str]) -> list[AnalysisValue]:
+    """The ``ANALYSIS`` group: ``USED`` values with ``NAMES``, ``CONTEXTS``, ``UNITS``,
+    ``VALUES`` (and ``SUBJECTS``, ``DESCRIPTIONS`` when present).
+
+    A group that is absent or declares no values gives ``[]``; one whose lists are
+    shorter than ``USED`` or not of the expected types gives what it holds consistently
+    (or nothing) and a note -- never an error, since the group is informative only.
+    """
+    if "ANALYSIS" not in raw.parameter_names:
+        return []
+    try:
+        used = raw.get("ANALYSIS", "USED")
+        n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
+        if n <= 0:
+            return []
+        names = raw.get("ANALYSIS", "NAMES")
+        values = raw.get("ANALYSIS", "VALUES")
+        if not isinstance(names, list) or values is None or isinstance(values, list):
+            notes.append("ANALYSIS group without NAMES/VALUES lists; its values are ignored")
+            return []
+        numbers = np.ravel(np.asarray(values, dtype=float))
+
+        def texts(name: str) -> list[str]:
+            found = raw.get("ANALYSIS", name)
+            found = found if isinstance(found, list) else []
+            return (found + [""] * n)[:n]
+
+        count = min(n, len(names), numbers.size)
+        if count < n:
+            notes.append(f"ANALYSIS:USED says {n} values but the group holds {count}; using {count}")
+        return [
+            AnalysisValue(name=name, context=ctx or "General", unit=unit, value=float(value),
+                          subject=subj, description=desc)  # fmt: skip
+            for name, ctx, unit, value, subj, desc in zip(
+                names[:count], texts("CONTEXTS"), texts("UNITS"), numbers[:count],
+                texts("SUBJECTS"), texts("DESCRIPTIONS"), strict=False,
+            )
+        ]
+    except (TypeError, ValueError, IndexError) as exc:
+        notes.append(f"ANALYSIS group unreadable ({exc}); its values are ignored")
+        return []
 
 
 def _subject_name(raw: RawC3D) -> str:
