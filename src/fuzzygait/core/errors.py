@@ -26,3 +26,8 @@ class ParameterError(FuzzyGaitError, ValueError):
 
 class SimulationError(FuzzyGaitError):
     """A simulation step failed (names the time, the residual and the parameter values)."""
+
+
+class EventError(FuzzyGaitError):
+    """Gait events are missing or do not make a usable gait cycle (names the file and
+    what to add)."""

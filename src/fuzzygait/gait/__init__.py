@@ -1,5 +1,6 @@
 """Gait events and gait cycles: foot strikes and foot offs (from the file or detected
-from the heel/toe markers) and 0-100 % cycle normalisation of joint angles."""
+from the heel/toe markers), 0-100 % cycle normalisation of joint angles, and the
+spatio-temporal parameters Vicon Nexus reports."""
 
 from fuzzygait.gait.cycles import (
     GaitCycle,
@@ -15,6 +16,7 @@ from fuzzygait.gait.events import (
     detect_gait_events,
     trial_gait_events,
 )
+from fuzzygait.gait.spatiotemporal import parameters_table, spatiotemporal_parameters
 
 __all__ = [
     "SOURCE_DETECTED",
@@ -26,5 +28,7 @@ __all__ = [
     "mean_sd_table",
     "normalise_cycles",
     "normalised_angle_table",
+    "parameters_table",
+    "spatiotemporal_parameters",
     "trial_gait_events",
 ]
