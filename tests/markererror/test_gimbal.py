@@ -23,28 +23,38 @@ def test_middle_component_per_joint() -> None:
 def test_first_and_third_components_are_undetermined_near_the_singularity() -> None:
     """Frames 0-3 at two α-levels (0, 1): the middle band reaches 70°, 76°, −80°, NaN at
     α = 0; the first and third components are flagged where it passes 90° − 15° only,
-    never at α = 1, and the middle component itself is left alone."""
+    never at α = 1; the middle component is never flagged, its band closed at ±90°
+    there (the asin's range: a sound bound)."""
     middle = np.full((2, 2, 4), 0.0)
     middle[0, 0] = [-10.0, -20.0, -80.0, np.nan]
     middle[0, 1] = [70.0, 76.0, 5.0, np.nan]
-    middle[1] = [[60.0, 70.0, -70.0, np.nan]] * 2  # α = 1: measured
+    middle[1] = [[60.0, 80.0, -77.0, np.nan]] * 2  # α = 1: measured
     other = np.zeros((2, 2, 4))
-    hulls = {"LFootProgressAngles_X": other, "LFootProgressAngles_Y": other, "LFootProgressAngles_Z": middle}
+    hulls = {"LFootProgressAngles_X": other, "LFootProgressAngles_Y": other.copy(), "LFootProgressAngles_Z": middle}
     flags = {c: np.zeros((2, 4), dtype=bool) for c in hulls}
     gimbal_undetermined(hulls, flags, measured_index=1)
     expected = np.array([[False, True, True, False], [False, False, False, False]])
     np.testing.assert_array_equal(flags["LFootProgressAngles_X"], expected)
     np.testing.assert_array_equal(flags["LFootProgressAngles_Y"], expected)
     assert not flags["LFootProgressAngles_Z"].any()
+    np.testing.assert_array_equal(middle[0, 1], [70.0, 90.0, 5.0, np.nan])
+    np.testing.assert_array_equal(middle[0, 0], [-10.0, -20.0, -90.0, np.nan])
+    np.testing.assert_array_equal(middle[1, 1], [60.0, 80.0, -77.0, np.nan])  # measured: untouched
     assert 90.0 - GIMBAL_MARGIN_DEG == 75.0
 
 
-def test_incomplete_angles_are_left_alone() -> None:
+def test_incomplete_angles_only_close_the_middle_band() -> None:
     middle = np.full((2, 2, 1), 89.0)
+    middle[1] = 10.0
     hulls = {"LKneeAngles_X": np.zeros((2, 2, 1)), "LKneeAngles_Y": middle}
     flags = {c: np.zeros((2, 1), dtype=bool) for c in hulls}
     gimbal_undetermined(hulls, flags, measured_index=1)
-    assert not any(f.any() for f in flags.values())
+    assert flags["LKneeAngles_X"][0, 0] and not flags["LKneeAngles_Y"].any()
+    assert middle[0, 1, 0] == 90.0
+    hulls = {"LKneeAngles_X": np.full((2, 2, 1), 80.0)}  # no middle component: nothing to go by
+    flags = {"LKneeAngles_X": np.zeros((2, 1), dtype=bool)}
+    gimbal_undetermined(hulls, flags, measured_index=1)
+    assert not flags["LKneeAngles_X"].any() and hulls["LKneeAngles_X"][0, 1, 0] == 80.0
 
 
 def test_near_the_singularity_a_small_turn_moves_the_outer_angles_far() -> None:

@@ -259,21 +259,30 @@ def near_gimbal_lock(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
 
 
 def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarray], measured_index: int) -> None:
-    """Mark, in place, the first and third components of every angle whose three
-    components are in ``hulls`` (``{"LKneeAngles_X": (alpha, bound, frame)}``, degrees)
-    undetermined in ``flags`` (``(alpha, frame)`` bool) where the middle component's band
-    is near the Cardan singularity (:func:`near_gimbal_lock`); the α-level
-    ``measured_index`` (α = 1, the measured angle) is left as it is."""
+    """The Cardan-singularity rule, in place, for every angle whose middle component is in
+    ``hulls`` (``{"LKneeAngles_Y": (alpha, bound, frame)}``, degrees) and ``flags``
+    (``(alpha, frame)`` bool): where the middle component's band comes within
+    :data:`GIMBAL_MARGIN_DEG` of ±90° (:func:`near_gimbal_lock`), the first and third
+    components are marked undetermined and the middle band is closed at ±90° — the
+    ``asin`` cannot pass it, and the first-order search stalls at the cap's kink short of
+    the true extreme, so ±90° is the sound bound there.  The α-level ``measured_index``
+    (α = 1, the measured angle) is left as it is."""
     for name in dict.fromkeys(column.rsplit("_", 1)[0] for column in hulls):
         columns = [f"{name}_{a}" for a in AXES]
-        if not all(c in hulls and c in flags for c in columns):
-            continue
         middle = middle_component(name)
+        if columns[middle] not in hulls:
+            continue
         band = hulls[columns[middle]]
         lock = near_gimbal_lock(band[:, 0], band[:, 1])
         lock[measured_index] = False
+        with np.errstate(invalid="ignore"):
+            upper = band[:, 1] > 90.0 - GIMBAL_MARGIN_DEG
+            lower = band[:, 0] < GIMBAL_MARGIN_DEG - 90.0
+        upper[measured_index] = lower[measured_index] = False
+        band[:, 1][upper] = 90.0
+        band[:, 0][lower] = -90.0
         for i, column in enumerate(columns):
-            if i != middle:
+            if i != middle and column in flags:
                 flags[column] = flags[column] | lock
 
 
