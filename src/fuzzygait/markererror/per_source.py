@@ -32,9 +32,9 @@ existing consumer of ``hull``/``alpha``/``component`` is unaffected):
 Cost: one Graph Follower run per source and flexion component at the per-source α-levels;
 by default only the smallest α-level of the result (α = 0: what the figure and the table
 show; every further level costs about as much again), i.e. 3 sources × 6 components × 1
-level: measured +5.5 % (Plug-in Gait) and +6.5 % (CGM 2.4) wall time on the default
-``fuzzygait uncertainty`` run of the sample trials (benchmarks/RESULTS.md, "Per-source
-bands").
+level: measured +5.5-8 % wall time (+7.5-8 % node evaluations) on the default ``fuzzygait
+uncertainty`` run of the sample trials, Plug-in Gait and CGM 2.4 (benchmarks/RESULTS.md,
+"Per-source bands").
 """
 
 from __future__ import annotations
