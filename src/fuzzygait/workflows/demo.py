@@ -228,7 +228,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     cgm24_lines = cgm24_session(data, out_dir)
     if progress is not None:
         progress.print("fuzzy marker-error analysis of the knee angles and the allowable error of knee flexion "
-                       "(about 20 s)...", markup=False)
+                       "(about 10 s)...", markup=False)
     settings = MarkerErrorSettings(alphas=DEMO_ALPHAS, angles=DEMO_FUZZY_ANGLES, tolerance=DEMO_TOLERANCE,
                                    allowable_angles=DEMO_ALLOWABLE)  # fmt: skip
     analysis = analyse_run(run, settings)
