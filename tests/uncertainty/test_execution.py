@@ -74,6 +74,16 @@ def test_map_keeps_order_and_names_the_failing_item(evaluators) -> None:
         assert info.value.row == 2 and "\n" not in str(info.value)
 
 
+def test_map_reports_progress_as_items_finish(evaluators) -> None:
+    """Every evaluator calls ``progress(done, total)`` once per finished item, counting up
+    to the total (a pool as the futures complete, not once at the end)."""
+    items = list(range(12))
+    for name, evaluator in evaluators.items():
+        calls: list[tuple[int, int]] = []
+        assert evaluator.map(abs, items, progress=lambda d, t: calls.append((d, t))) == items, name
+        assert calls == [(i, len(items)) for i in range(1, len(items) + 1)], name
+
+
 def _reject_zero(x: int) -> int:
     if x == 0:
         raise ValueError("zero is not allowed here")

@@ -208,15 +208,26 @@ class Evaluator:
 
     # -- generic tasks --------------------------------------------------------------------
     def submit_all(self, function: Callable[..., Any], argument_lists: Sequence[tuple[Any, ...]],
-                   label: str = "task") -> list[Any]:  # fmt: skip
-        """``[function(*args) for args in argument_lists]``, in order, on the workers."""
+                   label: str = "task", progress: Callable[[int, int], None] | None = None) -> list[Any]:  # fmt: skip
+        """``[function(*args) for args in argument_lists]``, in order, on the workers;
+        ``progress(done, total)`` as each one finishes."""
         client = self.client
         if client is None:
-            return [function(*args) for args in argument_lists]
+            results = []
+            for i, args in enumerate(argument_lists):
+                results.append(function(*args))
+                if progress is not None:
+                    progress(i + 1, len(argument_lists))
+            return results
         token = uuid.uuid4().hex[:12]
         futures = [client.submit(function, *args, key=f"fuzzygait-{label}-{token}-{i}", pure=False)
                    for i, args in enumerate(argument_lists)]  # fmt: skip
         try:
+            if progress is not None:
+                from distributed import as_completed
+
+                for done, _ in enumerate(as_completed(futures, loop=client.loop), start=1):
+                    progress(done, len(futures))
             return list(client.gather(futures))
         except Exception as err:  # noqa: BLE001 - worker death, lost connection
             raise ParallelEvaluationError(
@@ -238,9 +249,8 @@ class Evaluator:
                 if progress is not None:
                     progress(i + 1, len(items))
         else:
-            statuses = self.submit_all(map_task, [(function, i, item) for i, item in enumerate(items)], "map")
-            if progress is not None:
-                progress(len(items), len(items))
+            statuses = self.submit_all(map_task, [(function, i, item) for i, item in enumerate(items)], "map",
+                                       progress)  # fmt: skip
         failed = [s for s in statuses if "error" in s]
         if failed:
             first = failed[0]
