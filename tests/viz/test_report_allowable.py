@@ -52,7 +52,8 @@ def test_trial_page_leads_with_the_flexion_sentence_and_the_table(report: Path,
     text = _text(report / "walking.html")
     main = text.split("(measured)", 1)[0]  # the lead box, before the facts table
     assert sentence in main
-    assert text.index(sentence) < text.index("Allowable marker error (±2.5°)") < text.index("over the gait cycle")
+    # the sentence leads; the table follows the clinical sections (kinematics first)
+    assert text.index(sentence) < text.index("Kinematics over the gait cycle") < text.index("Allowable marker error (±2.5°)")
     header = "Angle Max error (mm) % of Table 3.1 pelvis (mm) thigh (mm) shank (mm) ankle (mm) foot (mm)"
     assert header in text
     for name in ("LKneeAngles_X", "LKneeAngles_Y", "LKneeAngles_Z"):  # report order: planes, side

@@ -17,6 +17,8 @@ from fuzzygait.mocap.gaps import (
     fill_trial_gaps,
     find_gaps,
     gap_report_table,
+    is_unlabelled,
+    labelled_markers,
     methods_used,
 )
 
@@ -32,6 +34,8 @@ __all__ = [
     "filter_trial",
     "find_gaps",
     "gap_report_table",
+    "is_unlabelled",
+    "labelled_markers",
     "methods_used",
     "min_run_length",
 ]

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import warnings
 from collections import defaultdict
+from collections.abc import Sequence
 
 import numpy as np
 from scipy import signal
@@ -253,7 +254,7 @@ def butterworth_lowpass(
     return out
 
 
-def filter_trial(trial: Trial, cutoff: float = 6.0, order: int = 4) -> Trial:
+def filter_trial(trial: Trial, cutoff: float = 6.0, order: int = 4, markers: Sequence[str] | None = None) -> Trial:
     """:func:`butterworth_lowpass` applied to a trial's markers (a new trial).
 
     The note added reads e.g. ``"Butterworth low-pass 6 Hz, 4th order zero-lag"``.  Too
@@ -263,12 +264,23 @@ def filter_trial(trial: Trial, cutoff: float = 6.0, order: int = 4) -> Trial:
         trial: the trial (not modified); its ``rate`` (Hz) is used.
         cutoff: -3 dB frequency of the combined filter in Hz.
         order: effective zero-lag order, a positive even integer.
+        markers: filter (and warn about) only these markers; the others are kept as they
+            are.  None: every marker.  Labels the trial does not hold are ignored.
     """
-    markers, short = _lowpass(trial.markers, trial.rate, cutoff, order, axis=0)
-    per_marker = short.max(axis=1)  # x, y, z normally share their gaps
+    if markers is None:
+        columns = list(range(trial.n_markers))
+    else:
+        wanted = set(markers)
+        columns = [k for k, label in enumerate(trial.marker_labels) if label in wanted]
+    out = np.array(trial.markers, dtype=float)
+    filtered, short = _lowpass(trial.markers[:, columns, :], trial.rate, cutoff, order, axis=0)
+    out[:, columns, :] = filtered
+    per_marker = short.max(axis=1) if short.size else np.zeros(0, dtype=int)  # x, y, z share their gaps
     where = {
-        trial.marker_labels[m]: int(per_marker[m]) for m in np.flatnonzero(per_marker)
+        trial.marker_labels[columns[m]]: int(per_marker[m]) for m in np.flatnonzero(per_marker)
     }
     _warn_short_runs(where, order, stacklevel=2)
     note = f"Butterworth low-pass {cutoff:g} Hz, {_ordinal(order)} order zero-lag"
-    return trial.with_markers(markers, note=note)
+    if markers is not None:
+        note += f" ({len(columns)} of {trial.n_markers} markers)"
+    return trial.with_markers(out, note=note)

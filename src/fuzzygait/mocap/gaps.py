@@ -54,6 +54,7 @@ Samples that stay missing are returned NaN in all three coordinates.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple
@@ -72,6 +73,8 @@ from fuzzygait.mocap.pattern_fill import (
 )
 
 #: Valid samples used on each side of a gap for the spline fit (at most).
+#: Labels of unlabelled trajectories: Vicon ``*12``, ``C_12``, ``Unlabeled 12``.
+_UNLABELLED = re.compile(r"\*\d+|C_\d+|Unlabell?ed[ _]?\d*", re.IGNORECASE)
 WINDOW_VALID_SAMPLES = 30
 #: Valid samples needed on each side of a gap to fill it.
 MIN_VALID_EACH_SIDE = 2
@@ -489,8 +492,19 @@ def fill_gaps(
     return out, gaps
 
 
+def is_unlabelled(label: str) -> bool:
+    """Whether ``label`` names an unlabelled trajectory (Vicon's ``*127``, also ``C_12``
+    and ``Unlabeled 3`` as other systems write them): no model reads such a marker."""
+    return bool(_UNLABELLED.fullmatch(label.strip()))
+
+
+def labelled_markers(labels: Sequence[str]) -> list[str]:
+    """``labels`` without the unlabelled trajectories (:func:`is_unlabelled`), in order."""
+    return [label for label in labels if not is_unlabelled(label)]
+
+
 def fill_trial_gaps(
-    trial: Trial, max_gap: int = 10, method: Method = "auto"
+    trial: Trial, max_gap: int = 10, method: Method = "auto", markers: Sequence[str] | None = None
 ) -> tuple[Trial, list[Gap]]:
     """:func:`fill_gaps` applied to a trial's markers.
 
@@ -498,20 +512,32 @@ def fill_trial_gaps(
         trial: the trial (not modified).
         max_gap: longest gap to fill, in frames; ``0`` fills nothing.
         method: ``"auto"``, ``"spline"`` or ``"pattern"`` (see :func:`fill_gaps`).
+        markers: fill (and report) only these markers, which are also the only ones the
+            pattern fill regresses on; the others are kept as they are.  None: every
+            marker.  Labels the trial does not hold are ignored.
 
     Returns:
         A new trial whose notes end with a summary such as
         ``"gap filling: 5 of 7 gaps filled (max_gap=10 frames, method=auto: 3 pattern,
         2 spline)"``, and the gap report.
     """
-    markers, gaps = fill_gaps(trial.markers, trial.marker_labels, max_gap, method)
+    if markers is None:
+        columns = list(range(trial.n_markers))
+    else:
+        wanted = set(markers)
+        columns = [k for k, label in enumerate(trial.marker_labels) if label in wanted]
+    labels = [trial.marker_labels[k] for k in columns]
+    filled_part, gaps = fill_gaps(trial.markers[:, columns, :], labels, max_gap, method)
+    out = np.array(trial.markers, dtype=float)
+    out[:, columns, :] = filled_part
     n_filled = sum(gap.filled for gap in gaps)
     used = methods_used(gaps)
+    which = "" if markers is None else f", {len(columns)} of {trial.n_markers} markers"
     note = (
         f"gap filling: {n_filled} of {len(gaps)} gaps filled "
-        f"(max_gap={max_gap} frames, method={method}{': ' + used if used else ''})"
+        f"(max_gap={max_gap} frames, method={method}{': ' + used if used else ''}{which})"
     )
-    return trial.with_markers(markers, note=note), gaps
+    return trial.with_markers(out, note=note), gaps
 
 
 def methods_used(gaps: Sequence[Gap]) -> str:

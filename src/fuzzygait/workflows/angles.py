@@ -38,7 +38,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
 from fuzzygait.kinematics.kad import knee_method
 from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
 from fuzzygait.kinematics.versions import model_version, supported_version
-from fuzzygait.mocap import fill_trial_gaps, filter_trial
+from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
 
 AXES = ("X", "Y", "Z")
@@ -52,7 +52,11 @@ MARKER_DIAMETER_RANGE = (1.0, 40.0)
 class Preprocessing:
     """Pre-processing options: gaps up to ``max_gap`` frames filled by ``fill_method``
     (``"auto"``, ``"spline"`` or ``"pattern"``, see :func:`fuzzygait.mocap.gaps.fill_gaps`),
-    then a zero-lag Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False."""
+    then a zero-lag Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False.
+
+    Unlabelled trajectories (Vicon's ``*127``, :func:`fuzzygait.mocap.gaps.is_unlabelled`)
+    are neither filled nor filtered nor reported: no model reads them, and their many
+    short fragments only filled the gap report and the filter's short-run warnings."""
 
     max_gap: int = 10
     cutoff: float = 6.0
@@ -60,9 +64,11 @@ class Preprocessing:
     fill_method: Method = "auto"
 
     def apply(self, trial: Trial) -> tuple[Trial, list[Gap]]:
-        """The pre-processed trial and its gap report."""
-        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap, method=self.fill_method)
-        return (filter_trial(filled, cutoff=self.cutoff) if self.filter else filled), gaps
+        """The pre-processed trial and its gap report (labelled markers only)."""
+        labelled = labelled_markers(trial.marker_labels)
+        markers = None if len(labelled) == trial.n_markers else labelled
+        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap, method=self.fill_method, markers=markers)
+        return (filter_trial(filled, cutoff=self.cutoff, markers=markers) if self.filter else filled), gaps
 
 
 #: The default pre-processing (gaps up to 10 frames, auto method; 6 Hz low-pass).

@@ -88,9 +88,10 @@ class AllowableSummary:
         return [row.text for row in self.lead_rows()]
 
 
-def allowable_summary(fuzzy: xr.Dataset) -> AllowableSummary | None:
-    """The allowable-error table of a refined dataset as text cells, None without one."""
-    if "allowable_status" not in fuzzy.data_vars:
+def allowable_summary(fuzzy: xr.Dataset | None) -> AllowableSummary | None:
+    """The allowable-error table of a refined dataset as text cells, None without one
+    (or without a dataset)."""
+    if fuzzy is None or "allowable_status" not in fuzzy.data_vars:
         return None
     table = allowable_table(fuzzy)
     source = str(table.attrs.get("source", "Table 3.1"))

@@ -66,7 +66,7 @@ class TrialAnalysis(Protocol):
     @property
     def run(self) -> ReportRun: ...
     @property
-    def fuzzy(self) -> xr.Dataset: ...
+    def fuzzy(self) -> xr.Dataset | None: ...  # None: angles only (no uncertainty analysis)
     @property
     def delta_phi(self) -> pd.DataFrame: ...
     @property
@@ -214,7 +214,7 @@ class TrialData:
     """Angles, hulls and cycles of one trial, aligned on the trial's frames."""
 
     run: ReportRun
-    fuzzy: xr.Dataset
+    fuzzy: xr.Dataset | None  # None: angles only, no bands
     alphas: np.ndarray
     cycles: dict[str, list[GaitCycle]]
 
@@ -222,7 +222,7 @@ class TrialData:
     def of(cls, analysis: TrialAnalysis) -> TrialData:
         """The report data of one analysed trial (α-levels below 1, cycles per side)."""
         run = analysis.run
-        alphas = np.asarray(analysis.fuzzy["alpha"].values, dtype=float)
+        alphas = np.zeros(0) if analysis.fuzzy is None else np.asarray(analysis.fuzzy["alpha"].values, dtype=float)
         alphas = np.sort(alphas[alphas < _ALPHA_ONE])
         cycles = {side: gait_cycles(run.trial, run.events, side) for side in SIDE_STYLE}
         return cls(run, analysis.fuzzy, alphas, cycles)
@@ -241,6 +241,8 @@ class TrialData:
 
     def _report_levels(self, name: str) -> tuple[np.ndarray, np.ndarray] | None:
         """Hull and undetermined mask of ``name`` at the report's α-levels."""
+        if self.fuzzy is None:
+            return None
         found = _levels(self.fuzzy, name, self.run.trial.frames)
         if found is None:
             return None
@@ -344,7 +346,7 @@ def delta_phi_table(analysis: TrialAnalysis, data: TrialData) -> DeltaPhiTable:
     values.columns = pd.Index([float(c) for c in values.columns])
     names = sorted((str(n) for n in values.index), key=component_order)
     values = values.reindex(index=names, columns=alphas)
-    levels = undetermined_levels(analysis.fuzzy)
+    levels = undetermined_levels(analysis.fuzzy) if analysis.fuzzy is not None else pd.DataFrame()
     level_alphas = [float(c) for c in levels.columns]
     flags = np.zeros((len(names), len(alphas)), dtype=bool)
     widest = np.full((len(names), len(alphas)), np.nan)
@@ -447,6 +449,7 @@ class TrialEntry:
     gaps_left: int = 0
     headline: Headline = field(default_factory=Headline)
     allowable: AllowableSummary | None = None
+    gps: float | None = None  # overall Gait Profile Score (deg), with normative data
 
     @property
     def ok(self) -> bool:
@@ -465,11 +468,15 @@ class TrialEntry:
 
     @classmethod
     def of(cls, source: Path, page: str, data: TrialData, table: DeltaPhiTable,
-           allowable: AllowableSummary | None = None) -> TrialEntry:  # fmt: skip
+           allowable: AllowableSummary | None = None, gaps: Sequence[Gap] | None = None,
+           gps: float | None = None) -> TrialEntry:  # fmt: skip
         """The index entry of a trial drawn on ``page`` from ``data``, its ΔΦ table and its
-        allowable-marker-error table (:mod:`~fuzzygait.viz.report.allowable`)."""
+        allowable-marker-error table (:mod:`~fuzzygait.viz.report.allowable`); ``gaps``:
+        the gaps counted (default every gap of the run; the report passes those of the
+        markers the model uses), ``gps``: the overall Gait Profile Score (deg)."""
         run = data.run
-        filled = sum(g.filled for g in run.gaps)
+        gaps = run.gaps if gaps is None else list(gaps)
+        filled = sum(g.filled for g in gaps)
         return cls(
             source=source,
             page=page,
@@ -477,7 +484,8 @@ class TrialEntry:
             rate=run.trial.rate,
             cycles=data.n_cycles(),
             gaps_filled=filled,
-            gaps_left=len(run.gaps) - filled,
+            gaps_left=len(gaps) - filled,
             headline=headline(table),
             allowable=allowable,
+            gps=gps,
         )

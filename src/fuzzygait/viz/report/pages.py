@@ -4,7 +4,6 @@ resources), one per trial and the index of the batch."""
 from __future__ import annotations
 
 import datetime as _dt
-import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,12 +21,26 @@ from fuzzygait.viz.report.bands import (
     FLEXION,
     DeltaPhiTable,
     Headline,
-    ReportRun,
     TrialAnalysis,
     TrialData,
     TrialEntry,
     alpha_text,
     grid_components,
+)
+from fuzzygait.viz.report.clinical import ClinicalData
+from fuzzygait.viz.report.clinical_html import (
+    deg_text,
+    footnote,
+    footnotes_section,
+    gait_profile_section,
+    header_facts,
+    kinetics_section,
+    kv_table,
+    reading_guide,
+    spatiotemporal_section,
+    static_text,
+    subject_section,
+    warnings_box,
 )
 from fuzzygait.viz.report.markup import escape as _esc
 from fuzzygait.viz.report.markup import html_table as _table
@@ -89,6 +102,13 @@ figcaption { font-size: .9rem; color: #444; margin-top: .3rem; }
 span.wrap { display: inline-block; max-width: 11rem; white-space: normal; }
 .nowrap { white-space: nowrap; }
 ul.notes li { margin: .15rem 0; }
+.guide { background: #fffbea; border: 1px solid #e6d9a8; border-radius: 6px; padding: .3rem 1rem .5rem;
+         margin: .8rem 0; }
+.guide h2 { margin: .4rem 0 .3rem; border: 0; font-size: 1.1rem; }
+.guide li { margin: .25rem 0; }
+.warn { background: #fff1e6; border: 1px solid #e8b48a; border-radius: 6px; padding: .5rem 1rem; margin: .6rem 0; }
+sup.fn a { text-decoration: none; font-size: .8em; }
+.footnotes ol { padding-left: 1.4rem; }
 footer { margin-top: 2.5rem; border-top: 1px solid #ddd; padding-top: .6rem; font-size: .85rem; color: #666; }
 """
 
@@ -103,8 +123,7 @@ DELTA_PHI_SENTENCE = (
     "ΔΦ<sub>α</sub> = max<sub>t</sub>(Φ<sup>u</sup><sub>α</sub>(t) − "
     "Φ<sup>l</sup><sub>α</sub>(t)) / max<sub>t</sub> |Φ(t)| × 100 %: the widest the "
     "α-band gets anywhere in the trial, relative to the largest measured magnitude of the "
-    "angle (thesis Eq. 5.3 and Table 5.2; the magnitude keeps angles that stay negative "
-    "comparable)."
+    "angle (the magnitude keeps angles that stay negative comparable)." + footnote("delta")
 )
 
 UNDETERMINED_SENTENCE = (
@@ -151,68 +170,12 @@ def _footer(model: str = "cgm1.0") -> str:
     )
 
 
-def _kv_table(rows: Sequence[tuple[str, str]], caption: str | None = None) -> str:
-    """A two-column table of (label, html) rows."""
-    cap = f"<caption class=\"small\">{_esc(caption)}</caption>" if caption else ""
-    body = "".join(f"<tr><th scope=\"row\">{_esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
-    return f"<table class=\"kv\">{cap}<tbody>{body}</tbody></table>"
-
-
-def _deg(rad: float) -> str:
-    """Radians as degrees with two decimals (never "-0.00")."""
-    text = f"{math.degrees(rad):.2f}"
-    return "0.00" if text == "-0.00" else text
-
-
-def _static_text(run: ReportRun) -> str:
-    """Where the static offsets come from (a sentence)."""
-    static = [n for n in run.notes if n.startswith("static offsets")]
-    if static:
-        return static[0][0].upper() + static[0][1:] + "."
-    return "No static trial given: the static offsets are used as stored in the subject parameters."
-
-
-def _subject_section(run: ReportRun) -> str:
-    """The subject parameters used, per side and general."""
-    subject = run.subject
-    rows = [
-        ("Leg length", "mm", "leg_length", lambda v: f"{v:.1f}"),
-        ("Knee width", "mm", "knee_width", lambda v: f"{v:.1f}"),
-        ("Ankle width", "mm", "ankle_width", lambda v: f"{v:.1f}"),
-        ("ASIS–trochanter distance", "mm", "asis_trochanter", lambda v: f"{v:.1f}"),
-        ("Tibial torsion", "deg", "tibial_torsion", _deg),
-        ("Thigh rotation offset", "deg", "thigh_rotation", _deg),
-        ("Shank rotation offset", "deg", "shank_rotation", _deg),
-        ("Ankle ab/adduction offset", "deg", "ankle_abadd", _deg),
-        ("Sole delta", "mm", "sole_delta", lambda v: f"{v:.1f}"),
-        ("<b>Static plantarflexion offset</b>", "deg", "static_plant_flex", _deg),
-        ("<b>Static rotation offset</b>", "deg", "static_rot_off", _deg),
-    ]
-    side_rows = [
-        [(label, False), (unit, False), (_esc(fmt(getattr(subject.left, attr))), True),
-         (_esc(fmt(getattr(subject.right, attr))), True)]
-        for label, unit, attr, fmt in rows
-    ]  # fmt: skip
-    sides = _table([("Parameter", False), ("Unit", False), ("Left", True), ("Right", True)], side_rows)
-    general = [
-        ("Body mass", f"{subject.body_mass:g} kg" if subject.body_mass else "not given"),
-        ("Height", f"{subject.height:g} mm" if subject.height else "not given"),
-        ("Marker diameter", f"{subject.marker_diameter:g} mm"),
-        ("Inter-ASIS distance", f"{subject.inter_asis_distance:g} mm"
-         if subject.inter_asis_distance else "measured from the markers"),
-        ("Source", _esc(subject.source or "trial file")),
-    ]  # fmt: skip
-    return (
-        "<h2 id=\"subject\">Subject parameters used</h2>"
-        f"<p class=\"small\">{_esc(_static_text(run))}</p>"
-        f"<div class=\"cols\">{sides}{_kv_table(general)}</div>"
-    )
-
-
-def _quality_section(analysis: TrialAnalysis, data: TrialData) -> str:
-    """Gait events, gaps, missing markers and angles, processing notes."""
+def _quality_section(analysis: TrialAnalysis, data: TrialData, clinical: ClinicalData) -> str:
+    """Gait events, gaps of the markers the model uses, missing markers and angles,
+    processing notes."""
     run = analysis.run
     trial = run.trial
+    gaps = clinical.model_gaps(run.gaps)
     parts = ["<h2 id=\"quality\">Data quality</h2>"]
     # events and cycles
     counts = []
@@ -227,17 +190,20 @@ def _quality_section(analysis: TrialAnalysis, data: TrialData) -> str:
                          ("Gait cycles", True)], counts))  # fmt: skip
     # gaps
     parts.append("<h3>Gaps in the marker trajectories</h3>")
-    if not run.gaps:
+    parts.append(f"<p class=\"small\">Only the {len(clinical.markers)} markers the model uses are listed; other "
+                 "markers in the file (unlabelled trajectories, markers of other models) do not affect the angles "
+                 "and are neither filled nor filtered.</p>")
+    if not gaps:
         parts.append("<p>None: every marker was visible in every frame.</p>")
     else:
-        filled = sum(g.filled for g in run.gaps)
+        filled = sum(g.filled for g in gaps)
         parts.append(
-            f"<p>{filled} of {len(run.gaps)} gaps filled ({_esc(methods_used(run.gaps)) or 'none'}); frames of gaps "
+            f"<p>{filled} of {len(gaps)} gaps filled ({_esc(methods_used(gaps)) or 'none'}); frames of gaps "
             "left open have no angle (and no band) for the joints that use the marker.</p>"
         )
         rows = []
         classes = []
-        for gap in sorted(run.gaps, key=lambda g: (g.marker, g.start)):
+        for gap in sorted(gaps, key=lambda g: (g.marker, g.start)):
             first = trial.first_frame + gap.start
             status = f"filled by {gap.method}" if gap.filled else f"not filled: {gap.reason}"
             span = f"{first}–{first + gap.length - 1}" if gap.length > 1 else f"{first}"
@@ -248,7 +214,7 @@ def _quality_section(analysis: TrialAnalysis, data: TrialData) -> str:
                              ("Result", False)], rows, row_classes=classes))  # fmt: skip
     # missing markers / angles not computed
     parts.append("<h3>Missing markers and angles not computed</h3>")
-    never = sorted({g.marker for g in run.gaps if "never visible" in g.reason})
+    never = sorted({g.marker for g in gaps if "never visible" in g.reason})
     missing = []
     if never:
         missing.append(f"Markers never visible: {_esc(', '.join(never))}.")
@@ -279,6 +245,7 @@ def _quality_section(analysis: TrialAnalysis, data: TrialData) -> str:
 def _assumptions_section(analysis: TrialAnalysis) -> str:
     """The assumed marker errors: α = 0 ball radius per marker."""
     fuzzy = analysis.fuzzy
+    assert fuzzy is not None, "the assumed marker errors need a fuzzy analysis"
     sources = _sources_text(fuzzy)
     parts = ["<h2 id=\"assumptions\">Assumed marker errors</h2>",
              "<p>The true position of every marker is taken to lie within a ball around "
@@ -377,54 +344,84 @@ def headline_lines(head: Headline) -> list[str]:
     return lines
 
 
-def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry,
-                table: DeltaPhiTable, files: str, source: Path) -> str:  # fmt: skip
-    """The page of one trial: the allowable marker error first, figures, ΔΦ table, the
-    flexion bands per error source (with per-source bands), data quality, assumptions,
-    subject."""
+def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, table: DeltaPhiTable, files: str,
+               source: Path, *, clinical: ClinicalData | None = None, session: str | None = None,
+               warnings: Sequence[str] = ()) -> str:  # fmt: skip
+    """The page of one trial: how to read it, the header (subject, session, model, markers,
+    processing), spatio-temporal parameters, the kinematics grid, GPS/MAP, kinetics, the
+    allowable marker error, ΔΦ table, per-source bands, whole trial, data quality (the
+    model's markers), assumptions, subject, references.  Without a fuzzy analysis
+    (``analysis.fuzzy`` None) the uncertainty sections are left out."""
     run = analysis.run
     trial = run.trial
+    fuzzy = analysis.fuzzy
+    if clinical is None:
+        clinical = ClinicalData.of(run, data.cycles)
     last = trial.first_frame + trial.n_frames - 1
     n_cycles = data.n_cycles()
-    facts = [
+    facts = header_facts(run, source, clinical, session) + [
         ("File", f"<span class=\"mono\">{_esc(source)}</span>"),
-        ("Subject", _esc(trial.subject or run.raw.subject or "not named in the file")),
-        ("Frames", f"{trial.n_frames} (C3D frames {trial.first_frame}–{last})"),
-        ("Sampling rate", f"{trial.rate:g} Hz"),
-        ("Duration", f"{trial.n_frames / trial.rate:.2f} s"),
+        ("Frames", f"{trial.n_frames} (C3D frames {trial.first_frame}–{last}) at {trial.rate:g} Hz, "
+                   f"{trial.n_frames / trial.rate:.2f} s"),
         ("Gait cycles", f"left {n_cycles['L']}, right {n_cycles['R']}"),
         ("Static offsets",
-         f"plantarflexion L {_deg(run.subject.left.static_plant_flex)}°, "
-         f"R {_deg(run.subject.right.static_plant_flex)}°; "
-         f"rotation L {_deg(run.subject.left.static_rot_off)}°, R {_deg(run.subject.right.static_rot_off)}°"
-         f"<br><span class=\"small\">{_esc(_static_text(run))} "
+         f"plantarflexion L {deg_text(run.subject.left.static_plant_flex)}°, "
+         f"R {deg_text(run.subject.right.static_plant_flex)}°; "
+         f"rotation L {deg_text(run.subject.left.static_rot_off)}°, R {deg_text(run.subject.right.static_rot_off)}°"
+         f"<br><span class=\"small\">{_esc(static_text(run))} "
          "<a href=\"#subject\">All subject parameters</a></span>"),
-        ("α-levels", ", ".join(alpha_text(a) for a in data.alphas) + ", 1 (measured)"),
     ]  # fmt: skip
-    if _sources_text(analysis.fuzzy):
-        facts.append(("Error sources", _esc(_sources_text(analysis.fuzzy))))
+    if len(data.alphas):
+        facts.append(("α-levels", ", ".join(alpha_text(a) for a in data.alphas) + ", 1 (measured)"))
+    if fuzzy is not None and _sources_text(fuzzy):
+        facts.append(("Error sources", _esc(_sources_text(fuzzy))))
     key = headline_lines(entry.headline)
-    filled = sum(g.filled for g in run.gaps)
-    key.append(f"Gaps: {filled} filled, {len(run.gaps) - filled} left open; "
+    if entry.gps is not None:
+        key.insert(0, f"Gait Profile Score: <b>{_fmt(entry.gps, 1)}°</b> (<a href=\"#gps\">per joint</a>)")
+    gaps = clinical.model_gaps(run.gaps)
+    filled = sum(g.filled for g in gaps)
+    key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
                f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
     figs = quote(files)
-    sources_link = ' <a href="#sources">Error sources</a> ·' if has_source_bands(analysis.fuzzy) else ""
+    links = [("guide", "How to read"), ("spatiotemporal", "Spatio-temporal"), ("cycles", "Kinematics"),
+             ("gps", "GPS"), ("kinetics", "Kinetics")]  # fmt: skip
+    if fuzzy is not None:
+        links += [("allowable", "Allowable error"), ("delta-phi", "ΔΦ table")]
+        if has_source_bands(fuzzy):
+            links.append(("sources", "Error sources"))
+    links += [("time-series", "Whole trial"), ("quality", "Data quality"), ("subject", "Subject")]
+    nav = " · ".join(f'<a href="#{k}">{_esc(t)}</a>' for k, t in links)
+    uncertainty = ""
+    if fuzzy is not None:
+        uncertainty = (allowable_section(entry.allowable) + _delta_phi_section(table, data)
+                       + sources_section(fuzzy, figs))  # fmt: skip
+    bands_text = "<p>No uncertainty bands: the trial was reported without the marker-error analysis.</p>"
+    if len(data.alphas):
+        bands_text = f"<p>{ALPHA_SENTENCE}{footnote('bands')}</p>"
+    height = int(round(1260 * ((len(clinical.rows) or 5) + 0.6) / 5.6))
+    lead = " with their uncertainty from marker position errors" if fuzzy is not None else ""
+    grey = "; grey: normative mean ± 1 SD" if clinical.normative is not None else ""
+    cycles_caption = frame_bands = ""
+    if len(data.alphas):
+        cycles_caption = " with α-bands; hatched strips along the top of a panel: undetermined there (no band drawn)"
+        frame_bands = ", with the α-bands frame by frame"
+    assumptions = _assumptions_section(analysis) if fuzzy is not None else ""
     body = f"""
-<nav><a href="index.html">← All trials (index)</a> · <a href="#allowable">Allowable error</a> ·
-<a href="#cycles">Gait cycle</a> ·
-<a href="#delta-phi">ΔΦ table</a> ·{sources_link} <a href="#time-series">Whole trial</a> ·
-<a href="#quality">Data quality</a> · <a href="#subject">Subject</a></nav>
+<nav><a href="index.html">← All trials (index)</a> · {nav}</nav>
 <header>
 <h1>{_esc(source.name)}</h1>
-<p class="lead">Joint angles by {_esc(model_title(run.result.model))} with their uncertainty from
-marker position errors</p>
+<p class="lead">Joint angles by {_esc(model_title(run.result.model))}{lead}</p>
 </header>
 <main>
-{lead_box(entry.allowable)}<div class="cols">{_kv_table(facts)}<div class="box">{'<br>'.join(key)}</div></div>
-{allowable_section(entry.allowable)}
-<h2 id="cycles">Joint angles over the gait cycle</h2>
-<p>{ALPHA_SENTENCE} Left side red, right side green; all angles in degrees, positive
-direction as labelled on each axis.</p>
+{warnings_box(list(warnings))}{lead_box(entry.allowable)}<div class="cols">{kv_table(facts)}
+<div class="box">{'<br>'.join(key)}</div></div>
+{reading_guide(bool(len(data.alphas)), clinical.normative is not None)}
+{spatiotemporal_section(clinical)}
+<h2 id="cycles">Kinematics over the gait cycle</h2>
+{bands_text}
+<p>Left side red (solid line, filled bands), right side green (dashed line, hatched bands); all angles in degrees,
+positive direction as labelled on each axis; vertical lines: foot off of each side; dotted lines: mean ± 1 SD over
+the cycles (stride-to-stride variability){grey}.</p>
 <p class="small">How the bands are normalised: each α-level's lower and upper bound is
 cut into the same gait cycles (foot strike to next foot strike of that side) and
 time-normalised like the angle; the band shown is the mean over cycles of the lower and of
@@ -432,26 +429,27 @@ the upper bounds, around the mean angle curve. It is therefore the uncertainty o
 mean curve drawn; the stride-to-stride variability is not included. A note such as
 “L: 3 of 4 cycles” means some cycles had missing data there.</p>
 <figure>
-<a href="{figs}/cycles.svg"><img src="{figs}/cycles.png" width="1100" height="1260"
+<a href="{figs}/cycles.svg"><img src="{figs}/cycles.png" width="1100" height="{height}"
 alt="{_CYCLES_ALT}"></a>
-<figcaption>Mean over gait cycles with α-bands; hatched strips along the top of a panel:
-undetermined there (no band drawn). Click for the scalable version
-(<a href="{figs}/cycles.svg">SVG</a>, <a href="{figs}/cycles.png">PNG</a>).</figcaption>
+<figcaption>Mean over gait cycles{cycles_caption}.
+Click for the scalable version (<a href="{figs}/cycles.svg">SVG</a>, <a href="{figs}/cycles.png">PNG</a>).</figcaption>
 </figure>
-{_delta_phi_section(table, data)}
-{sources_section(analysis.fuzzy, figs)}
+{gait_profile_section(clinical, figs)}
+{kinetics_section(clinical, figs)}
+{uncertainty}
 <h2 id="time-series">Whole trial</h2>
-<p>The same angles over the whole recording (not normalised), with the α-bands frame by
-frame. Dotted vertical lines mark foot strikes (red left, green right).</p>
+<p>The same angles over the whole recording (not normalised){frame_bands}.
+Dotted vertical lines mark foot strikes (red left, green right).</p>
 <figure>
-<a href="{figs}/time_series.svg"><img src="{figs}/time_series.png" width="1100" height="1260"
-alt="Grid of joint angles over time for the whole trial with uncertainty bands per alpha-level"></a>
-<figcaption>Joint angles over time with α-bands
+<a href="{figs}/time_series.svg"><img src="{figs}/time_series.png" width="1100" height="{height}"
+alt="Grid of joint angles over time for the whole trial"></a>
+<figcaption>Joint angles over time
 (<a href="{figs}/time_series.svg">SVG</a>, <a href="{figs}/time_series.png">PNG</a>).</figcaption>
 </figure>
-{_quality_section(analysis, data)}
-{_assumptions_section(analysis)}
-{_subject_section(run)}
+{_quality_section(analysis, data, clinical)}
+{assumptions}
+{subject_section(run)}
+{footnotes_section()}
 <p><a href="index.html">← Back to all trials</a></p>
 </main>
 {_footer(run.result.model)}"""
@@ -485,6 +483,7 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
     n_ok = sum(e.ok for e in entries)
     n_failed = len(entries) - n_ok
     rows, classes = [], []
+    with_gps = any(e.gps is not None for e in entries)
     for i, e in enumerate(entries, 1):
         if e.ok:
             name = f"<a href=\"{quote(e.page or '')}\">{_esc(e.source.name)}</a>"
@@ -495,19 +494,21 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
             gaps = f"{e.gaps_filled} filled" + (f", {e.gaps_left} open" if e.gaps_left else "")
             detail = (f"<a class=\"nowrap\" href=\"{quote(e.page or '')}\">report page</a><br>"
                       f"<span class=\"small nowrap\">gaps: {_esc(gaps)}</span>")  # fmt: skip
+            gps = [(_fmt(e.gps, 1) + ("°" if e.gps is not None else ""), True)] if with_gps else []
             rows.append([(str(i), True), (name, False), (status, False), (frames, True),
-                         (cycles, True), (index_cell(e.allowable), True), (dphi, True), (undet, True),
+                         (cycles, True), *gps, (index_cell(e.allowable), True), (dphi, True), (undet, True),
                          (widest, True), (detail, False)])  # fmt: skip
             classes.append("")
         else:
             rows.append([(str(i), True), (_esc(e.source.name), False),
                          ("<span class=\"failed\">failed</span>", False), ("–", True), ("–", True),
+                         *([("–", True)] if with_gps else []),
                          ("–", True), ("–", True), ("–", True), ("–", True),
                          (f'<span class="mono error">{_esc(e.error)}</span>', False)])  # fmt: skip
             classes.append("failed-row")
     lowest = alpha_text(min(alphas)) if alphas else "0"
     header = [("#", True), ("Trial", False), ("Status", False), ("Frames", True),
-              ("Gait cycles<br>L / R", True), ("Allowable<br>error", True),
+              ("Gait cycles<br>L / R", True), *([("GPS", True)] if with_gps else []), ("Allowable<br>error", True),
               ("Largest ΔΦ, flexion<br>(determined bands)", True),
               (f"Undetermined<br>at α = {lowest}", True), ("Widest<br>determined band", True),
               ("Details / error", False)]  # fmt: skip
@@ -526,10 +527,13 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
 whole trial, with shaded bands for the uncertainty caused by marker position errors
 (measurement system, marker placement, soft-tissue artefact). {ALPHA_SENTENCE}</p>
 <p>{DELTA_PHI_SENTENCE} Of the bands that are determined at every frame, the index
-shows the largest ΔΦ among hip, knee and ankle flexion (as in the thesis' Table 5.2) and
+shows the largest ΔΦ among hip, knee and ankle flexion and
 the widest band in degrees among all angles, each at the smallest α-level where there is
 one, and how many angle components are undetermined at the smallest α.</p>
-<p>{UNDETERMINED_SENTENCE}</p>
+<p>{UNDETERMINED_SENTENCE} The bands are ranges of possible values, not confidence intervals: they do not say
+how likely a value is.</p>
+<p>GPS: the Gait Profile Score (deg), how far the trial's joint angles are from the normative mean on average
+(only with normative data).{footnote("gps")}</p>
 <p>Allowable marker error: the largest marker error (mm; % of the assumed errors) for which the angle is
 known within the tolerance over the whole trial — the index shows knee flexion, each trial page every
 angle.</p>
@@ -538,6 +542,7 @@ angle.</p>
 <div class="index-table">{table}</div>
 <h2>Input files</h2>
 <ol class="small">{sources}</ol>
+{footnotes_section()}
 </main>
 {_footer()}"""
     return _page("fuzzygait report – all trials", body)

@@ -40,6 +40,7 @@ from fuzzygait.markererror.per_source import (
     widest_source_bands,
 )
 from fuzzygait.viz.report.bands import N_POINTS, TrialData, alpha_text, band_undetermined, cycle_bands
+from fuzzygait.viz.report.clinical_html import footnote
 from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt
 from fuzzygait.viz.report.markup import escape, html_table
 
@@ -83,6 +84,7 @@ def _band(data: TrialData, source: str, component: str) -> tuple[np.ndarray, np.
     """α = 0 (the smallest per-source level) hull ``(1, 2, n_frames)`` deg and undetermined
     mask ``(1, n_frames)`` of ``component`` with ``source`` on the trial's frames."""
     frames = np.asarray(data.run.trial.frames)
+    assert data.fuzzy is not None
     hull = source_hull(data.fuzzy, source, component).isel(source_alpha=[0]).reindex(frame=frames)
     flags = source_undetermined(data.fuzzy, source, component).isel(source_alpha=[0])
     flags = flags.reindex(frame=frames, fill_value=False)
@@ -94,6 +96,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
     """The per-source grid: rows hip, knee, ankle flexion; columns left, right (axes
     ``fig.axes`` row-major)."""
     fuzzy = data.fuzzy
+    assert fuzzy is not None, "the per-source figure needs a fuzzy analysis"
     order = _order(fuzzy)
     analysed = set(source_components(fuzzy))
     alpha = float(fuzzy["source_alpha"].to_numpy().min())
@@ -253,8 +256,8 @@ def sources_section(fuzzy: xr.Dataset, files: str | None) -> str:
     return (
         '<h2 id="sources">Which error source dominates: flexion bands per source</h2>'
         f"<p>The flexion angles with the α = {alpha} band of each marker error source on its own and of all "
-        f"together (thesis Fig. 5.9). At α = {alpha} every marker lies within its source's error of where it was "
-        f"measured ({radii}, by segment, thesis Table 3.1); all together adds the three. A source's band lies "
+        f"together{footnote('sources')}. At α = {alpha} every marker lies within its source's error of where it was "
+        f"measured ({radii}, by segment{footnote('bands')}); all together adds the three. A source's band lies "
         "inside the band of all together, as its balls lie inside theirs; the widest one dominates the "
         "uncertainty — reducing that error helps most.</p>"
         + figure
@@ -266,12 +269,12 @@ def sources_section(fuzzy: xr.Dataset, files: str | None) -> str:
     )
 
 
-def dominant_sentence(fuzzy: xr.Dataset, joint: str = "Knee") -> str | None:
+def dominant_sentence(fuzzy: xr.Dataset | None, joint: str = "Knee") -> str | None:
     """One sentence naming the source that dominates ``joint`` flexion (left and right),
     e.g. "Knee flexion: soft-tissue artefact dominates (widest α = 0 band alone L 62.1°,
     R 60.3°; measurement system 4.3°/4.2°, marker placement 28.4°/27.9°; all together
-    97.8°/95.0°)."; None without per-source bands for it."""
-    if not has_source_bands(fuzzy):
+    97.8°/95.0°)."; None without per-source bands for it (or without a dataset)."""
+    if fuzzy is None or not has_source_bands(fuzzy):
         return None
     table = widest_source_bands(fuzzy)
     names = [f"{side}{joint}Angles_X" for side in "LR" if f"{side}{joint}Angles_X" in table.widths.index]

@@ -9,15 +9,20 @@ import re
 import shutil
 import tempfile
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 
 import matplotlib.pyplot as plt
+import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.gait.normative import NormativeData
+from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.viz.report.allowable import allowable_summary
-from fuzzygait.viz.report.bands import TrialAnalysis, TrialData, TrialEntry, delta_phi_table
+from fuzzygait.viz.report.bands import ReportRun, TrialAnalysis, TrialData, TrialEntry, delta_phi_table
+from fuzzygait.viz.report.clinical import ClinicalData
+from fuzzygait.viz.report.clinical_figures import plot_gait_profile, plot_kinetics
 from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
 from fuzzygait.viz.report.pages import index_page, trial_page
 from fuzzygait.viz.report.sources import has_source_bands, plot_source_bands
@@ -27,11 +32,48 @@ __all__ = ["ReportItem", "ReportWriter", "write_report"]
 
 @dataclass
 class ReportItem:
-    """One trial of the batch: its analysis, or the one-line error that stopped it."""
+    """One trial of the batch: its analysis, or the one-line error that stopped it.
+
+    Attributes:
+        source: the trial's file.
+        analysis: its run and marker-error analysis (``analysis.fuzzy`` None: angles
+            only, no bands).
+        error: the one-line error that stopped it.
+        parameters: its spatio-temporal parameters
+            (:func:`~fuzzygait.gait.spatiotemporal.spatiotemporal_parameters`); None: the
+            writer computes them from the run.
+        session: the session (visit) the trial belongs to and its date, for the header
+            (e.g. ``"2024-03-05 visit"``); None: the file's modification date is shown.
+        warnings: lines shown in a warning box at the top of the page (e.g. a subject
+            name that does not match the subject file).
+    """
 
     source: Path
     analysis: TrialAnalysis | None = None
     error: str | None = None
+    parameters: TrialParameters | None = None
+    session: str | None = None
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class _AnglesOnly:
+    """An analysis without bands (:func:`angles_only`)."""
+
+    run: ReportRun
+    fuzzy: None
+    delta_phi: pd.DataFrame
+    notes: list[str]
+
+
+def angles_only(analysis: TrialAnalysis) -> TrialAnalysis:
+    """``analysis`` as the pages read it: one whose fuzzy dataset is missing or holds no
+    angle component (``--uncertainty none``) becomes one with ``fuzzy`` None (no bands,
+    no ΔΦ, allowable-error, per-source or assumptions sections)."""
+    fuzzy = analysis.fuzzy
+    if fuzzy is not None and int(fuzzy.sizes.get("component", 1)) > 0:
+        return analysis
+    return _AnglesOnly(analysis.run, None, pd.DataFrame(), list(analysis.notes))
 
 
 def _one_line(text: str) -> str:
@@ -55,11 +97,16 @@ class ReportWriter:
         out_dir: the report folder (created; existing pages of the same names replaced).
         strict: re-raise errors while drawing a page instead of listing the trial as
             failed (for debugging).
+        normative: reference curves (:func:`fuzzygait.gait.normative.read_normative`):
+            drawn as grey bands, and the Gait Profile Score / Movement Analysis Profile
+            of every trial against them; None: neither.
     """
 
-    def __init__(self, out_dir: str | os.PathLike[str], *, strict: bool = False) -> None:
+    def __init__(self, out_dir: str | os.PathLike[str], *, strict: bool = False,
+                 normative: NormativeData | None = None) -> None:  # fmt: skip
         self.out_dir = Path(out_dir)
         self.strict = strict
+        self.normative = normative
         self.entries: list[TrialEntry] = []
         self._names: set[str] = {"index"}
         self._alphas: set[float] = set()
@@ -112,7 +159,7 @@ class ReportWriter:
         name = self._unique_name(source)
         files = f"{name}_files"
         try:
-            entry = self._write_trial(item.analysis, source, name, files)
+            entry = self._write_trial(item, item.analysis, source, name, files)
         except Exception as exc:
             if self.strict:
                 raise
@@ -125,21 +172,33 @@ class ReportWriter:
         self.entries.append(entry)
         return entry
 
-    def _write_trial(self, analysis: TrialAnalysis, source: Path, name: str, files: str) -> TrialEntry:
+    def _write_trial(self, item: ReportItem, analysis: TrialAnalysis, source: Path, name: str,
+                     files: str) -> TrialEntry:  # fmt: skip
         """Figures and page of one trial into the staging folder; returns its entry."""
         assert self._staging is not None
+        analysis = angles_only(analysis)
         data = TrialData.of(analysis)
+        clinical = ClinicalData.of(analysis.run, data.cycles, parameters=item.parameters, normative=self.normative)
         self._alphas.update(float(a) for a in data.alphas)
         folder = self._staging / files
         folder.mkdir()
-        title = f"{source.name}: joint angles with fuzzy α-bands"
-        plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)")
-        plot_time_series(data, folder / "time_series", title + " (whole trial)")
-        if has_source_bands(analysis.fuzzy):
+        title = f"{source.name}: joint angles" + (" with fuzzy α-bands" if len(data.alphas) else "")
+        plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)", clinical)
+        plot_time_series(data, folder / "time_series", title + " (whole trial)", clinical)
+        if clinical.has_kinetics():
+            plot_kinetics(clinical, folder / "kinetics", f"{source.name}: joint moments and powers stored in the file")
+        if clinical.profile is not None:
+            plot_gait_profile(clinical.profile, folder / "profile", f"{source.name}: Movement Analysis Profile")
+        fuzzy = analysis.fuzzy
+        if fuzzy is not None and has_source_bands(fuzzy):
             plot_source_bands(data, folder / "sources", f"{source.name}: flexion with the bands of each error source")
         table = delta_phi_table(analysis, data)
-        entry = TrialEntry.of(source, f"{name}.html", data, table, allowable_summary(analysis.fuzzy))
-        page = trial_page(analysis, data, entry, table, files, source)
+        allowable = allowable_summary(fuzzy)
+        gps = clinical.profile.overall if clinical.profile is not None else None
+        entry = TrialEntry.of(source, f"{name}.html", data, table, allowable, clinical.model_gaps(analysis.run.gaps),
+                              gps)  # fmt: skip
+        page = trial_page(analysis, data, entry, table, files, source, clinical=clinical,
+                          session=item.session, warnings=item.warnings)  # fmt: skip
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
 
@@ -176,7 +235,8 @@ def _replace(new: Path, target: Path) -> None:
         os.replace(new, target)
 
 
-def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str]) -> Path:
+def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str], *,
+                 normative: NormativeData | None = None) -> Path:  # fmt: skip
     """Write the batch report: one page per trial and ``index.html``.
 
     Args:
@@ -188,9 +248,10 @@ def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str]) -
 
     Returns:
         Path of ``index.html``.  A trial whose page cannot be drawn is listed as failed
-        with the reason; the other trials are still written.
+        with the reason; the other trials are still written.  ``normative``: see
+        :class:`ReportWriter`.
     """
-    with ReportWriter(out_dir) as writer:
+    with ReportWriter(out_dir, normative=normative) as writer:
         for item in items:
             writer.add(item)
         return writer.finish()
