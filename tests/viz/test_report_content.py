@@ -143,8 +143,11 @@ def test_real_trial_kinetics_and_model_marker_quality(tmp_path: Path) -> None:
     assert knee.unit == "N·m/kg" and 0.1 < np.nanmax(np.abs(knee.mean)) < 5  # N·mm/kg stored, shown / 1000
     assert clinical.kinetics[("Knee", "power", "R", "Z")].unit == "W/kg"
     stored = normalise_cycles(run.raw.outputs["RKneeMoment"][:, 0], data.cycles["R"])  # N·mm/kg, (cycles, 101)
-    used = stored[np.isfinite(stored).all(axis=1) & (np.abs(stored).max(axis=1) > 0)]
-    assert knee.cycles == len(used) >= 1
+    grf = run.raw.outputs["RGroundReactionForce"]
+    plate = [bool(np.nan_to_num(grf[int(c.start) : int(np.ceil(c.end)) + 1]).any()) for c in data.cycles["R"]]
+    used = stored[np.asarray(plate) & np.isfinite(stored).all(axis=1)]
+    assert knee.cycles == len(used) == 1 < len(data.cycles["R"])  # the cycle without a plate is left out
+    assert not [k for k in clinical.kinetics if k[2] == "L"]  # the left foot struck no plate
     np.testing.assert_allclose(knee.mean, used.mean(axis=0) / 1000.0, rtol=1e-12)
     html = _text(out.parent / "Movement_trial.html")
     assert "kinetics.png" in html and (out.parent / "Movement_trial_files" / "kinetics.png").is_file()

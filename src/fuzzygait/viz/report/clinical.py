@@ -14,8 +14,11 @@ report shows moments in N·m/kg (stored value / 1000) and powers in W/kg when th
 moments stay below :data:`PER_KG_LIMIT` N·mm (no walking moment reaches 20 N·m/kg), and
 in N·m and W otherwise (a file that was not mass-normalised).  The power is the output's
 Z component (Plug-in Gait's total joint power; X and Y are 0).  A cycle enters a
-kinetic curve only when the output is finite and not identically 0 over the cycle (Nexus
-writes 0 or nothing where no force plate was struck).
+kinetic curve only when the side's stored ground reaction force (``LGroundReactionForce``)
+exceeds :data:`MIN_GRF` N somewhere in it — Nexus still writes the (small, inertial)
+moments of a foot that struck no plate: Movement_trial's left cycle peaks at 209 N·mm/kg
+without any force, the right one with a plate at 959 — and the output is finite and not
+identically 0 over the cycle (files without the force output: this rule alone).
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ __all__ = ["ClinicalData", "KineticCurve", "grid_rows", "model_markers"]
 
 #: Largest |moment| (N·mm) taken as per kg of body mass (see the module docstring).
 PER_KG_LIMIT = 20000.0
+#: Ground reaction force (N) above which a foot is on a force plate.
+MIN_GRF = 1.0
 #: Joints of the kinetics grid.
 KINETIC_JOINTS = ("Hip", "Knee", "Ankle")
 #: Samples of a normalised cycle.
@@ -85,10 +90,25 @@ class KineticCurve:
     unit: str
 
 
-def _kinetic_curve(values: np.ndarray, cycles: Sequence[GaitCycle], kind: str, per_kg: bool) -> KineticCurve | None:
-    """The kinetic curve of one component ``values (n_frames,)`` as stored."""
+def _contact(grf: np.ndarray | None, cycles: Sequence[GaitCycle]) -> np.ndarray:
+    """Per cycle whether the side's stored ground reaction force (N, ``(n_frames, 3)``)
+    is non-zero somewhere in it (the foot struck a force plate); all True without one."""
+    if grf is None:
+        return np.ones(len(cycles), dtype=bool)
+    magnitude = np.linalg.norm(np.nan_to_num(np.asarray(grf, dtype=float)), axis=1)
+    out = np.zeros(len(cycles), dtype=bool)
+    for k, cycle in enumerate(cycles):
+        span = magnitude[max(0, math.floor(cycle.start)) : math.ceil(cycle.end) + 1]
+        out[k] = bool(span.size and span.max() > MIN_GRF)
+    return out
+
+
+def _kinetic_curve(values: np.ndarray, cycles: Sequence[GaitCycle], kind: str, per_kg: bool,
+                   contact: np.ndarray) -> KineticCurve | None:  # fmt: skip
+    """The kinetic curve of one component ``values (n_frames,)`` as stored, over the
+    cycles with force-plate ``contact``."""
     normalised = normalise_cycles(values, cycles, N_POINTS)  # (c, p)
-    keep = np.isfinite(normalised).all(axis=1) & (np.abs(normalised).max(axis=1, initial=0.0) > 0)
+    keep = contact & np.isfinite(normalised).all(axis=1) & (np.abs(normalised).max(axis=1, initial=0.0) > 0)
     if not keep.any():
         return None
     scale = 1e-3 if kind == "moment" else 1.0
@@ -178,6 +198,8 @@ def _kinetics(run: ReportRun, cycles: dict[str, list[GaitCycle]]) -> dict[tuple[
     for side, side_cycles in cycles.items():
         if not side_cycles:
             continue
+        grf = outputs.get(f"{side}GroundReactionForce") if kinds.get(f"{side}GroundReactionForce") == "force" else None
+        contact = _contact(grf, side_cycles)
         for joint in KINETIC_JOINTS:
             for kind, axes in (("moment", "XYZ"), ("power", "Z")):
                 name = f"{side}{joint}{kind.capitalize()}"
@@ -187,7 +209,7 @@ def _kinetics(run: ReportRun, cycles: dict[str, list[GaitCycle]]) -> dict[tuple[
                 if values.ndim != 2 or values.shape[0] != run.trial.n_frames:
                     continue
                 for axis in axes:
-                    curve = _kinetic_curve(values[:, "XYZ".index(axis)], side_cycles, kind, per_kg)
+                    curve = _kinetic_curve(values[:, "XYZ".index(axis)], side_cycles, kind, per_kg, contact)
                     if curve is not None:
                         out[(joint, kind, side, axis)] = curve
     return out

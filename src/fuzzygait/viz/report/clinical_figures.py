@@ -73,6 +73,8 @@ def kinetics_figure(clinical: ClinicalData, title: str) -> Figure:
     handles: list[Artist] = []
     for side, (name, colour) in SIDE_STYLE.items():
         n = counts.get(side, 0)
+        if not n:  # no cycle of this side struck a force plate
+            continue
         label = f"{name} mean of {n} cycle{'s' if n != 1 else ''} with force-plate data"
         handles.append(Line2D([], [], color=colour, lw=1.4, ls=SIDE_LINE[side], label=label))
         face = {"facecolor": "white", "hatch": _right_hatch(3)} if side == "R" else {"facecolor": colour, "alpha": 0.2}
