@@ -50,10 +50,12 @@ def test_uncertainty_bad_arguments_are_one_line(tmp_path: Path) -> None:
 
 @needs_shared
 def test_report_over_the_vicon_folder(tmp_path: Path) -> None:
-    """Every trial of ../shared/data/vicon: a page or one clear error line, no traceback
-    (reduced to one angle and one α-level for speed; the full run is in RESULTS.md)."""
+    """Every walking trial of ../shared/data/vicon given as files (no session folder: no
+    subject file found): a page or one clear error line, no traceback (reduced to one
+    angle and one α-level for speed; the full run is in RESULTS.md)."""
     out = tmp_path / "report"
-    result = run("report", VICON, "--out", out, "--angles", "LKneeAngles", "--alphas", "0.5", "--workers", "1")
+    trials = [VICON / name for name in ("Movement_trial.c3d", "gait-pig.c3d", "gait-raw.c3d")]
+    result = run("report", *trials, "--out", out, "--angles", "LKneeAngles", "--alphas", "0.5", "--workers", "1")
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stdout + result.stderr
     index = (out / "index.html").read_text()

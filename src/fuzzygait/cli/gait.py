@@ -30,6 +30,7 @@ from fuzzygait.cli.options import (
     MaxGapOption,
     ModelOption,
     PreprocessingOptions,
+    SchedulerOption,
     StaticOption,
     SubjectOption,
     check_knee_ankle_centres,
@@ -434,27 +435,41 @@ def _per_source_text(fuzzy: xr.Dataset) -> str | None:
 def report(
     inputs: Annotated[
         list[Path],
-        typer.Argument(metavar="INPUT", help="Walking trials: C3D files, or folders searched "
-                       "recursively for *.c3d (files there with 'static' in the name are skipped)."),
+        typer.Argument(metavar="INPUT", help="Session folders (a folder per visit: static trial, walking trials, "
+                       ".vsk/.toml/.mp subject file; or a folder of such folders) or walking-trial C3D files."),
     ],
-    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html + one page per trial).")],
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html, a folder per session).")],
     calibration: CalibrationOptions = DEFAULT_CALIBRATION,
+    uncertainty: Annotated[
+        str, typer.Option(help="none: the angles only (seconds per trial); fast: the α = 0 and 0.5 bands of hip, "
+                          "knee and ankle angles; full: the marker-error analysis of the options below.")
+    ] = "full",
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
-    workers: Annotated[int, typer.Option(help="Processes for the angle components of a trial.")] = 2,
+    workers: Annotated[int, typer.Option(help="Processes for the trials (a local Dask pool; one trial: for its "
+                                         "angle components).")] = 2,
+    scheduler: SchedulerOption = None,
+    pdf: Annotated[bool, typer.Option("--pdf", help="Also a PDF (A4) of every trial page and session page.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Recompute trials whose inputs and options are unchanged "
+                                        "since the last run on --out (they are skipped otherwise).")] = False,
+    normative: Annotated[
+        Path | None, typer.Option("--normative", metavar="NORM.csv",
+                                  help="Normative mean/SD per % gait cycle (see README 'Normative data').")
+    ] = None,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     model: ModelOption = "auto",
 ) -> None:
-    """Clinicians' HTML report: per trial the allowable marker error first (--tolerance,
-    ±2.5°: knee flexion "known within ±2.5° if every marker stays within X mm"), joint
-    angles over the gait cycle with fuzzy uncertainty bands from marker errors, the ΔΦ
-    table, the flexion bands of each error source alone (--per-source) and data-quality
-    notes, one page per trial.
+    """Clinicians' HTML report of whole sessions: per session folder its static trial, subject file and
+    walking trials are found (the static trial by its static-only markers, its file name or its near-zero
+    motion: the page says which), one page per trial, one session summary page (mean ± SD over all cycles
+    of all trials per side) and one index across sessions.
 
-    A trial that fails is listed in the index with its error; the others are still
-    reported. Exit code 0 when at least one trial succeeded, 1 when all failed.
+    Trials run in parallel (--workers, --scheduler); a trial that fails is listed with its error while the
+    others are still reported; a re-run on the same --out skips unchanged trials (--force recomputes).
+    Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
     from fuzzygait.workflows.batch_report import write_batch_report
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
+    from fuzzygait.workflows.trial_job import mode_settings
 
     def failed(path: Path, error: str) -> None:
         where = "" if path.name in error else f"{path}: "
@@ -464,19 +479,27 @@ def report(
         alpha_levels = parse_alphas(marker_errors.alphas)
         _check_workers(workers)
         check_model(model)
+        if normative is not None and not normative.is_file():
+            raise FuzzyGaitError(f"{normative}: no such normative file; check the path (--normative)")
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=workers, tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
+        mode_settings(uncertainty, settings)  # one clear line for a bad --uncertainty, before any work
         with progress_bars() as bars:
             result = write_batch_report(
                 inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
                 marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                preprocessing=preprocessing.preprocessing(), model=model,
-                strict=debugging(), trials=StageBars(bars), components=StageBars(bars), on_failure=failed,
+                uncertainty=uncertainty, preprocessing=preprocessing.preprocessing(), model=model, pdf=pdf,
+                workers=workers, scheduler=scheduler, force=force, normative=normative, strict=debugging(),
+                trials=StageBars(bars), on_failure=failed,
             )  # fmt: skip
-    out.print(f"report: {result.n_ok} of {len(result.entries)} trials OK"
-              + (f", {result.n_failed} failed" if result.n_failed else ""), markup=False)  # fmt: skip
+    for summary in result.sessions:
+        for warning in summary.warnings:
+            err.print(f"fuzzygait: warning: {summary.name}/{warning}", markup=False)
+    skipped = f", {result.n_skipped} unchanged (reused; --force recomputes)" if result.n_skipped else ""
+    out.print(f"report: {len(result.sessions)} session(s), {result.n_ok} of {len(result.entries)} trials OK"
+              + (f", {result.n_failed} failed" if result.n_failed else "") + skipped, markup=False)  # fmt: skip
     out.print(f"wrote {result.index}", markup=False)
     if result.n_ok == 0:
         raise typer.Exit(EXIT_USER_ERROR)

@@ -107,6 +107,9 @@ PerSourceOption = Annotated[
         "one Graph Follower run per source and flexion component more.",
     ),
 ]
+SchedulerOption = Annotated[
+    str | None, typer.Option(help="Address of an existing Dask scheduler (e.g. tcp://host:8786).")
+]
 NoFilterOption = Annotated[bool, typer.Option("--no-filter", help="Do not low-pass the markers.")]
 MaxGapOption = Annotated[int, typer.Option(help="Longest gap (frames) to fill.")]
 CutoffOption = Annotated[float, typer.Option(help="Low-pass cutoff (Hz).")]

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from fuzzygait.cli.app import StageBars, app, out, progress_bars, user_errors
-from fuzzygait.cli.options import parse_alphas, parse_overrides
+from fuzzygait.cli.options import SchedulerOption, parse_alphas, parse_overrides
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
@@ -152,9 +152,7 @@ def frv_sim(
     duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s).")] = None,
     scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",
     workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations.")] = 2,
-    scheduler: Annotated[
-        str | None, typer.Option(help="Address of an existing Dask scheduler (e.g. tcp://host:8786).")
-    ] = None,
+    scheduler: SchedulerOption = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists.")] = False,
 ) -> None:
     """FRV-GFA (thesis §2.7, §5.7): a leg parameter as a fuzzy random variable, grouped

@@ -327,8 +327,8 @@ def normalised_angle_table(
             cycles_by_side[side] = gait_cycles(trial, events, side)
         cycles = cycles_by_side[side]
         normalised = normalise_cycles(values, cycles, n_points).reshape(
-            len(cycles), percent.size, -1
-        )
+            len(cycles), percent.size, int(np.prod(values.shape[1:], dtype=int))
+        )  # not -1: a side without cycles has size 0
         for j, component in enumerate(_component_names(name, values.shape[1:])):
             parts.append(
                 pd.DataFrame(

@@ -5,7 +5,9 @@ Three sources give the same :class:`SubjectParameters`:
 * a TOML file with Vicon ``PROCESSING`` names at top level (``LLegLength = 900.0``),
   see ``sample_data/subject.toml``;
 * a Vicon ``.vsk`` subject file (XML; ``LeftLegLength`` / ``RightLegLength`` names);
-* the ``PROCESSING`` group of a C3D file (``trial.parameters``).
+* the ``PROCESSING`` group of a C3D file (``trial.parameters``);
+* a pyCGM2 ``.mp`` file (YAML: ``MandatoryParameters`` and ``OptionalParameters`` with
+  ``LeftLegLength`` style names; mm, kg).
 
 :func:`write_subject` writes them back as TOML or ``.vsk`` (read back equal).
 
@@ -244,10 +246,7 @@ def read_vsk(path: str | os.PathLike[str]) -> SubjectParameters:
         raw = element.attrib.get("VALUE")
         if raw is None:
             continue  # Vicon leaves unset optional parameters without a VALUE
-        name = element.attrib["NAME"]
-        for long, short in (("Left", "L"), ("Right", "R")):
-            if name.startswith(long):
-                name = short + name[len(long) :]
+        name = _vicon_name(element.attrib["NAME"])
         try:
             values[name] = float(raw)
         except ValueError:
@@ -255,14 +254,86 @@ def read_vsk(path: str | os.PathLike[str]) -> SubjectParameters:
     return subject_from_processing(values, source=str(path))
 
 
+def _vicon_name(name: str) -> str:
+    """``LeftLegLength`` -> ``LLegLength`` (Vicon's long side prefixes shortened)."""
+    for long, short in (("Left", "L"), ("Right", "R")):
+        if name.startswith(long):
+            return short + name[len(long) :]
+    return name
+
+
+#: pyCGM2 ``.mp`` values read (mm, kg); the optional offsets (pyCGM2 computes them in the
+#: static calibration, 0 = not given) are not: fuzzygait's static calibration sets them.
+_MP_NAMES = {"Bodymass", "Height", "InterAsisDistance", "MarkerDiameter"} | {
+    f"{side}{name}" for side in "LR" for name in ("LegLength", "KneeWidth", "AnkleWidth", "SoleDelta",
+                                                  "AsisTrocanterDistance")}  # fmt: skip
+
+
+def _mp_groups(path: Path, text: str) -> dict[str, dict[str, str]]:
+    """The ``Group: / Key: value`` lines of a pyCGM2 ``.mp`` file (its YAML subset; JSON
+    written by older pyCGM2 versions has the same shape once braces and quotes go)."""
+    groups: dict[str, dict[str, str]] = {"": {}}
+    current = ""
+    for raw in text.replace("{", "\n").replace("}", "\n").replace(",", "\n").splitlines():
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        key, sep, value = (part.strip().strip("\"'") for part in line.partition(":"))
+        if not sep or not key:
+            raise ParameterError(f"{path}: not a pyCGM2 .mp file (line {raw.strip()!r} is not 'Name: value')")
+        if value == "":
+            current = key
+            groups.setdefault(current, {})
+        else:
+            groups.setdefault(current, {})[key] = value
+    return groups
+
+
+def read_mp(path: str | os.PathLike[str]) -> SubjectParameters:
+    """Read a pyCGM2 ``.mp`` subject file: the groups ``MandatoryParameters``
+    (``Bodymass`` kg, ``Height`` mm, ``LeftLegLength``, ``LeftKneeWidth``,
+    ``LeftAnkleWidth``, ``LeftSoleDelta``, the same for ``Right``; mm) and
+    ``OptionalParameters`` (``InterAsisDistance``, ``LeftAsisTrocanterDistance``, ... mm;
+    0 means "not measured"). The optional angular offsets are not read: the static
+    calibration computes them."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such subject file; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{path}: cannot read the pyCGM2 .mp file ({exc})") from None
+    groups = _mp_groups(path, text)
+    values: dict[str, float] = {}
+    for group in ("", "MandatoryParameters", "OptionalParameters"):
+        for key, raw in groups.get(group, {}).items():
+            name = _vicon_name(key)
+            if name not in _MP_NAMES or raw.lower() in ("null", "none", "~"):
+                continue
+            try:
+                value = float(raw)
+            except ValueError:
+                raise ParameterError(f"{path}: parameter {key} has non-numeric value {raw!r}") from None
+            if value == 0.0 and name not in ("LSoleDelta", "RSoleDelta"):
+                continue  # pyCGM2's "not measured"
+            values[name] = value
+    return subject_from_processing(values, source=str(path))
+
+
+#: Subject file types :func:`read_subject` reads.
+SUBJECT_SUFFIXES = (".toml", ".vsk", ".mp")
+
+
 def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
-    """Read a subject file by extension: ``.toml`` or ``.vsk``."""
+    """Read a subject file by extension: ``.toml``, ``.vsk`` or pyCGM2 ``.mp``."""
     suffix = Path(path).suffix.lower()
     if suffix == ".toml":
         return read_subject_toml(path)
     if suffix == ".vsk":
         return read_vsk(path)
-    raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml or .vsk")
+    if suffix == ".mp":
+        return read_mp(path)
+    raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml, .vsk or a pyCGM2 .mp")
 
 
 

@@ -1,84 +1,238 @@
-"""The clinicians' batch report (``fuzzygait report``): every trial read, processed and
-analysed once, its page written before the next trial is computed, a failed trial listed
-in the index with its one-line error while the others are still reported."""
+"""The clinicians' batch report (``fuzzygait report``): sessions found
+(:mod:`~fuzzygait.workflows.session`), every trial a job
+(:mod:`~fuzzygait.workflows.trial_job`) run through the project's
+:class:`~fuzzygait.uncertainty.execution.Evaluator` (serial, a local Dask pool or a
+scheduler), one summary page per session and one index across sessions.
+
+Layout of the report folder::
+
+    OUT/index.html                       the index across sessions
+    OUT/<session>/index.html             the session summary (mean ± SD over every cycle)
+    OUT/<session>/session_files/cycles.png|svg
+    OUT/<session>/<trial>.html           one page per trial (+ <trial>.pdf with --pdf)
+    OUT/<session>/<trial>_files/         its figures, data.npz (the page's numbers), job.json
+
+Trials given as files (not in a session folder) are written flat into ``OUT`` as before
+sessions, with ``OUT/session.html`` their summary (``OUT/index.html`` is the trial index
+when there is no session folder).  A failing trial never stops the batch: it is listed
+with its one-line error.  Re-running on the same ``OUT`` skips a trial whose
+:func:`job_key` (its files' contents, the options, the code) is unchanged (``force``
+recomputes); every file appears whole or not at all.  With a remote scheduler, the
+workers write the trial pages: ``OUT`` and the inputs must be on a shared file system.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import os
+import pickle
+import re
+import shutil
+import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
-from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, Preprocessing, run_angles
-from fuzzygait.workflows.marker_uncertainty import (
-    DEFAULT_SETTINGS,
-    MarkerErrorAnalysis,
-    MarkerErrorSettings,
-    analyse_run,
+from fuzzygait.io.atomic import atomic_output
+from fuzzygait.uncertainty.execution import Evaluator
+from fuzzygait.viz.report import TrialEntry
+from fuzzygait.viz.report.pages import index_page
+from fuzzygait.viz.report.session import (
+    SessionSummary,
+    SummaryTrial,
+    cross_session_index,
+    plot_session_cycles,
+    session_page,
 )
-from fuzzygait.workflows.progress import SILENT, Prefixed, StageProgress
+from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, Preprocessing
+from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS, MarkerErrorSettings
+from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.session import Session, find_sessions
+from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, mode_settings, run_trial_job
 
-__all__ = ["BatchReport", "report_inputs", "write_batch_report"]
+__all__ = ["BatchReport", "job_key", "write_batch_report"]
+
+_CODE_DIGEST: str | None = None
 
 
-def report_inputs(inputs: Sequence[Path], static: Path | None) -> list[Path]:
-    """The trials of a batch report: files as given; folders searched recursively for
-    ``*.c3d`` (any case), skipping files there whose name contains "static" (any case:
-    calibration trials). The ``static`` file is never a trial; duplicates once."""
-    found: list[Path] = []
-    for path in inputs:
-        if path.is_dir():
-            files = sorted(p for p in path.rglob("*") if p.is_file() and p.suffix.lower() == ".c3d"
-                           and "static" not in p.name.lower())  # fmt: skip
-            if not files:
-                raise FuzzyGaitError(f"{path}: no walking trials (*.c3d without 'static' in the name) in this folder")
-            found += files
-        else:
-            found.append(path)
-    skip = {static.resolve()} if static is not None else set()
-    unique: dict[Path, Path] = {}
-    for path in found:
-        if path.resolve() not in skip:
-            unique.setdefault(path.resolve(), path)
-    if not unique:
-        raise FuzzyGaitError("no trials to report (the only input is the --static trial)")
-    return list(unique.values())
+def code_digest() -> str:
+    """SHA-256 of fuzzygait's source files (a changed program recomputes every trial)."""
+    global _CODE_DIGEST
+    if _CODE_DIGEST is None:
+        root = Path(__file__).resolve().parents[1]
+        digest = hashlib.sha256()
+        for path in sorted(root.rglob("*.py")):
+            digest.update(str(path.relative_to(root)).encode())
+            digest.update(path.read_bytes())
+        _CODE_DIGEST = digest.hexdigest()
+    return _CODE_DIGEST
+
+
+def _file_digest(path: Path | None) -> str:
+    if path is None:
+        return "-"
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def job_key(job: TrialJob, normative: Path | None = None) -> str:
+    """The content hash of a trial job: its trial, static and subject files' (and the
+    normative file's) contents, every option and the code; not the paths, nor where or
+    with how many workers it runs."""
+    settings = None if job.settings is None else replace(job.settings, workers=None)
+    options = (job.name, job.marker_diameter, job.flat_foot, job.preprocessing, job.model, settings, job.warnings,
+               job.pdf)  # fmt: skip
+    digest = hashlib.sha256(code_digest().encode())
+    for path in (job.source, job.static, job.subject_file, normative):
+        digest.update(_file_digest(path).encode())
+    digest.update(repr(options).encode())
+    return digest.hexdigest()
 
 
 @dataclass
 class BatchReport:
-    """The written report: its ``index.html`` and the index entry of every trial."""
+    """The written report: its index, the sessions and every trial's outcome."""
 
     index: Path
-    entries: list[TrialEntry]
+    sessions: list[SessionSummary]
+    outcomes: list[TrialOutcome]
+    session_pages: list[Path] = field(default_factory=list)
+
+    @property
+    def entries(self) -> list[TrialEntry]:
+        """The index entry of every trial."""
+        return [o.entry for o in self.outcomes]
 
     @property
     def n_ok(self) -> int:
         """Trials with a page."""
-        return sum(e.ok for e in self.entries)
+        return sum(o.ok for o in self.outcomes)
 
     @property
     def n_failed(self) -> int:
         """Trials listed as failed."""
-        return len(self.entries) - self.n_ok
+        return len(self.outcomes) - self.n_ok
+
+    @property
+    def n_skipped(self) -> int:
+        """Trials reused from an earlier run (inputs and options unchanged)."""
+        return sum(o.skipped for o in self.outcomes)
 
 
-def _report_item(path: Path, analyse: Callable[[Path], MarkerErrorAnalysis], strict: bool) -> ReportItem:
-    """The analysis of one trial, or the one-line error that stopped it (re-raised when
-    ``strict``)."""
+def _page_name(path: Path) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", path.stem).strip("._-") or "trial"
+
+
+def _jobs(sessions: Sequence[Session], out_dir: Path, template: TrialJob,
+          normative: Path | None) -> tuple[list[list[TrialJob]], list[TrialOutcome]]:  # fmt: skip
+    """Per session its jobs, and the outcomes of trials failing before they start
+    (duplicate page names)."""
+    per_session, early = [], []
+    for session in sessions:
+        folder = (out_dir / session.output) if session.output else out_dir
+        names: set[str] = {"index", "session"}
+        jobs = []
+        for trial in session.trials:
+            name = _page_name(trial.path)
+            job = replace(template, source=trial.path.resolve(), out_dir=folder.resolve(), name=name,
+                          static=trial.static.resolve() if trial.static else None,
+                          subject_file=trial.subject_file.resolve() if trial.subject_file else None,
+                          warnings=trial.warnings,
+                          session=session.name if session.folder is not None else None)  # fmt: skip
+            if name.lower() in names:
+                early.append(TrialOutcome(trial.path, name, TrialEntry(trial.path, None, f"{trial.path}: its page name "
+                             f"{name}.html is taken by another trial of the session; rename the file")))  # fmt: skip
+                continue
+            names.add(name.lower())
+            jobs.append(replace(job, key=job_key(job, normative)))
+        per_session.append(jobs)
+    return per_session, early
+
+
+def _run(jobs: list[TrialJob], workers: int, scheduler: str | None, trials: StageProgress) -> list[TrialOutcome]:
+    """Run the jobs: in this process (one worker, or a single trial: its analysis then uses
+    the settings' workers), else one trial per worker with a serial analysis inside."""
+    trials.stage("trials", len(jobs))
+    if not jobs:
+        return []
+    if scheduler is None and (workers == 1 or len(jobs) == 1):
+        outcomes = []
+        for done, job in enumerate(jobs, 1):
+            outcomes.append(run_trial_job(job))
+            trials.update(done, len(jobs))
+        return outcomes
+    serial = [replace(j, settings=None if j.settings is None else replace(j.settings, workers=1)) for j in jobs]
+    with Evaluator(workers=workers, scheduler=scheduler) as evaluator:
+        return evaluator.map(run_trial_job, serial, progress=lambda done, total: trials.update(done, total))
+
+
+def _stacked_cycles(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str, np.ndarray]:
+    """Every gait cycle of the session's trials per component, from their ``data.npz``."""
+    stacks: dict[str, list[np.ndarray]] = {}
+    for outcome in outcomes:
+        if not outcome.ok:
+            continue
+        with np.load(folder / f"{outcome.name}_files" / "data.npz") as data:
+            for key in data.files:
+                if key.startswith("cycles/"):
+                    stacks.setdefault(key.removeprefix("cycles/"), []).append(np.asarray(data[key]))
+    width = {k: max(a.shape[1] for a in v) for k, v in stacks.items()}
+    return {k: np.vstack([a for a in v if a.shape[1] == width[k]]) for k, v in stacks.items()}
+
+
+def _facts(session: Session) -> list[tuple[str, str]]:
+    statics = "; ".join(f"{s.path.name} (found by {s.rule}: {s.detail})" for s in session.statics) or "none found"
+    used = sorted({t.static.name for t in session.trials if t.static is not None})
+    subjects = sorted({t.subject_file.name for t in session.trials if t.subject_file is not None})
+    facts = [("Static trial", statics if session.folder is not None else (", ".join(used) or "none (--static)")),
+             ("Subject file", ", ".join(subjects) or "none: the trials' PROCESSING groups")]  # fmt: skip
+    facts.append(("Folder", str(session.folder) if session.folder is not None else "files given directly"))
+    names = sorted({t.subject for t in session.trials if t.subject})
+    if names:
+        facts.append(("Subject (C3D)", ", ".join(names)))
+    return facts
+
+
+def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: Path, flat: bool,
+                   index_href: str | None, pdf: bool) -> tuple[SessionSummary, Path]:  # fmt: skip
+    """The session's summary page (atomic: figure folder, then page)."""
+    folder = (out_dir / session.output) if session.output else out_dir
+    folder.mkdir(parents=True, exist_ok=True)
+    page_name = "session.html" if flat else "index.html"
+    href_prefix = f"{session.output}/" if session.output else ""
+    trials = [SummaryTrial(o.source.name, f"{o.name}.html" if o.ok else None, o.entry.error, dict(o.entry.cycles),
+                           o.warnings, o.seconds, o.skipped, f"{o.name}.pdf" if pdf and o.ok else None)
+              for o in outcomes]  # fmt: skip
+    summary = SessionSummary(session.name, str(session.folder or "files given directly"), href_prefix + page_name,
+                             _facts(session), trials, list(session.notes),
+                             (page_name.removesuffix(".html") + ".pdf") if pdf else None)  # fmt: skip
+    staging = Path(tempfile.mkdtemp(prefix=".session.", suffix=".tmp", dir=folder))
     try:
-        return ReportItem(path, analyse(path), None)
-    except FuzzyGaitError as exc:
-        if strict:
-            raise
-        return ReportItem(path, None, str(exc))
-    except Exception as exc:  # a bug: listed as failed, the batch goes on
-        if strict:
-            raise
-        return ReportItem(path, None, f"internal error {type(exc).__name__}: {exc} "
-                          "(rerun with --debug and report it)")  # fmt: skip
+        figures = staging / "session_files"
+        figures.mkdir()
+        title = f"Session {session.name}: joint angles, mean ± SD over all gait cycles"
+        drawn = plot_session_cycles(_stacked_cycles(outcomes, folder), figures / "cycles", title)
+        html = session_page(summary, "session_files/cycles" if drawn else None, index_href)
+        (staging / page_name).write_text(html, encoding="utf-8")
+        if pdf:
+            from fuzzygait.workflows.pdf import html_to_pdf
+
+            html_to_pdf(staging / page_name, staging / page_name.replace(".html", ".pdf"))
+        for path in sorted(staging.iterdir(), key=lambda p: p.suffix == ".html"):  # the page last
+            target = folder / path.name
+            if target.is_dir():
+                shutil.rmtree(target)
+            os.replace(path, target)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return summary, folder / page_name
 
 
 def write_batch_report(
@@ -91,46 +245,96 @@ def write_batch_report(
     flat_foot: bool = False,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
+    uncertainty: str = "full",
     model: str = "auto",
+    pdf: bool = False,
+    workers: int = 1,
+    scheduler: str | None = None,
+    force: bool = False,
+    normative: Path | None = None,
     strict: bool = False,
     trials: StageProgress = SILENT,
-    components: StageProgress = SILENT,
     on_failure: Callable[[Path, str], None] | None = None,
 ) -> BatchReport:
-    """Analyse every trial of ``inputs`` (see :func:`report_inputs`) and write the report
-    into ``out_dir`` (:class:`~fuzzygait.viz.report.ReportWriter`: nothing changes there
-    when writing fails).
+    """Find the sessions of ``inputs``, report every trial and write the session pages
+    and the index into ``out_dir`` (see the module docstring).
 
     Args:
-        inputs: C3D files and folders.
+        inputs: session folders (or folders of session folders) and C3D files.
         out_dir: the report folder.
-        static, subject_file, marker_diameter, flat_foot, preprocessing: as for
+        static, subject_file: for the files given directly; in session folders they
+            override what was found.
+        marker_diameter, flat_foot, preprocessing, model: as for
             :func:`~fuzzygait.workflows.angles.run_angles`, the same for every trial.
-        settings: the marker-error analysis.
-        model: the model version of the angles and of their marker-error model, or
-            ``"auto"`` (per trial, as :func:`~fuzzygait.workflows.angles.run_angles`).
+        settings: the marker-error analysis of ``uncertainty="full"`` (``"fast"`` keeps
+            its error model, sources and method; ``"none"``: angles only —
+            :func:`~fuzzygait.workflows.trial_job.mode_settings`).
+        pdf: also a PDF of every trial page and session page.
+        workers: processes for the trials (a local Dask pool; 1: in this process).
+        scheduler: address of a running Dask scheduler (``tcp://host:8786``) instead.
+        force: recompute trials whose inputs and options are unchanged.
+        normative: reference curves for the pages (a normative CSV).
         strict: re-raise a trial's error instead of listing it as failed (debugging).
-        trials: progress over the trials; ``components``: over the stages of a trial's
-            analysis (:func:`~fuzzygait.workflows.marker_uncertainty.analyse_run`: fuzzy
-            angles, allowable marker error, per-source bands), named after the trial.
+        trials: progress over the trials computed.
         on_failure: called as ``on_failure(path, error)`` for every failed trial.
     """
-    paths = report_inputs(inputs, static)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise FuzzyGaitError(f"{out}: --out must be a folder, not a file")
+    sessions = find_sessions(inputs, static, subject_file)
+    extra: dict[str, Any] = {}
+    if normative is not None:
+        from fuzzygait.gait.normative import read_normative
 
-    def analyse(path: Path) -> MarkerErrorAnalysis:
-        run = run_angles(path, static=static, subject_file=subject_file, marker_diameter=marker_diameter,
-                         flat_foot=flat_foot, preprocessing=preprocessing, model=model)  # fmt: skip
-        return analyse_run(run, settings, stages=Prefixed(components, f"{path.name}: "))
+        extra["normative"] = read_normative(normative)
+    template = TrialJob(Path(), Path(), "", "", marker_diameter=marker_diameter, flat_foot=flat_foot,
+                        preprocessing=preprocessing, model=model, settings=mode_settings(uncertainty, settings),
+                        pdf=pdf, strict=strict, **extra)  # fmt: skip
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise FuzzyGaitError(f"{out}: cannot create the report folder ({exc.strerror})") from None
+    per_session, early = _jobs(sessions, out, template, normative)
+    jobs = [job for session_jobs in per_session for job in session_jobs]
+    reused = {job.key: finished_outcome(job) for job in jobs} if not force else {}
+    todo = [job for job in jobs if reused.get(job.key) is None]
+    computed = dict(zip([j.key for j in todo], _run(todo, workers, scheduler, trials), strict=True))
+    by_source: dict[Path, TrialOutcome] = {o.source: o for o in early}
+    for job in jobs:
+        outcome = reused.get(job.key) or computed[job.key]
+        by_source[job.source] = outcome
+        if not outcome.ok and on_failure is not None:
+            on_failure(job.source, outcome.entry.error or "")
+    flat_only = all(s.folder is None for s in sessions)
+    summaries, pages, outcomes = [], [], []
+    for session in sessions:
+        found = [by_source.get(t.path.resolve()) or by_source[t.path] for t in session.trials]
+        outcomes += found
+        summary, page = _write_session(session, found, out, session.folder is None, None if flat_only else
+                                       ("../index.html" if session.output else "index.html"), pdf)  # fmt: skip
+        summaries.append(summary)
+        pages.append(page)
+    index = out / "index.html"
+    if flat_only:
+        alphas = [] if template.settings is None else [a for a in template.settings.alphas if a < 1]
+        html = index_page([o.entry for o in outcomes], sorted(alphas))
+    else:
+        html = cross_session_index(summaries)
+    with atomic_output(index) as tmp:
+        tmp.write_text(html, encoding="utf-8")
+    return BatchReport(index, summaries, outcomes, pages)
 
-    with ReportWriter(out_dir, strict=strict) as writer:
-        trials.stage("trials", len(paths))
-        for done, path in enumerate(paths, 1):
-            components.stage(f"{path.name}: joint angles")
-            item = _report_item(path, analyse, strict)
-            entry = writer.add(item)
-            trials.update(done)
-            del item
-            if not entry.ok and on_failure is not None:
-                on_failure(path, entry.error or "")
-        index = writer.finish()
-    return BatchReport(index, writer.entries)
+
+def load_page_data(folder: Path, name: str) -> dict[str, np.ndarray]:
+    """The numbers of a written trial page (``<name>_files/data.npz``), for checks."""
+    with np.load(folder / f"{name}_files" / "data.npz") as data:
+        return {key: np.asarray(data[key]) for key in data.files}
+
+
+def load_entry(folder: Path, name: str) -> TrialEntry:
+    """The index entry of a written trial page."""
+    with open(folder / f"{name}_files" / "entry.pkl", "rb") as handle:
+        entry = pickle.load(handle)
+    if not isinstance(entry, TrialEntry):
+        raise FuzzyGaitError(f"{folder / name}: not a report entry")
+    return entry

@@ -12,6 +12,10 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
   bands first; "undetermined" where a segment frame can flip) and which marker error
   source dominates knee flexion (each source alone, thesis Fig. 5.9),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
+* ``session/session.html`` -- the session report of the synthetic Plug-in Gait session
+  (``walking.c3d`` and ``walking_noisy.c3d`` with ``static.c3d`` and ``subject.toml``;
+  angles only, ``report --uncertainty none``): the summary over every cycle of both
+  trials, ``session/index.html`` the trial index with a page per trial,
 
 and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
 clean, not low-passed) with the richest model version its markers support
@@ -41,6 +45,7 @@ from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.sources import dominant_sentence
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
+from fuzzygait.workflows.batch_report import write_batch_report
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
 #: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
@@ -233,6 +238,11 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
                                    allowable_angles=DEMO_ALLOWABLE)  # fmt: skip
     analysis = analyse_run(run, settings)
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
+    if progress is not None:
+        progress.print("session report of both walking trials (angles only, about 6 s)...", markup=False)
+    session = write_batch_report([data / "walking.c3d", data / "walking_noisy.c3d"], out_dir / "session",
+                                 static=data / "static.c3d", subject_file=data / "subject.toml",
+                                 uncertainty="none", force=True)  # fmt: skip
 
     n_cycles = {side: int(stats[stats["angle"].str.startswith(side)]["n_cycles"].max())
                 for side in ("L", "R")}  # fmt: skip
@@ -257,9 +267,12 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     lines += [f"| {r.angle} | {r.rms_deg:.3f} | {r.max_deg:.3f} |" for r in comparison.itertuples()]
     lines += uncertainty_lines(analysis)
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
+    lines += ["", f"Session report (walking.c3d and walking_noisy.c3d, angles only): `{session.session_pages[0]}` "
+              f"(mean ± SD over all cycles of both trials), trial pages from `{session.index}`"]
     lines += ["", "Notes:"] + [f"- {note}" for note in run.notes]
     lines += cgm24_lines
     lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`, `report/index.html`, "
+              "`session/session.html`, `session/index.html`, "
               "`cgm24_angles.csv`, `cgm24_accuracy.csv`"]
     summary = "\n".join(lines) + "\n"
     (out_dir / "summary.md").write_text(summary, encoding="utf-8")

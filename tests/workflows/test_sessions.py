@@ -1,0 +1,181 @@
+"""Session discovery and the batch report's running: which static rule fired, subject
+mismatch warnings, skip-unchanged by content hash, --force, no partial files after a
+killed trial, identical page data with 1 and 2 workers."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fuzzygait.io import read_c3d, write_c3d
+from fuzzygait.workflows import trial_job
+from fuzzygait.workflows.angles import Preprocessing
+from fuzzygait.workflows.batch_report import load_page_data, write_batch_report
+from fuzzygait.workflows.session import find_sessions, static_rule
+from support import SAMPLE_DATA, SHARED_DATA, VICON, needs_shared
+
+MISMATCH = ("subject mismatch: the trial is of subject 'A22' but the subject file Test.vsk is of 'Test'; "
+            "check that the right subject file is in the session folder")  # fmt: skip
+
+
+def _window(source: Path, target: Path, start: int, n: int) -> Path:
+    """Frames ``start .. start + n`` of a trial as a new C3D file (events inside kept)."""
+    trial = read_c3d(source)
+    t0, t1 = start / trial.rate, (start + n) / trial.rate
+    events = [dataclasses.replace(e, time=e.time - t0) for e in trial.events if t0 <= e.time < t1]
+    write_c3d(dataclasses.replace(trial, markers=trial.markers[start:start + n], outputs={}, output_kinds={},
+                                  events=events), target)  # fmt: skip
+    return target
+
+
+def _session(folder: Path, frames: int) -> Path:
+    """A synthetic session folder: static, two walking trials of ``frames`` frames, a
+    subject file."""
+    folder.mkdir()
+    shutil.copy(SAMPLE_DATA / "static.c3d", folder / "cal01.c3d")
+    shutil.copy(SAMPLE_DATA / "subject.toml", folder / "Synthetic.toml")
+    _window(SAMPLE_DATA / "walking.c3d", folder / "walk01.c3d", 0, frames)
+    _window(SAMPLE_DATA / "walking.c3d", folder / "walk02.c3d", 100, frames)
+    return folder
+
+
+@pytest.fixture
+def session(tmp_path: Path) -> Path:
+    """Two walking trials with a complete gait cycle per side (140 frames)."""
+    return _session(tmp_path / "visit-1", 140)
+
+
+def test_static_rules() -> None:
+    static = read_c3d(SAMPLE_DATA / "static.c3d")
+    walking = read_c3d(SAMPLE_DATA / "walking.c3d")
+    rule = static_rule(Path("cal01.c3d"), static)
+    assert rule is not None and rule[0] == "markers" and "LKNM" in rule[1]
+    keep = [i for i, m in enumerate(static.marker_labels) if m not in ("LKNM", "RKNM", "LMED", "RMED")]
+    plain = dataclasses.replace(static, markers=static.markers[:, keep],
+                                marker_labels=[static.marker_labels[i] for i in keep])  # fmt: skip
+    assert static_rule(Path("trial07.c3d"), plain) == ("motion", "near-zero motion: pelvis range 0 mm, no gait events")
+    assert static_rule(Path("Patient Static 1.c3d"), plain) == ("file name", "its name contains 'Static'")
+    assert static_rule(Path("walk.c3d"), walking) is None
+    assert static_rule(Path("unreadable.c3d"), None) is None
+
+
+def test_synthetic_session_found(session: Path) -> None:
+    (found,) = find_sessions([session.parent])  # a folder of session folders
+    assert found.name == "visit-1" and found.output == "visit-1"
+    assert [(s.path.name, s.rule) for s in found.statics] == [("cal01.c3d", "markers")]
+    assert [t.path.name for t in found.trials] == ["walk01.c3d", "walk02.c3d"]
+    assert all(t.static == session / "cal01.c3d" and t.subject_file == session / "Synthetic.toml"
+               for t in found.trials)  # fmt: skip
+    assert all(t.warnings == () for t in found.trials)  # the TOML names no subject: no check
+
+
+def test_files_given_directly_keep_static_and_subject(session: Path) -> None:
+    (found,) = find_sessions([session / "walk01.c3d", session / "walk01.c3d"], SAMPLE_DATA / "static.c3d",
+                             SAMPLE_DATA / "subject.toml")  # fmt: skip
+    assert found.folder is None and found.output == ""
+    (trial,) = found.trials
+    assert trial.static == SAMPLE_DATA / "static.c3d" and trial.subject_file == SAMPLE_DATA / "subject.toml"
+
+
+@needs_shared
+def test_real_sessions_and_subject_mismatch() -> None:
+    vicon, pig = find_sessions([VICON, SHARED_DATA / "pig-options"])
+    assert [(s.path.name, s.rule) for s in vicon.statics] == [("Static_trial.c3d", "file name")]
+    trials = {t.path.name: t for t in vicon.trials}
+    assert sorted(trials) == ["Movement_trial.c3d", "gait-pig.c3d", "gait-raw.c3d"]
+    assert trials["Movement_trial.c3d"].warnings == ()
+    assert trials["gait-pig.c3d"].subject_file is not None and trials["gait-pig.c3d"].subject_file.name == "Test.vsk"
+    assert trials["gait-pig.c3d"].warnings[0] == MISMATCH
+    rules = {s.path.name: s.rule for s in pig.statics}
+    assert rules == {"PiGKadMed_Calibration.c3d": "markers", "PiGKad_Calibration.c3d": "markers",
+                     "PiG_Calibration-FlatFoot-Full.c3d": "file name"}  # fmt: skip
+    paired = {t.path.name: t.static.name for t in pig.trials if t.static is not None}
+    assert paired == {"PiGKadMed_Motion.c3d": "PiGKadMed_Calibration.c3d",
+                      "PiGKad_Motion.c3d": "PiGKad_Calibration.c3d",
+                      "PiG_Motion-FlatFoot-Full.c3d": "PiG_Calibration-FlatFoot-Full.c3d"}  # fmt: skip
+
+
+def _job_files(folder: Path, name: str) -> dict[str, float]:
+    return {p.name: p.stat().st_mtime_ns for p in [folder / f"{name}.html", *(folder / f"{name}_files").iterdir()]}
+
+
+@pytest.mark.slow
+def test_skip_unchanged_force_and_changed_options(session: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    first = write_batch_report([session], out, uncertainty="none")
+    assert first.n_ok == 2 and first.n_skipped == 0
+    pages = out / "visit-1"
+    assert (out / "index.html").is_file() and (pages / "index.html").is_file()
+    assert (pages / "session_files" / "cycles.png").is_file()
+    assert "visit-1" in (out / "index.html").read_text(encoding="utf-8")
+    assert "cal01.c3d (found by markers" in (pages / "index.html").read_text(encoding="utf-8")
+    before = _job_files(pages, "walk01")
+
+    again = write_batch_report([session], out, uncertainty="none")
+    assert again.n_skipped == 2 and _job_files(pages, "walk01") == before
+
+    _window(SAMPLE_DATA / "walking.c3d", session / "walk02.c3d", 101, 140)  # same name, other content
+    changed = write_batch_report([session], out, uncertainty="none")
+    assert [o.skipped for o in changed.outcomes] == [True, False]
+
+    other = write_batch_report([session], out, uncertainty="none", preprocessing=Preprocessing(cutoff=5.0))
+    assert other.n_skipped == 0
+    forced = write_batch_report([session], out, uncertainty="none", preprocessing=Preprocessing(cutoff=5.0),
+                                force=True)  # fmt: skip
+    assert forced.n_skipped == 0 and _job_files(pages, "walk01") != before
+
+
+@pytest.mark.slow
+def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    out = tmp_path / "report"
+    real = trial_job.page_data
+
+    def killed_on_second(analysis: trial_job.MarkerErrorAnalysis) -> dict[str, np.ndarray]:
+        if "walk02" in analysis.run.trial.name:
+            raise KeyboardInterrupt  # the batch is killed mid-trial
+        return real(analysis)
+
+    monkeypatch.setattr(trial_job, "page_data", killed_on_second)
+    with pytest.raises(KeyboardInterrupt):
+        write_batch_report([session], out, uncertainty="none")
+    pages = out / "visit-1"
+    assert (pages / "walk01.html").is_file() and (pages / "walk01_files" / "job.json").is_file()
+    assert not (pages / "walk02.html").exists() and not (pages / "walk02_files").exists()
+    assert not [p for p in out.rglob("*") if ".tmp" in p.name], "partial files left"
+    assert not (out / "index.html").exists()
+
+    monkeypatch.setattr(trial_job, "page_data", real)
+    resumed = write_batch_report([session], out, uncertainty="none")
+    assert [o.skipped for o in resumed.outcomes] == [True, False] and resumed.n_ok == 2
+    assert json.loads((pages / "walk02_files" / "job.json").read_text())["key"]
+
+
+def test_failing_trial_is_listed_with_one_line(session: Path, tmp_path: Path) -> None:
+    (session / "walk03.c3d").write_bytes(b"not a c3d file")
+    failures: list[str] = []
+    result = write_batch_report([session], tmp_path / "r", uncertainty="none",
+                                on_failure=lambda path, error: failures.append(error))  # fmt: skip
+    assert result.n_ok == 2 and result.n_failed == 1
+    assert len(failures) == 1 and "\n" not in failures[0] and "walk03.c3d" in failures[0]
+    assert "walk03.c3d" in (tmp_path / "r" / "visit-1" / "index.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.slow
+def test_page_data_identical_with_one_and_two_workers(tmp_path: Path) -> None:
+    """--uncertainty fast on a LocalCluster of 2 workers and in-process: the same numbers
+    (30-frame trials: the analysis is ~1 s per 10 frames)."""
+    session = _session(tmp_path / "visit-1", 30)
+    one = write_batch_report([session], tmp_path / "one", uncertainty="fast", workers=1)
+    two = write_batch_report([session], tmp_path / "two", uncertainty="fast", workers=2)
+    assert one.n_ok == two.n_ok == 2
+    for name in ("walk01", "walk02"):
+        a, b = load_page_data(tmp_path / "one" / "visit-1", name), load_page_data(tmp_path / "two" / "visit-1", name)
+        assert sorted(a) == sorted(b) and "hull" in a
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
