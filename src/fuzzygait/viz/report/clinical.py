@@ -15,7 +15,8 @@ moments stay below :data:`PER_KG_LIMIT` N·mm (no walking moment reaches 20 N·m
 in N·m and W otherwise (a file that was not mass-normalised).  The power is the output's
 Z component (Plug-in Gait's total joint power; X and Y are 0).  A cycle enters a
 kinetic curve only when the side's stored ground reaction force (``LGroundReactionForce``)
-exceeds :data:`MIN_GRF` N somewhere in it — Nexus still writes the (small, inertial)
+exceeds :data:`MIN_GRF` N at 20, 30 and 40 % of it (its own stance on a plate, not only the
+next strike) — Nexus still writes the (small, inertial)
 moments of a foot that struck no plate: Movement_trial's left cycle peaks at 209 N·mm/kg
 without any force, the right one with a plate at 959 — and the output is finite and not
 identically 0 over the cycle (files without the force output: this rule alone).
@@ -46,6 +47,8 @@ __all__ = ["ClinicalData", "KineticCurve", "grid_rows", "model_markers"]
 PER_KG_LIMIT = 20000.0
 #: Ground reaction force (N) above which a foot is on a force plate.
 MIN_GRF = 1.0
+#: Percentages of the cycle (mid-stance) at which the force must be there.
+STANCE_CHECKS = (20.0, 30.0, 40.0)
 #: Joints of the kinetics grid.
 KINETIC_JOINTS = ("Hip", "Knee", "Ankle")
 #: Samples of a normalised cycle.
@@ -92,14 +95,16 @@ class KineticCurve:
 
 def _contact(grf: np.ndarray | None, cycles: Sequence[GaitCycle]) -> np.ndarray:
     """Per cycle whether the side's stored ground reaction force (N, ``(n_frames, 3)``)
-    is non-zero somewhere in it (the foot struck a force plate); all True without one."""
+    exceeds :data:`MIN_GRF` at each of :data:`STANCE_CHECKS` % of the cycle (the foot
+    stood on a force plate during this cycle's stance, not only at the next strike); all
+    True without a stored force."""
     if grf is None:
         return np.ones(len(cycles), dtype=bool)
     magnitude = np.linalg.norm(np.nan_to_num(np.asarray(grf, dtype=float)), axis=1)
     out = np.zeros(len(cycles), dtype=bool)
     for k, cycle in enumerate(cycles):
-        span = magnitude[max(0, math.floor(cycle.start)) : math.ceil(cycle.end) + 1]
-        out[k] = bool(span.size and span.max() > MIN_GRF)
+        frames = [int(round(cycle.start + p / 100.0 * (cycle.end - cycle.start))) for p in STANCE_CHECKS]
+        out[k] = all(0 <= f < magnitude.size and magnitude[f] > MIN_GRF for f in frames)
     return out
 
 

@@ -22,11 +22,15 @@ __all__ = ["gait_profile_figure", "kinetics_figure", "plot_gait_profile", "plot_
 
 #: Columns of the kinetics grid: (kind, axis, title, meaning of positive values).
 KINETIC_COLUMNS = (
-    ("moment", "X", "Moment, sagittal", "+ extensor (Plug-in Gait sign)"),
-    ("moment", "Y", "Moment, frontal", "+ abductor"),
-    ("moment", "Z", "Moment, transverse", "+ internal rotator"),
+    ("moment", "X", "Moment, sagittal", "+ extensor"),
+    ("moment", "Y", "Moment, frontal", "Plug-in Gait sign"),
+    ("moment", "Z", "Moment, transverse", "Plug-in Gait sign"),
     ("power", "Z", "Power", "+ generated, − absorbed"),
 )
+#: The sagittal sign where a joint names it otherwise (internal moments; checked on the
+#: reference files: hip flexor moment negative in late stance, knee extensor positive in
+#: early stance, ankle plantarflexor positive at push-off).
+SAGITTAL_MEANING = {"Ankle": "+ plantarflexor"}
 
 
 def kinetics_figure(clinical: ClinicalData, title: str) -> Figure:
@@ -64,6 +68,8 @@ def kinetics_figure(clinical: ClinicalData, title: str) -> Figure:
             if not unit:
                 ax.text(0.5, 0.5, "not in the file", transform=ax.transAxes, ha="center", va="center",
                         fontsize=8, color="0.45")  # fmt: skip
+            if kind == "moment" and axis == "X":
+                meaning = SAGITTAL_MEANING.get(joint, meaning)
             ax.set_ylabel(f"{joint} ({unit or '–'})\n{meaning}", fontsize=7.5)
             if r == 0:
                 ax.set_title(column, fontsize=10.5)

@@ -179,8 +179,11 @@ def gait_profile_section(clinical: ClinicalData, figs: str) -> str:
     rows.append([("<b>GPS</b>", False), (f"<b>{deg(profile.gps['L'])}</b>", True),
                  (f"<b>{deg(profile.gps['R'])}</b>", True)])  # fmt: skip
     table = _table([("Variable", False), ("Left (deg)", True), ("Right (deg)", True)], rows)
+    overall = f"<b>{deg(profile.overall)}°</b>" if math.isfinite(profile.overall) else (
+        "<b>not available</b> (it needs every variable of both sides; a side without a gait cycle or a "
+        "missing curve leaves it out — the side scores below are what there is)")  # fmt: skip
     return (
-        head + f"<p>Overall GPS: <b>{deg(profile.overall)}°</b> against the normative data "
+        head + f"<p>Overall GPS: {overall} against the normative data "
         f"<span class=\"mono\">{_esc(profile.normative)}</span>. Each number is the typical difference (root "
         "mean square over the gait cycle, every 2 %) between the patient's mean curve and the normative mean; "
         "0 means the same curve. A side's GPS combines its nine variables; the overall GPS combines both "

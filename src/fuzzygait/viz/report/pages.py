@@ -377,7 +377,8 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
         facts.append(("Error sources", _esc(_sources_text(fuzzy))))
     key = headline_lines(entry.headline)
     if entry.gps is not None:
-        key.insert(0, f"Gait Profile Score: <b>{_fmt(entry.gps, 1)}°</b> (<a href=\"#gps\">per joint</a>)")
+        gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
+        key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
     gaps = clinical.model_gaps(run.gaps)
     filled = sum(g.filled for g in gaps)
     key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
