@@ -8,6 +8,7 @@ from fuzzygait.cli.app import app, main
 # isort: off
 from fuzzygait.cli import gait  # noqa: F401
 from fuzzygait.cli import spatiotemporal  # noqa: F401
+from fuzzygait.cli import normative  # noqa: F401
 from fuzzygait.cli import simulate  # noqa: F401
 from fuzzygait.cli import data  # noqa: F401
 
