@@ -96,7 +96,7 @@ def test_page_has_the_section_after_the_first_screen(report: Path, analysis: Fak
     assert 'src="walking_files/sources.png"' in page and 'href="#sources"' in page
     text = _text(page)
     # the clinical sections lead (kinematics grid first); the per-source section after the allowable error and ΔΦ
-    assert text.index("Kinematics over the gait cycle") < text.index("Allowable marker error (")
+    assert text.index("Kinematics over the gait cycle") < text.index("Relative envelope width ΔΦ")
     assert text.index("Relative envelope width ΔΦ") < text.index("Which error source dominates") < text.index(
         "Whole trial The same angles")  # fmt: skip
     header = ("Angle measurement system alone marker placement alone soft-tissue artefact alone "
