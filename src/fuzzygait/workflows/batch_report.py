@@ -45,6 +45,7 @@ from fuzzygait.viz.report.session import (
     SessionSummary,
     SummaryTrial,
     cross_session_index,
+    cycles_used,
     plot_session_cycles,
     session_page,
 )
@@ -218,8 +219,9 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
         figures = staging / "session_files"
         figures.mkdir()
         title = f"Session {session.name}: joint angles, mean ± SD over all gait cycles"
-        drawn = plot_session_cycles(_stacked_cycles(outcomes, folder), figures / "cycles", title)
-        html = session_page(summary, "session_files/cycles" if drawn else None, index_href)
+        cycles = _stacked_cycles(outcomes, folder)
+        drawn = plot_session_cycles(cycles, figures / "cycles", title)
+        html = session_page(summary, "session_files/cycles" if drawn else None, index_href, cycles_used(cycles))
         (staging / page_name).write_text(html, encoding="utf-8")
         if pdf:
             from fuzzygait.workflows.pdf import html_to_pdf

@@ -20,15 +20,15 @@ import pickle
 import shutil
 import tempfile
 import time
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.gait.normative import NormativeData
 from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import (
@@ -112,7 +112,7 @@ class TrialJob:
     warnings: tuple[str, ...] = ()
     pdf: bool = False
     strict: bool = False
-    normative: Any = None
+    normative: NormativeData | None = None
     session: str | None = None
 
 
@@ -149,9 +149,7 @@ def _analyse(job: TrialJob) -> MarkerErrorAnalysis:
     run = run_angles(job.source, static=job.static, subject_file=job.subject_file,
                      marker_diameter=job.marker_diameter, flat_foot=job.flat_foot,
                      preprocessing=job.preprocessing, model=job.model)  # fmt: skip
-    analysis = angles_only(run) if job.settings is None else analyse_run(run, job.settings)
-    analysis.notes[:0] = [f"warning: {w}" for w in job.warnings]
-    return analysis
+    return angles_only(run) if job.settings is None else analyse_run(run, job.settings)
 
 
 def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
@@ -200,18 +198,6 @@ def _write_json(path: Path, content: dict[str, object]) -> None:
     os.replace(tmp, path)
 
 
-def _writer_options(job: TrialJob) -> dict[str, Any]:
-    """The page writer's optional arguments this job sets."""
-    return {} if job.normative is None else {"normative": job.normative}
-
-
-def _item_options(job: TrialJob) -> dict[str, Any]:
-    """The warnings and session of the page, where the page writer takes them."""
-    known = {f.name for f in fields(ReportItem)}
-    options: dict[str, Any] = {"warnings": list(job.warnings), "session": job.session}
-    return {k: v for k, v in options.items() if k in known and v}
-
-
 def run_trial_job(job: TrialJob) -> TrialOutcome:
     """Compute and write one trial (see the module docstring); never raises for a bad
     trial (unless ``job.strict``)."""
@@ -229,8 +215,8 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
     job.out_dir.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{job.name}.", suffix=".tmp", dir=job.out_dir))
     try:
-        with ReportWriter(staging / "w", strict=job.strict, **_writer_options(job)) as writer:
-            entry = writer.add(ReportItem(job.source, analysis, **_item_options(job)))
+        with ReportWriter(staging / "w", strict=job.strict, normative=job.normative) as writer:
+            entry = writer.add(ReportItem(job.source, analysis, session=job.session, warnings=list(job.warnings)))
             writer.finish()
         if not entry.ok:
             return _failed(job, entry.error or "could not draw the report page", start)

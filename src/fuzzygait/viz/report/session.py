@@ -22,7 +22,14 @@ from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
 from fuzzygait.viz.report.markup import escape, html_table
 from fuzzygait.viz.report.pages import CSS
 
-__all__ = ["SessionSummary", "SummaryTrial", "cross_session_index", "plot_session_cycles", "session_page"]
+__all__ = [
+    "SessionSummary",
+    "SummaryTrial",
+    "cross_session_index",
+    "cycles_used",
+    "plot_session_cycles",
+    "session_page",
+]
 
 _LINES = {"L": ("-", "////"), "R": ("--", "\\\\\\\\")}
 
@@ -150,17 +157,31 @@ _TRIAL_HEADER = [("Trial", False), ("Status", False), ("Gait cycles<br>L / R", T
                  ("Errors / warnings", False)]  # fmt: skip
 
 
-def session_page(summary: SessionSummary, figure: str | None, index_href: str | None) -> str:
+def cycles_used(cycles: Mapping[str, np.ndarray]) -> dict[str, int]:
+    """Per side the most cycles with data of any of its components (what the figure
+    averages; cycles a trial excluded for missing data are not among them)."""
+    used = {side: 0 for side in SIDE_STYLE}
+    for name, values in cycles.items():
+        if name[:1] in used:
+            used[name[0]] = max(used[name[0]], int(np.isfinite(values).any(axis=1).sum()))
+    return used
+
+
+def session_page(summary: SessionSummary, figure: str | None, index_href: str | None,
+                 used: Mapping[str, int] | None = None) -> str:  # fmt: skip
     """The HTML of a session page; ``figure`` the stem of its cycle figure (relative),
-    ``index_href`` the index across sessions (None: there is none)."""
+    ``index_href`` the index across sessions (None: there is none), ``used`` the cycles
+    per side the figure averages (:func:`cycles_used`)."""
     facts = "".join(f'<tr><th scope="row">{escape(k)}</th><td>{escape(v)}</td></tr>' for k, v in summary.facts)
     nav = f'<nav><a href="{quote(index_href)}">← All sessions (index)</a></nav>' if index_href else ""
     n_cycles = {s: sum(t.cycles.get(s, 0) for t in summary.trials if t.error is None) for s in SIDE_STYLE}
+    used = dict(used) if used is not None else n_cycles
     if figure:
         fig = (f'<figure><a href="{quote(figure)}.svg"><img src="{quote(figure)}.png" width="1100" height="1260" '
                f'alt="Joint angles of the session, mean and SD per side"></a><figcaption>Joint angles over the gait '
-               f"cycle, mean ± SD over all {n_cycles['L']} left and {n_cycles['R']} right cycles of the session's "
-               "trials (left: solid line, right: dashed). The SD is the stride-to-stride variability, not a "
+               f"cycle, mean ± SD over the {used['L']} left and {used['R']} right cycles with data of the session's "
+               f"trials (of {n_cycles['L']} and {n_cycles['R']}: a trial page says which cycles it left out for "
+               "missing data); left: solid line, right: dashed. The SD is the stride-to-stride variability, not a "
                "measurement uncertainty.</figcaption></figure>")  # fmt: skip
     else:
         fig = "<p>No gait cycles to summarise (no trial with a page has complete cycles).</p>"
