@@ -22,9 +22,8 @@ def test_middle_component_per_joint() -> None:
 
 def test_first_and_third_components_are_undetermined_near_the_singularity() -> None:
     """Frames 0-3 at two α-levels (0, 1): the middle band reaches 70°, 76°, −80°, NaN at
-    α = 0; the first and third components are flagged where it passes 90° − 15° only,
-    never at α = 1; the middle component is never flagged, its band closed at ±90°
-    there (the asin's range: a sound bound)."""
+    α = 0; every component is flagged where it passes 90° − 15° only, never at α = 1,
+    and the middle band is closed at ±90° there (the asin's range: a sound bound)."""
     middle = np.full((2, 2, 4), 0.0)
     middle[0, 0] = [-10.0, -20.0, -80.0, np.nan]
     middle[0, 1] = [70.0, 76.0, 5.0, np.nan]
@@ -36,20 +35,21 @@ def test_first_and_third_components_are_undetermined_near_the_singularity() -> N
     expected = np.array([[False, True, True, False], [False, False, False, False]])
     np.testing.assert_array_equal(flags["LFootProgressAngles_X"], expected)
     np.testing.assert_array_equal(flags["LFootProgressAngles_Y"], expected)
-    assert not flags["LFootProgressAngles_Z"].any()
+    np.testing.assert_array_equal(flags["LFootProgressAngles_Z"], expected)
     np.testing.assert_array_equal(middle[0, 1], [70.0, 90.0, 5.0, np.nan])
     np.testing.assert_array_equal(middle[0, 0], [-10.0, -20.0, -90.0, np.nan])
     np.testing.assert_array_equal(middle[1, 1], [60.0, 80.0, -77.0, np.nan])  # measured: untouched
     assert 90.0 - GIMBAL_MARGIN_DEG == 75.0
 
 
-def test_incomplete_angles_only_close_the_middle_band() -> None:
+def test_incomplete_angles_flag_what_is_there() -> None:
     middle = np.full((2, 2, 1), 89.0)
     middle[1] = 10.0
     hulls = {"LKneeAngles_X": np.zeros((2, 2, 1)), "LKneeAngles_Y": middle}
     flags = {c: np.zeros((2, 1), dtype=bool) for c in hulls}
     gimbal_undetermined(hulls, flags, measured_index=1)
-    assert flags["LKneeAngles_X"][0, 0] and not flags["LKneeAngles_Y"].any()
+    assert flags["LKneeAngles_X"][0, 0] and flags["LKneeAngles_Y"][0, 0]
+    assert not flags["LKneeAngles_X"][1, 0] and not flags["LKneeAngles_Y"][1, 0]
     assert middle[0, 1, 0] == 90.0
     hulls = {"LKneeAngles_X": np.full((2, 2, 1), 80.0)}  # no middle component: nothing to go by
     flags = {"LKneeAngles_X": np.zeros((2, 1), dtype=bool)}

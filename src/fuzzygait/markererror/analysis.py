@@ -20,8 +20,8 @@ a ``component`` dimension, on the trial's frames:
 * ``undetermined (component, alpha, frame)``: True where the band is not a band — a
   bound more than 90° from the measured angle on its continuous branch (the segment frame
   can flip inside the ball, :func:`~fuzzygait.markererror.angle_model.undetermined`), or,
-  for an angle's first and third Cardan components, its middle component's band within
-  15° of ±90° (the Cardan singularity; the middle band is closed at ±90° there,
+  for every component of an angle, its middle Cardan component's band within 15° of ±90°
+  (the Cardan singularity; the middle band is closed at ±90° there,
   :func:`~fuzzygait.markererror.angle_model.gimbal_undetermined`);
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
 * attributes: ``trial``, ``model`` (the model version), ``sources``, ``method``,

@@ -235,12 +235,15 @@ def undetermined(lower: np.ndarray, upper: np.ndarray, measured: np.ndarray) -> 
 
 
 #: Margin (degrees) from the Cardan singularity: where the band of an angle's middle
-#: Cardan component (the ``asin`` one, within ±90°) comes this close to ±90°, its first
-#: and third components are *undetermined* at that α-level and frame.  At the singularity
-#: only their sum or difference is defined — each alone can take any value inside the
-#: ball — and close to it they turn so fast that the extremes sit in slivers of the ball
-#: the local optimiser does not reliably find (benchmarks/RESULTS.md, "Soundness": every
-#: missed extreme of the real CGM 2.4 session had its middle angle at 75.7-89°).
+#: Cardan component (the ``asin`` one, within ±90°) comes this close to ±90°, the segment
+#: frame passes (near) the singularity inside the ball and all three components are
+#: *undetermined* at that α-level and frame.  At the singularity only the sum or difference
+#: of the first and third is defined — each alone can take any value inside the ball — and
+#: close to it they turn so fast that their extremes sit in slivers of the ball the local
+#: optimiser does not reliably find (benchmarks/RESULTS.md, "Soundness": every missed
+#: extreme of the real CGM 2.4 session had its middle angle at 75.7-89.5°); the middle
+#: component's far bound is then short too (SLSQP from the Graph Follower's extremisers
+#: widened 861 of 1,148 such forefoot bounds, by up to 19.5°).
 GIMBAL_MARGIN_DEG = 15.0
 
 
@@ -262,11 +265,10 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
     """The Cardan-singularity rule, in place, for every angle whose middle component is in
     ``hulls`` (``{"LKneeAngles_Y": (alpha, bound, frame)}``, degrees) and ``flags``
     (``(alpha, frame)`` bool): where the middle component's band comes within
-    :data:`GIMBAL_MARGIN_DEG` of ±90° (:func:`near_gimbal_lock`), the first and third
-    components are marked undetermined and the middle band is closed at ±90° — the
-    ``asin`` cannot pass it, and the first-order search stalls at the cap's kink short of
-    the true extreme, so ±90° is the sound bound there.  The α-level ``measured_index``
-    (α = 1, the measured angle) is left as it is."""
+    :data:`GIMBAL_MARGIN_DEG` of ±90° (:func:`near_gimbal_lock`), every component of the
+    angle present in ``flags`` is marked undetermined, and the middle band is closed at
+    ±90° there (the ``asin`` cannot pass it: the stored bound is a sound one).  The α-level
+    ``measured_index`` (α = 1, the measured angle) is left as it is."""
     for name in dict.fromkeys(column.rsplit("_", 1)[0] for column in hulls):
         columns = [f"{name}_{a}" for a in AXES]
         middle = middle_component(name)
@@ -281,8 +283,8 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
         upper[measured_index] = lower[measured_index] = False
         band[:, 1][upper] = 90.0
         band[:, 0][lower] = -90.0
-        for i, column in enumerate(columns):
-            if i != middle and column in flags:
+        for column in columns:
+            if column in flags:
                 flags[column] = flags[column] | lock
 
 
