@@ -113,6 +113,12 @@ def test_demo_writes_results(tmp_path: Path) -> None:
     assert "ΔΦ" in summary
     index = (out / "report" / "index.html").read_text()
     assert "walking_noisy" in index and "OK" in index
+    # the session report of the synthetic session: both walking trials, their summary
+    session = (out / "session" / "session.html").read_text(encoding="utf-8")
+    assert "walking.c3d" in session and "walking_noisy.c3d" in session and 'src="session_files/cycles.png"' in session
+    assert (out / "session" / "session_files" / "cycles.png").is_file()
+    assert (out / "session" / "walking.html").is_file() and (out / "session" / "walking_noisy.html").is_file()
+    assert "Session report (walking.c3d and walking_noisy.c3d, angles only)" in summary
 
 
 @pytest.mark.slow
