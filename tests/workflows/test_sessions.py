@@ -156,6 +156,7 @@ def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: 
     assert json.loads((pages / "walk02_files" / "job.json").read_text())["key"]
 
 
+@pytest.mark.slow
 def test_failing_trial_is_listed_with_one_line(session: Path, tmp_path: Path) -> None:
     (session / "walk03.c3d").write_bytes(b"not a c3d file")
     failures: list[str] = []
@@ -179,3 +180,25 @@ def test_page_data_identical_with_one_and_two_workers(tmp_path: Path) -> None:
         assert sorted(a) == sorted(b) and "hull" in a
         for key in a:
             np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+@pytest.mark.slow
+def test_pycgm2_subject_file_of_another_subject_warns(tmp_path: Path) -> None:
+    """A session whose only subject file is a pyCGM2 .mp of "Patient02": used, with the
+    mismatch warning; one named after the trial's subject is preferred."""
+    folder = _session(tmp_path / "visit", 30)
+    (folder / "Synthetic.toml").unlink()
+    mp = ("MandatoryParameters:\n  Bodymass: 72\n  LeftLegLength: 900\n  RightLegLength: 900\n  LeftKneeWidth: 105\n"
+          "  RightKneeWidth: 105\n  LeftAnkleWidth: 70\n  RightAnkleWidth: 70\n")  # fmt: skip
+    (folder / "Patient02.mp").write_text(mp, encoding="utf-8")
+    (found,) = find_sessions([folder])
+    trial = found.trials[0]
+    assert trial.subject == "Synthetic" and trial.subject_file == folder / "Patient02.mp"
+    assert trial.warnings == ("subject mismatch: the trial is of subject 'Synthetic' but the subject file Patient02.mp "
+                              "is of 'Patient02'; check that the right subject file is in the session folder",)  # fmt: skip
+    assert found.warnings[0].startswith("walk01.c3d: subject mismatch")
+    (folder / "Synthetic.mp").write_text(mp, encoding="utf-8")
+    (found,) = find_sessions([folder])
+    assert all(t.subject_file == folder / "Synthetic.mp" and t.warnings == () for t in found.trials)
+    result = write_batch_report([folder], tmp_path / "r", uncertainty="none")  # the .mp is read
+    assert result.n_ok == 2
