@@ -58,3 +58,12 @@ def test_pdf_of_trial_and_session_pages(tmp_path: Path) -> None:
     for pdf in (out / "visit" / "walking.pdf", out / "visit" / "index.pdf"):
         assert pdf.read_bytes()[:5] == b"%PDF-" and pdf.stat().st_size > 10_000, pdf
     assert not [p for p in out.rglob("*") if p.name.startswith(".")], "temporary files left"
+
+
+@pytest.mark.slow
+def test_unreachable_scheduler_is_one_line_and_leaves_no_folder(tmp_path: Path) -> None:
+    out = tmp_path / "r"
+    result = run("report", SAMPLE_DATA / "walking.c3d", "--static", SAMPLE_DATA / "static.c3d", "--out", out,
+                 "--uncertainty", "none", "--scheduler", "tcp://127.0.0.1:1")  # fmt: skip
+    assert_one_line_error(result, "cannot reach the Dask scheduler at 'tcp://127.0.0.1:1'")
+    assert not out.exists()

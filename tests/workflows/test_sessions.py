@@ -150,8 +150,11 @@ def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: 
     assert not [p for p in out.rglob("*") if ".tmp" in p.name], "partial files left"
     assert not (out / "index.html").exists()
 
+    stale = pages / ".walk02.abc123.tmp"  # what a worker killed mid-trial leaves (no finally runs there)
+    (stale / "w").mkdir(parents=True)
     monkeypatch.setattr(trial_job, "page_data", real)
     resumed = write_batch_report([session], out, uncertainty="none")
+    assert not stale.exists()
     assert [o.skipped for o in resumed.outcomes] == [True, False] and resumed.n_ok == 2
     assert json.loads((pages / "walk02_files" / "job.json").read_text())["key"]
 

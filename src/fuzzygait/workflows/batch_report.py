@@ -55,7 +55,7 @@ from fuzzygait.workflows.progress import SILENT, StageProgress
 from fuzzygait.workflows.session import Session, find_sessions
 from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, mode_settings, run_trial_job
 
-__all__ = ["BatchReport", "job_key", "write_batch_report"]
+__all__ = ["BatchReport", "job_key", "remove_stale_staging", "write_batch_report"]
 
 _CODE_DIGEST: str | None = None
 
@@ -125,6 +125,25 @@ class BatchReport:
     def n_skipped(self) -> int:
         """Trials reused from an earlier run (inputs and options unchanged)."""
         return sum(o.skipped for o in self.outcomes)
+
+
+def remove_stale_staging(folder: Path) -> list[str]:
+    """Remove what a killed earlier batch left in a report folder: its hidden staging
+    folders and temporary files (``.<name>.*.tmp``, ``.*.tmp-<pid>``, the PDF printer's
+    ``.<name>.print.html`` / ``.<name>.chromium``).  One batch per report folder at a
+    time: a concurrent batch's staging would be removed too."""
+    removed: list[str] = []
+    if not folder.is_dir():
+        return removed
+    for path in folder.iterdir():
+        name = path.name
+        if name.startswith(".") and (".tmp" in name or name.endswith((".print.html", ".chromium"))):
+            if path.is_dir():
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
+            removed.append(name)
+    return removed
 
 
 def _page_name(path: Path) -> str:
@@ -292,15 +311,23 @@ def write_batch_report(
     template = TrialJob(Path(), Path(), "", "", marker_diameter=marker_diameter, flat_foot=flat_foot,
                         preprocessing=preprocessing, model=model, settings=mode_settings(uncertainty, settings),
                         pdf=pdf, strict=strict, **extra)  # fmt: skip
+    created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise FuzzyGaitError(f"{out}: cannot create the report folder ({exc.strerror})") from None
+    for session in sessions:
+        remove_stale_staging((out / session.output) if session.output else out)
     per_session, early = _jobs(sessions, out, template, normative)
     jobs = [job for session_jobs in per_session for job in session_jobs]
     reused = {job.key: finished_outcome(job) for job in jobs} if not force else {}
     todo = [job for job in jobs if reused.get(job.key) is None]
-    computed = dict(zip([j.key for j in todo], _run(todo, workers, scheduler, trials), strict=True))
+    try:
+        computed = dict(zip([j.key for j in todo], _run(todo, workers, scheduler, trials), strict=True))
+    except BaseException:
+        if created and not any(out.iterdir()):
+            out.rmdir()  # e.g. an unreachable scheduler: no empty report folder left behind
+        raise
     by_source: dict[Path, TrialOutcome] = {o.source: o for o in early}
     for job in jobs:
         outcome = reused.get(job.key) or computed[job.key]
