@@ -110,3 +110,48 @@ def sparse_knee_analysis(angles_run: Any, n_frames: int = 6) -> Any:
     markers[frames] = trial.markers[frames]
     sparse = dataclasses.replace(angles_run, trial=trial.with_markers(markers))
     return analyse_run(sparse, MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1))
+
+
+class TwoMarkerLine:
+    """Analytic marker-error model: the direction of the line from marker A(t) to B(t) in
+    the x-y plane (``atan2`` of ``B + p_B − A − p_A``), the deviations of A and B (mm) its 6
+    parameters. With balls of radius r the line turns by at most arcsin(2r/d(t)) either
+    way (the inner common tangent of the two circles).
+
+    Args:
+        n: time nodes on [0, 1] s.
+        distance: ``(mean, amplitude)`` of d(t) = mean + amplitude·sin(2πt), mm.
+        turn: ``(amplitude, frequency)`` of the direction amplitude·sin(frequency·πt), rad.
+        offsets: A(t)'s x, y (as cos(3t)), z slopes, mm.
+        degrees: the output in degrees (else rad).
+        names: the two markers' names.
+    """
+
+    capabilities = frozenset({"nodes"})
+
+    def __init__(self, n: int = 60, distance: tuple[float, float] = (200.0, 100.0),
+                 turn: tuple[float, float] = (0.6, 2.6), offsets: tuple[float, float, float] = (50.0, 20.0, 5.0),
+                 degrees: bool = False, names: tuple[str, str] = ("A", "B")) -> None:  # fmt: skip
+        from fuzzygait.uncertainty import Output
+
+        t = np.linspace(0.0, 1.0, n)
+        self.times = t
+        self.distance = distance[0] + distance[1] * np.sin(2 * np.pi * t)
+        direction = turn[0] * np.sin(turn[1] * np.pi * t)
+        self.a = np.stack([offsets[0] * t, offsets[1] * np.cos(3 * t), offsets[2] * t], axis=1)
+        self.b = self.a + self.distance[:, None] * np.stack([np.cos(direction), np.sin(direction), 0 * t], axis=1)
+        self.degrees = degrees
+        self.parameter_names = tuple(f"{m}_{c}" for m in names for c in "xyz")
+        self.output = Output("direction", "deg" if degrees else "rad")
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        P = np.asarray(P, dtype=float).reshape(len(nodes), 2, 3)
+        v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
+        angle = np.arctan2(v[:, 1], v[:, 0])
+        return np.degrees(angle) if self.degrees else angle
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Any:
+        from fuzzygait.uncertainty import Evaluation
+
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))

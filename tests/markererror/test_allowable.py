@@ -30,8 +30,9 @@ from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject
 from fuzzygait.markererror.comparison import monte_carlo_envelope
 from fuzzygait.markererror.result import component_hull
 from fuzzygait.markererror.sources import ErrorModel
-from fuzzygait.uncertainty import BatchedDirect, Evaluation, FuzzyBalls, Output, graph_follower
+from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.workflows.angles import AnglesRun
+from support import TwoMarkerLine
 
 N_FRAMES = 6
 TOLERANCE = 2.5
@@ -85,37 +86,11 @@ def test_search_edge_cases() -> None:
 
 
 # ---------------------------------------------------------------------------- analytic case
-class TwoMarkerLine:
-    """Direction (deg) of the line A(t) → B(t) in the x-y plane, the deviations of A and B
-    (mm) the 6 parameters; the distance d(t) runs through 100..300 mm."""
-
-    parameter_names = ("A_x", "A_y", "A_z", "B_x", "B_y", "B_z")
-    output = Output("direction", "deg")
-    capabilities = frozenset({"nodes"})
-
-    def __init__(self, n: int = 41) -> None:
-        t = np.linspace(0.0, 1.0, n)
-        self.times = t
-        self.distance = 200.0 + 100.0 * np.sin(2 * np.pi * t)
-        direction = 0.6 * np.sin(2.6 * np.pi * t)
-        self.a = np.stack([50.0 * t, 20.0 * np.cos(3 * t), 5.0 * t], axis=1)
-        self.b = self.a + self.distance[:, None] * np.stack([np.cos(direction), np.sin(direction), 0 * t], axis=1)
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        P = np.asarray(P, dtype=float).reshape(len(nodes), 2, 3)
-        v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
-        return np.degrees(np.arctan2(v[:, 1], v[:, 0]))
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
-
-
 def test_two_markers_allowable_radius_is_d_sin_tau_over_2() -> None:
     """Balls of radius s·r around two markers at distance d turn the line by at most
     arcsin(2sr/d): within τ over the trial while s·r <= d_min·sin(τ)/2. The search on
     Graph Follower hulls brackets exactly that radius (the hulls are exact to 1e-6)."""
-    model, r = TwoMarkerLine(), 30.0
+    model, r = TwoMarkerLine(n=41, degrees=True), 30.0
     deterministic = model.evaluate(np.zeros(6)).values
     balls = FuzzyBalls(np.zeros((2, 3)), [r, r], ("A", "B"))
 

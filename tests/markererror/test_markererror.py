@@ -34,7 +34,8 @@ from fuzzygait.markererror.result import (
     component_hull,
     fuzzy_angles_dataset,
 )
-from fuzzygait.uncertainty import BatchedDirect, Evaluation, FuzzyBalls, Output, graph_follower
+from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
+from support import TwoMarkerLine
 
 JOINTS = ("Hip", "Knee", "Ankle")
 N_FRAMES = 8
@@ -97,32 +98,6 @@ def test_hulls_contain_monte_carlo(angles_run: AnglesRun, frames: np.ndarray, si
 
 
 # ---------------------------------------------------------------------------- analytic case
-class TwoMarkerLine:
-    """The direction (rad) of the line from A(t) to B(t) in the x-y plane: ``atan2`` of
-    ``B + p_B − A − p_A``; 6 parameters (deviations of A and B, mm)."""
-
-    parameter_names = ("A_x", "A_y", "A_z", "B_x", "B_y", "B_z")
-    output = Output("direction", "rad")
-    capabilities = frozenset({"nodes"})
-
-    def __init__(self, n: int = 60) -> None:
-        t = np.linspace(0.0, 1.0, n)
-        self.times = t
-        self.distance = 200.0 + 100.0 * np.sin(2 * np.pi * t)  # mm, 100..300
-        direction = 0.6 * np.sin(2.6 * np.pi * t)  # rad, far from the ±π cut
-        self.a = np.stack([50.0 * t, 20.0 * np.cos(3 * t), 5.0 * t], axis=1)
-        self.b = self.a + self.distance[:, None] * np.stack([np.cos(direction), np.sin(direction), 0 * t], axis=1)
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        P = np.asarray(P, dtype=float).reshape(len(nodes), 2, 3)
-        v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
-        return np.arctan2(v[:, 1], v[:, 0])
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
-
-
 def test_two_marker_angle_worst_case_is_arcsin() -> None:
     """Balls of radius r around two markers at distance d: the line turns by at most
     arcsin(2r/d) either way (the inner common tangent of the two circles); at level α

@@ -35,9 +35,10 @@ from fuzzygait.markererror.per_source import (
 )
 from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, ErrorModel
-from fuzzygait.uncertainty import BatchedDirect, Evaluation, FuzzyBalls, Output, graph_follower
+from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.storage import load_result, save_result
 from fuzzygait.workflows.angles import AnglesRun
+from support import TwoMarkerLine
 
 N_FRAMES = 6
 ALPHAS = (0.0, 0.5)
@@ -77,37 +78,11 @@ def _valid(fuzzy: xr.Dataset) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------- analytic
-class TwoMarkerLine:
-    """The direction (deg) of the line from A(t) = LTHI to B(t) = LKNE in the x-y plane;
-    6 parameters (deviations of the two markers, mm)."""
-
-    parameter_names = ("LTHI_x", "LTHI_y", "LTHI_z", "LKNE_x", "LKNE_y", "LKNE_z")
-    output = Output("direction", "deg")
-    capabilities = frozenset({"nodes"})
-
-    def __init__(self, n: int = 24) -> None:
-        t = np.linspace(0.0, 1.0, n)
-        self.times = t
-        self.distance = 250.0 + 100.0 * np.sin(2 * np.pi * t)  # mm
-        direction = 0.5 * np.sin(2.3 * np.pi * t)
-        self.a = np.stack([40.0 * t, 10.0 * np.cos(3 * t), 3.0 * t], axis=1)
-        self.b = self.a + self.distance[:, None] * np.stack([np.cos(direction), np.sin(direction), 0 * t], axis=1)
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        P = np.asarray(P, dtype=float).reshape(len(nodes), 2, 3)
-        v = (self.b[nodes] + P[:, 1]) - (self.a[nodes] + P[:, 0])
-        return np.degrees(np.arctan2(v[:, 1], v[:, 0]))
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
-
-
 def test_two_markers_per_source_give_arcsin_2r_over_d() -> None:
     """Two thigh markers (Table 3.1 thigh: measurement 2, placement 10, STA 20, all 32 mm)
     at distance d: the band of each source alone is 2·arcsin(2r/d) wide, widest where d is
     smallest; the table reads it to 1e-6 rad, nested, and names the soft-tissue artefact."""
-    model, markers = TwoMarkerLine(), ("LTHI", "LKNE")
+    model, markers = TwoMarkerLine(n=24, distance=(250.0, 100.0), turn=(0.5, 2.3), offsets=(40.0, 10.0, 3.0), degrees=True, names=("LTHI", "LKNE")), ("LTHI", "LKNE")
     levels = np.array([0.0, 1.0])
 
     def hull(radius: float) -> np.ndarray:

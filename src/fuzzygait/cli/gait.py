@@ -109,7 +109,8 @@ def preprocess(
             raise FuzzyGaitError(f"{out_file}: --out must name a .c3d file")
         if fill_method not in METHODS:
             raise FuzzyGaitError(f"--fill-method must be one of {', '.join(METHODS)}; got {fill_method!r}")
-        options = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter, fill_method=fill_method)
+        options = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter, fill_method=fill_method,
+                                labelled_only=False)  # fmt: skip
         trial, gaps = preprocess_file(input_file, out_file, options)
     n_filled = sum(g.filled for g in gaps)
     by_method = methods_used(gaps)

@@ -54,18 +54,21 @@ class Preprocessing:
     (``"auto"``, ``"spline"`` or ``"pattern"``, see :func:`fuzzygait.mocap.gaps.fill_gaps`),
     then a zero-lag Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False.
 
-    Unlabelled trajectories (Vicon's ``*127``, :func:`fuzzygait.mocap.gaps.is_unlabelled`)
-    are neither filled nor filtered nor reported: no model reads them, and their many
-    short fragments only filled the gap report and the filter's short-run warnings."""
+    With ``labelled_only`` (the default of the model pipelines) unlabelled trajectories
+    (Vicon's ``*127``, :func:`fuzzygait.mocap.gaps.is_unlabelled`) are neither filled nor
+    filtered nor reported: no model reads them, and their many short fragments only filled
+    the gap report and the filter's short-run warnings; ``fuzzygait preprocess`` (a file
+    in, the same file cleaned out) treats every trajectory."""
 
     max_gap: int = 10
     cutoff: float = 6.0
     filter: bool = True
     fill_method: Method = "auto"
+    labelled_only: bool = True
 
     def apply(self, trial: Trial) -> tuple[Trial, list[Gap]]:
-        """The pre-processed trial and its gap report (labelled markers only)."""
-        labelled = labelled_markers(trial.marker_labels)
+        """The pre-processed trial and its gap report."""
+        labelled = labelled_markers(trial.marker_labels) if self.labelled_only else list(trial.marker_labels)
         markers = None if len(labelled) == trial.n_markers else labelled
         filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap, method=self.fill_method, markers=markers)
         return (filter_trial(filled, cutoff=self.cutoff, markers=markers) if self.filter else filled), gaps

@@ -29,6 +29,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.gait.normative import NormativeData
+from fuzzygait.io.atomic import replace_path
 from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import (
@@ -180,14 +181,7 @@ def _move_into_place(staging: Path, job: TrialJob) -> list[str]:
     (files / "job.json").unlink(missing_ok=True)
     moved = []
     for path in sorted(staging.iterdir(), key=lambda p: (p.suffix != "", p.suffix == ".html")):
-        target = job.out_dir / path.name
-        if target.is_dir() and not target.is_symlink():
-            old = target.with_name(f".{target.name}.old-{os.getpid()}")
-            os.rename(target, old)
-            os.rename(path, target)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(path, target)
+        replace_path(path, job.out_dir / path.name)
         moved.append(path.name)
     return moved
 

@@ -19,6 +19,7 @@ import pandas as pd
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import TrialParameters
+from fuzzygait.io.atomic import replace_path
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import ReportRun, TrialAnalysis, TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.clinical import ClinicalData
@@ -216,24 +217,12 @@ class ReportWriter:
             else:
                 entries = sorted(staging.iterdir(), key=lambda p: p.name == "index.html")
                 for path in entries:  # index.html last
-                    _replace(path, self.out_dir / path.name)
+                    replace_path(path, self.out_dir / path.name)
                 staging.rmdir()
         except OSError as exc:
             raise FuzzyGaitError(f"{self.out_dir}: cannot write the report ({exc.strerror or exc})") from None
         self._staging = None
         return self.out_dir / "index.html"
-
-
-def _replace(new: Path, target: Path) -> None:
-    """Move ``new`` onto ``target`` (a file or a folder), replacing it."""
-    if target.is_dir() and not target.is_symlink():
-        old = target.with_name(f".{target.name}.old-{os.getpid()}")
-        os.rename(target, old)
-        os.rename(new, target)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(new, target)
-
 
 def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str], *,
                  normative: NormativeData | None = None) -> Path:  # fmt: skip
