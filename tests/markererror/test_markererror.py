@@ -454,3 +454,16 @@ def test_undetermined_marks_bounds_more_than_a_quarter_turn_away() -> None:
     upper = np.array([99.0, 20.0, 101.0, 260.5])
     assert UNDETERMINED_DEG == 90.0
     assert undetermined(lower, upper, measured).tolist() == [False, True, True, True]
+
+
+def test_single_components_are_analysed_alone_with_the_same_hull(angles_run: AnglesRun, sparse_trial: Trial) -> None:
+    """``angles=["LKneeAngles_X", "RHipAngles_X"]`` analyses those two components only
+    (the report's ``--uncertainty fast``), each with the hull the whole angle's run gives
+    it (the same task, the same seed)."""
+    options = FuzzyAngleOptions(alphas=(0.0, 0.5))
+    alone = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options,
+                               ["LKneeAngles_X", "RHipAngles_X"])  # fmt: skip
+    assert list(alone["component"].values) == ["LKneeAngles_X", "RHipAngles_X"]
+    whole = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options, ["LKneeAngles"])
+    np.testing.assert_array_equal(component_hull(alone, "LKneeAngles_X").to_numpy(),
+                                  component_hull(whole, "LKneeAngles_X").to_numpy())  # fmt: skip

@@ -197,7 +197,8 @@ def fuzzy_joint_angles(
         subject: the subject parameters used (static offsets included).
         result: the deterministic model output of ``trial``.
         options: α-levels, error sources, method, optimiser settings.
-        angles: angle names (default: every angle ``result`` holds, the CGM 2.4
+        angles: angle names (all three components) or single components
+            (``"LKneeAngles_X"``) (default: every angle ``result`` holds, the CGM 2.4
             forefoot's included).
         progress: called as ``progress(done, total)`` per angle component.
         evaluator: where the components are computed (default: serial, or a local pool
@@ -212,7 +213,7 @@ def fuzzy_joint_angles(
     if options.method not in METHODS:
         raise ParameterError(f"method must be one of {METHODS}; got {options.method!r}")
     sources = parse_sources(options.sources)
-    names = [n for n in (angles or ALL_ANGLE_NAMES) if n in result.angles]
+    names = [n for n in (angles or ALL_ANGLE_NAMES) if split_component(n)[0] in result.angles]
     if not names:
         raise ParameterError(f"{trial.name}: none of the requested angles could be computed")
     alphas = np.union1d(np.asarray(options.alphas, dtype=float), [1.0])
@@ -230,6 +231,17 @@ def fuzzy_joint_angles(
     return fuzzy
 
 
+def split_component(requested: str) -> tuple[str, list[int]]:
+    """``"LKneeAngles"`` -> ``("LKneeAngles", [0, 1, 2])``; ``"LKneeAngles_X"`` ->
+    ``("LKneeAngles", [0])``.  A component analysed without its angle's middle Cardan
+    component gets the 90° rule of the undetermined mask only, not the singularity rule
+    (:func:`~fuzzygait.markererror.angle_model.gimbal_undetermined` needs the middle band)."""
+    name, _, axis = requested.rpartition("_")
+    if name and axis in AXES:
+        return name, [AXES.index(axis)]
+    return requested, [0, 1, 2]
+
+
 def component_tasks(
     trial: Trial,
     subject: SubjectParameters,
@@ -238,14 +250,20 @@ def component_tasks(
     names: Sequence[str],
     clusters: ClusterCalibration | None = None,
 ) -> tuple[list[ComponentTask], list[str]]:
-    """The tasks :func:`fuzzy_joint_angles` maps (per angle in ``names``, X, Y, Z) and
+    """The tasks :func:`fuzzy_joint_angles` maps (per angle in ``names``, X, Y, Z, or the
+    single components named ``"LKneeAngles_X"``) and
     every marker they perturb, in first-use order.  ``options.alphas`` are used as given
     (ascending, 1 included)."""
     sources = parse_sources(options.sources)
     fixed = fixed_subject(trial, subject)
     tasks: list[ComponentTask] = []
     markers_all: list[str] = []
-    for name in names:
+    wanted: dict[str, list[int]] = {}
+    for requested in names:
+        name, axes = split_component(requested)
+        wanted.setdefault(name, [])
+        wanted[name] += [a for a in axes if a not in wanted[name]]
+    for name, axes in wanted.items():
         # frames where the angle is measured and the model computes it (a Plug-in Gait
         # angle needs every marker; a cluster pose three of its cluster's)
         every = np.arange(trial.n_frames)
@@ -257,7 +275,7 @@ def component_tasks(
         frames = np.flatnonzero(usable)
         radii = np.array([options.error_model.radius(m, sources) for m in model_markers])
         markers_all += [m for m in model_markers if m not in markers_all]
-        for axis in range(3):
+        for axis in sorted(axes):
             reference = result.angles[name][frames, axis]
             tasks.append(ComponentTask(trial, fixed, result.progression, name, axis, frames, model_markers, radii,
                                        options, reference, result.model, clusters))  # fmt: skip

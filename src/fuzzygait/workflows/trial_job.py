@@ -42,11 +42,11 @@ from fuzzygait.workflows.marker_uncertainty import (
 __all__ = ["UNCERTAINTY_MODES", "TrialJob", "TrialOutcome", "finished_outcome", "mode_settings", "run_trial_job"]
 
 #: ``--uncertainty``: ``none`` the angles only (seconds per trial); ``fast`` the α = 0
-#: and 0.5 bands of hip, knee and ankle angles (no allowable-error refinement, no
+#: and 0.5 bands of hip, knee and ankle flexion (no allowable-error refinement, no
 #: per-source bands); ``full`` the analysis the settings describe (by default every
 #: angle, four α-levels, the allowable marker error and the per-source bands).
 UNCERTAINTY_MODES = ("none", "fast", "full")
-FAST_ANGLES = ("LHipAngles", "RHipAngles", "LKneeAngles", "RKneeAngles", "LAnkleAngles", "RAnkleAngles")
+FAST_ANGLES = tuple(f"{side}{joint}Angles_X" for side in "LR" for joint in ("Hip", "Knee", "Ankle"))
 FAST_ALPHAS = (0.0, 0.5, 1.0)
 
 
