@@ -97,18 +97,24 @@ class FakeAnalysis:
     notes: list[str] = field(default_factory=list)
 
 
-def sparse_knee_analysis(angles_run: Any, n_frames: int = 6) -> Any:
-    """The real marker-error analysis (α = 0, 0.5, ±2.5° allowable error) of the left knee
-    on ``n_frames`` frames spread over ``angles_run``'s trial (the other frames' markers NaN)."""
+def sparse_angles_run(angles_run: Any, n_frames: int = 6) -> Any:
+    """``angles_run`` with every marker NaN outside ``n_frames`` frames spread evenly over
+    its trial: the marker-error analysis then only works on those frames (cheap tests)."""
     import dataclasses
-
-    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 
     trial = angles_run.trial
     frames = np.linspace(0, trial.n_frames - 1, n_frames).round().astype(int)
     markers = np.full_like(trial.markers, np.nan)
     markers[frames] = trial.markers[frames]
-    sparse = dataclasses.replace(angles_run, trial=trial.with_markers(markers))
+    return dataclasses.replace(angles_run, trial=trial.with_markers(markers))
+
+
+def sparse_knee_analysis(angles_run: Any, n_frames: int = 6) -> Any:
+    """The real marker-error analysis (α = 0, 0.5, ±2.5° allowable error) of the left knee
+    on ``n_frames`` frames spread over ``angles_run``'s trial (the other frames' markers NaN)."""
+    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
+
+    sparse = sparse_angles_run(angles_run, n_frames)
     return analyse_run(sparse, MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1))
 
 

@@ -13,7 +13,6 @@ Speed: the sample trial cut to 6 frames (markers NaN elsewhere), left leg, α = 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -38,7 +37,7 @@ from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, ErrorModel
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.storage import load_result, save_result
 from fuzzygait.workflows.angles import AnglesRun
-from support import TwoMarkerLine
+from support import TwoMarkerLine, sparse_angles_run
 
 N_FRAMES = 6
 ALPHAS = (0.0, 0.5)
@@ -48,11 +47,7 @@ LEFT_FLEXION = ["LHipAngles_X", "LKneeAngles_X", "LAnkleAngles_X"]
 @pytest.fixture(scope="module")
 def sparse_run(angles_run: AnglesRun) -> AnglesRun:
     """The sample run with every marker NaN outside 6 frames spread over the trial."""
-    trial = angles_run.trial
-    frames = np.linspace(0, trial.n_frames - 1, N_FRAMES).round().astype(int)
-    markers = np.full_like(trial.markers, np.nan)
-    markers[frames] = trial.markers[frames]
-    return dataclasses.replace(angles_run, trial=trial.with_markers(markers))
+    return sparse_angles_run(angles_run, N_FRAMES)
 
 
 @pytest.fixture(scope="module")

@@ -28,6 +28,7 @@ from fuzzygait.workflows.marker_uncertainty import (
     analyse_run,
     analyse_to_files,
 )
+from support import sparse_angles_run
 
 N_FRAMES = 6
 SETTINGS = MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1)
@@ -35,10 +36,8 @@ SETTINGS = MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), worke
 
 @pytest.fixture(scope="module")
 def sparse_run(angles_run: AnglesRun) -> AnglesRun:
-    frames = np.linspace(0, angles_run.trial.n_frames - 1, N_FRAMES).round().astype(int)
-    markers = np.full_like(angles_run.trial.markers, np.nan)
-    markers[frames] = angles_run.trial.markers[frames]
-    return dataclasses.replace(angles_run, trial=angles_run.trial.with_markers(markers))
+    """The sample run with every marker NaN outside 6 frames spread over the trial."""
+    return sparse_angles_run(angles_run, N_FRAMES)
 
 
 @pytest.fixture(scope="module")

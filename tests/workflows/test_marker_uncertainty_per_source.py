@@ -21,6 +21,7 @@ from fuzzygait.workflows import marker_uncertainty
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run, analyse_to_files
 from fuzzygait.workflows.progress import Prefixed
+from support import sparse_angles_run
 
 N_FRAMES = 6
 SETTINGS = MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1)
@@ -28,10 +29,8 @@ SETTINGS = MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), worke
 
 @pytest.fixture(scope="module")
 def sparse_run(angles_run: AnglesRun) -> AnglesRun:
-    frames = np.linspace(0, angles_run.trial.n_frames - 1, N_FRAMES).round().astype(int)
-    markers = np.full_like(angles_run.trial.markers, np.nan)
-    markers[frames] = angles_run.trial.markers[frames]
-    return dataclasses.replace(angles_run, trial=angles_run.trial.with_markers(markers))
+    """The sample run with every marker NaN outside 6 frames spread over the trial."""
+    return sparse_angles_run(angles_run, N_FRAMES)
 
 
 class Recorder:
