@@ -254,11 +254,18 @@ def middle_component(name: str) -> int:
     return ANGLE_TABLE[joint][0].index(1)
 
 
+def _near_caps(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the lower / upper bound (degrees) comes within :data:`GIMBAL_MARGIN_DEG` of
+    −90° / +90° (NaN: False)."""
+    with np.errstate(invalid="ignore"):
+        return np.asarray(lower) < GIMBAL_MARGIN_DEG - 90.0, np.asarray(upper) > 90.0 - GIMBAL_MARGIN_DEG
+
+
 def near_gimbal_lock(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Where a middle Cardan component's band ``[lower, upper]`` (degrees) comes within
     :data:`GIMBAL_MARGIN_DEG` of ±90°."""
-    with np.errstate(invalid="ignore"):
-        return (np.asarray(upper) > 90.0 - GIMBAL_MARGIN_DEG) | (np.asarray(lower) < GIMBAL_MARGIN_DEG - 90.0)
+    low, high = _near_caps(lower, upper)
+    return low | high
 
 
 def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarray], measured_index: int) -> None:
@@ -275,12 +282,9 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
         if columns[middle] not in hulls:
             continue
         band = hulls[columns[middle]]
-        lock = near_gimbal_lock(band[:, 0], band[:, 1])
-        lock[measured_index] = False
-        with np.errstate(invalid="ignore"):
-            upper = band[:, 1] > 90.0 - GIMBAL_MARGIN_DEG
-            lower = band[:, 0] < GIMBAL_MARGIN_DEG - 90.0
+        lower, upper = _near_caps(band[:, 0], band[:, 1])
         upper[measured_index] = lower[measured_index] = False
+        lock = upper | lower
         band[:, 1][upper] = 90.0
         band[:, 0][lower] = -90.0
         for column in columns:

@@ -54,7 +54,7 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task
-from fuzzygait.markererror.angle_model import AXES, undetermined
+from fuzzygait.markererror.angle_model import undetermined
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
 from fuzzygait.markererror.sources import SOURCE_TITLES, SOURCES, parse_sources
 from fuzzygait.uncertainty.execution import Evaluator
@@ -293,7 +293,6 @@ def per_source_bands(
         if absent:
             raise ParameterError(f"alphas: the fuzzy result has no α = {', '.join(f'{a:g}' for a in absent)} "
                                  f"(its levels: {', '.join(f'{a:g}' for a in main_alphas)})")  # fmt: skip
-    names = list(dict.fromkeys(c.rsplit("_", 1)[0] for c in wanted))
     frame_index = {int(f): i for i, f in enumerate(fuzzy["frame"].to_numpy())}
     sample_frames = np.array([frame_index.get(int(f), -1) for f in trial.frames])
     if np.any(sample_frames < 0) or len(frame_index) != trial.n_frames:
@@ -311,9 +310,7 @@ def per_source_bands(
     try:
         for source in chosen:
             alone = replace(options, sources=(source,), alphas=tuple(float(a) for a in levels))
-            tasks, _ = component_tasks(trial, subject, result, alone, names, clusters)
-            by_name = {f"{t.name}_{AXES[t.axis]}": t for t in tasks}
-            run = [by_name[c] for c in wanted]
+            run, _ = component_tasks(trial, subject, result, alone, wanted, clusters)
 
             def step(k: int, _n: int, offset: int = done) -> None:
                 if progress is not None:
