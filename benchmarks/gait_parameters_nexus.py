@@ -4,15 +4,16 @@ Run:  .venv/bin/python benchmarks/gait_parameters_nexus.py
 
 For every C3D file under ``../shared/data`` whose ``ANALYSIS`` group holds Nexus' (or
 Vicon Workstation's) spatio-temporal parameters, prints one Markdown table per file and
-side: our value of the side's first complete gait cycle (what Nexus reports; the
-library's :func:`~fuzzygait.gait.spatiotemporal.spatiotemporal_parameters`, the command's
-``--cycles nexus``), Nexus' value converted to Nexus 2 units
+side: our value of the cycle the reference program reports, with its definitions
+(:func:`~fuzzygait.gait.spatiotemporal.reference_convention`: Nexus -- the side's first
+complete gait cycle, the command's ``--cycles nexus``; Vicon Workstation -- the first
+cycle with Workstation's step and opposite-foot-off definitions, ``--cycles
+workstation``), Nexus' value converted to Nexus 2 units
 (:func:`~fuzzygait.gait.spatiotemporal.nexus_reference`), the difference and whether it
 is within issue 16's tolerance (one frame for times and phases, 1 % otherwise).
 
-Then, for the files with sub-frame events or a cycle choice of their own, what explains
-a disagreement: our values of the cycle the reference used, and the stride/step lengths
-from the heel and ankle markers instead of the toe.
+Then the Nexus definitions beside a Workstation file's values (what differs), and every
+cycle's stride/step lengths from the toe, heel and ankle markers.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from fuzzygait.gait.spatiotemporal import (
     UNITS,
     agreement_tolerance,
     nexus_reference,
+    reference_convention,
     side_parameters,
     spatiotemporal_parameters,
 )
@@ -40,36 +42,25 @@ def _fmt(value: float) -> str:
     return "–" if not math.isfinite(value) else f"{value:.6g}"
 
 
-def reference_cycle(trial: Trial, code: str) -> int | None:
-    """The cycle whose stride time is the reference's, when that is not the first
-    complete one (Workstation reported a first cycle that is not complete)."""
-    result = spatiotemporal_parameters(trial).sides[code]
-    stride = nexus_reference(trial)[code].get("Stride Time", math.nan)
-    first = result.first_complete
-    if first is None or abs(first.values["Stride Time"] - stride) < 1e-4:
-        return None
-    matching = [c.index for c in result.cycles if abs(c.values["Stride Time"] - stride) < 1e-4]
-    return matching[0] if matching else None
-
-
-def side_table(trial: Trial, code: str, index: int | None = None) -> list[str]:
-    """Ours against the reference for the first complete cycle (or cycle ``index``)."""
+def side_table(trial: Trial, code: str, convention: str) -> list[str]:
+    """Ours against the reference, with the definitions of ``convention``."""
     result = spatiotemporal_parameters(trial).sides[code]
     reference = nexus_reference(trial)[code]
-    cycle = result.first_complete if index is None else result.cycles[index]
+    cycle = result.first_complete if convention == "nexus" else result.first
     assert cycle is not None
-    which = f"first complete of {len(result.cycles)}" if index is None else (
-        f"{'complete' if cycle.complete else 'not complete'}: the cycle the reference used")
+    values = cycle.values if convention == "nexus" else cycle.workstation
+    which = (f"first complete of {len(result.cycles)}" if convention == "nexus" else
+             f"first of {len(result.cycles)}, {'complete' if cycle.complete else 'not complete'}")  # fmt: skip
     lines = [
-        f"**{trial.name}, {SIDE_CONTEXTS[code]}** — our cycle {cycle.index} "
+        f"**{trial.name}, {SIDE_CONTEXTS[code]}, {convention} definitions** — our cycle {cycle.index} "
         f"({cycle.start_time:.4f}–{cycle.end_time:.4f} s, {which}), {trial.rate:g} Hz",
         "",
-        "| parameter | unit | ours | Nexus | ours − Nexus | tolerance | within |",
+        "| parameter | unit | ours | reference | ours − reference | tolerance | within |",
         "|---|---|---|---|---|---|---|",
     ]
     for name in NAMES:
-        ours, theirs = cycle.values[name], reference.get(name, math.nan)
-        tol = agreement_tolerance(name, theirs, trial.rate, cycle.values["Stride Time"])
+        ours, theirs = values[name], reference.get(name, math.nan)
+        tol = agreement_tolerance(name, theirs, trial.rate, values["Stride Time"])
         diff = ours - theirs
         ok = "–" if not math.isfinite(diff) else ("yes" if abs(diff) <= tol else "**no**")
         rel = f" ({100 * diff / theirs:+.3f} %)" if math.isfinite(diff) and theirs else ""
@@ -117,11 +108,12 @@ def main() -> None:
         if not any(v.context in ("Left", "Right") for v in trial.analysis):
             continue
         print(f"### {path.relative_to(DATA)}\n")
+        convention = reference_convention(trial)
         for code in SIDE_CONTEXTS:
-            print("\n".join(side_table(trial, code)) + "\n")
-        for code in SIDE_CONTEXTS:
-            if (index := reference_cycle(trial, code)) is not None:
-                print("\n".join(side_table(trial, code, index)) + "\n")
+            print("\n".join(side_table(trial, code, convention)) + "\n")
+        if convention != "nexus":  # what Nexus' definitions would give instead
+            for code in SIDE_CONTEXTS:
+                print("\n".join(side_table(trial, code, "nexus")) + "\n")
         print("\n".join(explanations(trial)) + "\n")
 
 

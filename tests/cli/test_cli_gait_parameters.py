@@ -43,6 +43,23 @@ def test_nexus_values_reproduced_and_a_bad_trial_reported(tmp_path: Path) -> Non
     assert synthetic["Stride Length (m)"].to_numpy() == pytest.approx([1.375, 1.375], abs=1e-3)
 
 
+@needs_shared
+def test_workstation_values_reproduced_with_its_definitions(tmp_path: Path) -> None:
+    gait_pig = shared_file("vicon", "gait-pig.c3d")
+    out = tmp_path / "params.csv"
+    result = run("gait-parameters", gait_pig, "--out", out, "--cycles", "workstation")
+    assert result.returncode == 0, result.stderr
+    assert "Vicon Workstation's definitions" in result.stdout
+    table = pd.read_csv(out)
+    trial = read_c3d(gait_pig)
+    reference = nexus_reference(trial)
+    for code, side in (("L", "Left"), ("R", "Right")):
+        row = table[table["side"] == side].iloc[0]
+        for name, value in reference[code].items():
+            tol = agreement_tolerance(name, value, trial.rate, row["Stride Time (s)"])
+            assert abs(row[column_name(name)] - value) <= tol, (side, name)
+
+
 def test_mean_over_cycles(tmp_path: Path) -> None:
     out = tmp_path / "params.csv"
     result = run("gait-parameters", SAMPLE_DATA / "walking.c3d", "--out", out)
@@ -63,5 +80,5 @@ def test_every_trial_failing_is_one_line_and_no_output(tmp_path: Path) -> None:
 def test_bad_output_suffix_or_cycle_selection_before_any_trial_is_read(tmp_path: Path) -> None:
     with pytest.raises(FuzzyGaitError, match=r"--out must end in \.csv or \.parquet"):
         gait_parameters_files([tmp_path / "nope.c3d"], tmp_path / "p.txt")
-    with pytest.raises(FuzzyGaitError, match="--cycles must be one of all, nexus"):
+    with pytest.raises(FuzzyGaitError, match="--cycles must be one of all, nexus, workstation"):
         gait_parameters_files([tmp_path / "nope.c3d"], tmp_path / "p.csv", "median")

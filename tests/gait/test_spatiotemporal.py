@@ -21,6 +21,7 @@ from fuzzygait.gait.spatiotemporal import (
     column_name,
     nexus_reference,
     parameters_table,
+    reference_convention,
     side_parameters,
     spatiotemporal_parameters,
 )
@@ -189,26 +190,38 @@ def test_nexus_flat_foot_session_reports_the_first_complete_cycle_not_the_mean()
     assert nexus_reference(trial)["L"]["Stride Time"] == pytest.approx(1.03, abs=1e-6)
 
 
-def test_workstation_gait_pig_right_side() -> None:
+@pytest.mark.parametrize("code", ["L", "R"])
+def test_workstation_gait_pig_every_parameter_with_workstation_definitions(code: str) -> None:
+    """Vicon Workstation's values of gait-pig: its first cycle (the left one not complete),
+    the opposite Foot Off even after the cycle, the opposite foot's step (module docstring)."""
+    trial = read_c3d(shared_file("vicon", "gait-pig.c3d"))
+    assert reference_convention(trial) == "workstation"
+    first = spatiotemporal_parameters(trial).sides[code].first
+    assert first is not None
+    reference = nexus_reference(trial)[code]
+    _within(trial, code, first.workstation, tuple(reference))
+    for name in reference:  # in fact within 0.005 % (the step to 0.02 mm)
+        assert first.workstation[name] == pytest.approx(reference[name], rel=5e-5), name
+
+
+def test_workstation_step_is_the_opposite_feet_step_nexus_the_one_ending_at_this_strike() -> None:
     trial = read_c3d(shared_file("vicon", "gait-pig.c3d"))
     right = spatiotemporal_parameters(trial).sides["R"].first_complete
-    assert right is not None
-    _within(trial, "R", right.values, tuple(n for n in NAMES if n != "Step Length"))
-    # known disagreement (benchmarks/RESULTS.md): Workstation's step, 650.7 mm, is matched
-    # by no marker of the file; the toe marker gives 637.7 mm
+    assert right is not None and right.index == 0
+    # Nexus' definition gives 637.7 mm, 2 % short of Workstation's 650.7 mm
     assert right.values["Step Length"] == pytest.approx(0.6377, abs=5e-4)
-    assert nexus_reference(trial)["R"]["Step Length"] == pytest.approx(0.6507, abs=5e-4)
+    assert right.workstation["Step Length"] == pytest.approx(0.65075, abs=5e-5)
+    assert reference_convention(read_c3d(shared_file("pig-options", "PiG_Motion-FlatFoot-Full.c3d"))) == "nexus"
 
 
 def test_workstation_gait_pig_left_side_used_its_incomplete_first_cycle() -> None:
     trial = read_c3d(shared_file("vicon", "gait-pig.c3d"))
     left = spatiotemporal_parameters(trial).sides["L"]
     first, second = left.cycles
-    assert not first.complete and second.complete
-    defined = ("Cadence", "Walking Speed", "Stride Time", "Step Time", "Opposite Foot Contact",
-               "Foot Off", "Stride Length")  # fmt: skip
-    _within(trial, "L", first.values, defined)
-    # Workstation took the right Foot Off after the cycle's end: 109.6 % (ours: none)
+    assert not first.complete and second.complete and left.first is first
+    # Nexus' definition: no opposite Foot Off inside the cycle; Workstation took the right
+    # Foot Off after the cycle's end (109.6 %) and defined no Single Support
     assert math.isnan(first.values["Opposite Foot Off"])
-    assert nexus_reference(trial)["L"]["Opposite Foot Off"] == pytest.approx(109.605, abs=1e-3)
+    assert first.workstation["Opposite Foot Off"] == pytest.approx(109.605, abs=1e-3)
+    assert math.isnan(first.workstation["Single Support"])
     assert "Single Support" not in nexus_reference(trial)["L"]

@@ -21,7 +21,9 @@ def gait_parameters(
         typer.Option(
             "--cycles",
             help="all: mean ± SD over every complete gait cycle of a side; nexus: the "
-            "first complete cycle of each side, the one Vicon Nexus reports.",
+            "first complete cycle of each side, the one Vicon Nexus reports; workstation: "
+            "the first cycle with Vicon Workstation's definitions (its step length is the "
+            "opposite foot's step).",
         ),
     ] = "all",
 ) -> None:
@@ -39,7 +41,8 @@ def gait_parameters(
         run = gait_parameters_files(files, out_file, cycles)
     for message in run.failures:
         err.print(f"fuzzygait: error: {message}", markup=False)
-    heading = "first complete cycle" if cycles == "nexus" else "mean ± SD over complete cycles"
+    heading = {"nexus": "first complete cycle", "workstation": "first cycle, Vicon Workstation's definitions"}.get(
+        cycles, "mean ± SD over complete cycles")
     for result in run.results:
         rows = run.table[run.table["trial"] == result.trial].to_dict("records")
         table = Table(title=f"{result.trial}: {heading} (events: {result.event_source})", title_justify="left")

@@ -39,14 +39,16 @@ inferred from Nexus' own values in the reference files, no constant fitted:
   measured along that stride vector (along the horizontal stride: up to 0.03 mm off).
 * ``gait-pig.c3d`` (Vicon Workstation, 50 Hz, sub-frame events, older units ``1/s``
   = strides per second, ``mm``, ``mm/s`` and ``%`` of the cycle for Step Time and the
-  support times): the stride lengths agree within 0.002 % with the toe positions at the
-  nearest frame (0.6 % with linear interpolation between frames, hence the nearest
-  frame); Workstation reported the left side's *first* cycle even though it is not
-  complete (the right foot's Off comes after its end: "Opposite Foot Off" 109.6 %,
-  "Double Support" 121.8 %, no "Single Support"), and its step lengths (689 and 651 mm)
-  are matched by no marker or Plug-in Gait segment point of this file with the event
-  times shifted by up to two frames (toe: 633 and 638 mm, 8 % and 2 % short): see
-  ``benchmarks/RESULTS.md``.
+  support times): Workstation's definitions differ in three points, all reproduced within
+  0.005 % on both sides (:attr:`CycleParameters.workstation`, ``--cycles workstation``):
+  it reports each side's *first* cycle, complete or not; its Opposite Foot Off is the
+  first opposite Foot Off after the cycle's start even beyond its end (left: 109.6 %,
+  Double Support 121.8 %, no Single Support); and its **Step Length** of a side is the
+  3-D distance from *this* toe at the cycle's opening strike to the opposite toe at the
+  opposite strike, ``|TOE_opposite(OFC) - TOE(s)|`` -- the step the opposite foot takes
+  (689.11 and 650.76 mm against Workstation's 689.13 and 650.75; Nexus' step, the one
+  ending at this foot's strike, gives 633 and 638 mm).  The lengths use the toe
+  positions at the nearest frame (0.6 % off with linear interpolation between frames).
 
 :func:`nexus_reference` converts a file's ``ANALYSIS`` values (either generation of
 units) to the units above for comparison.
@@ -87,9 +89,10 @@ TIMES = tuple(n for n, u in PARAMETERS if u == "s")
 PHASES = tuple(n for n, u in PARAMETERS if u == "%")
 #: Marker whose positions at the foot strikes give stride and step length (Nexus: toe).
 FOOT_MARKER = "TOE"
-#: Cycle selections of :func:`parameters_table`: mean ± SD over complete cycles, or
-#: the first complete cycle of each side (what Nexus stores).
-SELECTIONS = ("all", "nexus")
+#: Cycle selections of :func:`parameters_table`: mean ± SD over complete cycles, the
+#: first complete cycle of each side (what Nexus stores), or the first cycle with Vicon
+#: Workstation's definitions (what Workstation stored; module docstring).
+SELECTIONS = ("all", "nexus", "workstation")
 _OPPOSITE = {"L": "R", "R": "L"}
 
 
@@ -106,6 +109,9 @@ class CycleParameters:
             side's Foot Off all lie inside the cycle, in that order.
         values: parameter name -> value in :data:`UNITS`; NaN where the events or
             markers it needs are missing.
+        workstation: the same with Vicon Workstation's definitions (module docstring:
+            Opposite Foot Off may lie beyond the cycle, Step Length is the opposite
+            foot's step); equal to ``values`` but for those and what derives from them.
     """
 
     side: str
@@ -114,6 +120,7 @@ class CycleParameters:
     end_time: float
     complete: bool
     values: dict[str, float]
+    workstation: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -138,6 +145,11 @@ class SideParameters:
         """The first complete cycle (the one Vicon Nexus reports), or ``None``."""
         complete = self.complete_cycles
         return complete[0] if complete else None
+
+    @property
+    def first(self) -> CycleParameters | None:
+        """The first cycle, complete or not (the one Vicon Workstation reported)."""
+        return self.cycles[0] if self.cycles else None
 
     def _column(self, name: str) -> np.ndarray:
         values = np.array([c.values[name] for c in self.complete_cycles], dtype=float)
@@ -193,7 +205,6 @@ def _position(trial: Trial, label: str, time: float) -> np.ndarray:
 def _one_cycle(trial: Trial, events: Sequence[Event], side: str, index: int, start: float,
                end: float, foot_marker: str) -> CycleParameters:  # fmt: skip
     other = _OPPOSITE[side]
-    stride_time = end - start
     contact = _first_inside(_times(events, FOOT_STRIKE, other), start, end)
     opposite_off = _first_inside(_times(events, FOOT_OFF, other), start, contact if np.isfinite(contact) else end)
     foot_off = _first_inside(_times(events, FOOT_OFF, side), start, end)
@@ -204,7 +215,23 @@ def _one_cycle(trial: Trial, events: Sequence[Event], side: str, index: int, sta
     stride_mm = float(np.linalg.norm(stride))
     opposite = _position(trial, other + foot_marker, contact)
     step_mm = float((last - opposite) @ stride) / stride_mm if stride_mm > 0 else math.nan
-    values = {
+    values = _cycle_values(start, end, contact, opposite_off, foot_off, stride_mm, step_mm)
+    # Vicon Workstation: the opposite Foot Off may come after the cycle; the step is the
+    # opposite foot's, from this toe at the opening strike (module docstring)
+    late_off = _first_inside(_times(events, FOOT_OFF, other), start, math.inf)
+    workstation = _cycle_values(start, end, contact, late_off, foot_off, stride_mm,
+                                float(np.linalg.norm(opposite - first)))  # fmt: skip
+    if workstation["Single Support"] < 0:  # the opposite foot never in swing inside the cycle
+        workstation["Single Support"] = math.nan
+    return CycleParameters(side, index, start, end, complete, values, workstation)
+
+
+def _cycle_values(start: float, end: float, contact: float, opposite_off: float, foot_off: float,
+                  stride_mm: float, step_mm: float) -> dict[str, float]:  # fmt: skip
+    """The eleven parameters (:data:`UNITS`) from a cycle's event times (s) and its
+    stride and step lengths (mm)."""
+    stride_time = end - start
+    return {
         "Cadence": 120.0 / stride_time,
         "Walking Speed": stride_mm / 1000.0 / stride_time,
         "Stride Time": stride_time,
@@ -217,7 +244,6 @@ def _one_cycle(trial: Trial, events: Sequence[Event], side: str, index: int, sta
         "Stride Length": stride_mm / 1000.0,
         "Step Length": step_mm / 1000.0,
     }
-    return CycleParameters(side, index, start, end, complete, values)
 
 
 def side_parameters(trial: Trial, events: Sequence[Event], side: str,
@@ -287,7 +313,8 @@ def parameters_table(results: Sequence[TrialParameters], selection: str = "all")
     Args:
         selection: ``"all"`` -- mean and SD over the side's complete cycles (``cycles``
             counts them); ``"nexus"`` -- the first complete cycle, as Vicon Nexus stores
-            it (``cycles`` 1, SD NaN).
+            it (``cycles`` 1, SD NaN); ``"workstation"`` -- the first cycle, complete or
+            not, with Vicon Workstation's definitions (:attr:`CycleParameters.workstation`).
 
     Raises:
         ParameterError: for an unknown selection.
@@ -298,9 +325,10 @@ def parameters_table(results: Sequence[TrialParameters], selection: str = "all")
     for result in results:
         for code, side in result.sides.items():
             row: dict[str, object] = {"trial": result.trial, "side": SIDE_CONTEXTS[code]}
-            if selection == "nexus":
-                first = side.first_complete
-                mean = first.values if first else dict.fromkeys(NAMES, math.nan)
+            if selection in ("nexus", "workstation"):
+                first = side.first_complete if selection == "nexus" else side.first
+                mean = (first.values if selection == "nexus" else first.workstation) if first else (
+                    dict.fromkeys(NAMES, math.nan))
                 sd = dict.fromkeys(NAMES, math.nan)
                 row["cycles"] = int(first is not None)
             else:
@@ -340,6 +368,14 @@ def nexus_reference(trial: Trial) -> dict[str, dict[str, float]]:
     return result
 
 
+def reference_convention(trial: Trial) -> str:
+    """Which definitions the file's ``ANALYSIS`` values follow: ``"workstation"`` when
+    they are in the older Vicon Workstation units (Cadence in ``1/s``), else ``"nexus"``
+    -- the :data:`SELECTIONS` entry to compare them with."""
+    units = {v.name: v.unit.strip() for v in trial.analysis}
+    return "workstation" if units.get("Cadence") == "1/s" else "nexus"
+
+
 def agreement_tolerance(name: str, reference: float, rate: float, stride_time: float) -> float:
     """How far a parameter may differ from a reference value (issue 16's acceptance):
     one frame for times (``1 / rate`` s) and phases (``100 / (rate T)`` %), 1 % of the
@@ -367,6 +403,7 @@ __all__ = [
     "column_name",
     "nexus_reference",
     "parameters_table",
+    "reference_convention",
     "side_parameters",
     "spatiotemporal_parameters",
 ]

@@ -56,8 +56,9 @@ def gait_parameters_files(
     Args:
         out: ``.csv`` or ``.parquet`` file to write (atomically; not written when every
             trial failed), or ``None``.
-        selection: ``"all"`` (mean ± SD over complete cycles) or ``"nexus"`` (the first
-            complete cycle per side, what Vicon Nexus stores).
+        selection: ``"all"`` (mean ± SD over complete cycles), ``"nexus"`` (the first
+            complete cycle per side, what Vicon Nexus stores) or ``"workstation"`` (the
+            first cycle with Vicon Workstation's definitions).
 
     Raises:
         FuzzyGaitError: a bad ``out`` suffix or ``selection`` (before any trial is read).
