@@ -161,3 +161,31 @@ class TwoMarkerLine:
 
         nodes = np.arange(self.times.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+def trial_window(source: Path, target: Path, start: int, n: int) -> Path:
+    """Frames ``start .. start + n`` of a trial as a new C3D file (events inside kept)."""
+    import dataclasses
+
+    from fuzzygait.io import read_c3d, write_c3d
+
+    trial = read_c3d(source)
+    t0, t1 = start / trial.rate, (start + n) / trial.rate
+    events = [dataclasses.replace(e, time=e.time - t0) for e in trial.events if t0 <= e.time < t1]
+    write_c3d(dataclasses.replace(trial, markers=trial.markers[start:start + n], outputs={}, output_kinds={},
+                                  events=events), target)  # fmt: skip
+    return target
+
+
+def synthetic_session(folder: Path, frames: int) -> Path:
+    """A synthetic session folder as a gait lab stores one: the static trial
+    (``cal01.c3d``), two walking trials of ``frames`` frames cut from the bundled walking
+    trial at frames 0 and 100 (``walk01.c3d``, ``walk02.c3d``) and the subject file."""
+    import shutil
+
+    folder.mkdir()
+    shutil.copy(SAMPLE_DATA / "static.c3d", folder / "cal01.c3d")
+    shutil.copy(SAMPLE_DATA / "subject.toml", folder / "Synthetic.toml")
+    trial_window(SAMPLE_DATA / "walking.c3d", folder / "walk01.c3d", 0, frames)
+    trial_window(SAMPLE_DATA / "walking.c3d", folder / "walk02.c3d", 100, frames)
+    return folder

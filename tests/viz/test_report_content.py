@@ -70,7 +70,8 @@ def test_page_shows_every_section(content_dir: Path) -> None:
         assert section in checker.ids, section
     html = _text(page)
     for fact in ("Subject", "Session", "2024-03-05 visit", "Model", "CGM 1.0", "Marker set", "Gaps and filter",
-                 "Butterworth low-pass 6 Hz", "gap filling:", "subject name differs"):  # fmt: skip
+                 "Butterworth low-pass 6 Hz", "gaps of up to 10 frames filled (method auto)",
+                 "subject name differs"):  # fmt: skip
         assert fact in html, fact
     assert "Cadence" in html and "steps/min" in html and "Step Length" in html
     assert "Overall GPS: <b>0.0°</b>" in html and "Knee flexion" in html

@@ -6,48 +6,26 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fuzzygait.io import read_c3d, write_c3d
+from fuzzygait.io import read_c3d
 from fuzzygait.workflows import trial_job
 from fuzzygait.workflows.angles import Preprocessing
 from fuzzygait.workflows.batch_report import load_page_data, write_batch_report
 from fuzzygait.workflows.session import find_sessions, static_rule
-from support import SAMPLE_DATA, SHARED_DATA, VICON, needs_shared
+from support import SAMPLE_DATA, SHARED_DATA, VICON, needs_shared, synthetic_session, trial_window
 
 MISMATCH = ("subject mismatch: the trial is of subject 'A22' but the subject file Test.vsk is of 'Test'; "
             "check that the right subject file is in the session folder")  # fmt: skip
 
 
-def _window(source: Path, target: Path, start: int, n: int) -> Path:
-    """Frames ``start .. start + n`` of a trial as a new C3D file (events inside kept)."""
-    trial = read_c3d(source)
-    t0, t1 = start / trial.rate, (start + n) / trial.rate
-    events = [dataclasses.replace(e, time=e.time - t0) for e in trial.events if t0 <= e.time < t1]
-    write_c3d(dataclasses.replace(trial, markers=trial.markers[start:start + n], outputs={}, output_kinds={},
-                                  events=events), target)  # fmt: skip
-    return target
-
-
-def _session(folder: Path, frames: int) -> Path:
-    """A synthetic session folder: static, two walking trials of ``frames`` frames, a
-    subject file."""
-    folder.mkdir()
-    shutil.copy(SAMPLE_DATA / "static.c3d", folder / "cal01.c3d")
-    shutil.copy(SAMPLE_DATA / "subject.toml", folder / "Synthetic.toml")
-    _window(SAMPLE_DATA / "walking.c3d", folder / "walk01.c3d", 0, frames)
-    _window(SAMPLE_DATA / "walking.c3d", folder / "walk02.c3d", 100, frames)
-    return folder
-
-
 @pytest.fixture
 def session(tmp_path: Path) -> Path:
     """Two walking trials with a complete gait cycle per side (140 frames)."""
-    return _session(tmp_path / "visit-1", 140)
+    return synthetic_session(tmp_path / "visit-1", 140)
 
 
 def test_static_rules() -> None:
@@ -119,7 +97,7 @@ def test_skip_unchanged_force_and_changed_options(session: Path, tmp_path: Path)
     again = write_batch_report([session], out, uncertainty="none")
     assert again.n_skipped == 2 and _job_files(pages, "walk01") == before
 
-    _window(SAMPLE_DATA / "walking.c3d", session / "walk02.c3d", 101, 140)  # same name, other content
+    trial_window(SAMPLE_DATA / "walking.c3d", session / "walk02.c3d", 101, 140)  # same name, other content
     changed = write_batch_report([session], out, uncertainty="none")
     assert [o.skipped for o in changed.outcomes] == [True, False]
 
@@ -174,7 +152,7 @@ def test_failing_trial_is_listed_with_one_line(session: Path, tmp_path: Path) ->
 def test_page_data_identical_with_one_and_two_workers(tmp_path: Path) -> None:
     """--uncertainty fast on a LocalCluster of 2 workers and in-process: the same numbers
     (30-frame trials: the analysis is ~1 s per 10 frames)."""
-    session = _session(tmp_path / "visit-1", 30)
+    session = synthetic_session(tmp_path / "visit-1", 30)
     one = write_batch_report([session], tmp_path / "one", uncertainty="fast", workers=1)
     two = write_batch_report([session], tmp_path / "two", uncertainty="fast", workers=2)
     assert one.n_ok == two.n_ok == 2
@@ -189,7 +167,7 @@ def test_page_data_identical_with_one_and_two_workers(tmp_path: Path) -> None:
 def test_pycgm2_subject_file_of_another_subject_warns(tmp_path: Path) -> None:
     """A session whose only subject file is a pyCGM2 .mp of "Patient02": used, with the
     mismatch warning; one named after the trial's subject is preferred."""
-    folder = _session(tmp_path / "visit", 30)
+    folder = synthetic_session(tmp_path / "visit", 30)
     (folder / "Synthetic.toml").unlink()
     mp = ("MandatoryParameters:\n  Bodymass: 72\n  LeftLegLength: 900\n  RightLegLength: 900\n  LeftKneeWidth: 105\n"
           "  RightKneeWidth: 105\n  LeftAnkleWidth: 70\n  RightAnkleWidth: 70\n")  # fmt: skip

@@ -301,6 +301,24 @@ def spatiotemporal_parameters(trial: Trial, events: Sequence[Event] | None = Non
     return TrialParameters(trial.name, sides, source, notes)
 
 
+def pooled_parameters(name: str, cycles: dict[str, np.ndarray], source: str = "pooled") -> TrialParameters:
+    """Complete cycles of several trials as one :class:`TrialParameters` (e.g. a session's
+    mean ± SD over every cycle of every trial).
+
+    Args:
+        name: what the result is of (e.g. the session's name).
+        cycles: ``"L"``/``"R"`` -> ``(n_cycles, 11)`` parameter values in :data:`NAMES`
+            order and :data:`UNITS`; a side left out has no cycles.
+        source: where the cycles' events came from, for :attr:`TrialParameters.event_source`.
+    """
+    sides = {}
+    for code in SIDE_CONTEXTS:
+        rows = np.asarray(cycles.get(code, np.empty((0, len(NAMES)))), dtype=float).reshape(-1, len(NAMES))
+        sides[code] = SideParameters(code, [CycleParameters(code, k, math.nan, math.nan, True, dict(zip(NAMES, row)))
+                                            for k, row in enumerate(rows.tolist())])  # fmt: skip
+    return TrialParameters(name, sides, source)
+
+
 def column_name(name: str, statistic: str = "") -> str:
     """Table header of a parameter: ``"Cadence (steps/min)"``, ``"Cadence SD (steps/min)"``."""
     return f"{name}{' ' + statistic if statistic else ''} ({UNITS[name]})"
@@ -403,6 +421,7 @@ __all__ = [
     "column_name",
     "nexus_reference",
     "parameters_table",
+    "pooled_parameters",
     "reference_convention",
     "side_parameters",
     "spatiotemporal_parameters",

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.gait.spatiotemporal import pooled_parameters
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.viz.report import TrialEntry
@@ -207,6 +208,20 @@ def _stacked_cycles(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str,
     return {k: np.vstack([a for a in v if a.shape[1] == width[k]]) for k, v in stacks.items()}
 
 
+def _stacked_parameters(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str, np.ndarray]:
+    """Every complete gait cycle's spatio-temporal parameters per side, from the trials'
+    ``data.npz`` (pages written before these were stored contribute none)."""
+    stacks: dict[str, list[np.ndarray]] = {}
+    for outcome in outcomes:
+        if not outcome.ok:
+            continue
+        with np.load(folder / f"{outcome.name}_files" / "data.npz") as data:
+            for code in ("L", "R"):
+                if f"spatiotemporal/{code}" in data.files:
+                    stacks.setdefault(code, []).append(np.asarray(data[f"spatiotemporal/{code}"]))
+    return {code: np.vstack(rows) for code, rows in stacks.items()}
+
+
 def _facts(session: Session) -> list[tuple[str, str]]:
     statics = "; ".join(f"{s.path.name} (found by {s.rule}: {s.detail})" for s in session.statics) or "none found"
     used = sorted({t.static.name for t in session.trials if t.static is not None})
@@ -240,7 +255,9 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
         title = f"Session {session.name}: joint angles, mean ± SD over all gait cycles"
         cycles = _stacked_cycles(outcomes, folder)
         drawn = plot_session_cycles(cycles, figures / "cycles", title)
-        html = session_page(summary, "session_files/cycles" if drawn else None, index_href, cycles_used(cycles))
+        parameters = pooled_parameters(session.name, _stacked_parameters(outcomes, folder), "the trials' events")
+        html = session_page(summary, "session_files/cycles" if drawn else None, index_href, cycles_used(cycles),
+                            parameters)  # fmt: skip
         (staging / page_name).write_text(html, encoding="utf-8")
         if pdf:
             from fuzzygait.workflows.pdf import html_to_pdf

@@ -29,6 +29,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.gait.normative import NormativeData
+from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
 from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
@@ -156,8 +157,11 @@ def _analyse(job: TrialJob) -> MarkerErrorAnalysis:
 def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     """The numbers a trial's page is drawn from (``data.npz``): ``angle/<name>``
     (n_frames, 3) deg, ``cycles/<component>`` (n_cycles, n_points) deg per gait-cycle
-    percent (the component's side's cycles) and, when analysed, ``hull`` (component,
-    alpha, bound, frame) deg with its ``alpha`` levels and ``component`` names."""
+    percent (the component's side's cycles), ``spatiotemporal/<L|R>`` (n_complete_cycles,
+    11) -- each complete cycle's spatio-temporal parameters in
+    :data:`~fuzzygait.gait.spatiotemporal.NAMES` order and units (absent without one) --
+    and, when analysed, ``hull`` (component, alpha, bound, frame) deg with its ``alpha``
+    levels and ``component`` names."""
     run = analysis.run
     angles = sorted(run.result.angles.items())
     data: dict[str, np.ndarray] = {f"angle/{n}": np.asarray(v, dtype=float) for n, v in angles}
@@ -165,6 +169,13 @@ def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     for component, rows in table.groupby("angle", sort=True):
         wide = rows.pivot_table(index="cycle", columns="percent", values="value", sort=True)
         data[f"cycles/{component}"] = wide.to_numpy(dtype=float)
+    try:
+        parameters = spatiotemporal_parameters(run.trial, run.events)
+    except FuzzyGaitError:  # no complete cycle: the page says why; nothing to summarise
+        parameters = None
+    for code, side in (parameters.sides.items() if parameters is not None else ()):
+        if side.complete_cycles:
+            data[f"spatiotemporal/{code}"] = np.array([[c.values[n] for n in NAMES] for c in side.complete_cycles])
     fuzzy = analysis.fuzzy
     if fuzzy.sizes.get("component", 0):
         hull = fuzzy["hull"].transpose("component", "alpha", "bound", "frame")

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
 from fuzzygait.gait.normative import GPS_VARIABLES
-from fuzzygait.gait.spatiotemporal import NAMES, UNITS
+from fuzzygait.gait.spatiotemporal import NAMES, UNITS, TrialParameters
 from fuzzygait.viz.report.bands import ReportRun
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.markup import escape as _esc
@@ -99,12 +100,25 @@ def _session_text(source: Path, session: str | None) -> str:
     return f"{stamp} <span class=\"small\">(the file's date; the C3D file stores none)</span>"
 
 
+def _gap_settings(note: str) -> str:
+    """The settings of a gap-filling note (``"gap filling: 0 of 3 gaps filled (max_gap=10
+    frames, method=auto)"`` -> ``"gaps of up to 10 frames filled (method auto)"``): its
+    counts include markers the model does not use, the data-quality section counts the
+    model's."""
+    found = re.search(r"max_gap=(\d+) frames, method=(\w+)", note)
+    if found is None:
+        return note
+    if found[1] == "0":
+        return "gap filling: off (max_gap 0)"
+    return f"gaps of up to {found[1]} frames filled (method {found[2]}); what was filled: Data quality"
+
+
 def _processing_text(run: ReportRun) -> str:
     """Gap filling and filter settings, as the run's notes say them."""
     notes = list(run.trial.notes)
     gap = [n for n in notes if n.startswith("gap filling")]
     low = [n for n in notes if n.startswith("Butterworth")]
-    parts = [gap[-1] if gap else "gap filling: not applied"]
+    parts = [_gap_settings(gap[-1]) if gap else "gap filling: not applied"]
     parts.append(low[-1] if low else "no low-pass filter")
     return "<br>".join(_esc(p) for p in parts)
 
@@ -128,19 +142,28 @@ def _model_name(model: str) -> str:
 
 
 def _number(value: float, unit: str) -> str:
+    """A parameter value as shown: 0.1 steps/min and %, 1 ms, 1 mm, 0.01 m/s."""
     if not math.isfinite(value):
         return "–"
-    digits = 1 if unit in ("steps/min", "%") else 3 if unit == "s" else 2
+    digits = 1 if unit in ("steps/min", "%") else 3 if unit in ("s", "m") else 2
     return f"{value:.{digits}f}"
 
 
 def spatiotemporal_section(clinical: ClinicalData) -> str:
-    """The spatio-temporal parameters per side, mean ± SD over the complete cycles, with
-    Vicon Nexus' names and units."""
+    """The spatio-temporal table of a trial page (mean ± SD over the complete cycles)."""
     head = "<h2 id=\"spatiotemporal\">Spatio-temporal parameters</h2>"
     params = clinical.parameters
     if params is None:
         return head + f"<p class=\"small\">Not available: {_esc(clinical.parameters_error or 'no gait cycle')}</p>"
+    notes = "".join(f"<li>{_esc(n)}</li>" for n in params.notes)
+    return (head + "<p>Computed from the gait events and the toe markers as Vicon Nexus does, over the complete "
+            "gait cycles of each side (a cycle with both feet's events in order). Percentages are of the gait "
+            "cycle; “Opposite Foot Off/Contact” are the other foot's events.</p>" + spatiotemporal_table(params)
+            + (f"<ul class=\"notes small\">{notes}</ul>" if notes else ""))  # fmt: skip
+
+
+def spatiotemporal_table(params: TrialParameters) -> str:
+    """Parameter, unit, then mean ± SD over each side's complete cycles (HTML table)."""
     rows = []
     for name in NAMES:
         unit = UNITS[name]
@@ -156,11 +179,7 @@ def spatiotemporal_section(clinical: ClinicalData) -> str:
     counts = [len(params.sides[c].complete_cycles) for c in "LR"]
     header = [("Parameter", False), ("Unit", False), (f"Left (mean ± SD, {counts[0]} cycles)", True),
               (f"Right (mean ± SD, {counts[1]} cycles)", True)]  # fmt: skip
-    notes = "".join(f"<li>{_esc(n)}</li>" for n in params.notes)
-    return (head + "<p>Computed from the gait events and the toe markers as Vicon Nexus does, over the complete "
-            "gait cycles of each side (a cycle with both feet's events in order). Percentages are of the gait "
-            "cycle; “Opposite Foot Off/Contact” are the other foot's events.</p>" + _table(header, rows)
-            + (f"<ul class=\"notes small\">{notes}</ul>" if notes else ""))  # fmt: skip
+    return _table(header, rows)
 
 
 def gait_profile_section(clinical: ClinicalData, figs: str) -> str:

@@ -18,7 +18,9 @@ from urllib.parse import quote
 import numpy as np
 
 from fuzzygait import __version__
+from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
+from fuzzygait.viz.report.clinical_html import spatiotemporal_table
 from fuzzygait.viz.report.markup import escape, html_table
 from fuzzygait.viz.report.pages import CSS
 
@@ -168,10 +170,11 @@ def cycles_used(cycles: Mapping[str, np.ndarray]) -> dict[str, int]:
 
 
 def session_page(summary: SessionSummary, figure: str | None, index_href: str | None,
-                 used: Mapping[str, int] | None = None) -> str:  # fmt: skip
+                 used: Mapping[str, int] | None = None, parameters: TrialParameters | None = None) -> str:  # fmt: skip
     """The HTML of a session page; ``figure`` the stem of its cycle figure (relative),
     ``index_href`` the index across sessions (None: there is none), ``used`` the cycles
-    per side the figure averages (:func:`cycles_used`)."""
+    per side the figure averages (:func:`cycles_used`), ``parameters`` the complete cycles
+    of all trials (:func:`~fuzzygait.gait.spatiotemporal.pooled_parameters`)."""
     facts = "".join(f'<tr><th scope="row">{escape(k)}</th><td>{escape(v)}</td></tr>' for k, v in summary.facts)
     nav = f'<nav><a href="{quote(index_href)}">← All sessions (index)</a></nav>' if index_href else ""
     n_cycles = {s: sum(t.cycles.get(s, 0) for t in summary.trials if t.error is None) for s in SIDE_STYLE}
@@ -186,6 +189,12 @@ def session_page(summary: SessionSummary, figure: str | None, index_href: str | 
     else:
         fig = "<p>No gait cycles to summarise (no trial with a page has complete cycles).</p>"
     warnings = "".join(f"<li class=\"warning\">{escape(w)}</li>" for w in summary.warnings)
+    if parameters is not None and any(s.complete_cycles for s in parameters.sides.values()):
+        spatiotemporal = ("<p>Mean ± SD over every complete gait cycle of the session's trials, computed as on the "
+                          "trial pages (as Vicon Nexus does, from the events and the toe markers).</p>"
+                          + spatiotemporal_table(parameters))  # fmt: skip
+    else:
+        spatiotemporal = "<p>No complete gait cycle in the session's trials.</p>"
     notes = "".join(f"<li>{escape(n)}</li>" for n in summary.notes)
     pdf = f" · {_link('PDF of this page', summary.pdf)}" if summary.pdf else ""
     body = f"""
@@ -199,6 +208,8 @@ def session_page(summary: SessionSummary, figure: str | None, index_href: str | 
 <h2 id="session">Session</h2>
 <table class="kv"><tbody>{facts}</tbody></table>
 {f'<h2 id="warnings">Warnings</h2><ul>{warnings}</ul>' if warnings else ''}
+<h2 id="spatiotemporal">Spatio-temporal parameters: all trials</h2>
+{spatiotemporal}
 <h2 id="cycles">Gait cycle: all trials</h2>
 {fig}
 <h2 id="trials">Trials</h2>
