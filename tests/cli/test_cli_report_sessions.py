@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
-from support import SAMPLE_DATA, SHARED_DATA, VICON, assert_one_line_error, needs_shared, run
+from support import SAMPLE_DATA, SHARED_DATA, VICON, assert_one_line_error, needs_shared, run, synthetic_session, trial_window
 
 
 def test_bad_uncertainty_mode_is_one_line(tmp_path: Path) -> None:
@@ -67,3 +72,36 @@ def test_unreachable_scheduler_is_one_line_and_leaves_no_folder(tmp_path: Path) 
                  "--uncertainty", "none", "--scheduler", "tcp://127.0.0.1:1")  # fmt: skip
     assert_one_line_error(result, "cannot reach the Dask scheduler at 'tcp://127.0.0.1:1'")
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_batch_killed_mid_run_resumes_without_recomputing(tmp_path: Path) -> None:
+    """A real kill (SIGKILL of the whole process group, as a closed terminal or an OOM
+    killer would) once the first trial is finished: no partial page is visible, and the
+    re-run reuses the finished trial, computes the others and leaves no temporary file."""
+    session = synthetic_session(tmp_path / "visit", 240)
+    trial_window(SAMPLE_DATA / "walking.c3d", session / "walk03.c3d", 50, 240)
+    out = tmp_path / "report"
+    args = [sys.executable, "-m", "fuzzygait", "report", str(session), "--out", str(out), "--uncertainty", "none",
+            "--workers", "1"]  # fmt: skip
+    process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    finished = out / "visit" / "walk01_files" / "job.json"
+    try:
+        deadline = time.monotonic() + 300  # a generous bound for a loaded machine, not a timing assertion
+        while not finished.exists() and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert finished.exists(), "the first trial never finished"
+        os.killpg(process.pid, signal.SIGKILL)
+    finally:
+        process.wait()
+    pages = sorted(p.name for p in (out / "visit").glob("*.html"))
+    assert "walk03.html" not in pages, "the batch finished before the kill: nothing was tested"
+    for page in pages:  # whatever is visible is whole
+        assert page == "index.html" or (out / "visit" / page.replace(".html", "_files") / "job.json").exists(), page
+        assert (out / "visit" / page).read_text(encoding="utf-8").rstrip().endswith("</html>"), page
+    again = run("report", session, "--out", out, "--uncertainty", "none", "--workers", "1")
+    assert again.returncode == 0, again.stderr
+    assert "3 of 3 trials OK" in again.stdout
+    reused = int(again.stdout.split(" unchanged (reused")[0].split()[-1])
+    assert reused >= 1  # walk01 at least was not recomputed
+    assert not [p for p in out.rglob("*") if p.name.startswith(".")], "temporary files left"
