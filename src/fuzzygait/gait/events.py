@@ -72,11 +72,14 @@ from fuzzygait.core.errors import MarkerError
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.kinematics.progression import progression_frame
 from fuzzygait.mocap.filtering import ShortRunWarning, butterworth_lowpass
+from fuzzygait.mocap.sanity import motionless
 
 #: Source string of :func:`trial_gait_events` for the file's own events.
 SOURCE_FILE = "file"
 #: Source string of :func:`trial_gait_events` for detected events.
 SOURCE_DETECTED = "detected from heel/toe markers (Zeni 2008)"
+#: Start of the source string of :func:`trial_gait_events` for a motionless trial.
+SOURCE_MOTIONLESS = "none detected"
 
 #: Event labels and contexts, exactly as Vicon Nexus writes them.
 FOOT_STRIKE = "Foot Strike"
@@ -257,12 +260,16 @@ def detect_gait_events(trial: Trial) -> list[Event]:
         (``"Foot Strike"``/``"Foot Off"``, context ``"Left"``/``"Right"``), subject
         ``trial.subject``; the ``description`` names the method and the marker used.
         Events at the very ends of the trial or of a marker's visible runs may be
-        missing.
+        missing; none for a motionless trial
+        (:func:`fuzzygait.mocap.sanity.motionless`: pelvis
+        and feet within 100 mm over the trial), whose peaks are noise.
 
     Raises:
         MarkerError: naming the markers, when a foot has neither heel nor toe marker,
             no pelvis marker is visible, or the walking direction cannot be found.
     """
+    if motionless(trial) is not None:
+        return []
     signals = _foot_signals(trial)
     stride = _stride_samples(signals)
     distance = None if stride is None else MIN_SEPARATION_STRIDES * stride
@@ -295,7 +302,9 @@ def trial_gait_events(trial: Trial) -> tuple[list[Event], str]:
         ``(events, source)``: ``source`` is :data:`SOURCE_FILE` (``"file"``) when the
         trial carries any Left/Right ``Foot Strike``/``Foot Off`` event (then only those
         are returned), else :data:`SOURCE_DETECTED` (``"detected from heel/toe markers
-        (Zeni 2008)"``) with the events of :func:`detect_gait_events` -- report it.
+        (Zeni 2008)"``) with the events of :func:`detect_gait_events` -- report it;
+        for a motionless trial no events and ``"none detected: the trial is motionless
+        (...)"`` (:data:`SOURCE_MOTIONLESS`; its peaks would be noise).
 
     Raises:
         MarkerError: the file has no events and the markers needed for detection are
@@ -304,4 +313,7 @@ def trial_gait_events(trial: Trial) -> tuple[list[Event], str]:
     events = file_gait_events(trial)
     if events:
         return events, SOURCE_FILE
+    still = motionless(trial)
+    if still is not None:
+        return [], f"{SOURCE_MOTIONLESS}: {still}"
     return detect_gait_events(trial), SOURCE_DETECTED

@@ -40,6 +40,7 @@ from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
+from fuzzygait.mocap.sanity import check_trial, missing_throughout
 
 AXES = ("X", "Y", "Z")
 #: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
@@ -185,13 +186,15 @@ class StaticCalibration:
     (``"plain"``, ``"KAD"`` or ``"KAD+MED"``, :func:`fuzzygait.kinematics.kad.knee_method`;
     for a cluster model its name and the knee/ankle centre rule), the cluster
     calibration (cluster models only),
-    whether foot flat was on, and the static trial's name."""
+    whether foot flat was on, the static trial's name and the content checks' notes on
+    it (:func:`fuzzygait.mocap.sanity.check_trial`: implausible samples blanked)."""
 
     subject: SubjectParameters
     method: str
     flat_foot: bool
     static: str
     clusters: ClusterCalibration | None = None
+    notes: tuple[str, ...] = ()
 
     def describe(self) -> str:
         """``"static offsets calibrated from S.c3d (KAD, foot flat off, 14 mm markers)"``."""
@@ -218,9 +221,14 @@ def calibrate_static(
     foot-flat static trial, 6 Hz: StaticPlantFlex 1.3e-4 rad off Nexus' value,
     unfiltered 1e-8 rad).  ``knee_ankle_centres``: a cluster model's knee/ankle centre
     rule (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when present, else chord).
+
+    The content checks run first (:func:`fuzzygait.mocap.sanity.check_trial`): a trial
+    that moves (a walking trial given as the static one), in the wrong unit or at an
+    absurd rate is refused in one line; implausible samples are blanked and noted.
     """
     trial = static if isinstance(static, Trial) else read_c3d(static)
-    clean, _ = replace(preprocessing, filter=False).apply(trial)
+    checked = check_trial(trial, static=True)
+    clean, _ = replace(preprocessing, filter=False).apply(checked)
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
                                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     method = knee_method(clean)
@@ -228,7 +236,8 @@ def calibrate_static(
     if model_version(model).clusters:
         clusters = calibrate_clusters(clean, calibrated, knee_ankle_centres, forefoot=model_version(model).forefoot)
         method = f"{model} clusters, {RULE_NAMES[knee_ankle_rule(clean, knee_ankle_centres)]} knee/ankle centres"
-    return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters)
+    notes = tuple(checked.notes[len(trial.notes) :])
+    return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters, notes)
 
 
 def run_angles(
@@ -268,7 +277,7 @@ def run_angles(
             holding a cluster calibration (says what to give).
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
-    trial, gaps = preprocessing.apply(raw)
+    trial, gaps = preprocessing.apply(check_trial(raw))
     subject = resolve_subject(raw, subject_file, marker_diameter)
     notes = list(trial.notes)
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
@@ -283,6 +292,7 @@ def run_angles(
                                        model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
+        notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]
     else:
         if model_version(model).clusters:
             clusters = stored_clusters(stored, subject_file, model)
@@ -292,12 +302,28 @@ def run_angles(
             notes.append(f"{Path(subject_file or '').name} was calibrated for {stored.model}; "
                          f"its offsets are used by {model} as they are")  # fmt: skip
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
+    mark_empty_angles(result, raw)
     notes += result.notes
     notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
     events, source = trial_gait_events(trial)
     if source != "file":
         notes.append(f"gait events {source}")
     return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters)
+
+
+def mark_empty_angles(result: CGMResult, raw: Trial) -> None:
+    """Add every angle NaN in every frame to ``result.unavailable`` (so that it is not
+    counted as computed), saying why: the markers of ``raw`` missing in every frame
+    (:func:`fuzzygait.mocap.sanity.missing_throughout`), when there are any."""
+    empty = [name for name, values in result.angles.items()
+             if name not in result.unavailable and not np.isfinite(values).any()]  # fmt: skip
+    if not empty:
+        return
+    missing = missing_throughout(raw)
+    why = "no frame could be computed" + (f" (marker{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
+                                          "missing in every frame)" if missing else "")  # fmt: skip
+    for name in empty:
+        result.unavailable[name] = why
 
 
 def choose_model(

@@ -135,6 +135,7 @@ def calibrate_to_file(
         f"Method {calibration.method}, foot flat {'on' if flat_foot else 'off'}, "
         f"{calibration.subject.marker_diameter:g} mm markers.",
         "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
+        *(f"Static trial note: {note}" for note in calibration.notes),
     ]
     metadata: dict[str, TomlData] = {"model": name, "static": static_name, "method": calibration.method,
                                      "flat_foot": flat_foot, "fuzzygait": __version__}  # fmt: skip
