@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import re
+import unicodedata
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Protocol
@@ -107,7 +108,13 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
         raise _fail(path, f"cannot be read as C3D: {exc}; the file is corrupt or not C3D") from exc
     except OSError as exc:
         raise _fail(path, f"cannot be opened ({exc.strerror or exc})") from exc
-    return _interpret(path, raw)
+    try:
+        return _interpret(path, raw)
+    except FuzzyGaitError:
+        raise
+    except (ValueError, TypeError, IndexError, KeyError, OverflowError) as exc:
+        # a last resort: parameters of unexpected types or shapes in a damaged file
+        raise _fail(path, f"has inconsistent parameters ({type(exc).__name__}: {exc}); the file is corrupt") from exc
 
 
 def _interpret(path: Path, raw: RawC3D) -> Trial:
@@ -136,12 +143,6 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
             scale = to_mm if kinds[lbl] in ("modeled_marker", "segment_frame") else 1.0
             outputs[lbl] = points[:, i, :] * scale
 
-    expected = _header_frame_count(raw)
-    if expected is not None and expected != n_frames:
-        notes.append(
-            f"header announces {expected} frames but the data block holds {n_frames}; "
-            f"using the {n_frames} frames present"
-        )
     return Trial(
         markers=points[:, marker_cols, :] * to_mm,
         marker_labels=[labels[i] for i in marker_cols],
@@ -172,11 +173,22 @@ def _point_rate(path: Path, raw: RawC3D, notes: list[str]) -> float:
 
 
 def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[str]) -> list[str]:
-    labels = list(raw.labels[:n_points])
+    labels = [_printable(str(lbl)) for lbl in raw.labels[:n_points]]
+    cleaned = [new for new, old in zip(labels, raw.labels[:n_points]) if new != str(old).strip()]
+    if cleaned:
+        shown = ", ".join(cleaned[:5]) + (", ..." if len(cleaned) > 5 else "")
+        notes.append(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}")
     if len(labels) < n_points:
         notes.append(f"{n_points - len(labels)} points have no label; named POINTnn")
         labels += [""] * (n_points - len(labels))
     return [lbl if lbl else f"POINT{i + 1}" for i, lbl in enumerate(labels)]
+
+
+def _printable(text: str) -> str:
+    """``text`` with every control or format character (terminal escape codes, NUL,
+    bidi marks, ...) replaced by ``?``, stripped: labels are printed to terminals and
+    written into CSV headers."""
+    return "".join("?" if unicodedata.category(ch)[0] == "C" else ch for ch in text).strip()
 
 
 def _label_prefix(raw: RawC3D, labels: list[str]) -> str:
@@ -240,14 +252,6 @@ def _output_kinds(raw: RawC3D, labels: list[str], prefix: str) -> dict[str, str]
     return kinds
 
 
-def _header_frame_count(raw: RawC3D) -> int | None:
-    frames = raw.get("POINT", "FRAMES")
-    if frames is None or not np.size(frames):
-        return None
-    count = int(np.ravel(frames)[0])
-    return count + 65536 if count < 0 else count  # stored as signed 16-bit
-
-
 def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
     used = raw.get("EVENT", "USED")
     n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
@@ -255,11 +259,13 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
         if raw.header_events:
             notes.append("events taken from the C3D header (no EVENT group); context unknown")
         return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
-    times = np.asarray(raw.get("EVENT", "TIMES"), dtype=float)
-    if times.ndim == 1:  # stored flat: (minutes, seconds) pairs one after the other
-        times = times.reshape(2, -1, order="F")
+    found = raw.get("EVENT", "TIMES")
+    times = np.zeros((2, 0)) if found is None or isinstance(found, list) else np.asarray(found, dtype=float)
+    if times.ndim != 2 or times.shape[0] != 2:  # stored flat: (minutes, seconds) pairs one after the other
+        times = times.ravel()[: times.size // 2 * 2].reshape(2, -1, order="F")
     if times.shape[-1] < n:
-        raise _fail(path, f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}")
+        notes.append(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; using {times.shape[-1]}")
+        n = times.shape[-1]
     seconds = times[0, :n] * 60.0 + times[1, :n]
 
     def texts(name: str, default: str) -> list[str]:

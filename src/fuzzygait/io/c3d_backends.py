@@ -14,9 +14,12 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from fuzzygait.io.c3d_guard import Layout
 
 ParamGetter = Callable[[str, str], Any]
 """``get(group, name)``: the parameter value (list of str, or numpy array in the
@@ -137,13 +140,34 @@ def _c3d_param_value(param: Any) -> Any:
     return arr.T if arr.ndim >= 2 else arr
 
 
-def _decode_c3d(path: Path) -> RawC3D:
+def _lenient_reader(handle: Any) -> Any:
+    """A ``c3d.Reader`` whose header/parameter agreement checks (assertions in
+    ``_check_metadata``: point count, scale, rate, analog rate) become notes: the data
+    are read from the parameters, as the package does anyway, so such a file is never
+    refused for a disagreement that ezc3d tolerates."""
     import c3d
 
+    class LenientReader(c3d.Reader):  # the package is untyped
+        disagreements: list[str] = []
+
+        def _check_metadata(self) -> None:
+            try:
+                super()._check_metadata()
+            except AssertionError as exc:
+                self.disagreements = [f"header and parameters disagree ({exc}); the parameters are used"]
+
+    return LenientReader(handle)
+
+
+def _decode_c3d(path: Path, n_frames: int | None = None) -> RawC3D:
+    """Decode with the ``c3d`` package; ``n_frames``: read that many frames (when the
+    header's count is smaller than what the file holds)."""
     try:
         with open(path, "rb") as handle, warnings.catch_warnings(record=True) as records:
             warnings.simplefilter("always")
-            reader = c3d.Reader(handle)
+            reader = _lenient_reader(handle)
+            if n_frames and reader.get("TRIAL:ACTUAL_END_FIELD") is None:
+                reader.header.last_frame = max(reader.header.last_frame, reader.header.first_frame + n_frames - 1)
             frames = [pts for _, pts, _ in reader.read_frames()]
             # The package's own warnings (missing optional parameters, header/parameter
             # disagreements it resolves itself) are not data-quality news for a user;
@@ -163,9 +187,9 @@ def _decode_c3d(path: Path) -> RawC3D:
             rate = float(reader.point_rate)
             events = _c3d_header_events(header)
             # materialise every parameter now: the file closes when we leave this block
-            cache = {(g, p): get(g, p) for g, params in names.items() for p in params}
+            cache, unreadable = _materialise(get, names)
     except Exception as exc:  # the c3d package raises ValueError, struct.error, ...
-        raise BackendError(_first_sentence(str(exc)) or type(exc).__name__) from exc
+        raise BackendError(_c3d_reason(exc)) from exc
     if frames:
         block = np.stack(frames)  # (n_frames, n_points, 5): x, y, z, residual, cameras
         points = block[:, :, :3].astype(float)
@@ -181,7 +205,31 @@ def _decode_c3d(path: Path) -> RawC3D:
         get=lambda g, p: cache.get((g, p)),
         parameter_names=names,
         backend="c3d",
+        warnings=list(reader.disagreements) + unreadable,
     )
+
+
+def _materialise(get: ParamGetter, names: dict[str, list[str]]) -> tuple[dict[tuple[str, str], Any], list[str]]:
+    """Every parameter's value; one whose stored shape or type cannot be decoded (a
+    damaged record the package skipped past) is left out with a note."""
+    cache: dict[tuple[str, str], Any] = {}
+    bad = []
+    for group, params in names.items():
+        for name in params:
+            try:
+                cache[(group, name)] = get(group, name)
+            except Exception:  # numpy/struct errors on a damaged record
+                bad.append(f"{group}:{name}")
+    notes = [f"parameters {', '.join(bad)} could not be decoded and are ignored"] if bad else []
+    return cache, notes
+
+
+def _c3d_reason(exc: Exception) -> str:
+    """The ``c3d`` package's reason, or a plain one where the package fails internally
+    (e.g. ``UnboundLocalError`` on an unknown processor type)."""
+    if isinstance(exc, (NameError, AttributeError, UnboundLocalError)):
+        return f"the c3d package failed internally ({type(exc).__name__}) on a damaged header or parameter section"
+    return _first_sentence(str(exc)) or type(exc).__name__
 
 
 def _c3d_header_events(header: Any) -> list[tuple[str, float]]:
@@ -198,46 +246,41 @@ def _c3d_header_events(header: Any) -> list[tuple[str, float]]:
 
 
 # --------------------------------------------------------------------------- public
-#: What the ``c3d`` package (0.6) says of a parameter name that occurs twice in a group.
-#: Vicon Nexus writes such files and ezc3d reads them, so it is not taken as corruption.
-DUPLICATE_PARAMETER = "Parameter already exists"
-
-
-def check_parameter_section(path: Path) -> None:
-    """Parse header and parameter section with the ``c3d`` package (milliseconds).
-
-    ezc3d needs more than ten seconds to give up on some corrupt parameter sections;
-    this quick structural check refuses them at once.
-
-    Raises:
-        BackendError: the header or parameter section is not valid C3D.
-    """
-    import c3d
-
-    try:
-        with open(path, "rb") as handle, warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            c3d.Reader(handle)
-    except Exception as exc:
-        if DUPLICATE_PARAMETER in str(exc):  # a repeated name (Nexus writes such files): not corruption
-            return
-        raise BackendError(
-            f"header or parameter section is corrupt ({_first_sentence(str(exc)) or type(exc).__name__})"
-        ) from exc
-
-
 def decode(path: Path) -> RawC3D:
-    """Decode ``path`` with ezc3d, falling back to the ``c3d`` package.
+    """Decode ``path``: never stricter than ezc3d and the ``c3d`` package, never dying.
 
-    The parameter section is first checked by :func:`check_parameter_section`.
+    1. :func:`~fuzzygait.io.c3d_guard.inspect` walks header and parameter section in
+       pure Python (about 1 ms per file).
+    2. No doubt: ezc3d reads the file in this process (the fast, normal path); if it
+       refuses the file, returns no frames, or fewer frames than the file holds, the
+       ``c3d`` package is tried and the better reading kept, with a note.
+    3. Doubts (a parameter record that does not fit, too many dimensions, analog
+       parameters ezc3d would index out of bounds, ...): ezc3d is not run here. The
+       ``c3d`` package reads the file (its checks of header/parameter agreement turned
+       into notes); if it refuses, ezc3d reads it in a child process with a time limit
+       (:mod:`fuzzygait.io.c3d_child`) unless the doubt is a broken record chain,
+       which ezc3d cannot read either.
+
+    Notes for truncation and header/parameter disagreements are added to
+    :attr:`RawC3D.warnings` (:func:`frame_notes`).
 
     Raises:
-        BackendError: when the parameter section is corrupt or neither reader can decode
-            the file; the message carries the readers' reasons.
+        BackendError: no reader can decode the file; the message gives the reasons.
     """
-    check_parameter_section(path)
+    from fuzzygait.io.c3d_guard import inspect
+
+    layout = inspect(path)
+    if layout.doubts:
+        raw = _decode_doubtful(path, layout)
+    else:
+        raw = _decode_trusted(path, layout)
+    raw.warnings.extend(frame_notes(layout, raw))
+    return raw
+
+
+def _decode_trusted(path: Path, layout: Layout) -> RawC3D:
     try:
-        return _decode_ezc3d(path)
+        raw = _decode_ezc3d(path)
     except BackendError as first:
         try:
             raw = _decode_c3d(path)
@@ -245,3 +288,64 @@ def decode(path: Path) -> RawC3D:
             raise BackendError(f"ezc3d: {first}; c3d: {second}") from None
         raw.warnings.insert(0, f"ezc3d refused the file ({first}); read with the c3d package")
         return raw
+    target = _frames_present(layout)
+    n = raw.points.shape[0]
+    if n == 0 or (target is not None and n < target):
+        try:  # the c3d package, told how many frames the file really holds
+            other = _decode_c3d(path, n_frames=target)
+        except BackendError:
+            return raw
+        if other.points.shape[0] > n:
+            other.warnings.insert(
+                0, f"ezc3d read {n} of the {other.points.shape[0]} frames the file holds; read with the c3d package"
+            )
+            return other
+    return raw
+
+
+def _frames_present(layout: Layout) -> int | None:
+    """Frames to read when the declared counts disagree: the larger declared count the
+    file's size supports (None: no better count than the readers' own)."""
+    holds = layout.frames_in_file()
+    declared = [d for d in layout.declared_frames() if d]
+    if holds is None or not declared:
+        return None
+    best = max(min(d, holds) for d in declared)
+    return best if best > min(declared) or best == 0 else None
+
+
+def _decode_doubtful(path: Path, layout: Layout) -> RawC3D:
+    doubt = layout.doubts[0] + (f" (and {len(layout.doubts) - 1} more doubts)" if len(layout.doubts) > 1 else "")
+    try:
+        raw = _decode_c3d(path, n_frames=_frames_present(layout))
+    except BackendError as second:
+        if layout.broken:
+            raise BackendError(f"{doubt}; c3d: {second}") from None
+        from fuzzygait.io.c3d_child import decode_isolated
+
+        try:
+            raw = decode_isolated(path)
+        except BackendError as first:
+            raise BackendError(f"{doubt}; c3d: {second}; ezc3d: {first}") from None
+        raw.warnings.insert(0, f"{doubt}; read with ezc3d in a separate process")
+        return raw
+    raw.warnings.insert(0, f"{doubt}; read with the c3d package")
+    return raw
+
+
+def frame_notes(layout: Layout, raw: RawC3D) -> list[str]:
+    """Notes when the frame counts of header, ``POINT:FRAMES``, file size and the data
+    actually read disagree (a truncated file, a corrupt count)."""
+    header, param = layout.declared_frames()
+    holds = layout.frames_in_file()
+    n = raw.points.shape[0]
+    notes = []
+    if header is not None and param is not None and header != param:
+        notes.append(f"the header announces {header} frames but POINT:FRAMES says {param}")
+    declared = [d for d in (header, param) if d is not None]
+    if declared and n < max(declared):
+        why = f"the file ends after {holds} frames (truncated)" if holds is not None and holds < max(declared) else ""
+        notes.append(f"{max(declared)} frames announced, {n} read" + (f": {why}" if why else "") + f"; using the {n}")
+    elif holds is not None and n < holds and not any(d >= holds for d in declared):
+        notes.append(f"the data block holds {holds} frames but only {n} were read")
+    return notes
