@@ -31,6 +31,10 @@ from fuzzygait.io.tomlfile import TomlData, load_toml, toml_text
 
 #: Default marker diameter (mm) when a source does not give one.
 DEFAULT_MARKER_DIAMETER = 14.0
+#: Plausible body height (mm; 0 = unknown): a small child (0.5 m) to the tallest adults.
+HEIGHT_RANGE = (500.0, 2600.0)
+#: Plausible body mass (kg; 0 = unknown): an infant (2 kg) to 400 kg.
+BODY_MASS_RANGE = (2.0, 400.0)
 
 
 def asis_trochanter_regression(leg_length: float) -> float:
@@ -164,11 +168,17 @@ class SubjectParameters:
             if not math.isfinite(value) or not low <= value <= high:
                 problems.append(f"{name}={value:g} (expected {low:g}..{high:g} {unit})")
 
+        def check_known(name: str, value: float | None, low: float, high: float, unit: str) -> None:
+            if value != 0.0:  # 0: unknown (Vicon's "not measured")
+                check_range(name, value, low, high, unit + ", or 0 when unknown")
+
         check_range("MarkerDiameter", self.marker_diameter, 1, 40, "mm")
         check_range("InterAsisDistance", self.inter_asis_distance, 100, 500, "mm")
-        check_range("Bodymass", self.body_mass, 0, 400, "kg")
+        check_known("Bodymass", self.body_mass, *BODY_MASS_RANGE, "kg")
+        check_known("Height", self.height, *HEIGHT_RANGE, "mm")
         for prefix, params in (("L", self.left), ("R", self.right)):
             check_range(f"{prefix}LegLength", params.leg_length, 300, 1400, "mm")
+            check_known(f"{prefix}AsisTrocanterDistance", params.asis_trochanter_distance, 20, 300, "mm")
             check_range(f"{prefix}KneeWidth", params.knee_width, 40, 250, "mm")
             check_range(f"{prefix}AnkleWidth", params.ankle_width, 30, 200, "mm")
             check_range(f"{prefix}SoleDelta", params.sole_delta, -100, 100, "mm")
@@ -239,6 +249,8 @@ def read_vsk(path: str | os.PathLike[str]) -> SubjectParameters:
         raise ParameterError(f"{path}: no such subject file; check the path") from None
     except ET.ParseError as exc:
         raise ParameterError(f"{path}: not a valid Vicon .vsk (XML) file ({exc})") from None
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot read the subject file ({exc.strerror or exc})") from None
     values: dict[str, float] = {}
     for element in root.iter():
         if not element.tag.endswith("Parameter") or "NAME" not in element.attrib:
@@ -325,7 +337,15 @@ SUBJECT_SUFFIXES = (".toml", ".vsk", ".mp")
 
 
 def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
-    """Read a subject file by extension: ``.toml``, ``.vsk`` or pyCGM2 ``.mp``."""
+    """Read a subject file by extension: ``.toml``, ``.vsk`` or pyCGM2 ``.mp``.
+
+    Raises:
+        ParameterError: a folder, a missing or unreadable file, another extension, or
+            implausible parameters (one line naming the file and the parameter).
+    """
+    if Path(path).is_dir():
+        raise ParameterError(f"{path}: is a folder, not a subject file; give the subject file itself "
+                             "(.toml, .vsk or a pyCGM2 .mp)")  # fmt: skip
     suffix = Path(path).suffix.lower()
     if suffix == ".toml":
         return read_subject_toml(path)

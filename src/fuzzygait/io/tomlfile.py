@@ -22,15 +22,38 @@ def load_toml(path: str | os.PathLike[str], kind: str) -> dict[str, Any]:
         kind: what the file is, for messages (e.g. ``"subject file"``).
 
     Raises:
-        ParameterError: missing file or invalid TOML, naming the file.
+        ParameterError: missing file, a folder, invalid TOML or a NaN/infinite number
+            (which no configuration means), naming the file (and the key).
     """
     path = Path(path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ParameterError(f"{path}: no such {kind}; check the path") from None
+    except IsADirectoryError:
+        raise ParameterError(f"{path}: is a folder, not a {kind}; give the file itself") from None
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot read the {kind} ({exc.strerror or exc})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"{path}: not a valid TOML file ({exc})") from None
+    bad = _non_finite(document)
+    if bad is not None:
+        raise ParameterError(f"{path}: {bad} is not a finite number; give a number (nan and inf are not values)")
+    return document
+
+
+def _non_finite(value: Any, key: str = "") -> str | None:
+    """``"key = nan"`` of the first NaN or infinite float in a TOML document (dotted
+    keys, ``[i]`` for array items), or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{key} = {value}"
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for name, item in items:
+        sub = f"{key}[{name}]" if isinstance(name, int) else f"{key}.{name}" if key else str(name)
+        found = _non_finite(item, sub)
+        if found is not None:
+            return found
+    return None
 
 
 #: A TOML scalar :func:`toml_text` writes.

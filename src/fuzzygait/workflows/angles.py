@@ -290,6 +290,10 @@ def run_angles(
     if static_trial is not None:
         calibration = calibrate_static(static_trial, subject, preprocessing=preprocessing, flat_foot=flat_foot,
                                        model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+        if subject.inter_asis_distance is None and calibration.subject.inter_asis_distance is not None:
+            notes.append(f"InterAsisDistance measured on the static trial {calibration.static}: "
+                         f"{calibration.subject.inter_asis_distance:.2f} mm ({subject.source or 'the subject'} "
+                         "gives none, or 0: Plug-in Gait's 'compute it from the ASIS markers')")  # fmt: skip
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
         notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]

@@ -1,0 +1,180 @@
+"""Content sanity (issue 17 Deliver 2): every check fires on the bad input built from the
+sample / reference data, with the note or one-line error it promises, and on none of the
+good recordings."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fuzzygait.core.errors import C3DError, MarkerError
+from fuzzygait.io import read_c3d
+from fuzzygait.mocap import sanity
+from fuzzygait.workflows.angles import Preprocessing
+from support import SAMPLE_DATA, SHARED_DATA, needs_shared
+
+WALKING = SAMPLE_DATA / "walking.c3d"
+STATIC = SAMPLE_DATA / "static.c3d"
+
+
+@pytest.fixture(scope="module")
+def walking():
+    return read_c3d(WALKING)
+
+
+def _good_trials() -> list[Path]:
+    files = sorted(SAMPLE_DATA.glob("*.c3d"))
+    for folder in ("vicon", "pig-options", "cgm2"):
+        files += sorted((SHARED_DATA / folder).rglob("*.c3d")) if (SHARED_DATA / folder).is_dir() else []
+    return files
+
+
+def _is_static(path: Path) -> bool:
+    return any(word in path.name.lower() for word in ("static", "calibration"))
+
+
+def test_no_check_fires_on_the_good_trials():
+    """Every trial of sample_data and ../shared/data/{vicon,pig-options,cgm2}: no note, no
+    error; static trials are motionless and pass the static check, walking trials move."""
+    files = _good_trials()
+    assert len(files) >= 5
+    notes = {}
+    for path in files:
+        trial = read_c3d(path)
+        checked = sanity.check_trial(trial, static=_is_static(path))
+        notes[path.name] = checked.notes[len(trial.notes) :]
+        assert checked is trial  # nothing blanked, nothing copied
+        assert (sanity.motionless(trial) is not None) == _is_static(path) or path.name.startswith("Static - CGM2")
+    assert notes == {name: [] for name in notes}
+    if SHARED_DATA.is_dir():
+        assert len(files) >= 17
+
+
+# --------------------------------------------------------------------------- rate
+@pytest.mark.parametrize("rate", [1e6, 4e-23, 0.5, 10_001.0])
+def test_absurd_rates_are_refused_naming_the_file_and_rate(walking, rate):
+    with pytest.raises(C3DError, match=re.escape(f"walking.c3d: point rate {rate:g} Hz is implausible")):
+        sanity.check_trial(replace(walking, rate=rate))
+
+
+@pytest.mark.parametrize("rate", [1.0, 50.0, 2000.0, 10_000.0])
+def test_plausible_rates_pass(walking, rate):
+    sanity.check_rate(replace(walking, rate=rate))
+
+
+# --------------------------------------------------------------------------- units
+@pytest.mark.parametrize(
+    ("factor", "unit", "text"),
+    [(1e-3, "metres", "about 1000 times too small"), (0.1, "centimetres", "about 10 times too small"),
+     (1 / 25.4, "inches", "about 25.4 times too small"), (1e3, "millimetres read as metres", "1000 times too large")],
+)  # fmt: skip
+def test_unit_mismatch_is_refused_naming_the_likely_unit(walking, factor, unit, text):
+    scaled = walking.with_markers(walking.markers * factor)
+    with pytest.raises(C3DError) as caught:
+        sanity.check_trial(scaled)
+    message = str(caught.value)
+    assert message.startswith("walking.c3d: marker distances are ") and text in message and unit in message
+    assert f"LASI-RASI {250 * factor:.3g} mm" in message  # the sample subject's ASIS are 250 mm apart
+    assert "POINT:UNITS" in message
+
+
+def test_body_scale_of_the_sample_is_one_within_its_proportions(walking):
+    scale, lengths = sanity.body_scale(walking)
+    assert lengths["LASI-RASI"] == pytest.approx(250.0, abs=0.5)
+    assert 0.9 < scale < 1.2
+
+
+# --------------------------------------------------------------------------- spikes
+def test_a_1e30_coordinate_is_blanked_and_noted(walking):
+    markers = walking.markers.copy()
+    knee = walking.marker_labels.index("LKNE")
+    markers[200, knee, 0] = 1e30
+    bad = walking.with_markers(markers)
+    checked = sanity.check_trial(bad)
+    assert checked.notes[-1].startswith(f"LKNE: 1 implausible sample blanked (frame {walking.first_frame + 200}:")
+    assert np.isnan(checked.markers[200, knee]).all()
+    # every other sample as read
+    keep = np.ones(walking.n_frames, bool)
+    keep[200] = False
+    np.testing.assert_array_equal(checked.markers[keep], walking.markers[keep])
+    # without the check the low-pass filter spreads the spike over the whole trajectory
+    spread, _ = Preprocessing().apply(bad)
+    assert np.nanmax(np.abs(spread.marker("LKNE")[:100] - walking.marker("LKNE")[:100])) > 1e6
+
+
+@pytest.mark.parametrize(("start", "length"), [(100, 1), (100, 3), (0, 2), (509, 3)])
+def test_spike_runs_up_to_three_frames_and_at_the_ends(walking, start, length):
+    markers = walking.markers.copy()
+    ankle = walking.marker_labels.index("RANK")
+    markers[start : start + length, ankle, 2] += 2000.0  # 2 m off the path, 200 m/s at 100 Hz
+    spikes = sanity.find_spikes(walking.with_markers(markers))
+    assert list(spikes) == ["RANK"]
+    np.testing.assert_array_equal(spikes["RANK"], np.arange(start, start + length))
+
+
+def test_a_spike_beside_a_gap_is_found(walking):
+    markers = walking.markers.copy()
+    toe = walking.marker_labels.index("LTOE")
+    markers[300:305, toe] = np.nan
+    markers[305, toe, 1] -= 5000.0
+    assert sanity.find_spikes(walking.with_markers(markers)) == {"LTOE": pytest.approx([305])}
+
+
+def test_a_fast_but_human_movement_is_no_spike(walking):
+    """A marker moving at 20 m/s (a kicking foot) for 10 frames is not blanked."""
+    markers = walking.markers.copy()
+    toe = walking.marker_labels.index("RTOE")
+    markers[200:210, toe, 0] += np.cumsum(np.full(10, 200.0))  # 200 mm a frame at 100 Hz
+    markers[210:, toe, 0] += 2000.0
+    assert sanity.find_spikes(walking.with_markers(markers)) == {}
+
+
+def test_too_many_implausible_samples_refuse_the_marker(walking):
+    markers = walking.markers.copy()
+    heel = walking.marker_labels.index("LHEE")
+    markers[::10, heel, 0] = 1e30  # 10 % of the samples
+    with pytest.raises(MarkerError, match=r"walking\.c3d: marker LHEE has 52 implausible samples of 512"):
+        sanity.check_trial(walking.with_markers(markers))
+
+
+# --------------------------------------------------------------------------- motion
+def test_motion_measure_is_the_session_rule_s(walking):
+    """pelvis_range is the measure of the session discovery's motion rule."""
+    from fuzzygait.workflows import session
+
+    for path in (WALKING, STATIC):
+        trial = read_c3d(path)
+        assert sanity.pelvis_range(trial) == pytest.approx(session._pelvis_range(trial))
+    assert sanity.MOTIONLESS_TRAVEL == session.STATIC_TRAVEL
+    assert sanity.STATIC_MAX_TRAVEL == session.STATIC_MARKERS_TRAVEL
+
+
+def test_a_walking_trial_as_static_is_refused(walking):
+    with pytest.raises(C3DError) as caught:
+        sanity.check_trial(walking, static=True)
+    message = str(caught.value)
+    assert message.startswith("walking.c3d: given as the static trial but it moves (pelvis 6388 mm")
+    assert "give the standing calibration trial" in message
+
+
+@needs_shared
+def test_the_real_walking_trial_as_static_is_refused():
+    trial = read_c3d(SHARED_DATA / "vicon" / "Movement_trial.c3d")
+    with pytest.raises(C3DError, match=r"Movement_trial\.c3d: given as the static trial but it moves \(pelvis 1638 mm"):
+        sanity.check_static(trial)
+
+
+def test_motionless_needs_the_feet_still_too(walking):
+    """A treadmill walk (pelvis held in place, feet swinging) is not motionless; the
+    standing trial is."""
+    centre = np.nanmean([walking.marker("LASI"), walking.marker("RASI")], axis=0)
+    treadmill = walking.with_markers(walking.markers - (centre - centre[0])[:, None, :])
+    ranges = sanity.motion_ranges(treadmill)
+    assert ranges["pelvis"] < 1.0 and ranges["LHEE"] > 500.0
+    assert sanity.motionless(treadmill) is None
+    standing = read_c3d(STATIC)
+    assert sanity.motionless(standing).startswith("the trial is motionless (ranges over the trial: pelvis 0 mm")
