@@ -31,7 +31,7 @@ def load_toml(path: str | os.PathLike[str], kind: str) -> dict[str, Any]:
     except FileNotFoundError:
         raise ParameterError(f"{path}: no such {kind}; check the path") from None
     except IsADirectoryError:
-        raise ParameterError(f"{path}: is a folder, not a {kind}; give the file itself") from None
+        raise ParameterError(f"{path}: is a folder; give the {kind} itself") from None
     except OSError as exc:
         raise ParameterError(f"{path}: cannot read the {kind} ({exc.strerror or exc})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
