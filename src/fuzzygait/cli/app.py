@@ -3,22 +3,86 @@ warnings as one line, progress bars on stderr.
 
 Every command reports bad input as one line ``fuzzygait: error: <file>: <cause>`` on
 standard error and exits with a non-zero code; no partial output file is left behind.
-``--debug`` shows the full traceback instead (for bug reports).
+``--debug`` shows the full traceback instead (for bug reports).  A usage error (unknown
+option, missing argument, a value of the wrong type) is such a line too, naming the
+option and the command's ``--help``, exit 1.  Warnings raised while a command works are
+held until that work ends: printed (one line each) when it succeeds, left out when it
+fails (the error line says how many; ``--debug`` shows them), so a failing command
+prints its one error line only.  SIGINT and SIGTERM stop a command cleanly
+(:mod:`~fuzzygait.cli.interrupts`): one line, exit 130 or 143.
 """
 
 from __future__ import annotations
 
+import sys
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Annotated, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
+from typer._click.exceptions import ClickException, NoArgsIsHelpError, UsageError
+from typer.core import TyperGroup
 
 from fuzzygait import __version__
+from fuzzygait.cli.interrupts import InterruptGuard, exit_code, interrupt_line
+from fuzzygait.cli.usage import usage_line
 from fuzzygait.core.errors import FuzzyGaitError
+
+EXIT_USER_ERROR = 1
+EXIT_INTERNAL_ERROR = 3
+
+out = Console(highlight=False, soft_wrap=True)
+err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+_state: dict[str, Any] = {"debug": False}
+#: Warnings held by the active :func:`user_errors` blocks (innermost last).
+_held: list[list[str]] = []
+T = TypeVar("T")
+
+
+class Commands(TyperGroup):
+    """The command group, run as one process should end: a usage error as one line and
+    exit 1 (``--help`` as typer prints it), SIGINT/SIGTERM as one line and exit
+    130/143 after the clean-up (:class:`~fuzzygait.cli.interrupts.InterruptGuard`)."""
+
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True, windows_expand_args: bool = True,
+             **extra: Any) -> Any:  # fmt: skip
+        _held.clear()
+        code: int
+        with InterruptGuard() as guard:
+            try:
+                value = super().main(args, prog_name, complete_var, standalone_mode=False,
+                                     windows_expand_args=windows_expand_args, **extra)  # fmt: skip
+                code = value if isinstance(value, int) and not isinstance(value, bool) else 0
+            except NoArgsIsHelpError as exc:  # `fuzzygait` alone: the help, as --help prints it
+                out.print(exc.format_message(), markup=False, end="")
+                code = 0
+            except UsageError as exc:
+                err.print(usage_line(exc, self._command_in(args)), markup=False)
+                code = EXIT_USER_ERROR
+            except ClickException as exc:
+                err.print(f"fuzzygait: error: {' '.join(exc.format_message().split())}", markup=False)
+                code = EXIT_USER_ERROR
+            except (typer.Abort, EOFError):
+                err.print("fuzzygait: error: aborted", markup=False)
+                code = EXIT_USER_ERROR
+            except KeyboardInterrupt:  # raised before the guard was active, or not by a signal
+                guard.signum = guard.signum or 2
+        if guard.signum is not None:
+            err.print(interrupt_line(guard.signum), markup=False)
+            code = exit_code(guard.signum)
+        if standalone_mode:
+            sys.exit(code)
+        return code
+
+    def _command_in(self, args: Sequence[str] | None) -> str | None:
+        """The first of ``args`` (default: the process's) that names a command."""
+        return next((a for a in (sys.argv[1:] if args is None else args) if a in self.commands), None)
+
 
 app = typer.Typer(
     name="fuzzygait",
@@ -26,15 +90,8 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    cls=Commands,
 )
-out = Console(highlight=False, soft_wrap=True)
-err = Console(stderr=True, highlight=False, soft_wrap=True)
-
-_state = {"debug": False}
-T = TypeVar("T")
-
-EXIT_USER_ERROR = 1
-EXIT_INTERNAL_ERROR = 3
 
 
 def debugging() -> bool:
@@ -50,30 +107,67 @@ def fail(message: str, code: int = EXIT_USER_ERROR) -> typer.Exit:
 
 @contextmanager
 def user_errors() -> Iterator[None]:
-    """Turn exceptions into the one-line error and exit code (traceback with --debug)."""
+    """Turn exceptions into the one-line error and exit code (traceback with --debug).
+
+    The warnings raised inside are held: printed when the block succeeds (to the
+    enclosing block, if any), left out when it fails, the error line counting them.  An
+    interrupt (``KeyboardInterrupt``) passes through to :class:`Commands`."""
+    held: list[str] = []
+    _held.append(held)
     try:
         yield
-    except typer.Exit:
+    except typer.Exit as exc:
+        _drop(held, exc.exit_code != 0)
         raise
     except FuzzyGaitError as exc:
+        _drop(held)
         if _state["debug"]:
             raise
-        raise fail(str(exc)) from None
-    except KeyboardInterrupt:
-        raise fail("interrupted", 130) from None
+        raise fail(str(exc) + _left_out(held)) from None
     except Exception as exc:  # a bug: still one line, unless debugging
+        _drop(held)
         if _state["debug"]:
             raise
         raise fail(
-            f"internal error {type(exc).__name__}: {exc} (rerun with --debug and report it)",
+            f"internal error {type(exc).__name__}: {exc} (rerun with --debug and report it)" + _left_out(held),
             EXIT_INTERNAL_ERROR,
         ) from None
+    except BaseException:  # interrupted: the interrupt's line is the only one
+        _drop(held)
+        raise
+    _drop(held, failed=False)
+
+
+def _drop(held: list[str], failed: bool = True) -> None:
+    """End a :func:`user_errors` block's holding of warnings: on success pass them on (to
+    the enclosing block, or print them)."""
+    if _held and _held[-1] is held:
+        _held.pop()
+    if not failed:
+        for line in held:
+            _warn_line(line)
+        held.clear()
+
+
+def _left_out(held: Sequence[str]) -> str:
+    if not held:
+        return ""
+    return f" ({len(held)} warning{'s' if len(held) > 1 else ''} left out; --debug shows them)"
+
+
+def _warn_line(line: str) -> None:
+    """A warning line: held by the innermost :func:`user_errors` block, else printed."""
+    if _held:
+        if line not in _held[-1]:
+            _held[-1].append(line)
+    else:
+        err.print(line, markup=False)
 
 
 def progress_bars() -> Progress:
     """Progress bars on stderr (removed when done; silent when stderr is not a terminal)."""
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TimeElapsedColumn(), console=err, transient=True)  # fmt: skip
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    console=err, transient=True, disable=not err.is_terminal)  # fmt: skip
 
 
 class StageBars:
@@ -127,7 +221,7 @@ def _main(
 
 
 def _show_warning(message: Warning | str, category: type[Warning], *_args: object, **_kwargs: object) -> None:
-    err.print(f"fuzzygait: warning: {message}", markup=False)
+    _warn_line(f"fuzzygait: warning: {message}")
 
 
 def main(argv: Sequence[str] | None = None) -> None:

@@ -129,22 +129,40 @@ class BatchReport:
 
 
 def remove_stale_staging(folder: Path) -> list[str]:
-    """Remove what a killed earlier batch left in a report folder: its hidden staging
-    folders and temporary files (``.<name>.*.tmp``, ``.*.tmp-<pid>``, the PDF printer's
-    ``.<name>.print.html`` / ``.<name>.chromium``).  One batch per report folder at a
-    time: a concurrent batch's staging would be removed too."""
+    """Remove what a killed or interrupted batch left in a report folder: its hidden
+    staging folders and temporary files (``.<name>.*.tmp``, ``.*.tmp-<pid>``, the PDF
+    printer's ``.<name>.print.html`` / ``.<name>.chromium``, and in a trial's
+    ``<name>_files`` folder its ``.job.json.tmp-<pid>``), and a page folder set aside
+    while being replaced (``.<name>.old-<pid>``: put back when the new one is missing,
+    else removed).  One batch per report folder at a time: a concurrent batch's staging
+    would be removed too."""
     removed: list[str] = []
     if not folder.is_dir():
         return removed
     for path in folder.iterdir():
         name = path.name
         if name.startswith(".") and (".tmp" in name or name.endswith((".print.html", ".chromium"))):
-            if path.is_dir():
-                shutil.rmtree(path, ignore_errors=True)
-            else:
-                path.unlink(missing_ok=True)
+            _remove(path)
             removed.append(name)
+        elif name.startswith(".") and (aside := re.fullmatch(r"\.(.+)\.old-\d+", name)):
+            target = folder / aside.group(1)
+            if target.exists():
+                _remove(path)
+            else:
+                os.rename(path, target)
+            removed.append(name)
+        elif name.endswith("_files") and path.is_dir():
+            for tmp in path.glob(".*.tmp-*"):
+                _remove(tmp)
+                removed.append(f"{name}/{tmp.name}")
     return removed
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
 
 
 def _page_name(path: Path) -> str:
@@ -273,6 +291,19 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
     return summary, folder / page_name
 
 
+def _clean_up(out: Path, sessions: Sequence[Session], created: bool) -> None:
+    """After a batch stopped early (an interrupt, an unreachable scheduler): remove the
+    staging its trials left (a worker stopped mid-trial cannot), and a report folder
+    this batch created that is left empty; the pages finished before are kept."""
+    for session in sessions:
+        folder = (out / session.output) if session.output else out
+        remove_stale_staging(folder)
+        if created and folder != out and folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()
+    if created and out.is_dir() and not any(out.iterdir()):
+        out.rmdir()  # no empty report folder left behind
+
+
 def write_batch_report(
     inputs: Sequence[Path],
     out_dir: str | os.PathLike[str],
@@ -341,9 +372,8 @@ def write_batch_report(
     todo = [job for job in jobs if reused.get(job.key) is None]
     try:
         computed = dict(zip([j.key for j in todo], _run(todo, workers, scheduler, trials), strict=True))
-    except BaseException:
-        if created and not any(out.iterdir()):
-            out.rmdir()  # e.g. an unreachable scheduler: no empty report folder left behind
+    except BaseException:  # interrupted, or the pool failed: its processes are gone by now
+        _clean_up(out, sessions, created)
         raise
     by_source: dict[Path, TrialOutcome] = {o.source: o for o in early}
     for job in jobs:

@@ -199,8 +199,11 @@ def _move_into_place(staging: Path, job: TrialJob) -> list[str]:
 
 def _write_json(path: Path, content: dict[str, object]) -> None:
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    tmp.write_text(json.dumps(content, indent=1), encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(json.dumps(content, indent=1), encoding="utf-8")
+        os.replace(tmp, path)
+    finally:  # interrupted before the rename: no temporary file left
+        tmp.unlink(missing_ok=True)
 
 
 def run_trial_job(job: TrialJob) -> TrialOutcome:

@@ -35,6 +35,7 @@ import logging
 import math
 import os
 import shutil
+import signal
 import tempfile
 import threading
 import uuid
@@ -47,7 +48,15 @@ from typing import Any, TypeVar
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
-from fuzzygait.uncertainty.execution.workers import WORKER_ENV, ModelRecipe, Slot, evaluate_rows, map_task, probe
+from fuzzygait.uncertainty.execution.workers import (
+    WORKER_ENV,
+    WORKER_PRELOAD,
+    ModelRecipe,
+    Slot,
+    evaluate_rows,
+    map_task,
+    probe,
+)
 from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Evaluation, Output
 
 T = TypeVar("T")
@@ -70,7 +79,14 @@ class ParallelEvaluationError(FuzzyGaitError):
         self.row, self.parameters, self.error_type = row, parameters, error_type
 
 
-@dataclass
+#: Prefix of an evaluator's temporary directory (``fuzzygait-parallel-<pid>-<random>``
+#: in the system's temporary folder; the Dask workers' scratch space is inside it).
+TMPDIR_PREFIX = "fuzzygait-parallel-"
+#: Seconds the local cluster is given to stop its workers before they are killed.
+CLOSE_TIMEOUT = 10.0
+
+
+@dataclass(eq=False)
 class _Resources:
     """What an evaluator owns and must release (kept apart so ``weakref.finalize`` does not
     hold the evaluator alive)."""
@@ -81,18 +97,129 @@ class _Resources:
     tmpdir: str | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
 
-    def release(self) -> None:
+    def make_tmpdir(self) -> str:
+        """The temporary directory (created on first call; the caller holds ``lock``)."""
+        if self.tmpdir is None:
+            remove_stale_tmpdirs()
+            self.tmpdir = tempfile.mkdtemp(prefix=f"{TMPDIR_PREFIX}{os.getpid()}-")
+        return self.tmpdir
+
+    def release(self, interrupted: bool = False) -> None:
+        """Close the client and the cluster, kill any worker process left and remove the
+        temporary directory; ``interrupted`` (or after :func:`stop_quickly`): the workers
+        are stopped at once, their running tasks abandoned."""
         with self.lock:
             client, cluster, tmpdir = self.client, self.cluster, self.tmpdir
             self.client = self.cluster = self.tmpdir = None
-            for owned, thing in ((self.owns_client, client), (True, cluster)):
-                if thing is not None and owned:
-                    try:
-                        thing.close()
-                    except Exception:  # noqa: BLE001 - best effort at shutdown
-                        pass
-            if tmpdir is not None:
-                shutil.rmtree(tmpdir, ignore_errors=True)
+            _LIVE.discard(self)
+            try:
+                if cluster is not None and (_QUICKLY.is_set() or interrupted):
+                    _stop_workers_now(cluster)
+                for owned, thing in ((self.owns_client, client), (True, cluster)):
+                    if thing is not None and owned:
+                        try:
+                            thing.close(timeout=CLOSE_TIMEOUT)
+                        except Exception:  # noqa: BLE001 - best effort at shutdown
+                            pass
+            finally:  # even when the close is interrupted: no worker and no file left
+                if cluster is not None:
+                    _kill_workers(cluster)
+                if tmpdir is not None:
+                    shutil.rmtree(tmpdir, ignore_errors=True)
+
+
+#: Every evaluator's resources while it holds a cluster or a temporary directory.
+_LIVE: set[_Resources] = set()
+
+
+#: Set by :func:`stop_quickly`: every evaluator closing from now on stops its workers at once.
+_QUICKLY = threading.Event()
+#: Seconds a worker is given to stop by itself when its evaluator stops quickly.
+QUICK_STOP_SECONDS = 0.5
+
+
+def stop_quickly() -> None:
+    """From now on, an evaluator closing does not wait for its workers' running tasks (the
+    command was interrupted: they are abandoned anyway)."""
+    _QUICKLY.set()
+
+
+async def _close_nannies(nannies: list[Any], timeout: float) -> None:
+    import asyncio
+
+    await asyncio.gather(*(nanny.close(timeout=timeout) for nanny in nannies), return_exceptions=True)
+
+
+def _stop_workers_now(cluster: Any) -> None:
+    """Close a local cluster's nannies with a short timeout: a worker busy with a task is
+    killed after :data:`QUICK_STOP_SECONDS` instead of the close's usual 4 s."""
+    nannies = list(getattr(cluster, "workers", {}).values())
+    try:
+        cluster.sync(_close_nannies, nannies, QUICK_STOP_SECONDS)
+    except Exception:  # noqa: BLE001 - best effort: the close and the kill below follow
+        pass
+
+
+def _kill_workers(cluster: Any) -> None:
+    """SIGKILL what is left of a closed local cluster's worker processes (a close that
+    timed out, or one interrupted)."""
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        process = getattr(getattr(nanny, "process", None), "process", None)
+        pid = getattr(process, "pid", None)
+        if pid:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+
+
+def remove_temporary_directories() -> list[str]:
+    """Remove the temporary directories of every live evaluator of this process without
+    shutting anything down (the last resort of an interrupted command whose clean
+    shutdown takes too long; its processes are killed separately). Returns them."""
+    removed = []
+    for res in list(_LIVE):
+        if res.tmpdir is not None:
+            shutil.rmtree(res.tmpdir, ignore_errors=True)
+            removed.append(res.tmpdir)
+    return removed
+
+
+def remove_stale_tmpdirs(folder: str | None = None) -> list[str]:
+    """Remove the temporary directories (``fuzzygait-parallel-<pid>-*``) that processes no
+    longer running left behind (e.g. killed with SIGKILL) in ``folder`` (default: the
+    system's temporary folder). Returns the removed paths."""
+    removed = []
+    root = Path(folder or tempfile.gettempdir())
+    for path in root.glob(f"{TMPDIR_PREFIX}*-*"):
+        pid = path.name.removeprefix(TMPDIR_PREFIX).split("-", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid() or _running(int(pid)):
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+        removed.append(str(path))
+    return removed
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process
+        return True
+    return True
+
+
+class _AbandonedWaits(logging.Filter):
+    """Drops asyncio's "Task exception was never retrieved" reports of the client's
+    ``AllExit``: the waits of a gather abandoned by an interrupt, ended by the close."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        return not (error is not None and type(error).__name__ == "AllExit")
+
+
+_ABANDONED_WAITS = _AbandonedWaits()
 
 
 def _pre_spawn_environ() -> dict[str, object]:
@@ -156,18 +283,24 @@ class Evaluator:
         import dask
         from distributed import Client, LocalCluster
 
+        logging.getLogger("asyncio").addFilter(_ABANDONED_WAITS)  # once: a filter is added only once
         if self.scheduler is None:
+            _LIVE.add(res)
+            scratch = os.path.join(res.make_tmpdir(), "dask")  # removed with the evaluator's directory
             try:
-                with dask.config.set({"distributed.nanny.pre-spawn-environ": _pre_spawn_environ()}):
+                with dask.config.set({"distributed.nanny.pre-spawn-environ": _pre_spawn_environ(),
+                                      "temporary-directory": scratch}):  # the scheduler's scratch too
                     cluster = LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
                         silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
+                        local_directory=scratch, preload=[WORKER_PRELOAD],
                         # no dashboard; the scheduler's health endpoint on a free local port
                         scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                     )  # fmt: skip
             except Exception as err:  # noqa: BLE001
                 raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}") from None
-            res.cluster, res.client, res.owns_client = cluster, Client(cluster, set_as_default=False), True
+            res.cluster = cluster
+            res.client, res.owns_client = Client(cluster, set_as_default=False), True
         elif isinstance(self.scheduler, str):
             try:
                 res.client = Client(self.scheduler, timeout=self.connect_timeout, set_as_default=False)
@@ -191,20 +324,20 @@ class Evaluator:
         """A private temporary directory, removed by :meth:`close`."""
         res = self._resources
         with res.lock:
-            if res.tmpdir is None:
-                res.tmpdir = tempfile.mkdtemp(prefix="fuzzygait-parallel-")
-            return Path(res.tmpdir)
+            _LIVE.add(res)
+            return Path(res.make_tmpdir())
 
     def close(self) -> None:
         """Shut down the local cluster (or disconnect from the scheduler) and remove the
-        temporary store. The evaluator starts afresh if used again."""
+        temporary store; a worker process still running after :data:`CLOSE_TIMEOUT`
+        seconds is killed. The evaluator starts afresh if used again."""
         self._resources.release()
 
     def __enter__(self) -> Evaluator:
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def __exit__(self, exc_type: type[BaseException] | None, *exc: object) -> None:
+        self._resources.release(interrupted=exc_type is not None and issubclass(exc_type, KeyboardInterrupt))
 
     # -- generic tasks --------------------------------------------------------------------
     def submit_all(self, function: Callable[..., Any], argument_lists: Sequence[tuple[Any, ...]],

@@ -13,6 +13,7 @@ memory-maps read-only.
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import threading
 import time
@@ -29,6 +30,18 @@ from fuzzygait.uncertainty.protocol import SENSITIVITIES
 #: Environment of the local cluster's worker processes: one BLAS/OpenMP thread each (the
 #: workers are the parallelism; nested threads only oversubscribe the cores).
 WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+#: The Dask preload of the local cluster's workers (:func:`dask_setup` runs in each).
+WORKER_PRELOAD = __name__
+
+
+def dask_setup(worker: object) -> None:
+    """Run by Dask in every worker process of the local cluster as it starts: the worker
+    ignores SIGINT.  A Ctrl-C in a terminal goes to the whole process group; the driver
+    (the ``fuzzygait`` command) then shuts the pool down itself, so a worker has nothing
+    to do with it but print a traceback of the task it was running."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @runtime_checkable
