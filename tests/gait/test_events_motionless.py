@@ -56,3 +56,10 @@ def test_the_real_static_trial_as_walking_has_no_events():
 def test_noise_alone_never_gives_events(sd):
     static = replace(read_c3d(SAMPLE_DATA / "static.c3d"), events=[])
     assert trial_gait_events(_standing_with_noise(static, sd=sd))[0] == []
+
+
+def test_a_one_frame_trial_has_no_events_and_says_why():
+    walking = replace(read_c3d(SAMPLE_DATA / "walking.c3d"), events=[])
+    one = replace(walking, markers=walking.markers[100:101], outputs={})
+    events, source = trial_gait_events(one)
+    assert events == [] and source == f"{SOURCE_MOTIONLESS}: the trial has 1 frame: no motion to tell events from"

@@ -296,7 +296,11 @@ def motionless(trial: Trial) -> str | None:
     """Why ``trial`` is motionless, or None when it moves (or cannot be told: no pelvis
     marker).  Motionless: the pelvis and every foot marker stay within
     :data:`MOTIONLESS_TRAVEL` mm (the feet too, so that walking on a treadmill, whose
-    pelvis hardly travels, still counts as moving)."""
+    pelvis hardly travels, still counts as moving).  A trial of a single frame has no
+    motion to tell events from."""
+    if trial.n_frames < 2:
+        frames = f"{trial.n_frames} frame{'' if trial.n_frames == 1 else 's'}"
+        return f"the trial has {frames}: no motion to tell events from"
     ranges = motion_ranges(trial)
     if "pelvis" not in ranges or max(ranges.values()) >= MOTIONLESS_TRAVEL:
         return None
