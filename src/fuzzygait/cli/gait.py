@@ -177,6 +177,8 @@ def calibrate(
     calibration = written.calibration
     out.print(f"model {written.model} ({written.why})", markup=False)
     out.print(calibration.describe(), markup=False)
+    for note in calibration.notes:  # the content checks' notes on the static trial
+        out.print(f"  note: {note}", markup=False)
     _print_calibrated(calibration.subject)
     if calibration.clusters is not None:
         segments = sorted(calibration.clusters.segments.items(), key=lambda item: ("LR".index(item[0][0]), item[0][1]))

@@ -33,13 +33,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import SUBJECT_SUFFIXES
 from fuzzygait.io.tomlfile import load_toml
+from fuzzygait.mocap.sanity import MOTIONLESS_TRAVEL, STATIC_MAX_TRAVEL, pelvis_range
 
 __all__ = ["STATIC_RULES", "Session", "SessionTrial", "StaticTrial", "find_sessions", "static_rule"]
 
@@ -47,10 +46,12 @@ __all__ = ["STATIC_RULES", "Session", "SessionTrial", "StaticTrial", "find_sessi
 STATIC_RULES = ("markers", "file name", "motion")
 #: Markers only a static (calibration) trial carries.
 STATIC_ONLY_MARKERS = ("LKAX", "RKAX", "LKD1", "RKD1", "LKD2", "RKD2", "LKNM", "RKNM", "LMED", "RMED")
-#: Largest pelvis range (mm) of a static trial recognised by its markers.
-STATIC_MARKERS_TRAVEL = 300.0
-#: Largest pelvis range (mm) of a static trial recognised by its motion alone.
-STATIC_TRAVEL = 100.0
+#: Largest pelvis range (mm) of a static trial recognised by its markers (the content
+#: checks' bound for a standing trial: the two cannot drift apart).
+STATIC_MARKERS_TRAVEL = STATIC_MAX_TRAVEL
+#: Largest pelvis range (mm) of a static trial recognised by its motion alone (the
+#: content checks' "motionless" bound).
+STATIC_TRAVEL = MOTIONLESS_TRAVEL
 _STATIC_NAME = re.compile(r"static|calib|standing", re.IGNORECASE)
 
 
@@ -114,20 +115,6 @@ def _read(path: Path) -> Trial | None:
         return None
 
 
-def _pelvis_range(trial: Trial) -> float | None:
-    """Range (mm, diagonal of the bounding box) of the ASIS midpoint over the trial."""
-    present = [m for m in ("LASI", "RASI") if m in trial.marker_labels]
-    if not present:
-        return None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        mid = np.nanmean([trial.marker(m) for m in present], axis=0)
-    ok = np.isfinite(mid).all(axis=1)
-    if not ok.any():
-        return None
-    return float(np.linalg.norm(mid[ok].max(axis=0) - mid[ok].min(axis=0)))
-
-
 def _has_gait_events(trial: Trial) -> bool:
     return any(e.label.lower() in ("foot strike", "foot off") for e in trial.events)
 
@@ -135,7 +122,7 @@ def _has_gait_events(trial: Trial) -> bool:
 def static_rule(path: Path, trial: Trial | None) -> tuple[str, str] | None:
     """``(rule, detail)`` of the first static-trial rule that fires for ``path`` (see the
     module docstring), or None: a walking trial."""
-    travel = None if trial is None else _pelvis_range(trial)
+    travel = None if trial is None else pelvis_range(trial)
     events = trial is not None and _has_gait_events(trial)
     if trial is not None and not events:
         markers = [m for m in STATIC_ONLY_MARKERS if m in trial.marker_labels]
