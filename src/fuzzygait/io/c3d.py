@@ -110,8 +110,10 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
         raise _fail(path, f"cannot be opened ({exc.strerror or exc})") from exc
     try:
         return _interpret(path, raw)
-    except FuzzyGaitError:
+    except C3DError:
         raise
+    except FuzzyGaitError as exc:  # e.g. Trial's own checks: name the file
+        raise _fail(path, str(exc)) from exc
     except (ValueError, TypeError, IndexError, KeyError, OverflowError) as exc:
         # a last resort: parameters of unexpected types or shapes in a damaged file
         raise _fail(path, f"has inconsistent parameters ({type(exc).__name__}: {exc}); the file is corrupt") from exc
@@ -174,13 +176,15 @@ def _point_rate(path: Path, raw: RawC3D, notes: list[str]) -> float:
 
 def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[str]) -> list[str]:
     labels = [_printable(str(lbl)) for lbl in raw.labels[:n_points]]
-    cleaned = [new for new, old in zip(labels, raw.labels[:n_points]) if new != str(old).strip()]
+    cleaned = [new for new, old in zip(labels, raw.labels[:n_points]) if new != str(old).replace("\x00", " ").strip()]
     if cleaned:
         shown = ", ".join(cleaned[:5]) + (", ..." if len(cleaned) > 5 else "")
         notes.append(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}")
     if len(labels) < n_points:
         notes.append(f"{n_points - len(labels)} points have no label; named POINTnn")
         labels += [""] * (n_points - len(labels))
+    elif labels and not all(labels):
+        notes.append(f"{labels.count('')} points have an empty label; named POINTnn")
     return [lbl if lbl else f"POINT{i + 1}" for i, lbl in enumerate(labels)]
 
 
@@ -188,6 +192,7 @@ def _printable(text: str) -> str:
     """``text`` with every control or format character (terminal escape codes, NUL,
     bidi marks, ...) replaced by ``?``, stripped: labels are printed to terminals and
     written into CSV headers."""
+    text = text.replace("\x00", " ")  # NUL padding, as some writers pad labels
     return "".join("?" if unicodedata.category(ch)[0] == "C" else ch for ch in text).strip()
 
 
@@ -256,6 +261,9 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
     used = raw.get("EVENT", "USED")
     n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
     if n <= 0:
+        stored = raw.get("EVENT", "LABELS")
+        if isinstance(stored, list) and any(stored):
+            notes.append(f"EVENT:USED is {n} but EVENT:LABELS lists {len(stored)} events; they are ignored")
         if raw.header_events:
             notes.append("events taken from the C3D header (no EVENT group); context unknown")
         return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]

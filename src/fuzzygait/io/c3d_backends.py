@@ -45,6 +45,9 @@ class RawC3D:
         parameter_names: parameter names of every group present.
         backend: ``"ezc3d"`` or ``"c3d"``.
         warnings: messages the backend emitted while reading.
+        analog_per_frame: analog samples per point frame as the backend read the data
+            block (ezc3d derives it from the ``ANALOG`` parameters; if that disagrees with
+            the header, its frames are misaligned), None when unknown.
     """
 
     points: np.ndarray
@@ -56,6 +59,7 @@ class RawC3D:
     parameter_names: dict[str, list[str]]
     backend: str
     warnings: list[str] = field(default_factory=list)
+    analog_per_frame: int | None = None
 
 
 def _first_sentence(message: str) -> str:
@@ -93,6 +97,7 @@ def _decode_ezc3d(path: Path) -> RawC3D:
 
     header = c["header"]
     points = np.asarray(c["data"]["points"], dtype=float)[:3].transpose(2, 1, 0)
+    analogs = np.shape(c["data"]["analogs"])  # (1, channels, samples)
     events = [
         (str(lbl).strip(), float(t))
         for lbl, t in zip(header["events"]["events_label"], header["events"]["events_time"])
@@ -112,6 +117,7 @@ def _decode_ezc3d(path: Path) -> RawC3D:
         },
         backend="ezc3d",
         warnings=[str(w.message) for w in caught],
+        analog_per_frame=analogs[1] * analogs[2] // points.shape[0] if points.shape[0] and len(analogs) == 3 else None,
     )
 
 
@@ -274,7 +280,7 @@ def decode(path: Path) -> RawC3D:
         raw = _decode_doubtful(path, layout)
     else:
         raw = _decode_trusted(path, layout)
-    raw.warnings.extend(frame_notes(layout, raw))
+    raw.warnings.extend(layout.notes + frame_notes(layout, raw))
     return raw
 
 
@@ -288,6 +294,14 @@ def _decode_trusted(path: Path, layout: Layout) -> RawC3D:
             raise BackendError(f"ezc3d: {first}; c3d: {second}") from None
         raw.warnings.insert(0, f"ezc3d refused the file ({first}); read with the c3d package")
         return raw
+    if raw.analog_per_frame is not None and raw.analog_per_frame != layout.analog_count:
+        try:  # ezc3d sized the frames from the ANALOG parameters, not the header: misaligned
+            other = _decode_c3d(path)
+        except BackendError:
+            raw.warnings.insert(0, _misaligned(raw, layout) + "; the data may be wrong")
+            return raw
+        other.warnings.insert(0, _misaligned(raw, layout) + "; read with the c3d package, which follows the header")
+        return other
     target = _frames_present(layout)
     n = raw.points.shape[0]
     if n == 0 or (target is not None and n < target):
@@ -301,6 +315,13 @@ def _decode_trusted(path: Path, layout: Layout) -> RawC3D:
             )
             return other
     return raw
+
+
+def _misaligned(raw: RawC3D, layout: Layout) -> str:
+    return (
+        f"ezc3d read frames with {raw.analog_per_frame} analog samples each, the header declares "
+        f"{layout.analog_count} (its ANALOG parameters are incomplete)"
+    )
 
 
 def _frames_present(layout: Layout) -> int | None:

@@ -15,8 +15,10 @@ What is checked, and why:
   (84 Intel, 85 DEC, 86 SGI/MIPS): ezc3d and the ``c3d`` package read every number of the
   file in that format; a wrong byte gives garbage or, in the ``c3d`` package, an internal
   error;
-* every parameter record, walked through the records' "offset to next" chain as ezc3d
-  does: the record must lie inside the file, its name must be printable, its data type
+* every group and parameter record, walked through the records' "offset to next" chain
+  as ezc3d does: the record must lie inside the file, its name must be printable, a
+  group's description must fill its record exactly (a parameter record whose group
+  number turned negative reads as a group, on which ezc3d crashes), a parameter's type
   one of -1, 1, 2, 4, and its data (the product of its dimensions times the element size,
   plus the description) must fit inside its record -- this bounds every dimension by the
   section's size, so a corrupt dimension count can no longer announce 10^80 elements;
@@ -41,6 +43,9 @@ BLOCK = 512  # bytes per C3D block
 PROCESSORS = {84: "Intel", 85: "DEC", 86: "SGI/MIPS"}
 _ELEMENT_SIZE = {-1: 1, 1: 1, 2: 2, 4: 4}
 _NAME_BYTES = frozenset(range(0x20, 0x7F))  # printable ASCII
+#: Bytes read for the pass: a parameter section starts within 255 blocks and spans at
+#: most 255 blocks, so this covers it in any file (the data block is never read).
+_HEAD_BYTES = 2 * 255 * BLOCK + BLOCK
 _MAX_DIMS = 7  # the C3D manual's limit; ezc3d nests one loop per dimension
 
 
@@ -51,6 +56,7 @@ class RawParameter:
     kind: int
     dims: tuple[int, ...]
     data: bytes
+    position: int = 0  # byte offset of the record (its name-length byte) in the file
 
 
 @dataclass
@@ -63,12 +69,15 @@ class Layout:
         point_count, analog_count: header words 2 and 3 (points; analog samples per frame).
         first_frame, last_frame: header frame numbers (1-based, unsigned 16-bit).
         header_scale: header point scale (negative: float data), NaN if unreadable.
+        header_rate: header point rate, Hz.
         data_start: header data-start block (1-based).
         parameters: ``{(GROUP, NAME): RawParameter}`` (a repeated name keeps the last,
             as ezc3d does).
         doubts: reasons not to run ezc3d in this process (empty: the file is safe for it).
         repeated: ``GROUP:NAME`` of parameters stored more than once.
         broken: a doubt concerns the header or the parameter records themselves.
+        notes: things a user should know that do not stop ezc3d (the record chain ending
+            before the section does, header frame numbers that disagree with ``TRIAL``).
     """
 
     size: int
@@ -78,11 +87,13 @@ class Layout:
     first_frame: int = 0
     last_frame: int = 0
     header_scale: float = float("nan")
+    header_rate: float = float("nan")
     data_start: int = 0
     parameters: dict[tuple[str, str], RawParameter] = field(default_factory=dict)
     doubts: list[str] = field(default_factory=list)
     repeated: list[str] = field(default_factory=list)
     broken: bool = False
+    notes: list[str] = field(default_factory=list)
 
     def doubt(self, reason: str, *, broken: bool = False) -> None:
         """Record a reason not to run ezc3d here; ``broken``: the header or the record
@@ -153,8 +164,16 @@ def inspect(path: Path) -> Layout:
     Never raises on a damaged file (only ``OSError`` when it cannot be opened): every
     problem becomes a doubt in :attr:`Layout.doubts`.
     """
-    data = path.read_bytes()
-    layout = Layout(size=len(data))
+    with open(path, "rb") as handle:
+        head = handle.read(_HEAD_BYTES)
+        size = handle.seek(0, 2)
+    return inspect_bytes(head, size)
+
+
+def inspect_bytes(data: bytes, size: int | None = None) -> Layout:
+    """:func:`inspect` of a file's first bytes (all of it, or at least the first
+    :data:`_HEAD_BYTES`); ``size``: the whole file's size (default ``len(data)``)."""
+    layout = Layout(size=len(data) if size is None else size)
     if len(data) < BLOCK:
         layout.doubt("the file is shorter than one 512-byte block", broken=True)
         return layout
@@ -180,6 +199,8 @@ def inspect(path: Path) -> Layout:
     else:
         _walk_parameters(data, start + 4, layout)
     _check_counts(layout)
+    _check_trial_frames(layout)
+    _check_header_agreement(layout)
     return layout
 
 
@@ -188,6 +209,7 @@ def _read_header(data: bytes, layout: Layout) -> None:
     words = struct.unpack(f"{endian}4H", data[2:10])
     layout.point_count, layout.analog_count, layout.first_frame, layout.last_frame = words
     layout.header_scale = layout._float(data[12:16])
+    layout.header_rate = layout._float(data[20:24])
     (layout.data_start,) = struct.unpack(f"{endian}H", data[16:18])
 
 
@@ -204,6 +226,7 @@ def _walk_parameters(data: bytes, pos: int, layout: Layout, into: Layout | None 
             break
         n_chars, group_id = struct.unpack("bb", data[pos : pos + 2])
         if n_chars == 0 or group_id == 0:
+            _check_tail(data, pos, layout)
             break
         name_end = pos + 2 + abs(n_chars)
         raw_name = data[pos + 2 : name_end]
@@ -222,9 +245,15 @@ def _walk_parameters(data: bytes, pos: int, layout: Layout, into: Layout | None 
             layout.doubt(f"parameter record {name} at byte {pos} points outside the file", broken=True)
             break
         if group_id < 0:
+            if offset and (body + 1 > len(data) or offset != 3 + data[body]):
+                layout.doubt(
+                    f"group record {name} at byte {pos} is malformed (its description does not fill its record)",
+                    broken=True,
+                )
+                break
             groups[-group_id] = name
         else:
-            param = _read_parameter(data, body, record_end, name, layout)
+            param = _read_parameter(data, body, record_end, name, layout, pos, exact=bool(offset))
             if param is not None:  # a bad record is skipped, as the c3d package does
                 pending.append((group_id, name, param))
         if not offset:
@@ -244,7 +273,24 @@ def _walk_parameters(data: bytes, pos: int, layout: Layout, into: Layout | None 
         layout.parameters[(group, name)] = param
 
 
-def _read_parameter(data: bytes, body: int, record_end: int, name: str, layout: Layout) -> RawParameter | None:
+def _check_tail(data: bytes, pos: int, layout: Layout) -> None:
+    """A chain that ends (a zero name length) well before the section's declared end,
+    with non-zero bytes after it, has lost the parameters stored there."""
+    start = (data[0] - 1) * BLOCK
+    end = min(len(data), start + BLOCK * data[start + 2])
+    left = sum(1 for b in data[pos:end] if b)
+    if left > 16:
+        layout.notes.append(
+            f"the parameter records stop at byte {pos} but {left} non-zero bytes follow in the parameter "
+            "section: parameters stored after that point are lost (damaged file?)"
+        )
+
+
+def _read_parameter(
+    data: bytes, body: int, record_end: int, name: str, layout: Layout, position: int, exact: bool
+) -> RawParameter | None:
+    """The parameter record whose body (type byte) is at ``body``; ``exact``: the record
+    has a successor, so data and description must end exactly at ``record_end``."""
     if body + 2 > record_end:
         layout.doubt(f"parameter {name} (byte {body}) is cut short", broken=True)
         return None
@@ -273,7 +319,59 @@ def _read_parameter(data: bytes, body: int, record_end: int, name: str, layout: 
             broken=True,
         )
         return None
-    return RawParameter(kind, dims, data[data_start : data_start + size])
+    end = data_start + size + 1 + data[data_start + size]  # after the description
+    if exact and end != record_end:  # ezc3d refuses such a record ("not standard"), after up to 20 s
+        layout.doubt(
+            f"parameter {name}'s data and description ({end - body} bytes) do not fill its record "
+            f"({record_end - body} bytes)",
+            broken=True,
+        )
+    elif not exact:  # the last record: nothing but padding may follow it in the section
+        _check_tail(data, end, layout)
+    if kind == -1 and not n_dims:
+        layout.doubt(f"character parameter {name} has no dimensions (ezc3d crashes on it)")
+    return RawParameter(kind, dims, data[data_start : data_start + size], position)
+
+
+def _check_trial_frames(layout: Layout) -> None:
+    """The header's first and last frame numbers: in order, and equal to Vicon's
+    ``TRIAL:ACTUAL_START_FIELD``/``ACTUAL_END_FIELD`` (two 16-bit words each) when
+    present (ezc3d uses the header's, the ``c3d`` package the ``TRIAL`` ones)."""
+    if layout.first_frame > layout.last_frame or layout.first_frame == 0:
+        layout.notes.append(
+            f"the header's first frame number {layout.first_frame} is not between 1 and its last, {layout.last_frame}"
+        )
+    for name, header in (("ACTUAL_START_FIELD", layout.first_frame), ("ACTUAL_END_FIELD", layout.last_frame)):
+        words = [int(w) % 65536 for w in layout.numbers("TRIAL", name)[:2]]
+        if len(words) == 2 and layout.parameters[("TRIAL", name)].kind == 2:
+            value = words[0] + 65536 * words[1]
+            if value != header:
+                which = "first" if name == "ACTUAL_START_FIELD" else "last"
+                layout.notes.append(f"the header's {which} frame number {header} differs from TRIAL:{name} = {value}")
+
+
+def _check_header_agreement(layout: Layout) -> None:
+    """Rate and scale stored twice (header and ``POINT``) that disagree: the readers
+    use different copies (ezc3d the header's sign of the scale, the ``c3d`` package the
+    parameters), so the result depends on the reader -- worth a note."""
+    rate = layout.number("POINT", "RATE")
+    if rate is not None and layout.header_rate == layout.header_rate and not _close(rate, layout.header_rate):
+        layout.notes.append(f"the header's rate {layout.header_rate:g} Hz differs from POINT:RATE = {rate:g} Hz")
+    scale = layout.number("POINT", "SCALE")
+    head = layout.header_scale
+    if scale is None or head != head or scale != scale:
+        return
+    if (scale < 0) != (head < 0):
+        layout.notes.append(
+            f"the header's scale {head:g} and POINT:SCALE = {scale:g} disagree on whether the data are "
+            "floating point (negative) or scaled integers"
+        )
+    elif scale > 0 and not _close(scale, head):
+        layout.notes.append(f"the header's scale {head:g} differs from POINT:SCALE = {scale:g}")
+
+
+def _close(a: float, b: float) -> bool:
+    return abs(a - b) <= 1e-6 * max(abs(a), abs(b))
 
 
 def _check_counts(layout: Layout) -> None:
