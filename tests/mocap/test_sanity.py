@@ -143,14 +143,18 @@ def test_too_many_implausible_samples_refuse_the_marker(walking):
 
 # --------------------------------------------------------------------------- motion
 def test_motion_measure_is_the_session_rule_s(walking):
-    """pelvis_range is the measure of the session discovery's motion rule."""
+    """pelvis_range is the measure of the session discovery's motion rule (one measure):
+    the ASIS midpoint's bounding-box diagonal, 6388 mm over the sample walk, 0 standing."""
     from fuzzygait.workflows import session
 
-    for path in (WALKING, STATIC):
-        trial = read_c3d(path)
-        assert sanity.pelvis_range(trial) == pytest.approx(session._pelvis_range(trial))
+    assert session.pelvis_range is sanity.pelvis_range
     assert sanity.MOTIONLESS_TRAVEL == session.STATIC_TRAVEL
     assert sanity.STATIC_MAX_TRAVEL == session.STATIC_MARKERS_TRAVEL
+    mid = (walking.marker("LASI") + walking.marker("RASI")) / 2
+    ok = np.isfinite(mid).all(axis=1)
+    assert sanity.pelvis_range(walking) == pytest.approx(np.linalg.norm(np.ptp(mid[ok], axis=0)))
+    assert sanity.pelvis_range(walking) == pytest.approx(6388, abs=1)
+    assert sanity.pelvis_range(read_c3d(STATIC)) < 1.0
 
 
 def test_a_walking_trial_as_static_is_refused(walking):
