@@ -13,7 +13,8 @@ from scipy import stats
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.frv.samples import DISTRIBUTIONS, sample_increments
-from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks, _open_group, _read_meta
+from fuzzygait.uncertainty.frv.store import read_group, read_meta
+from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks
 
 
 def _store_path(store: FRVStudy | str | os.PathLike[str]) -> Path:
@@ -22,7 +23,7 @@ def _store_path(store: FRVStudy | str | os.PathLike[str]) -> Path:
 
 def stored_samples(store: FRVStudy | str | os.PathLike[str]) -> int:
     """Number of samples in a stored study."""
-    return int(_read_meta(_store_path(store))["n_samples"])
+    return int(read_meta(_store_path(store))["n_samples"])
 
 
 def iter_hull_blocks(store: FRVStudy | str | os.PathLike[str], data: str = "hulls") -> Iterator[np.ndarray]:
@@ -32,8 +33,8 @@ def iter_hull_blocks(store: FRVStudy | str | os.PathLike[str], data: str = "hull
     if data not in ("hulls", "increments"):
         raise ParameterError(f"data must be 'hulls' or 'increments'; got {data!r}")
     path = _store_path(store)
-    meta = _read_meta(path)
-    hull = _open_group(path, "samples")["hull"]
+    meta = read_meta(path)
+    hull = read_group(path, "samples")["hull"]
     for a, b in _blocks(0, meta["n_samples"], meta["chunk"]):
         block = hull.isel(sample=slice(a, b)).to_numpy()
         yield block if data == "hulls" else np.moveaxis(sample_increments(np.moveaxis(block, 3, 1)), 1, 3)
@@ -90,8 +91,8 @@ def fit_distributions(store: FRVStudy | str | os.PathLike[str], kind: str = "nor
     if kind not in DISTRIBUTIONS:
         raise ParameterError(f"kind must be 'normal' or 'beta'; got {kind!r}")
     path = _store_path(store)
-    n_samples = _read_meta(path)["n_samples"]
-    coords = _open_group(path, "samples").drop_dims("sample").coords
+    n_samples = read_meta(path)["n_samples"]
+    coords = read_group(path, "samples").drop_dims("sample").coords
     dims = ("alpha", "bound", "time")
     attrs = {"kind": kind, "data": data, "n_samples": n_samples}
     if kind == "normal":

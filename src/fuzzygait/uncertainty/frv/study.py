@@ -1,18 +1,18 @@
 """The persistent FRV-GFA study (thesis §2.7.4 steps 1–7): :class:`FRVStudy` runs the
-steps into a chunked zarr store, block by block, and extends it by samples."""
+steps into a chunked zarr store, block by block, and extends it by samples; every write
+commits atomically (:mod:`fuzzygait.uncertainty.frv.store`)."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import xarray as xr
-import zarr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
@@ -21,11 +21,14 @@ from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, 
 from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
 from fuzzygait.uncertainty.frv.hulls import _hermite_rows, interval_hulls
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, generate_samples
+from fuzzygait.uncertainty.frv.store import STORE_FORMAT, check, commit, new_store, open_group, read_meta
+from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.gfa import optimisation_nodes
 from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
+from fuzzygait.uncertainty.storage import replace_folder, temporary_folder, tidy_beside
 
-STORE_FORMAT = "fuzzygait-frv-1"
+__all__ = ["STORE_FORMAT", "FRVStudy"]
 
 
 def _single_spec(spec: FRVSpec | Sequence[FRVSpec]) -> FRVSpec:
@@ -49,20 +52,6 @@ def _blocks(start: int, stop: int, chunk: int) -> Iterator[tuple[int, int]]:
         a = b
 
 
-def _open_group(path: Path, name: str) -> xr.Dataset:
-    """Group ``name`` lazily: slices are read on access, nothing is cached."""
-    return xr.open_dataset(path, engine="zarr", group=name, consolidated=False, chunks=None, cache=False)
-
-
-def _append(path: Path, name: str, ds: xr.Dataset, dim: str, encoding: dict[str, Any] | None = None) -> None:
-    """Write ``ds`` to group ``name``: create it, or append along ``dim``."""
-    root = zarr.open_group(path, mode="r")
-    if name in root:
-        ds.to_zarr(path, group=name, append_dim=dim, consolidated=False, zarr_format=2)
-    else:
-        ds.to_zarr(path, group=name, mode="w-", consolidated=False, zarr_format=2, encoding=encoding)
-
-
 def _new_counts() -> dict[str, Any]:
     return {"samples": 0, "forward_simulations": 0, "interval_optimisations": 0, "occurring_intervals": 0,
             "occurring_proper_intervals": 0, "possible_intervals": 0, "worst_case_optimisations": 0,
@@ -75,8 +64,10 @@ class FRVStudy:
 
     Store layout (zarr v2 groups, written through xarray):
 
-    * root attributes: ``spec``, ``seed``, ``grid``, ``n_disc``, ``time_stride``,
-      ``refine``, ``chunk``, ``n_time`` (the model's), ``n_samples`` and ``counts``;
+    * root attributes, the commit record: ``spec``, ``seed``, ``grid``, ``n_disc``,
+      ``time_stride``, ``refine``, ``chunk``, ``n_time`` (the model's), ``n_samples``,
+      ``counts``, the valid rows ``library_rows`` and ``interval_rows``, and the caller's
+      ``options`` (what the study was made with, e.g. the command's options);
     * ``library``: ``value (bin, time)`` the model at each bin centre (``slope`` = df/dp
       when refining), ``centre (bin)``; rows in order of computation;
     * ``intervals``: ``left``, ``right (interval)`` bins and ``lower``, ``upper
@@ -86,8 +77,12 @@ class FRVStudy:
       by block (one append along ``sample`` per block of ``chunk`` samples).
 
     Only the output time nodes ``optimisation_nodes(n_time, time_stride)`` are kept (the
-    library too). Use :meth:`create`, :meth:`open`, :meth:`add_samples`; read with
-    :meth:`hulls`, :meth:`samples`, :meth:`library`, :meth:`intervals`, :attr:`counts`.
+    library too). Each write phase (library, intervals, all samples of one call) commits
+    atomically; rows a killed write left beyond the commit record are discarded on
+    :meth:`open`, and a study is created in a folder beside its store and moved into place
+    when complete (see :mod:`fuzzygait.uncertainty.frv.store`). Use :meth:`create`,
+    :meth:`open`, :meth:`add_samples`; read with :meth:`hulls`, :meth:`samples`,
+    :meth:`library`, :meth:`intervals`, :attr:`counts`.
     """
 
     def __init__(self, path: Path, model: FuzzyModel, spec: FRVSpec, meta: dict[str, Any],
@@ -101,6 +96,9 @@ class FRVStudy:
         self.chunk: int = meta["chunk"]
         self.n_time: int = meta["n_time"]
         self.n_samples: int = meta["n_samples"]
+        self.library_rows: int = int(meta["library_rows"])
+        self.interval_rows: int = int(meta["interval_rows"])
+        self.options: dict[str, Any] = dict(meta.get("options") or {})
         self.counts: dict[str, Any] = dict(meta["counts"])
         self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
         times = np.asarray(model.times, dtype=float)
@@ -122,7 +120,7 @@ class FRVStudy:
     def create(cls, model: FuzzyModel, spec: FRVSpec | Sequence[FRVSpec], n_samples: int, n_disc: int = 100,
                seed: int = 0, store: str | os.PathLike[str] | None = None, evaluator: BatchFunction | None = None,
                time_stride: int = 1, refine: bool | None = None, chunk: int = 256,
-               overwrite: bool = False) -> FRVStudy:  # fmt: skip
+               overwrite: bool = False, options: Mapping[str, Any] | None = None) -> FRVStudy:  # fmt: skip
         """Run the FRV-GFA for ``n_samples`` samples into a new store.
 
         Args:
@@ -139,7 +137,14 @@ class FRVStudy:
             refine: Hermite refinement between library entries; default: when the
                 evaluator returns sensitivities.
             chunk: samples per zarr chunk and per processing block.
-            overwrite: replace an existing store.
+            overwrite: replace an existing store (it stays intact until the new one is
+                complete).
+            options: what the study is made with, JSON-compatible (stored as the
+                ``options`` attribute, e.g. for the caller to refuse extending it with
+                other ones).
+
+        The study is built in a temporary folder beside ``store`` and moved onto it when
+        complete: on any failure (or a kill) nothing is left at ``store``.
         """
         t0 = time.perf_counter()
         spec = _single_spec(spec)
@@ -149,38 +154,42 @@ class FRVStudy:
         if store is None:
             raise ParameterError("store: give the path of the zarr directory to create")
         path = Path(store)
-        if path.exists():
-            if not overwrite:
-                raise FuzzyGaitError(f"{path}: already exists; open it with FRVStudy.open or pass overwrite=True")
-            shutil.rmtree(path)
+        if path.exists() and not overwrite:
+            raise FuzzyGaitError(f"{path}: already exists; open it with FRVStudy.open or pass overwrite=True")
         if not path.parent.exists():
             raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
         n_time = CountedModel(model, scale=np.ones(1)).n_time
         low, high = _sample_range(spec, seed, 0, n_samples, chunk)
         meta: dict[str, Any] = {"seed": seed, "grid": Grid.from_range(low, high, n_disc).to_dict(), "n_disc": n_disc,
                 "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
-                "n_samples": 0, "counts": _new_counts()}  # fmt: skip
-        attrs = {"format": STORE_FORMAT, "spec": spec.to_dict(), **meta}
-        zarr.open_group(path, mode="w-", zarr_format=2).attrs.update(attrs)
-        study = cls(path, model, spec, meta, evaluator)
-        study._ingest(0, n_samples, t0)
+                "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
+                "options": dict(options or {})}  # fmt: skip
+        staging = temporary_folder(path, "creating")
+        try:
+            new_store(staging, {"spec": spec.to_dict(), **meta})
+            study = cls(staging, model, spec, meta, evaluator)
+            study._ingest(0, n_samples, t0)
+            replace_folder(staging, path)
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        study.path = path
         return study
 
     @classmethod
     def open(cls, path: str | os.PathLike[str], model: FuzzyModel, evaluator: BatchFunction | None = None) -> FRVStudy:
         """Open a study written by :meth:`create` (the model must be the same one)."""
         path = Path(path)
-        meta = _read_meta(path)
+        meta = read_meta(path)
         study = cls(path, model, FRVSpec.from_dict(meta["spec"]), meta, evaluator)
-        study._truncate()
-        root = zarr.open_group(path, mode="r")
-        if "library" in root:
-            lib = _open_group(path, "library").sortby("bin")
-            study._lib_first = int(lib["bin"][0]) if lib.sizes["bin"] else 0
+        tidy_beside(path)
+        check(path, meta, repair=True)
+        if study.library_rows:
+            lib = study.library()
+            study._lib_first = int(lib["bin"][0])
             study._lib_values = lib["value"].to_numpy()
             study._lib_slopes = lib["slope"].to_numpy() if "slope" in lib else None
-        if "intervals" in root:
-            table = _open_group(path, "intervals")
+        if study.interval_rows:
+            table = study.intervals()
             keys = _encode(table["left"].to_numpy(), table["right"].to_numpy())
             order = np.argsort(keys)
             study._keys = keys[order]
@@ -197,7 +206,7 @@ class FRVStudy:
         t0 = time.perf_counter()
         n = _whole(n, "n")
         if n:
-            self._truncate()
+            check(self.path, read_meta(self.path), repair=True)
             low, high = _sample_range(self.spec, self.seed, self.n_samples, n, self.chunk)
             self.grid = self.grid.extended(np.array([low, high]))
             self._write_meta()
@@ -207,40 +216,31 @@ class FRVStudy:
     def hulls(self) -> xr.Dataset:
         """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
         with the counts as attributes."""
-        ds = _open_group(self.path, "samples")[["hull"]].isel(sample=slice(0, self.n_samples))
+        ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
         ds.attrs.update(self.counts)
         return ds
 
     def samples(self) -> xr.Dataset:
         """The raw α-cuts ``cut`` and their ``bin`` (lazily)."""
-        return _open_group(self.path, "samples")[["cut", "bin"]].isel(sample=slice(0, self.n_samples))
+        return open_group(self.path, "samples", self.n_samples)[["cut", "bin"]]
 
     def library(self) -> xr.Dataset:
         """The library: ``value (bin, time)`` at bin ``centre`` (and ``slope``), sorted."""
-        return _open_group(self.path, "library").sortby("bin")
+        return open_group(self.path, "library", self.library_rows).sortby("bin")
 
     def intervals(self) -> xr.Dataset:
         """The interval dictionary: ``left``, ``right`` bins, ``lower``, ``upper`` hulls."""
-        return _open_group(self.path, "intervals")
+        return open_group(self.path, "intervals", self.interval_rows)
 
     # ------------------------------------------------------------------ internals
     def _write_meta(self) -> None:
+        """Commit: the record of the grid, counts and valid rows, rewritten in one file."""
         self.counts["possible_intervals"] = self.grid.possible_intervals
         self.counts["time_nodes"] = int(self.nodes.size)
         self.counts["worst_case_optimisations"] = 2 * int(self.nodes.size) * self.grid.possible_intervals  # Eq. 2.33
-        zarr.open_group(self.path, mode="a").attrs.update(
-            {"grid": self.grid.to_dict(), "refine": self.refine, "n_samples": self.n_samples, "counts": self.counts}
-        )
-
-    def _truncate(self) -> None:
-        """Drop sample rows beyond ``n_samples`` (left by an interrupted add)."""
-        root = zarr.open_group(self.path, mode="a")
-        samples = root["samples"] if "samples" in root else None
-        if isinstance(samples, zarr.Group):
-            for _, array in samples.arrays():
-                dims = cast("list[str]", array.attrs.get("_ARRAY_DIMENSIONS", []))
-                if dims and dims[0] == "sample" and array.shape[0] > self.n_samples:
-                    array.resize((self.n_samples, *array.shape[1:]))
+        commit(self.path, {"grid": self.grid.to_dict(), "refine": self.refine, "n_samples": self.n_samples,
+                           "library_rows": self.library_rows, "interval_rows": self.interval_rows,
+                           "counts": self.counts})  # fmt: skip
 
     def _ingest(self, start: int, n: int, t0: float) -> None:
         """Steps 2–7 for samples ``start … start+n−1`` on the current grid: pass 2 finds
@@ -309,6 +309,7 @@ class FRVStudy:
         if slopes is not None:
             ds["slope"] = (("bin", "time"), slopes)
         _append(self.path, "library", ds, "bin")
+        self.library_rows += int(missing.size)
         # merge into the contiguous in-memory library
         below = missing < have_lo if m else np.ones(missing.size, dtype=bool)
         self._lib_values = np.concatenate([values[below], self._lib_values, values[~below]])
@@ -332,6 +333,7 @@ class FRVStudy:
                          "lower": (("interval", "time"), lower), "upper": (("interval", "time"), upper)},
                         coords={"time": self.times})  # fmt: skip
         _append(self.path, "intervals", ds, "interval")
+        self.interval_rows += int(keys.size)
         all_keys = np.concatenate([self._keys, keys])
         order = np.argsort(all_keys, kind="stable")
         self._keys = all_keys[order]
@@ -371,10 +373,3 @@ def _sample_range(spec: FRVSpec, seed: int, start: int, n: int, chunk: int) -> t
     return low, high
 
 
-def _read_meta(path: Path) -> dict[str, Any]:
-    if not path.is_dir():
-        raise FuzzyGaitError(f"{path}: no such FRV study; check the path")
-    attrs = dict(zarr.open_group(path, mode="r").attrs)
-    if attrs.get("format") != STORE_FORMAT:
-        raise FuzzyGaitError(f"{path}: not an FRV study store (format {attrs.get('format')!r})")
-    return attrs
