@@ -129,3 +129,15 @@ def test_the_cli_on_the_real_trial_with_a_spike_and_as_static(tmp_path):
     assert np.nanmax(np.abs(a[angles].to_numpy() - b[angles].to_numpy())) < 1e-3
     result = run("angles", VICON / "Movement_trial.c3d", "--static", VICON / "Movement_trial.c3d", "--out", clean_csv)
     assert_one_line_error(result, "Movement_trial.c3d: given as the static trial but it moves (pelvis 1638 mm")
+
+
+def test_preprocess_blanks_a_spike_before_the_filter(trials, tmp_path):
+    from fuzzygait.workflows.angles import Preprocessing, preprocess_file
+
+    walking, _ = trials
+    write_c3d(_with(walking, "LKNE", lambda m: m.__setitem__((200, 0), 1e30)), tmp_path / "spike.c3d")
+    checked, gaps = preprocess_file(tmp_path / "spike.c3d", tmp_path / "clean.c3d", Preprocessing(labelled_only=False))
+    assert checked.notes[-1].startswith("LKNE: 1 implausible sample blanked (frame 201:")
+    assert [(g.marker, g.start, g.filled) for g in gaps] == [("LKNE", 200, True)]
+    reference, _ = Preprocessing(labelled_only=False).apply(walking)
+    np.testing.assert_allclose(read_c3d(tmp_path / "clean.c3d").marker("LKNE"), reference.marker("LKNE"), atol=0.01)

@@ -83,8 +83,14 @@ def preprocess_file(
     input_file: str | os.PathLike[str], out_file: str | os.PathLike[str], preprocessing: Preprocessing = Preprocessing()
 ) -> tuple[Trial, list[Gap]]:
     """Read a C3D file, pre-process it and write the result to ``out_file`` (its folder
-    created); returns the trial as read and the gap report."""
-    raw = read_c3d(input_file)
+    created); returns the trial as read after the content checks
+    (:func:`fuzzygait.mocap.sanity.check_trial`: implausible samples of the labelled
+    markers blanked, each noted in its ``notes``) and the gap report.
+
+    Raises:
+        C3DError, MarkerError: an absurd rate, a unit mismatch, a marker with too many
+            implausible samples (nothing written)."""
+    raw = check_trial(read_c3d(input_file))
     cleaned, gaps = preprocessing.apply(raw)
     Path(out_file).parent.mkdir(parents=True, exist_ok=True)
     write_c3d(cleaned, out_file)
