@@ -182,3 +182,22 @@ def test_motionless_needs_the_feet_still_too(walking):
     assert sanity.motionless(treadmill) is None
     standing = read_c3d(STATIC)
     assert sanity.motionless(standing).startswith("the trial is motionless (ranges over the trial: pelvis 0 mm")
+
+
+def test_in_a_five_frame_trial_the_majority_stays():
+    """Static - CGM2 1.c3d has 5 frames: a spike in the middle frame is the one blanked,
+    not the two frames on either side of it."""
+    static = read_c3d(SAMPLE_DATA / "static.c3d")
+    short = replace(static, markers=static.markers[:5].copy(), outputs={})
+    knee = short.marker_labels.index("LKNE")
+    short.markers[2, knee, 1] += 3000.0
+    assert {k: list(v) for k, v in sanity.find_spikes(short).items()} == {"LKNE": [2]}
+
+
+def test_a_held_label_swap_blanks_nothing(walking):
+    """A jump to another place held for 50 frames is not a spike (two long pieces)."""
+    markers = walking.markers.copy()
+    markers[100:150, walking.marker_labels.index("LKNE"), 0] += 2000.0  # 2 m away for 0.5 s
+    assert sanity.find_spikes(walking.with_markers(markers)) == {}
+    markers[160:162, walking.marker_labels.index("LKNE"), 0] += 2000.0  # and for 2 frames later: a spike
+    assert {k: list(v) for k, v in sanity.find_spikes(walking.with_markers(markers)).items()} == {"LKNE": [160, 161]}

@@ -152,31 +152,31 @@ def check_units(trial: Trial) -> None:
 
 # --------------------------------------------------------------------------- spikes
 def _spike_mask(position: np.ndarray, jump: float) -> np.ndarray:
-    """``(n_frames,)`` True at the samples of ``position`` (``(n, 3)`` mm) that leave the
-    path by a jump larger than ``jump`` mm and come back within :data:`MAX_SPIKE_FRAMES`
-    frames (or lie between such a jump and a gap or an end of the trial)."""
+    """``(n_frames,)`` True at the samples of ``position`` (``(n, 3)`` mm) off the
+    marker's path.
+
+    The visible samples are cut into *pieces* at every jump larger than ``jump`` mm and
+    at every gap.  A piece next to a jump is off the path when it is short: at most
+    :data:`MAX_SPIKE_FRAMES` frames and shorter than the marker's longest piece (so that
+    in a trial of a few frames the majority stays).  A jump between two long pieces (a
+    label swap held for a while) blanks nothing."""
     n = position.shape[0]
     finite = np.isfinite(position).all(axis=1)
     steps = np.linalg.norm(np.diff(position, axis=0), axis=1)
-    breaks = np.flatnonzero(steps > jump) + 1  # a jump between sample i-1 and i
-    # pieces: runs of visible samples cut at jumps and gaps
-    cut = np.zeros(n + 1, dtype=bool)
+    jumped = np.zeros(n + 1, dtype=bool)
+    jumped[1:n][steps > jump] = True  # jumped[i]: a jump between samples i-1 and i
+    cut = jumped.copy()
     cut[0] = cut[n] = True
-    cut[breaks] = True
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], finite.astype(np.int8), [0]])) != 0)
-    cut[edges] = True
+    cut[np.flatnonzero(np.diff(np.concatenate([[0], finite.astype(np.int8), [0]])) != 0)] = True
     starts = np.flatnonzero(cut[:-1])
     stops = np.concatenate([starts[1:], [n]])
+    visible = finite[starts]
+    lengths = np.where(visible, stops - starts, 0)
+    short = min(MAX_SPIKE_FRAMES, int(lengths.max()) - 1)
+    spiky = visible & (lengths <= short) & (jumped[starts] | jumped[stops])
     mask = np.zeros(n, dtype=bool)
-    jumped = np.zeros(n + 1, dtype=bool)
-    jumped[breaks] = True
-    for start, stop in zip(starts, stops, strict=True):
-        if not finite[start] or stop - start > MAX_SPIKE_FRAMES or not (jumped[start] or jumped[stop]):
-            continue
-        before, after = start - 1, stop
-        # a short piece between two long ones (or a gap/end): the short one is off the path
-        if (before < 0 or not finite[before] or jumped[start]) and (after >= n or not finite[after] or jumped[stop]):
-            mask[start:stop] = True
+    for start, stop in zip(starts[spiky], stops[spiky], strict=True):
+        mask[start:stop] = True
     return mask
 
 
