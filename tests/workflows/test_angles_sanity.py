@@ -141,3 +141,23 @@ def test_preprocess_blanks_a_spike_before_the_filter(trials, tmp_path):
     assert [(g.marker, g.start, g.filled) for g in gaps] == [("LKNE", 200, True)]
     reference, _ = Preprocessing(labelled_only=False).apply(walking)
     np.testing.assert_allclose(read_c3d(tmp_path / "clean.c3d").marker("LKNE"), reference.marker("LKNE"), atol=0.01)
+
+
+@needs_shared
+def test_the_campaign_spike_on_the_real_trial(monkeypatch):
+    """One LKNE coordinate of 1e30 in Movement_trial.c3d: the angles equal the clean
+    trial's within 1e-4 deg (1e-6 deg 20 frames away); without the check they were off
+    by more than 90 deg."""
+    import fuzzygait.workflows.angles as workflow
+
+    walking, static = read_c3d(VICON / "Movement_trial.c3d"), read_c3d(VICON / "Static_trial.c3d")
+    clean = run_angles(walking, static=static)
+    spiked = _with(walking, "LKNE", lambda m: m.__setitem__((150, 0), 1e30))
+    run = run_angles(spiked, static=static)
+    far = np.r_[0:130, 171:walking.n_frames]
+    for name, values in clean.result.angles.items():
+        np.testing.assert_allclose(run.result.angles[name], values, atol=1e-4, err_msg=name)
+        np.testing.assert_allclose(run.result.angles[name][far], values[far], atol=1e-6, err_msg=name)
+    monkeypatch.setattr(workflow, "check_trial", lambda trial, static=False: trial)
+    unchecked = run_angles(spiked, static=static)
+    assert np.nanmax(np.abs(unchecked.result.angles["LKneeAngles"] - clean.result.angles["LKneeAngles"])) > 90
