@@ -201,3 +201,20 @@ def test_a_held_label_swap_blanks_nothing(walking):
     assert sanity.find_spikes(walking.with_markers(markers)) == {}
     markers[160:162, walking.marker_labels.index("LKNE"), 0] += 2000.0  # and for 2 frames later: a spike
     assert {k: list(v) for k, v in sanity.find_spikes(walking.with_markers(markers)).items()} == {"LKNE": [160, 161]}
+
+
+@pytest.mark.filterwarnings("error")
+def test_degenerate_content_gives_one_line_and_no_warning(walking):
+    """Infinite samples are blanked like 1e30; markers all at the origin, or every
+    sample infinite, are one error line; no RuntimeWarning is printed before it."""
+    markers = walking.markers.copy()
+    markers[5, walking.marker_labels.index("RTOE")] = np.inf
+    checked = sanity.check_trial(walking.with_markers(markers))
+    assert checked.notes[-1].startswith("RTOE: 1 implausible sample blanked (frame 6:")
+    with pytest.raises(C3DError, match=r"walking\.c3d: the body's markers all sit at one point"):
+        sanity.check_trial(walking.with_markers(np.zeros_like(walking.markers)))
+    with pytest.raises(MarkerError, match=r"walking\.c3d: marker LASI has 512 implausible samples of 512"):
+        sanity.check_trial(walking.with_markers(np.full_like(walking.markers, -np.inf)))
+    for n in (0, 1):
+        short = replace(walking, markers=walking.markers[:n], outputs={}, events=[])
+        assert sanity.check_trial(short, static=True) is short

@@ -109,7 +109,8 @@ def segment_lengths(trial: Trial) -> dict[str, float]:
     lengths = {}
     for a, b, _ in SEGMENTS:
         if trial.has_marker(a) and trial.has_marker(b):
-            distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
+            with np.errstate(invalid="ignore", over="ignore"):  # inf - inf: not finite, dropped
+                distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
             distance = distance[np.isfinite(distance)]
             if distance.size:
                 lengths[f"{a}-{b}"] = float(np.median(distance))
@@ -139,6 +140,9 @@ def check_units(trial: Trial) -> None:
     low, high = SCALE_RANGE
     if low <= scale <= high:
         return
+    if scale < 1e-9:
+        raise C3DError(f"{trial.name}: the body's markers all sit at one point ({', '.join(lengths)} 0 mm): the file "
+                       "holds no usable marker positions; re-export the trial")  # fmt: skip
     ratio, unit = min(_UNIT_GUESSES, key=lambda guess: abs(math.log(guess[0] / max(scale, 1e-300))))
     shown = ", ".join(f"{name} {value:.3g} mm" for name, value in list(lengths.items())[:3])
     if scale < 1:
@@ -228,7 +232,7 @@ def blank_spikes(trial: Trial) -> Trial:
     notes = []
     for label, samples in spikes.items():
         column = trial.marker_labels.index(label)
-        visible = int(np.isfinite(trial.markers[:, column, :]).all(axis=1).sum())
+        visible = int((~np.isnan(trial.markers[:, column, :]).any(axis=1)).sum())  # samples with a value
         if samples.size > MAX_SPIKE_FRACTION * max(visible, 1):
             raise MarkerError(f"{trial.name}: marker {label} has {samples.size} implausible samples of {visible} "
                               f"(beyond {MAX_COORDINATE:g} mm or jumps faster than {MAX_SPEED / 1000:g} m/s; "
@@ -258,7 +262,8 @@ def _range(points: np.ndarray) -> float | None:
     ok = np.isfinite(points).all(axis=1)
     if not ok.any():
         return None
-    return float(np.linalg.norm(points[ok].max(axis=0) - points[ok].min(axis=0)))
+    with np.errstate(over="ignore"):
+        return float(np.linalg.norm(points[ok].max(axis=0) - points[ok].min(axis=0)))
 
 
 def pelvis_range(trial: Trial) -> float | None:
@@ -267,7 +272,7 @@ def pelvis_range(trial: Trial) -> float | None:
     present = [m for m in PELVIS_MARKERS if trial.has_marker(m)]
     if not present:
         return None
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", over="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)  # nanmean of an all-NaN frame
         mid = np.nanmean([trial.marker(m) for m in present], axis=0)
     return _range(mid)
