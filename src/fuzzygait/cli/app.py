@@ -59,7 +59,7 @@ class Commands(TyperGroup):
                                      windows_expand_args=windows_expand_args, **extra)  # fmt: skip
                 code = value if isinstance(value, int) and not isinstance(value, bool) else 0
             except NoArgsIsHelpError as exc:  # `fuzzygait` alone: the help, as --help prints it
-                out.print(exc.format_message(), markup=False, end="")
+                out.print(exc.format_message(), markup=False)
                 code = 0
             except UsageError as exc:
                 err.print(usage_line(exc, self._command_in(args)), markup=False)

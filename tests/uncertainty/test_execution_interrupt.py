@@ -1,0 +1,93 @@
+"""An interrupted Evaluator leaves nothing: its local pool's workers ignore SIGINT (a
+Ctrl-C reaches the whole process group; only the driver decides), an interrupt while
+tasks run stops every worker process and removes the evaluator's temporary directory
+(Dask's scratch space is inside it), and directories that killed processes left behind
+are swept when a new one is made."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from fuzzygait.uncertainty.execution import Evaluator
+from fuzzygait.uncertainty.execution.evaluator import TMPDIR_PREFIX, remove_stale_tmpdirs
+
+HANG = 120.0  # s: only to stop a hung test
+
+
+def _busy(marker: str) -> str:
+    """A task that says it started (a file) and then runs far longer than the test."""
+    Path(marker).write_text(str(os.getpid()))
+    deadline = time.monotonic() + HANG
+    while time.monotonic() < deadline:
+        sum(range(10_000))
+    return marker
+
+
+def _ignored_signals(pid: int) -> int:
+    """The process's ignored-signal mask (``SigIgn`` of /proc/<pid>/status)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigIgn:"):
+            return int(line.split()[1], 16)
+    raise AssertionError(f"no SigIgn for {pid}")
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_stale_temporary_directories_are_swept(tmp_path):
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True, check=True).stdout.strip()  # fmt: skip
+    dead = tmp_path / f"{TMPDIR_PREFIX}{gone}-abc"
+    mine = tmp_path / f"{TMPDIR_PREFIX}{os.getpid()}-def"
+    alive = tmp_path / f"{TMPDIR_PREFIX}1-ghi"  # pid 1 always runs
+    other = tmp_path / "fuzzygait-parallel-notapid"
+    for folder in (dead, mine, alive, other):
+        folder.mkdir()
+    (dead / "dask").mkdir()
+    assert remove_stale_tmpdirs(str(tmp_path)) == [str(dead)]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in (mine, alive, other))
+
+
+@pytest.mark.slow  # starts a local Dask cluster
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
+def test_interrupted_pool_stops_its_workers_and_removes_its_files(tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    markers = [str(tmp_path / f"started-{i}") for i in range(2)]
+
+    def interrupt_when_busy() -> None:  # SIGINT once both workers run a task
+        deadline = time.monotonic() + HANG
+        while time.monotonic() < deadline and not all(os.path.exists(m) for m in markers):
+            time.sleep(0.05)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    evaluator = Evaluator(workers=2)
+    pids = sorted(evaluator.client.run(os.getpid).values())
+    assert len(pids) == 2
+    for pid in pids:
+        assert _ignored_signals(pid) & (1 << (signal.SIGINT - 1)), "a worker does not ignore SIGINT"
+    assert [p.name.startswith(TMPDIR_PREFIX) for p in scratch.iterdir()] == [True]
+    watcher = threading.Thread(target=interrupt_when_busy, daemon=True)
+    watcher.start()
+    with pytest.raises(KeyboardInterrupt), evaluator:
+        evaluator.map(_busy, markers)
+    watcher.join(HANG)
+    assert sorted(int(Path(m).read_text()) for m in markers) == pids  # both were busy when interrupted
+    assert [pid for pid in pids if _running(pid)] == []
+    assert list(scratch.iterdir()) == []  # neither the evaluator's directory nor Dask's scratch space
