@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from support import SAMPLE_DATA, synthetic_session
 
 psutil = pytest.importorskip("psutil")
@@ -101,9 +102,11 @@ class Run:
     def left(self) -> list[psutil.Process]:
         """The processes of the run still alive after it ended (given a moment)."""
         deadline = time.monotonic() + 5
-        while (alive := [p for p in self.seen.values() if _alive(p)] + self.processes()) and time.monotonic() < deadline:
+        while True:
+            alive = [p for p in self.seen.values() if _alive(p)] + self.processes()
+            if not alive or time.monotonic() > deadline:
+                return alive
             time.sleep(0.1)
-        return alive
 
     def kill(self) -> None:
         """SIGKILL whatever of the run is still there (the clean-up of a failed test)."""

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from fuzzygait.cli import app
 from fuzzygait.cli.app import user_errors
-from fuzzygait.cli.interrupts import InterruptGuard, Interrupted, exit_code, interrupt_line
+from fuzzygait.cli.interrupts import Interrupted, InterruptGuard, exit_code, interrupt_line
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.workflows.batch_report import remove_stale_staging
 
