@@ -63,3 +63,14 @@ def test_a_one_frame_trial_has_no_events_and_says_why():
     one = replace(walking, markers=walking.markers[100:101], outputs={})
     events, source = trial_gait_events(one)
     assert events == [] and source == f"{SOURCE_MOTIONLESS}: the trial has 1 frame: no motion to tell events from"
+
+
+def test_a_spiked_heel_does_not_move_the_detected_events():
+    """A 1e30 heel sample: detection ignores it (the same events as the clean trial)."""
+    walking = replace(read_c3d(SAMPLE_DATA / "walking.c3d"), events=[])
+    markers = walking.markers.copy()
+    markers[200, walking.marker_labels.index("LHEE"), 0] = 1e30
+    spiked = detect_gait_events(walking.with_markers(markers))
+    clean = detect_gait_events(walking)
+    assert [(e.label, e.context) for e in spiked] == [(e.label, e.context) for e in clean]
+    np.testing.assert_allclose([e.time for e in spiked], [e.time for e in clean], atol=1e-3)

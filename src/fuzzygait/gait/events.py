@@ -72,7 +72,7 @@ from fuzzygait.core.errors import MarkerError
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.kinematics.progression import progression_frame
 from fuzzygait.mocap.filtering import ShortRunWarning, butterworth_lowpass
-from fuzzygait.mocap.sanity import motionless
+from fuzzygait.mocap.sanity import find_spikes, motionless
 
 #: Source string of :func:`trial_gait_events` for the file's own events.
 SOURCE_FILE = "file"
@@ -245,6 +245,23 @@ def _parabolic_vertex(values: np.ndarray, index: int) -> float:
     return index + float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
 
 
+def _without_spikes(trial: Trial) -> Trial:
+    """``trial`` with the implausible samples of the markers the detection reads set
+    missing (:func:`fuzzygait.mocap.sanity.find_spikes`; the NaN are bridged by the peak
+    search), so that a 1e30 sample does not move every peak after the low-pass: the
+    angle workflow blanks and notes them before (``check_trial``), this keeps the
+    detection right for any caller."""
+    used = [m for m in (*(m for s in PELVIS_MARKER_SETS for m in s), "LHEE", "RHEE", "LTOE", "RTOE")
+            if trial.has_marker(m)]  # fmt: skip
+    spikes = find_spikes(trial, used)
+    if not spikes:
+        return trial
+    markers = trial.markers.copy()
+    for label, samples in spikes.items():
+        markers[samples, trial.marker_labels.index(label), :] = np.nan
+    return trial.with_markers(markers)
+
+
 def detect_gait_events(trial: Trial) -> list[Event]:
     """Foot Strike / Foot Off events of both feet from marker kinematics (Zeni 2008).
 
@@ -270,7 +287,7 @@ def detect_gait_events(trial: Trial) -> list[Event]:
     """
     if motionless(trial) is not None:
         return []
-    signals = _foot_signals(trial)
+    signals = _foot_signals(_without_spikes(trial))
     stride = _stride_samples(signals)
     distance = None if stride is None else MIN_SEPARATION_STRIDES * stride
     events = []
