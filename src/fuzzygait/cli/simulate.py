@@ -131,11 +131,19 @@ def fuzzy_sim(
     _print_written(written)
 
 
+#: frv-sim's parameters that a study records, by the name of the recorded option
+_RECORDED = {"parameter": "frv", "value": "value", "disc": "disc", "alphas": "alphas", "distribution": "distribution",
+             "seed": "seed", "target": "target", "overrides": "set", "nodes": "nodes", "dt": "dt",
+             "duration": "duration", "scheme": "scheme"}  # fmt: skip
+
+
 @app.command("frv-sim")
 def frv_sim(
+    ctx: typer.Context,
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="stance (thesis §5.7) or swing.")],
     out_store: Annotated[Path, typer.Option("--out", "-o", help="FRV study, a .zarr directory; an existing "
-                                            "study is extended with --samples more samples.")],
+                                            "study is extended with --samples more samples, with the options it "
+                                            "was made with (an option given must match them).")],
     parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter.")] = "E",
     value: Annotated[
         float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the scenario's.")
@@ -153,11 +161,17 @@ def frv_sim(
     scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",
     workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations.")] = 2,
     scheduler: SchedulerOption = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists.")] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists (the "
+                                            "old one is replaced once the new one is complete).")] = False,
 ) -> None:
     """FRV-GFA (thesis §2.7, §5.7): a leg parameter as a fuzzy random variable, grouped
     samples, Graph Follower hulls on the occurring intervals only, output samples and
-    their counts in a chunked zarr store."""
+    their counts in a chunked zarr store.
+
+    Every write commits atomically: a run that fails or is killed leaves the study as it
+    was (a new one: nothing); run the command again to complete it.
+    """
+
     from fuzzygait.workflows.frv_leg import FRVRequest, check_frv_parameter, run_frv_leg
     from fuzzygait.workflows.fuzzy_dynamics import LegSetup, check_scenario
 
@@ -168,14 +182,22 @@ def frv_sim(
         check_frv_parameter(parameter)
         values = parse_overrides(overrides or [])
         levels = parse_alphas(alphas)
+        given = {"scenario"} | {k for name, k in _RECORDED.items() if _given(ctx, name)}
         with progress_bars() as bars:
             study = run_frv_leg(
                 LegSetup(scenario, nodes, dt, duration, values, scheme),
                 FRVRequest(parameter, value, samples, disc, levels, distribution, seed), out_store,
-                target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, progress=StageBars(bars),
+                target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
+                progress=StageBars(bars),
             )  # fmt: skip
     out.print(_frv_summary(scenario, study.counts), markup=False)
     _print_written([out_store])
+
+
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether the user gave parameter ``name`` (typer bundles its own click: compare by name)."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
 
 
 def _print_written(paths: Sequence[Path]) -> None:

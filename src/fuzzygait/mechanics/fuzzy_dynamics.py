@@ -160,6 +160,7 @@ def leg_frv_study(
     sensitivities: bool = True,
     chunk: int = 256,
     overwrite: bool = False,
+    options: Mapping[str, object] | None = None,
 ):
     """Run (or extend) the FRV-GFA of a leg scenario (thesis §5.7) into a zarr ``store``.
 
@@ -169,7 +170,9 @@ def leg_frv_study(
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
     compiled simulator library from the on-disk cache.  An existing store is extended with
     ``n_samples`` more samples (every stored library trajectory and interval hull reused)
-    unless ``overwrite``.  Returns the :class:`~fuzzygait.uncertainty.frv.FRVStudy`.
+    unless ``overwrite``; a new study records ``options`` (what it was made with, for the
+    caller to compare before extending it).  Returns the
+    :class:`~fuzzygait.uncertainty.frv.FRVStudy`.
     """
     from pathlib import Path
 
@@ -189,5 +192,5 @@ def leg_frv_study(
             study.add_samples(n_samples)
         else:
             study = FRVStudy.create(model, spec, n_samples, n_disc=n_disc, seed=seed, store=path,
-                                    evaluator=evaluator, chunk=chunk, overwrite=overwrite)  # fmt: skip
+                                    evaluator=evaluator, chunk=chunk, overwrite=overwrite, options=options)  # fmt: skip
     return study

@@ -1,25 +1,36 @@
 """FRV-GFA of a leg scenario as a job (``fuzzygait frv-sim``, thesis §2.7, §5.7): one leg
 parameter as a fuzzy random variable about its deterministic value, the study run (or
 extended) into a chunked zarr store by
-:func:`fuzzygait.mechanics.fuzzy_dynamics.leg_frv_study`."""
+:func:`fuzzygait.mechanics.fuzzy_dynamics.leg_frv_study`.
+
+A study records the options it was made with (:func:`study_options`: the scenario, the
+FRV, every fixed parameter value, the target and the simulation settings, all resolved).
+Extending it takes the options not given from that record and refuses, in one line
+naming the option, any given one that differs — two models are never mixed in a study.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, default_parameters
 from fuzzygait.mechanics.scenarios import SCENARIOS
-from fuzzygait.workflows.fuzzy_dynamics import LegSetup
+from fuzzygait.workflows.fuzzy_dynamics import LegSetup, simulation_timing
 from fuzzygait.workflows.progress import SILENT, StageProgress
 
 if TYPE_CHECKING:
     from fuzzygait.uncertainty.frv import FRVStudy
 
-__all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "run_frv_leg"]
+__all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "run_frv_leg", "study_options"]
+
+#: the recorded options in the order they are compared (named as frv-sim's options)
+OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution", "seed", "disc", "nodes", "dt",
+           "duration", "scheme")  # fmt: skip
+_NEW_STUDY = "start a new study (another --out, or --overwrite)"
 
 
 def check_frv_parameter(parameter: str) -> None:
@@ -28,13 +39,17 @@ def check_frv_parameter(parameter: str) -> None:
         raise FuzzyGaitError(f"--frv {parameter!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
 
 
+def _scenario_values(scenario: str) -> dict[str, float]:
+    preset = SCENARIOS[scenario]
+    defaults = default_parameters(preset.material, shank_mass=preset.shank_mass)
+    return {name: float(v) for name, v in zip(LEG_PARAMETERS, defaults, strict=True)}
+
+
 def deterministic_value(scenario: str, parameter: str, values: Mapping[str, float]) -> float:
     """``p_det`` of the FRV parameter: its value in ``values``, else the scenario's."""
     if parameter in values:
         return values[parameter]
-    preset = SCENARIOS[scenario]
-    defaults = default_parameters(preset.material, shank_mass=preset.shank_mass)
-    return float(defaults[LEG_PARAMETERS.index(parameter)])
+    return _scenario_values(scenario)[parameter]
 
 
 @dataclass(frozen=True)
@@ -53,6 +68,64 @@ class FRVRequest:
     seed: int = 0
 
 
+def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[str, Any]:
+    """What a study of ``frv`` on ``setup`` is made with, resolved (the scenario's values
+    filled in) and JSON-compatible: the record a study keeps and an extension must match."""
+    from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_TARGET
+
+    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    values = {**_scenario_values(setup.scenario), **{k: float(v) for k, v in setup.values.items()}}
+    if frv.value is not None:
+        values[frv.parameter] = float(frv.value)
+    return {"scenario": setup.scenario, "frv": frv.parameter, "value": values[frv.parameter], "set": values,
+            "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
+            "distribution": frv.distribution, "seed": int(frv.seed), "disc": int(frv.disc), "nodes": int(setup.nodes),
+            "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
+
+
+def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mapping[str, Any],
+             given: Collection[str]) -> tuple[LegSetup, FRVRequest, str | None]:  # fmt: skip
+    """The request with every option not ``given`` taken from the ``stored`` record; the
+    given ``--set`` values are laid over the stored ones."""
+    values = {**stored["set"], **setup.values}
+    setup = replace(setup, values=values, **{k: stored[k] for k in ("nodes", "dt", "duration", "scheme")
+                                             if k not in given})  # fmt: skip
+    taken: dict[str, Any] = {"parameter": stored["frv"]} if "frv" not in given else {}
+    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "seed") if k not in given})
+    if "value" not in given:
+        taken["value"] = None  # p_det: the --set value, else the stored one
+    return setup, replace(frv, **taken), (stored["target"] if "target" not in given else target)
+
+
+def _num(value: float) -> str:
+    """Short, but exact: two different values never print alike."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
+def _show(key: str, value: Any) -> str:
+    if key == "alphas":
+        return ",".join(_num(a) for a in value)
+    return _num(value) if isinstance(value, float) else str(value)
+
+
+def _refuse_other_options(store: Path, made: Mapping[str, Any], asked: Mapping[str, Any],
+                          given: Collection[str]) -> None:  # fmt: skip
+    """One line naming the first option whose value differs from the study's record."""
+    for key in OPTIONS:
+        if made[key] == asked[key]:
+            continue
+        option, was, now = f"--{key}", _show(key, made[key]), _show(key, asked[key])
+        if key == "set" or (key == "value" and key not in given):  # p_det given by --set
+            name = asked["frv"] if key == "value" else next(n for n in LEG_PARAMETERS if made[key][n] != asked[key][n])
+            was, now = (f"{name}={_num(record['set'][name])}" for record in (made, asked))
+            option = f"--set {name}"
+        named = "SCENARIO" if key == "scenario" else option.split()[0]
+        advice = f"give SCENARIO {was}" if key == "scenario" else f"leave {option} out"
+        raise FuzzyGaitError(f"{store}: this study was made with {named} {was}; given {now}. To extend it, {advice}, "
+                             f"or {_NEW_STUDY}")  # fmt: skip
+
+
 def run_frv_leg(
     setup: LegSetup,
     frv: FRVRequest,
@@ -62,22 +135,49 @@ def run_frv_leg(
     workers: int = 2,
     scheduler: str | None = None,
     overwrite: bool = False,
+    given: Collection[str] | None = None,
     progress: StageProgress = SILENT,
 ) -> FRVStudy:
     """Run the FRV-GFA of ``frv`` on the leg ``setup`` into ``out_store`` (an existing
     study is extended unless ``overwrite``), the forward simulations on ``workers`` local
     processes or the Dask ``scheduler``.  Returns the study (its ``counts`` say what was
-    computed)."""
-    from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
-    from fuzzygait.uncertainty.frv import FRVSpec
+    computed).
 
-    fixed = dict(setup.values)
-    if frv.value is not None:
-        fixed[frv.parameter] = frv.value
-    spec = FRVSpec(frv.parameter, deterministic_value(setup.scenario, frv.parameter, fixed),
-                   alphas=tuple(frv.alphas), distribution=frv.distribution)  # fmt: skip
+    Extending, the options not in ``given`` (names of :data:`OPTIONS`; None: all given)
+    are the study's; a given one that differs from the study's record raises a
+    :class:`FuzzyGaitError` naming it. A failed new study leaves nothing at ``out_store``
+    (nor the folders made for it); a failed extension leaves the study as it was.
+    """
+    from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
+    from fuzzygait.mechanics.targets import TARGETS
+    from fuzzygait.uncertainty.frv import FRVSpec
+    from fuzzygait.uncertainty.frv.store import read_meta
+
+    extend = out_store.exists() and not overwrite
+    if extend:
+        made = read_meta(out_store).get("options") or {}
+        if not all(key in made for key in OPTIONS):
+            raise FuzzyGaitError(f"{out_store}: the study does not record the options it was made with (an older "
+                                 f"version or the library made it): it cannot be extended; {_NEW_STUDY}")  # fmt: skip
+        setup, frv, target = _as_made(setup, frv, target, made, OPTIONS if given is None else given)
+    options = study_options(setup, frv, target)
+    if options["target"] not in TARGETS:
+        raise FuzzyGaitError(f"--target {options['target']!r}: unknown target; choose one of {', '.join(TARGETS)}")
+    if extend:
+        _refuse_other_options(out_store, made, options, OPTIONS if given is None else given)
+    spec = FRVSpec(frv.parameter, options["value"], alphas=tuple(frv.alphas), distribution=frv.distribution)
+    made_folders = [p for p in (out_store.parent, *out_store.parent.parents) if not p.exists()]
     out_store.parent.mkdir(parents=True, exist_ok=True)
     progress.stage(f"{setup.scenario}: FRV-GFA ({frv.samples} samples)")
-    return leg_frv_study(setup.scenario, spec, frv.samples, out_store, target=target, base_overrides=fixed,
-                         n_disc=frv.disc, seed=frv.seed, nodes=setup.nodes, dt=setup.dt, duration=setup.duration,
-                         scheme=setup.scheme, workers=workers, scheduler=scheduler, overwrite=overwrite)  # fmt: skip
+    try:
+        return leg_frv_study(setup.scenario, spec, frv.samples, out_store, target=options["target"],
+                             base_overrides=options["set"], n_disc=frv.disc, seed=frv.seed, nodes=setup.nodes,
+                             dt=setup.dt, duration=setup.duration, scheme=setup.scheme, workers=workers,
+                             scheduler=scheduler, overwrite=overwrite, options=options)  # fmt: skip
+    except BaseException:
+        for folder in made_folders:  # innermost first; only if still empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
