@@ -1,0 +1,114 @@
+"""``frv-sim`` on an existing study (issue 17): the study records the options it was made
+with; extending it with any different one is refused in one line naming the option, its
+recorded and its given value — before anything is simulated or written (the store is
+untouched, byte for byte). A store without a record, or not a study, is refused too.
+
+In-process and fast: the study's record is written by ``FRVStudy.create`` on a cheap
+model with the options ``run_frv_leg`` would record for the leg (the refusal reads only
+the record; the end-to-end runs are in ``test_cli_frv_sim_crash.py``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fuzzygait.cli import app
+from fuzzygait.uncertainty import FunctionModel
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
+from fuzzygait.workflows.frv_leg import FRVRequest, study_options
+from fuzzygait.workflows.fuzzy_dynamics import LegSetup
+
+MODULUS = 59.958e9  # Pa, Table 5.3
+MADE = ("stance", "--disc", "6", "--duration", "0.02", "--nodes", "6", "--set", f"E={MODULUS}")
+runner = CliRunner()
+
+
+def _model() -> FunctionModel:
+    times = np.linspace(0.0, 1.0, 5)
+    return FunctionModel(lambda p: np.sin(p[..., :1] * 1e-10 * times), times)
+
+
+def _study(path: Path, options: dict | None) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    FRVStudy.create(_model(), FRVSpec("E", MODULUS), 30, n_disc=6, store=path, options=options)
+    return path
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    options = study_options(setup, FRVRequest(disc=6), None)
+    assert options["set"]["eta"] == 1.0 and options["dt"] == 0.001  # the scenario's, resolved
+    return _study(tmp_path_factory.mktemp("options") / "study.zarr", options)
+
+
+def _files(path: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
+
+
+def _refusal(store: Path, *args: str) -> str:
+    before = _files(store)
+    result = runner.invoke(app, ["frv-sim", *args, "--samples", "10", "--workers", "1", "--out", str(store)])
+    assert result.exit_code == 1, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and result.stdout == "", result.output
+    assert _files(store) == before  # nothing written
+    assert sorted(p.name for p in store.parent.iterdir()) == [store.name]  # nothing beside it
+    return lines[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (("--frv", "rho"), "made with --frv E; given rho. To extend it, leave --frv out"),
+        (("--value", "6e10"), "made with --value 5.9958e+10; given 6e+10. To extend it, leave --value out"),
+        (("--set", "E=6e10"), "made with --set E=5.9958e+10; given E=6e+10. To extend it, leave --set E out"),
+        (("--set", "eta=2"), "made with --set eta=1; given eta=2. To extend it, leave --set eta out"),
+        (("--set", "rho=8550.000001"), "made with --set rho=8550; given rho=8550.000001."),
+        (("--target", "last_node_x"), "made with --target max_element_energy; given last_node_x."),
+        (("--alphas", "0,0.5"), "made with --alphas 0,0.25,0.5,0.75,1; given 0,0.5,1."),
+        (("--seed", "1"), "made with --seed 0; given 1."),
+        (("--distribution", "beta"), "made with --distribution normal; given beta."),
+        (("--disc", "100"), "made with --disc 6; given 100."),
+        (("--nodes", "20"), "made with --nodes 6; given 20."),
+        (("--dt", "0.0005"), "made with --dt 0.001; given 0.0005."),
+        (("--duration", "2"), "made with --duration 0.02; given 2."),
+        (("--scheme", "variational"), "made with --scheme energy-momentum; given variational."),
+    ],
+)  # fmt: skip
+def test_an_extension_with_another_option_is_refused_naming_it(store: Path, args: tuple[str, ...], named: str) -> None:
+    line = _refusal(store, "stance", *args)
+    assert line.startswith(f"fuzzygait: error: {store}: this study was {named}")
+    assert line.endswith("or start a new study (another --out, or --overwrite)")
+
+
+def test_options_given_as_made_pass_the_check(store: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The same options, given or left out, reach the study run unchanged (the run itself
+    is replaced here: it would simulate the leg)."""
+    import fuzzygait.mechanics.fuzzy_dynamics as mechanics
+
+    seen: list[dict] = []
+    monkeypatch.setattr(mechanics, "leg_frv_study", lambda *a, **k: seen.append(k) or FRVStudy.open(store, _model()))
+    for args in (("stance",), MADE, ("stance", "--set", "eta=1", "--scheme", "energy-momentum", "--frv", "E")):
+        result = runner.invoke(app, ["frv-sim", *args, "--samples", "0", "--workers", "1", "--out", str(store)])
+        assert result.exit_code == 0, result.output
+    assert len(seen) == 3 and all(k["options"] == seen[0]["options"] for k in seen)
+    assert seen[0]["options"] == FRVStudy.open(store, _model()).options
+
+
+def test_the_scenario_is_checked_too(store: Path) -> None:
+    line = _refusal(store, "swing")
+    assert "made with SCENARIO stance; given swing. To extend it, give SCENARIO stance, or start a new" in line
+
+
+def test_a_study_without_a_record_or_not_a_study_is_refused(tmp_path: Path) -> None:
+    bare = _study(tmp_path / "bare" / "study.zarr", None)
+    line = _refusal(bare, *MADE)
+    assert "does not record the options it was made with" in line and "another --out, or --overwrite" in line
+    other = tmp_path / "other" / "x.zarr"
+    other.mkdir(parents=True)
+    (other / "notes.txt").write_text("not a study")
+    assert "not an FRV study" in _refusal(other, *MADE)
