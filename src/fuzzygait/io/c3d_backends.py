@@ -302,6 +302,7 @@ def _decode_trusted(path: Path, layout: Layout) -> RawC3D:
             return raw
         other.warnings.insert(0, _misaligned(raw, layout) + "; read with the c3d package, which follows the header")
         return other
+    _hide_invented(raw, layout)
     target = _frames_present(layout)
     n = raw.points.shape[0]
     if n == 0 or (target is not None and n < target):
@@ -315,6 +316,19 @@ def _decode_trusted(path: Path, layout: Layout) -> RawC3D:
             )
             return other
     return raw
+
+
+#: Parameters ezc3d invents when a file lacks them (from the header, or "mm"); the
+#: reader's notes for a missing rate or unit must still be given.
+_INVENTED = (("POINT", "RATE"), ("POINT", "UNITS"))
+
+
+def _hide_invented(raw: RawC3D, layout: Layout) -> None:
+    """Make ``raw.get`` return None for the :data:`_INVENTED` parameters the file lacks."""
+    missing = {key for key in _INVENTED if key not in layout.parameters}
+    if missing:
+        get = raw.get
+        raw.get = lambda group, name: None if (group, name) in missing else get(group, name)
 
 
 def _misaligned(raw: RawC3D, layout: Layout) -> str:
