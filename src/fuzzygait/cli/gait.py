@@ -127,6 +127,9 @@ def preprocess(
             f"-{trial.first_frame + gap.start + gap.length - 1} ({gap.reason})",
             markup=False,
         )
+    for note in trial.notes:  # the reader's and the content checks' (the gap/filter ones are above)
+        if not note.startswith(("gap filling", "Butterworth")):
+            out.print(f"  note: {note}", markup=False)
 
 
 # --------------------------------------------------------------------------- calibrate

@@ -22,6 +22,7 @@ from fuzzygait.gait.spatiotemporal import (
 )
 from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import check_table_path, write_table
+from fuzzygait.mocap.sanity import check_trial
 
 __all__ = ["GaitParametersRun", "gait_parameters_files"]
 
@@ -70,11 +71,12 @@ def gait_parameters_files(
     failures: list[str] = []
     for path in paths:
         try:
-            result = spatiotemporal_parameters(read_c3d(path))
+            trial = check_trial(read_c3d(path))  # rate, units, spikes: one line or a note
+            result = spatiotemporal_parameters(trial)
         except FuzzyGaitError as exc:
             failures.append(str(exc))
             continue
-        results.append(replace(result, trial=str(path)))
+        results.append(replace(result, trial=str(path), notes=[*trial.notes, *result.notes]))
     table = parameters_table(results, selection)
     run = GaitParametersRun(table, results, failures)
     if out_path is not None and results:
