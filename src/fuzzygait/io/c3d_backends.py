@@ -381,6 +381,10 @@ def frame_notes(layout: Layout, raw: RawC3D) -> list[str]:
     if declared and n < max(declared):
         why = f"the file ends after {holds} frames (truncated)" if holds is not None and holds < max(declared) else ""
         notes.append(f"{max(declared)} frames announced, {n} read" + (f": {why}" if why else "") + f"; using the {n}")
-    elif holds is not None and n < holds and not any(d >= holds for d in declared):
+    elif holds is not None and n < holds and not any(d >= holds for d in declared) and (
+            layout.size - (layout.data_start - 1) * 512 - n * (layout.frame_size() or 0) > 512):  # fmt: skip
+        # more than one 512-byte block after the last frame read: writers pad the data
+        # block to whole blocks, and ezc3d ends its files with one more block (a file of
+        # exactly 512 frames of 256 bytes has 512 bytes after them)
         notes.append(f"the data block holds {holds} frames but only {n} were read")
     return notes

@@ -137,16 +137,21 @@ class Layout:
             param = int(frames) + 65536 if kind == 2 and frames < 0 else int(frames)  # unsigned 16-bit
         return header, param
 
-    def frames_in_file(self) -> int | None:
-        """Whole frames the data block can hold between its start and the end of the
-        file (None when the frame size is unknown or zero)."""
+    def frame_size(self) -> int | None:
+        """Bytes per frame of the data block (None when unknown or zero)."""
         scale = self.number("POINT", "SCALE")
         scale = self.header_scale if scale is None else scale
         if scale != scale or self.data_start <= 0:
             return None
         word = 4 if scale < 0 else 2
         frame_bytes = word * (4 * self.point_count + self.analog_count)
-        if frame_bytes <= 0:
+        return frame_bytes if frame_bytes > 0 else None
+
+    def frames_in_file(self) -> int | None:
+        """Whole frames the data block can hold between its start and the end of the
+        file (None when the frame size is unknown or zero)."""
+        frame_bytes = self.frame_size()
+        if frame_bytes is None:
             return None
         return max(0, self.size - (self.data_start - 1) * BLOCK) // frame_bytes
 
