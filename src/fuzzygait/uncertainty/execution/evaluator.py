@@ -140,8 +140,10 @@ QUICK_STOP_SECONDS = 0.5
 
 def stop_quickly() -> None:
     """From now on, an evaluator closing does not wait for its workers' running tasks (the
-    command was interrupted: they are abandoned anyway)."""
+    command was interrupted: they are abandoned anyway), and Dask logs nothing in this
+    process below CRITICAL (its reports of connections closed by the shutdown)."""
     _QUICKLY.set()
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
 async def _close_nannies(nannies: list[Any], timeout: float) -> None:

@@ -12,6 +12,7 @@ memory-maps read-only.
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
 import socket
@@ -35,13 +36,38 @@ WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THRE
 WORKER_PRELOAD = __name__
 
 
+#: Loggers of a worker process whose shutdown noise :class:`_ShutdownNoise` drops.
+_NOISY_LOGGERS = ("distributed.worker", "distributed.core", "distributed.comm", "distributed.batched",
+                  "distributed.nanny", "distributed.worker.state_machine")  # fmt: skip
+
+
+class _ShutdownNoise(logging.Filter):
+    """Drops a worker's log records once it is closing, and its tracebacks of a lost
+    connection to the scheduler (the driver going away): neither tells the user anything
+    the command does not say in one line."""
+
+    def __init__(self, worker: object) -> None:
+        super().__init__()
+        self.worker = worker
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        status = str(getattr(self.worker, "status", ""))
+        if "clos" in status or "stopp" in status:
+            return False
+        return not str(record.msg).startswith(("Failed to communicate with scheduler", "Connection to"))
+
+
 def dask_setup(worker: object) -> None:
     """Run by Dask in every worker process of the local cluster as it starts: the worker
-    ignores SIGINT.  A Ctrl-C in a terminal goes to the whole process group; the driver
-    (the ``fuzzygait`` command) then shuts the pool down itself, so a worker has nothing
-    to do with it but print a traceback of the task it was running."""
+    ignores SIGINT, and logs nothing about its own shutdown.  A Ctrl-C in a terminal goes
+    to the whole process group; the driver (the ``fuzzygait`` command) then shuts the pool
+    down itself, so a worker has nothing to do with it but print a traceback of the task
+    it was running."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+    noise = _ShutdownNoise(worker)
+    for name in _NOISY_LOGGERS:
+        logging.getLogger(name).addFilter(noise)
 
 
 @runtime_checkable
