@@ -7,7 +7,7 @@ header, parameters and data; zeroed ranges and blocks; truncations; extreme head
 and parameter values -- frame counts, scale, rate, data start, point/analog counts;
 corrupt parameter records -- dimension counts, dimensions, types, offsets, names; control
 characters in labels) plus its copies written by ezc3d and by the ``c3d`` package
-(:mod:`fuzzygait.io.c3d_fuzz`). Variants are read by ``read_c3d`` in worker processes
+(:mod:`fuzzygait.testing.c3d_fuzz`). Variants are read by ``read_c3d`` in worker processes
 (``--jobs`` of them), many per worker; a worker that dies (a crash) or is silent for 30 s
 (a hang) is recorded against the variant it was reading and restarted after it, so the
 campaign always finishes. Prints the outcome table; exit status 1 if any variant is a
@@ -33,7 +33,7 @@ import time  # noqa: E402
 from collections import Counter  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from fuzzygait.io.c3d_fuzz import OUTCOMES, Variant, save_specs, variants  # noqa: E402
+from fuzzygait.testing.c3d_fuzz import OUTCOMES, Variant, save_specs, variants  # noqa: E402
 
 SHARED = ROOT.parent / "shared" / "data"
 SILENT_S = 30.0  # a worker silent this long is hung on the current variant
@@ -55,7 +55,7 @@ def run_shard(specs: list[Variant], results: dict[int, dict], offset: int) -> No
     try:
         while start < len(specs):
             proc = subprocess.Popen(
-                [sys.executable, "-m", "fuzzygait.io.c3d_fuzz", str(spec_file), str(start)],
+                [sys.executable, "-m", "fuzzygait.testing.c3d_fuzz", str(spec_file), str(start)],
                 stdout=subprocess.PIPE,
                 stderr=subprocess.DEVNULL,
                 env=env,

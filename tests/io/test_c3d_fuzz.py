@@ -1,6 +1,6 @@
-"""Seeded fuzzing of ``read_c3d`` over every shared C3D file (fuzzygait.io.c3d_fuzz).
+"""Seeded fuzzing of ``read_c3d`` over every shared C3D file (fuzzygait.testing.c3d_fuzz).
 
-The variants are read in one worker process (``python -m fuzzygait.io.c3d_fuzz``), so a
+The variants are read in one worker process (``python -m fuzzygait.testing.c3d_fuzz``), so a
 segmentation fault or a hang inside a C++ reader fails the test instead of killing the
 test run. Every variant must be refused with one line naming the file, or read -- with a
 note wherever its frames, points, rate, first frame, events or parameters differ from
@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from support import SHARED_DATA, needs_shared
 
-from fuzzygait.io.c3d_fuzz import OUTCOMES, Variant, save_specs, variants
+from fuzzygait.testing.c3d_fuzz import OUTCOMES, Variant, save_specs, variants
 
 ACCEPTABLE = set(OUTCOMES[:6])
 
@@ -33,7 +33,7 @@ def _campaign(specs: list[Variant], tmp_path: Path, timeout: float) -> list[dict
     spec_file = tmp_path / "specs.json"
     save_specs(specs, spec_file)
     done = subprocess.run(
-        [sys.executable, "-m", "fuzzygait.io.c3d_fuzz", str(spec_file)],
+        [sys.executable, "-m", "fuzzygait.testing.c3d_fuzz", str(spec_file)],
         capture_output=True,
         text=True,
         timeout=timeout,  # stops a hang only; not a timing assertion

@@ -22,7 +22,7 @@ from fuzzygait.core.errors import C3DError
 from fuzzygait.io import read_c3d
 from fuzzygait.io.c3d_backends import BackendError
 from fuzzygait.io.c3d_child import decode_isolated
-from fuzzygait.io.c3d_fuzz import _write_c3d_package, _write_ezc3d
+from fuzzygait.testing.c3d_fuzz import _write_c3d_package, _write_ezc3d
 from fuzzygait.io.c3d_guard import inspect
 
 

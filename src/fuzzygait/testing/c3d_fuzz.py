@@ -3,7 +3,7 @@
 Shared by the fuzz tests (``tests/io/test_c3d_fuzz.py``) and the full campaign
 (``benchmarks/fuzz_c3d.py``). A :class:`Variant` is a (source file, kind, seed) triple;
 :func:`build` makes its bytes deterministically, so a worker process can rebuild any
-variant from the triple alone. :func:`run_worker` (``python -m fuzzygait.io.c3d_fuzz
+variant from the triple alone. :func:`run_worker` (``python -m fuzzygait.testing.c3d_fuzz
 SPECS.json START``) reads variants one after the other *in its own process* -- a
 segmentation fault or a hang then kills or stalls that worker, which the driver notices,
 records and restarts after -- and prints one JSON line per variant with its
@@ -460,6 +460,6 @@ def save_specs(specs: list[Variant], path: Path) -> None:
     path.write_text(json.dumps([asdict(v) for v in specs]))
 
 
-if __name__ == "__main__":  # python -m fuzzygait.io.c3d_fuzz SPECS.json [START]
+if __name__ == "__main__":  # python -m fuzzygait.testing.c3d_fuzz SPECS.json [START]
     loaded = [Variant(**v) for v in json.loads(Path(sys.argv[1]).read_text())]
     run_worker(loaded, int(sys.argv[2]) if len(sys.argv) > 2 else 0)
