@@ -214,14 +214,7 @@ def _run(jobs: list[TrialJob], workers: int, scheduler: str | None, trials: Stag
 
 def _stacked_cycles(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str, np.ndarray]:
     """Every gait cycle of the session's trials per component, from their ``data.npz``."""
-    stacks: dict[str, list[np.ndarray]] = {}
-    for outcome in outcomes:
-        if not outcome.ok:
-            continue
-        with np.load(folder / f"{outcome.name}_files" / "data.npz") as data:
-            for key in data.files:
-                if key.startswith("cycles/"):
-                    stacks.setdefault(key.removeprefix("cycles/"), []).append(np.asarray(data[key]))
+    stacks = _stacked(outcomes, folder, "cycles/")
     width = {k: max(a.shape[1] for a in v) for k, v in stacks.items()}
     return {k: np.vstack([a for a in v if a.shape[1] == width[k]]) for k, v in stacks.items()}
 
@@ -229,15 +222,18 @@ def _stacked_cycles(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str,
 def _stacked_parameters(outcomes: Sequence[TrialOutcome], folder: Path) -> dict[str, np.ndarray]:
     """Every complete gait cycle's spatio-temporal parameters per side, from the trials'
     ``data.npz`` (pages written before these were stored contribute none)."""
+    return {code: np.vstack(rows) for code, rows in _stacked(outcomes, folder, "spatiotemporal/").items()}
+
+
+def _stacked(outcomes: Sequence[TrialOutcome], folder: Path, prefix: str) -> dict[str, list[np.ndarray]]:
+    """The page-data arrays under ``prefix`` of every successful trial, per key (the
+    prefix removed), in trial order."""
     stacks: dict[str, list[np.ndarray]] = {}
-    for outcome in outcomes:
-        if not outcome.ok:
-            continue
-        with np.load(folder / f"{outcome.name}_files" / "data.npz") as data:
-            for code in ("L", "R"):
-                if f"spatiotemporal/{code}" in data.files:
-                    stacks.setdefault(code, []).append(np.asarray(data[f"spatiotemporal/{code}"]))
-    return {code: np.vstack(rows) for code, rows in stacks.items()}
+    for outcome in (o for o in outcomes if o.ok):
+        for key, array in load_page_data(folder, outcome.name).items():
+            if key.startswith(prefix):
+                stacks.setdefault(key.removeprefix(prefix), []).append(array)
+    return stacks
 
 
 def _facts(session: Session) -> list[tuple[str, str]]:
