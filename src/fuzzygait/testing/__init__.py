@@ -1,3 +1,188 @@
-"""Tools for testing fuzzygait itself (not used by the pipelines): the seeded C3D fault
-campaign shared by the fuzz tests and ``benchmarks/fuzz_c3d.py``
-(:mod:`fuzzygait.testing.c3d_fuzz`)."""
+"""Tools for testing models and the engine: :func:`check_model`, which every model of
+the package passes, and cheap analytic models with exact sensitivities (with a recipe,
+for the parallel :class:`~fuzzygait.uncertainty.execution.Evaluator`).
+
+    from fuzzygait.testing import check_model
+    report = check_model(model, p)       # raises ModelCheckError naming the first failure
+
+The seeded C3D fault campaign shared by the fuzz tests and ``benchmarks/fuzz_c3d.py`` is
+:mod:`fuzzygait.testing.c3d_fuzz`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.execution import SharedArray
+from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Evaluation, Output, model_problem
+
+
+class ModelCheckError(ParameterError):
+    """A model does not keep the protocol of :mod:`fuzzygait.uncertainty.protocol`."""
+
+
+def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None, fd_step: float = 1e-6,
+                sensitivity_rtol: float = 1e-4, n_nodes: int = 7, seed: int = 0) -> dict[str, float]:  # fmt: skip
+    """Check that ``model`` keeps the model protocol at the parameter vector ``p``.
+
+    Checks: the declared attributes (``times`` 1-D, ``parameter_names`` as many as
+    ``p``, ``output``, known ``capabilities``); ``evaluate(p)`` gives an
+    :class:`~fuzzygait.uncertainty.protocol.Evaluation` of ``(n_time,)`` finite values,
+    the same on a second call (deterministic); with ``"sensitivities"``, a jacobian of
+    shape ``(n_time, n_p)`` with the same values (to 1e-8 relative), that agrees with central finite
+    differences (step ``fd_step`` × ``scale``) to ``sensitivity_rtol`` of the largest
+    derivative; with ``"nodes"``, ``evaluate_nodes`` at ``n_nodes`` random
+    (node, parameter) pairs equals the full trajectories there (to 1e-9 relative).
+
+    Returns:
+        The measured figures: ``n_time``, ``sensitivity_error`` (relative, or 0),
+        ``nodes_error`` (relative, or 0).
+
+    Raises:
+        ModelCheckError: naming the first check that failed.
+    """
+    problem = model_problem(model)
+    if problem is not None:
+        raise ModelCheckError(problem)
+    p = np.asarray(p, dtype=float).ravel()
+    names = tuple(model.parameter_names)  # type: ignore[attr-defined]
+    if names and len(names) != p.size:
+        raise ModelCheckError(f"{len(names)} parameter names {list(names)} for {p.size} parameters")
+    capabilities = frozenset(model.capabilities)  # type: ignore[attr-defined]
+    n_time = int(np.asarray(model.times).size)  # type: ignore[attr-defined]
+    first = _values(model, p, n_time)
+    if not np.array_equal(first, _values(model, p, n_time)):
+        raise ModelCheckError("two evaluations at the same parameters differ (the model must be deterministic)")
+    scale = np.maximum(np.abs(p), 1.0) if scale is None else np.asarray(scale, dtype=float)
+    report = {"n_time": float(n_time), "sensitivity_error": 0.0, "nodes_error": 0.0}
+    if SENSITIVITIES in capabilities:
+        report["sensitivity_error"] = _check_sensitivities(model, p, first, scale, fd_step, sensitivity_rtol)
+    if NODES in capabilities:
+        report["nodes_error"] = _check_nodes(model, p, scale, n_time, n_nodes, seed)
+    return report
+
+
+def _values(model: object, p: np.ndarray, n_time: int, sensitivities: bool = False) -> np.ndarray:
+    evaluation = model.evaluate(p.copy(), sensitivities=sensitivities)  # type: ignore[attr-defined]
+    if not isinstance(evaluation, Evaluation):
+        raise ModelCheckError(f"evaluate() returned {type(evaluation).__name__}, expected an Evaluation")
+    values = np.asarray(evaluation.values, dtype=float)
+    if values.shape != (n_time,):
+        raise ModelCheckError(f"evaluate() returned values of shape {values.shape} for {n_time} time nodes")
+    if not np.all(np.isfinite(values)):
+        raise ModelCheckError(f"evaluate() returned non-finite values at parameters {p.tolist()}")
+    return values
+
+
+def _check_sensitivities(model: object, p: np.ndarray, values: np.ndarray, scale: np.ndarray, fd_step: float,
+                         rtol: float) -> float:  # fmt: skip
+    evaluation = model.evaluate(p.copy(), sensitivities=True)  # type: ignore[attr-defined]
+    if evaluation.jacobian is None:
+        raise ModelCheckError("the model declares 'sensitivities' but evaluate(p, sensitivities=True) gave none")
+    jac = np.asarray(evaluation.jacobian, dtype=float)
+    if jac.shape != (values.size, p.size):
+        raise ModelCheckError(f"jacobian of shape {jac.shape}, expected {(values.size, p.size)}")
+    drift = float(np.max(np.abs(np.asarray(evaluation.values, dtype=float) - values)))
+    if drift > 1e-8 * max(float(np.max(np.abs(values))), 1.0):  # adaptive integrators may step differently
+        raise ModelCheckError(f"evaluate(p, sensitivities=True) gives values {drift:.2e} away from evaluate(p)")
+    fd = np.empty_like(jac)
+    for i in range(p.size):
+        h = fd_step * scale[i]
+        up, down = p.copy(), p.copy()
+        up[i] += h
+        down[i] -= h
+        fd[:, i] = (_values(model, up, values.size) - _values(model, down, values.size)) / (2 * h)
+    reference = max(float(np.max(np.abs(fd))), np.finfo(float).tiny)
+    error = float(np.max(np.abs(jac - fd))) / reference
+    if error > rtol:
+        raise ModelCheckError(f"sensitivities differ from central finite differences by {error:.2e} "
+                              f"of the largest derivative (tolerance {rtol:g})")  # fmt: skip
+    return error
+
+
+def _check_nodes(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int, seed: int) -> float:
+    rng = np.random.default_rng(seed)
+    P = p + 1e-3 * scale * rng.standard_normal((n_nodes, p.size))
+    nodes = rng.integers(0, n_time, n_nodes)
+    at_nodes: np.ndarray = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
+    if at_nodes.shape != (n_nodes,):
+        raise ModelCheckError(f"evaluate_nodes returned shape {at_nodes.shape} for {n_nodes} pairs")
+    full = np.array([_values(model, row, n_time)[j] for row, j in zip(P, nodes, strict=True)])
+    error = float(np.max(np.abs(at_nodes - full)) / max(float(np.max(np.abs(full))), 1.0))
+    if error > 1e-9:
+        raise ModelCheckError(f"evaluate_nodes differs from the full trajectories by {error:.2e} (relative)")
+    return error
+
+
+@dataclass
+class AnalyticModel:
+    """The model an :class:`AnalyticRecipe` builds (see there)."""
+
+    kind: str
+    times: np.ndarray
+    fail_above: float | None
+    offset: np.ndarray | None
+
+    def _check(self, p: np.ndarray) -> None:
+        if self.fail_above is not None and p[0] > self.fail_above:
+            raise ParameterError(f"p[0] = {p[0]:g} exceeds fail_above = {self.fail_above:g}")
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return ()  # any number of parameters
+
+    output = Output("analytic", "")
+    capabilities = frozenset({SENSITIVITIES})
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        p = np.asarray(p, dtype=float).ravel()
+        self._check(p)
+        t = self.times[:, None]
+        omega = np.arange(1, p.size + 1, dtype=float)[None, :]
+        if self.kind == "sin":
+            terms, jac = np.sin(omega * t * p), omega * t * np.cos(omega * t * p)
+        else:  # poly
+            terms, jac = p**2 * t**omega, 2.0 * p * t**omega
+        values = terms.sum(axis=1)
+        if self.offset is not None:
+            values = values + self.offset
+        return Evaluation(values, jac if sensitivities else None)
+
+
+@dataclass(frozen=True)
+class AnalyticRecipe:
+    """A cheap analytic model, for tests and examples of the parallel machinery.
+
+    ``kind="sin"``: ``f(t) = Σ_i sin((i+1)·t·p_i)``; ``kind="poly"``:
+    ``f(t) = Σ_i p_i²·t^(i+1)``, on ``n_time`` nodes of ``[0, t_end]``, with exact
+    sensitivities. ``offset`` (a :class:`SharedArray` of shape ``(n_time,)``) is added to
+    the output; ``fail_above`` makes evaluation raise
+    :class:`~fuzzygait.core.errors.ParameterError` when ``p[0] > fail_above`` (to test errors).
+    """
+
+    kind: str = "sin"
+    n_time: int = 101
+    t_end: float = 1.0
+    fail_above: float | None = None
+    offset: SharedArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("sin", "poly"):
+            raise ParameterError(f"unknown analytic model {self.kind!r}; choose 'sin' or 'poly'")
+        if self.n_time < 1:
+            raise ParameterError(f"n_time must be ≥ 1; got {self.n_time}")
+
+    @property
+    def key(self) -> Hashable:
+        return ("AnalyticRecipe", self.kind, self.n_time, self.t_end, self.fail_above, self.offset)
+
+    def build(self) -> AnalyticModel:
+        offset = None if self.offset is None else np.asarray(self.offset.load(), dtype=float)
+        if offset is not None and offset.shape != (self.n_time,):
+            raise ParameterError(f"offset must have shape ({self.n_time},); got {offset.shape}")
+        times = np.linspace(0.0, self.t_end, self.n_time)
+        return AnalyticModel(self.kind, times, self.fail_above, offset)
