@@ -30,6 +30,7 @@ from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.trial import OUTPUT_UNITS, AnalysisValue, Event, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
+from fuzzygait.io.subject import PROCESSING_NAMES
 
 
 class _EzC3D(Protocol):
@@ -153,7 +154,7 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
         outputs=outputs,
         output_kinds=kinds,
         events=_events(path, raw, notes),
-        parameters=_processing_parameters(raw),
+        parameters=_processing_parameters(raw, notes),
         analysis=_analysis_values(raw, notes),
         subject=_subject_name(raw),
         label_prefix=prefix,
@@ -274,6 +275,11 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
     if times.shape[-1] < n:
         notes.append(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; using {times.shape[-1]}")
         n = times.shape[-1]
+    elif times.shape[-1] > n:
+        notes.append(
+            f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; only the first {n} are read "
+            "(set EVENT:USED in the file if the others are real events)"
+        )
     seconds = times[0, :n] * 60.0 + times[1, :n]
 
     def texts(name: str, default: str) -> list[str]:
@@ -292,7 +298,21 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
     ]
 
 
-def _processing_parameters(raw: RawC3D) -> dict[str, float]:
+def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
+    """The single-number parameters of the ``PROCESSING`` group (Vicon's subject
+    measurements, mm / kg / rad as stored); a subject measurement found in another group
+    is noted and not used when the file has a ``PROCESSING`` group (a damaged group number
+    moves a parameter silently otherwise; files of other software keep e.g. ``SUBJECT:HEIGHT``)."""
+    known = {name.upper() for name in PROCESSING_NAMES}
+    for group, names in raw.parameter_names.items():
+        if group == "PROCESSING" or "PROCESSING" not in raw.parameter_names:
+            continue
+        for name in names:
+            if name.upper() in known:
+                notes.append(
+                    f"parameter {group}:{name} is a subject measurement outside the PROCESSING group; "
+                    "it is not used (give it in a subject file if it is needed)"
+                )
     result: dict[str, float] = {}
     for name in raw.parameter_names.get("PROCESSING", []):
         value = raw.get("PROCESSING", name)

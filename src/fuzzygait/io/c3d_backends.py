@@ -98,11 +98,13 @@ def _decode_ezc3d(path: Path) -> RawC3D:
     header = c["header"]
     points = np.asarray(c["data"]["points"], dtype=float)[:3].transpose(2, 1, 0)
     analogs = np.shape(c["data"]["analogs"])  # (1, channels, samples)
-    events = [
-        (str(lbl).strip(), float(t))
-        for lbl, t in zip(header["events"]["events_label"], header["events"]["events_time"])
-        if str(lbl).strip()
-    ]
+    event_notes: list[str] = []
+    events = header_event_slots(
+        [str(lbl) for lbl in header["events"]["events_label"]],
+        [float(t) for t in header["events"]["events_time"]],
+        _header_event_count(path),
+        event_notes,
+    )
     return RawC3D(
         points=points,
         labels=list(get("POINT", "LABELS") or []) + _extra_labels(get),
@@ -116,7 +118,7 @@ def _decode_ezc3d(path: Path) -> RawC3D:
             if g != "__METADATA__"
         },
         backend="ezc3d",
-        warnings=[str(w.message) for w in caught],
+        warnings=[str(w.message) for w in caught] + event_notes,
         analog_per_frame=analogs[1] * analogs[2] // points.shape[0] if points.shape[0] and len(analogs) == 3 else None,
     )
 
@@ -191,7 +193,8 @@ def _decode_c3d(path: Path, n_frames: int | None = None) -> RawC3D:
             labels = list(get("POINT", "LABELS") or []) + _extra_labels(get)
             first_frame = int(reader.first_frame)
             rate = float(reader.point_rate)
-            events = _c3d_header_events(header)
+            event_notes: list[str] = []
+            events = _c3d_header_events(header, event_notes)
             # materialise every parameter now: the file closes when we leave this block
             cache, unreadable = _materialise(get, names)
     except Exception as exc:  # the c3d package raises ValueError, struct.error, ...
@@ -211,7 +214,7 @@ def _decode_c3d(path: Path, n_frames: int | None = None) -> RawC3D:
         get=lambda g, p: cache.get((g, p)),
         parameter_names=names,
         backend="c3d",
-        warnings=list(reader.disagreements) + unreadable,
+        warnings=list(reader.disagreements) + unreadable + event_notes,
     )
 
 
@@ -238,17 +241,44 @@ def _c3d_reason(exc: Exception) -> str:
     return _first_sentence(str(exc)) or type(exc).__name__
 
 
-def _c3d_header_events(header: Any) -> list[tuple[str, float]]:
+def _c3d_header_events(header: Any, notes: list[str]) -> list[tuple[str, float]]:
     try:
         count = int(header.event_count)
-        labels = [
-            (lbl.decode("latin-1") if isinstance(lbl, bytes) else str(lbl)).strip()
-            for lbl in header.event_labels[:count]
-        ]
-        times = [float(t) for t in header.event_timings[:count]]
+        labels = [lbl.decode("latin-1") if isinstance(lbl, bytes) else str(lbl) for lbl in header.event_labels]
+        times = [float(t) for t in header.event_timings]
     except Exception:  # old headers without an event block
         return []
-    return [(lbl, t) for lbl, t in zip(labels, times) if lbl]
+    return header_event_slots(labels, times, count, notes)
+
+
+#: Byte offset of the header's event count (16-bit word 151; little-endian in the
+#: formats ezc3d reads) and the number of event slots the header has.
+_EVENT_COUNT_AT = 300
+_EVENT_SLOTS = 18
+
+
+def _header_event_count(path: Path) -> int:
+    """The header's number of defined events (word 151), 18 when unreadable."""
+    with open(path, "rb") as fh:
+        fh.seek(_EVENT_COUNT_AT)
+        word = fh.read(2)
+    return int.from_bytes(word, "little") if len(word) == 2 else _EVENT_SLOTS
+
+
+def header_event_slots(labels: list[str], times: list[float], count: int, notes: list[str]) -> list[tuple[str, float]]:
+    """``(label, time_s)`` of the header's first ``count`` event slots that have a label;
+    labelled slots beyond ``count`` (or a count beyond the 18 slots) are noted, not read."""
+    labels = [lbl.strip() for lbl in labels]
+    used = max(0, min(count, _EVENT_SLOTS, len(labels)))
+    beyond = [i + 1 for i in range(used, len(labels)) if labels[i]]
+    if count > _EVENT_SLOTS:
+        notes.append(f"the header declares {count} events but has {_EVENT_SLOTS} event slots; reading {used}")
+    elif beyond:
+        notes.append(
+            f"the header declares {count} events but event slot(s) {', '.join(map(str, beyond))} also hold labels; "
+            "those are not read"
+        )
+    return [(lbl, t) for lbl, t in zip(labels[:used], times[:used]) if lbl]
 
 
 # --------------------------------------------------------------------------- public

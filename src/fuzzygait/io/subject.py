@@ -95,6 +95,13 @@ _SIDE_NAMES = {
     "static_rot_off": "StaticRotOff",
 }
 _REQUIRED_SIDE = ("leg_length", "knee_width", "ankle_width")
+
+#: Every name Vicon writes to a C3D file's ``PROCESSING`` group for the subject
+#: measurements (``Bodymass``, ``LLegLength``, ...), as ``to_processing`` writes them.
+PROCESSING_NAMES = frozenset(
+    {"Bodymass", "Height", "MarkerDiameter", "InterAsisDistance"}
+    | {side + vicon for side in "LR" for vicon in _SIDE_NAMES.values()}
+)
 _ANGLE_FIELDS = {"tibial_torsion", "thigh_rotation", "shank_rotation", "ankle_abadd",
                  "static_plant_flex", "static_rot_off"}  # fmt: skip
 
