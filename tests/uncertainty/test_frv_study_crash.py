@@ -24,8 +24,8 @@ import numpy as np
 import pytest
 import zarr.storage._local as zarr_local
 
+from fuzzygait.io import atomic
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty import storage as result_storage
 from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
 from fuzzygait.uncertainty.frv.store import read_meta
 
@@ -126,7 +126,7 @@ def arm(kill_at: int, events: list[tuple[str, str]] | None = None) -> None:
 
     zarr_local.LocalStore.delete = hooked_delete  # type: ignore[method-assign]
     wrap(os, "rename", lambda path: "publish")
-    wrap(result_storage, "_exchange", lambda path: "publish")
+    wrap(atomic, "exchange", lambda path: "publish")
     wrap(shutil, "rmtree", lambda path: "discard")
 
 
@@ -150,7 +150,7 @@ def writes(
     events: list[tuple[str, str]] = []
     with monkeypatch.context() as patch:
         for module, name in ((zarr_local, "_put"), (zarr_local.LocalStore, "delete"), (os, "rename"),
-                             (result_storage, "_exchange"), (shutil, "rmtree")):  # fmt: skip
+                             (atomic, "exchange"), (shutil, "rmtree")):  # fmt: skip
             patch.setattr(module, name, getattr(module, name))  # restored afterwards
         arm(0, events)
         action(store, n)
@@ -263,15 +263,16 @@ def test_an_extension_killed_in_each_phase_completes_bit_identical(root: Path) -
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["create", "extend", "overwrite", "repair"])
 def test_killed_at_every_phase(root: Path, name: str) -> None:
-    """Every write of an extension (91 here) and of the repair after a kill; 8 writes of
-    each phase of a new study and of an overwrite (about 40 each, of 140)."""
+    """8 writes of each phase (first, last and evenly between: about 30-40 kills of the
+    90-140 writes of each run) of a new study, an extension, an overwrite and the repair
+    after a kill."""
     run = scenario(root, name)
     expected = {"library", "intervals", "samples", "commit"}
     assert {p for p, _ in run.events} == expected | {"create": {"publish", "discard"},
                                                      "overwrite": {"publish", "discard"},
                                                      "repair": {"discard"}}.get(name, set())  # fmt: skip
     assert all(sum(p == phase for p, _ in run.events) >= 3 for phase in expected)
-    chosen = moments(run.events, 8 if name in ("create", "overwrite") else None)
+    chosen = moments(run.events, 8)
     outcomes = {k: run.check_kill(k) for k in chosen if not (run.root / f"k{k}").exists()}
     # a kill leaves the new study only once it is in place (after the rename / the exchange)
     published = next((i + 1 for i, (p, _) in enumerate(run.events) if p == "publish"), len(run.events) + 1)

@@ -17,7 +17,7 @@ import pytest
 import xarray as xr
 import zarr.storage._local as zarr_local
 
-from fuzzygait.uncertainty import storage
+from fuzzygait.io import atomic
 from fuzzygait.uncertainty.storage import load_result, save_result
 
 
@@ -38,7 +38,7 @@ def test_a_failed_swap_leaves_the_previous_result(tmp_path: Path, monkeypatch: p
     def broken(new: Path, old: Path) -> bool:
         raise OSError(5, "Input/output error", str(old))
 
-    monkeypatch.setattr(storage, "_exchange", broken)
+    monkeypatch.setattr(atomic, "exchange", broken)
     with pytest.raises(OSError, match="Input/output"):
         save_result(result(2), target)
     assert is_result(target, 1)
@@ -50,7 +50,7 @@ def test_without_an_atomic_exchange_the_old_one_is_renamed_aside(
 ) -> None:
     target = tmp_path / "r.zarr"
     save_result(result(1), target)
-    monkeypatch.setattr(storage, "_exchange", lambda new, old: False)  # e.g. a file system without RENAME_EXCHANGE
+    monkeypatch.setattr(atomic, "exchange", lambda new, old: False)  # e.g. a file system without RENAME_EXCHANGE
     save_result(result(2), target)
     assert is_result(target, 2) and sorted(p.name for p in tmp_path.iterdir()) == ["r.zarr"]
     # a process killed between the two renames left the old result aside and nothing in place: put back
@@ -58,7 +58,7 @@ def test_without_an_atomic_exchange_the_old_one_is_renamed_aside(
     os.rename(target, aside)
     save_result(result(3), tmp_path / "other.zarr")  # another target: this one is not touched
     assert aside.exists() and not target.exists()
-    storage.tidy_beside(target)
+    atomic.tidy_beside(target)
     assert is_result(target, 2) and not aside.exists()
 
 
@@ -70,7 +70,7 @@ def _save_killed(kill_at: int, target: Path) -> None:
         if count[0] == kill_at:
             os.kill(os.getpid(), signal.SIGKILL)
 
-    put, exchange, rmtree = zarr_local._put, storage._exchange, shutil.rmtree
+    put, exchange, rmtree = zarr_local._put, atomic.exchange, shutil.rmtree
 
     def hooked_put(path: Path, value: Any, exclusive: bool = False) -> int:
         event()
@@ -84,7 +84,7 @@ def _save_killed(kill_at: int, target: Path) -> None:
         event()
         rmtree(path, *args, **kwargs)
 
-    zarr_local._put, storage._exchange, shutil.rmtree = hooked_put, hooked_exchange, hooked_rmtree
+    zarr_local._put, atomic.exchange, shutil.rmtree = hooked_put, hooked_exchange, hooked_rmtree
     save_result(result(2), target)
     os._exit(min(count[0], 250))  # the kill was not reached: say how many writes there were
 

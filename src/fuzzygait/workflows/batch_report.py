@@ -38,7 +38,7 @@ import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.gait.spatiotemporal import pooled_parameters
-from fuzzygait.io.atomic import atomic_output
+from fuzzygait.io.atomic import atomic_output, remove_path, replace_path
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.viz.report import TrialEntry
 from fuzzygait.viz.report.pages import index_page
@@ -142,27 +142,20 @@ def remove_stale_staging(folder: Path) -> list[str]:
     for path in folder.iterdir():
         name = path.name
         if name.startswith(".") and (".tmp" in name or name.endswith((".print.html", ".chromium"))):
-            _remove(path)
+            remove_path(path)
             removed.append(name)
         elif name.startswith(".") and (aside := re.fullmatch(r"\.(.+)\.old-\d+", name)):
             target = folder / aside.group(1)
             if target.exists():
-                _remove(path)
+                remove_path(path)
             else:
                 os.rename(path, target)
             removed.append(name)
         elif name.endswith("_files") and path.is_dir():
             for tmp in path.glob(".*.tmp-*"):
-                _remove(tmp)
+                remove_path(tmp)
                 removed.append(f"{name}/{tmp.name}")
     return removed
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
 
 
 def _page_name(path: Path) -> str:
@@ -278,10 +271,7 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
 
             html_to_pdf(staging / page_name, staging / page_name.replace(".html", ".pdf"))
         for path in sorted(staging.iterdir(), key=lambda p: p.suffix == ".html"):  # the page last
-            target = folder / path.name
-            if target.is_dir():
-                shutil.rmtree(target)
-            os.replace(path, target)
+            replace_path(path, folder / path.name)  # the old one goes only once the new one is in place
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return summary, folder / page_name

@@ -10,7 +10,7 @@ them) and removes a group that no commit has counted. A group holding fewer rows
 its record says is damage no kill can cause; the study is refused in one line.
 
 A new study is built in a temporary folder beside its target and moved into place
-when complete (:func:`~fuzzygait.uncertainty.storage.replace_folder`), so a failed or
+when complete (:func:`~fuzzygait.io.atomic.replace_folder`), so a failed or
 killed first run leaves nothing at the target.
 """
 

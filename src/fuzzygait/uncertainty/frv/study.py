@@ -16,6 +16,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
+from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, serial_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
@@ -26,7 +27,6 @@ from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.gfa import optimisation_nodes
 from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
-from fuzzygait.uncertainty.storage import replace_folder, temporary_folder, tidy_beside
 
 __all__ = ["STORE_FORMAT", "FRVStudy"]
 
