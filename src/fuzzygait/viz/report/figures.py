@@ -203,6 +203,13 @@ def _draw_undetermined(ax: Axes, x: np.ndarray, strips: list[tuple[int, str, np.
                            alpha=0.25 if k == 0 else 0.3, edgecolor=colour, hatch=HATCH, lw=0)  # fmt: skip
 
 
+def time_limits(t: np.ndarray) -> tuple[float, float]:
+    """x-axis limits (s) of a whole-trial plot: the first and last sample, widened by
+    5 ms each way for a trial of one frame (matplotlib refuses equal limits)."""
+    lo, hi = float(t[0]), float(t[-1])
+    return (lo - 0.005, hi + 0.005) if hi <= lo else (lo, hi)
+
+
 def _not_computed(ax: Axes, text: str = "not computed") -> None:
     """A grey note in the middle of an empty panel."""
     ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center",
@@ -370,7 +377,7 @@ def time_series_figure(data: TrialData, title: str, clinical: ClinicalData | Non
             if not drawn:
                 _not_computed(ax)
             _draw_undetermined(ax, t, strips)
-            ax.set_xlim(t[0], t[-1])
+            ax.set_xlim(*time_limits(t))
             if r == len(rows) - 1:
                 ax.set_xlabel("time (s)   [dotted lines: foot strikes]", fontsize=8)
     handles = _legend_handles(data.alphas, None, seen)

@@ -41,7 +41,7 @@ from fuzzygait.markererror.per_source import (
 )
 from fuzzygait.viz.report.bands import N_POINTS, TrialData, alpha_text, band_undetermined, cycle_bands
 from fuzzygait.viz.report.clinical_html import footnote
-from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt
+from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt, time_limits
 from fuzzygait.viz.report.markup import escape, html_table
 
 if TYPE_CHECKING:
@@ -148,7 +148,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
                 if r == len(JOINTS) - 1:
                     ax.set_xlabel("gait cycle (%)  [0 and 100 % = foot strike]", fontsize=8)
             else:
-                ax.set_xlim(float(x[0]), float(x[-1]))
+                ax.set_xlim(*time_limits(x))
                 ax.set_xlabel("time (s)  [no gait cycles on this side: the whole trial]", fontsize=8)
     n_cycles = data.n_cycles()
     handles: list[Artist] = [Line2D([], [], color="black", lw=1.3, label="measured (mean over cycles: L "
