@@ -15,7 +15,9 @@ from fuzzygait.core.errors import FuzzyGaitError
 if TYPE_CHECKING:
     import xarray as xr
 
-NodesOption = Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")]
+NodesOption = Annotated[
+    int | None, typer.Option(help="Beam nodes of the prosthesis blade; default: the scenario's (swing 20, stance 40).")
+]
 FixedValuesOption = Annotated[
     list[str] | None, typer.Option("--set", metavar="NAME=VALUE,...", help="Fixed parameter values (SI units).")
 ]
@@ -25,7 +27,7 @@ FixedValuesOption = Annotated[
 def simulate(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Simulation results, .nc or .zarr.")],
-    nodes: NodesOption = 20,
+    nodes: NodesOption = None,
     dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's, 0.001.")] = None,
     duration: Annotated[
         float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's, 2.")
@@ -41,9 +43,10 @@ def simulate(
         Path | None, typer.Option("--plot", help="Also plot the energies over time (.png, .svg or .pdf).")
     ] = None,
     scheme: Annotated[
-        str, typer.Option(help="Time integrator: variational (thesis Eq. 4.26) or energy-momentum "
-                          "(exact energy balance, more robust for very flexible and stiff blades).")
-    ] = "variational",
+        str | None, typer.Option(help="Time integrator: variational (thesis Eq. 4.26) or energy-momentum "
+                                 "(exact energy balance, more robust for very flexible and stiff blades); "
+                                 "default: the scenario's (swing variational, stance energy-momentum).")
+    ] = None,
     sensitivities: Annotated[
         bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities "
                            "(about twice the cost of a plain run).")
@@ -52,13 +55,15 @@ def simulate(
     """Simulate the leg with the prosthesis blade (swing or stance scenario) and save
     positions, directors, joint angles and energies over time.
 
-    Nothing is written when the simulation fails: try a smaller --dt or more damping then.
+    The thesis' Table 4.3/4.4 values, except where they do not run on the shipped blade
+    (swing: --set eta=1e5; stance: --scheme energy-momentum; printed as a note). Nothing
+    is written when the simulation fails; the error names the options that fix it.
     """
     from fuzzygait.workflows.fuzzy_dynamics import (
-        LegSetup,
         SimulationOutputs,
         check_scenario,
         check_scheme,
+        command_setup,
         simulate_leg,
         simulation_timing,
     )
@@ -67,14 +72,17 @@ def simulate(
     with user_errors():
         check_scenario(scenario)
         check_output_suffixes(out_file, rrd, {"--plot": plot})
-        if nodes < 2:
+        if nodes is not None and nodes < 2:
             raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
         step, span = simulation_timing(scenario, dt, duration)
-        check_scheme(scheme)
-        values = parse_overrides(overrides or [])
+        if scheme is not None:
+            check_scheme(scheme)
+        setup, note = command_setup(scenario, nodes, step, span, parse_overrides(overrides or []), scheme)
+        if note:
+            out.print(f"note: {note}", markup=False)
         with progress_bars() as bars:
             ds, written = simulate_leg(
-                LegSetup(scenario, nodes, step, span, values, scheme), SimulationOutputs(out_file, plot=plot, rrd=rrd),
+                setup, SimulationOutputs(out_file, plot=plot, rrd=rrd),
                 sensitivities=sensitivities, progress=StageBars(bars),
             )  # fmt: skip
     _print_simulation_summary(ds)
@@ -96,13 +104,15 @@ def fuzzy_sim(
     alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.5,1",
     stride: Annotated[int, typer.Option(help="Optimise every STRIDE-th time node (thesis: 100).")] = 100,
     novelty: Annotated[float, typer.Option(help="Novelty tolerance, relative (thesis: 0.01 % = 1e-4).")] = 1e-4,
-    nodes: NodesOption = 20,
+    nodes: NodesOption = None,
     dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's.")] = None,
     duration: Annotated[
         float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's.")
     ] = None,
     overrides: FixedValuesOption = None,
-    scheme: Annotated[str, typer.Option(help="variational or energy-momentum.")] = "variational",
+    scheme: Annotated[
+        str | None, typer.Option(help="variational or energy-momentum; default: the scenario's (as simulate).")
+    ] = None,
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write the hulls as a Rerun recording.")] = None,
     plot: Annotated[Path | None, typer.Option("--plot", help="Also plot the hulls (.png, .svg, .pdf).")] = None,
     parameter_plot: Annotated[
@@ -112,7 +122,13 @@ def fuzzy_sim(
     """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
     (Graph Follower algorithm, linearised with the simulator's sensitivities)."""
     from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
-    from fuzzygait.workflows.fuzzy_dynamics import FuzzySimOutputs, LegSetup, check_scenario, fuzzy_simulation
+    from fuzzygait.workflows.fuzzy_dynamics import (
+        FuzzySimOutputs,
+        check_scenario,
+        check_scheme,
+        command_setup,
+        fuzzy_simulation,
+    )
     from fuzzygait.workflows.outputs import check_output_suffixes
 
     with user_errors():
@@ -120,10 +136,14 @@ def fuzzy_sim(
         check_output_suffixes(out_file, rrd, {"--plot": plot, "--parameter-plot": parameter_plot})
         spreads = parse_fuzzy(fuzzy)
         levels = parse_alphas(alphas)
-        values = parse_overrides(overrides or [])
+        if scheme is not None:
+            check_scheme(scheme)
+        setup, note = command_setup(scenario, nodes, dt, duration, parse_overrides(overrides or []), scheme)
+        if note:
+            out.print(f"note: {note}", markup=False)
         with progress_bars() as bars:
             result, written = fuzzy_simulation(
-                LegSetup(scenario, nodes, dt, duration, values, scheme), spreads,
+                setup, spreads,
                 FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
                 target=target, alphas=levels, stride=stride, novelty=novelty, progress=StageBars(bars),
             )  # fmt: skip
@@ -146,7 +166,8 @@ def frv_sim(
                                             "was made with (an option given must match them).")],
     parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter.")] = "E",
     value: Annotated[
-        float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the scenario's.")
+        float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the thesis' "
+                                    "study's (stance E: 59.958e9 Pa, Table 5.3), else the scenario's.")
     ] = None,
     samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
     disc: Annotated[int, typer.Option(help="Grouping grid points N_p-disc.")] = 100,
@@ -155,7 +176,7 @@ def frv_sim(
     seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
     target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
     overrides: FixedValuesOption = None,
-    nodes: NodesOption = 20,
+    nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
     dt: Annotated[float | None, typer.Option("--dt", help="Time step (s).")] = None,
     duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s).")] = None,
     scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",

@@ -5,14 +5,15 @@ and every output file written, or none of them."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.errors import FuzzyGaitError, SimulationError
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
 from fuzzygait.workflows.outputs import write_all_or_none
 from fuzzygait.workflows.progress import SILENT, StageProgress
@@ -27,6 +28,8 @@ __all__ = [
     "build_simulator",
     "check_scenario",
     "check_scheme",
+    "command_setup",
+    "named_fixes",
     "fuzzy_simulation",
     "simulate_leg",
     "simulation_timing",
@@ -73,6 +76,51 @@ class LegSetup:
     scheme: str = "variational"
 
 
+def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: float | None,
+                  values: Mapping[str, float], scheme: str | None) -> tuple[LegSetup, str | None]:
+    """The setup a command runs: the scenario's :data:`~fuzzygait.mechanics.presets.COMMAND_DEFAULTS`
+    (values and scheme the thesis' tables do not run with on the shipped blade) under what
+    the user gave. Returns it and a note naming each default taken from there (None: none)."""
+    from fuzzygait.mechanics.presets import COMMAND_DEFAULTS
+
+    check_scenario(scenario)
+    defaults = COMMAND_DEFAULTS[scenario]
+    taken = {k: v for k, v in defaults.values.items() if k not in values}
+    changed = [f"--set {k}={v:g}" for k, v in taken.items()]
+    if scheme is None:
+        scheme = defaults.scheme
+        if scheme != "variational":
+            changed.append(f"--scheme {scheme}")
+    if nodes is None:
+        nodes = defaults.nodes
+        if nodes != 20:
+            changed.append(f"--nodes {nodes}")
+    note = (f"{scenario} runs with {', '.join(changed)} by default ({defaults.reason}); give the option to change it"
+            if changed else None)  # fmt: skip
+    return LegSetup(scenario, nodes, dt, duration, {**taken, **values}, scheme), note
+
+
+@contextmanager
+def named_fixes(setup: LegSetup) -> Iterator[None]:
+    """Add to a :class:`SimulationError` the command-line options that fix it: more
+    damping (``--set eta=``, ten times the run's), and for a failed Newton step the other
+    scheme or half the time step (``--dt``)."""
+    try:
+        yield
+    except SimulationError as exc:
+        preset = SCENARIOS[setup.scenario]
+        eta = float(setup.values.get("eta", preset.material.damping))
+        step = preset.dt if setup.dt is None else setup.dt
+        fixes = [f"--set eta={max(10 * eta, 1e5):g}"]
+        if "folded" in str(exc):
+            fixes.append(f"--nodes {2 * setup.nodes}")
+        else:
+            if setup.scheme != "energy-momentum":
+                fixes.append("--scheme energy-momentum")
+            fixes.append(f"--dt {step / 2:g}")
+        raise SimulationError(f"{exc}; on the command line: {' or '.join(fixes)}") from None
+
+
 def build_simulator(setup: LegSetup, progress: StageProgress = SILENT) -> tuple[LegSimulator, np.ndarray]:
     """The scenario's simulator (built, or its compiled code loaded) and its full
     parameter vector with the setup's values set."""
@@ -109,7 +157,7 @@ def simulate_leg(
     progress.stage(f"{setup.scenario}: time steps", int(round(span / step)))
     # the integrator checks for non-finite values itself; numpy's overflow warnings on a
     # diverging step would only add lines to its one-line error
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup):
         ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities, scheme=setup.scheme,
                      progress=progress.update)  # fmt: skip
     config = sim.configuration
@@ -157,7 +205,7 @@ def fuzzy_simulation(
         raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
     sim, base = build_simulator(setup, progress)
     progress.stage(f"{setup.scenario}: α-level optimisations")
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup):
         result = fuzzy_forward_dynamics(
             sim, spreads, target=target, base=base, alphas=alphas, stride=stride, novelty_tol=novelty,
             dt=setup.dt, duration=setup.duration, scheme=setup.scheme, progress=progress.update,
