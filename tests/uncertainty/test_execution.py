@@ -180,12 +180,13 @@ PARAMS = FuzzyVector([triangular(0.8, 1.0, 1.3, "a"), triangular(1.5, 2.0, 2.2, 
 
 @pytest.mark.parametrize(
     "strategy",
-    [BatchedDirect(stride=5, starts=3, screen=16, iterations=8), Linearised(stride=4)],
-    ids=["batched-direct", "linearised"],
+    [BatchedDirect(stride=5, starts=3, screen=16, iterations=8), Linearised(stride=4),
+     Linearised(stride=4, tracks="side-by-side")],
+    ids=["batched-direct", "linearised", "linearised-side-by-side"],
 )
 def test_graph_follower_bit_identical_on_every_evaluator(evaluators, strategy) -> None:
     recipe = AnalyticRecipe("sin", n_time=21, t_end=2.0)
-    if isinstance(strategy, Linearised):  # the model itself, in this process
+    if isinstance(strategy, Linearised):  # the model itself, in this process (one row after another)
         direct = graph_follower(recipe.build(), PARAMS, (0.0, 0.5), strategy=strategy)
     else:  # node evaluations need the evaluated model's "nodes"
         direct = graph_follower(evaluators["serial"].model(recipe), PARAMS, (0.0, 0.5), strategy=strategy)

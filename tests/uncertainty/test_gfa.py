@@ -30,12 +30,15 @@ from fuzzygait.uncertainty import (
     triangular_relative,
 )
 
-MODES = ("linearised", "direct")
+MODES = ("linearised", "side-by-side", "direct")
 
 
 def strategy_for(mode: str, **options: object) -> Linearised | Direct:
-    """The strategy called ``mode`` with those of ``options`` it has."""
-    kind = Linearised if mode == "linearised" else Direct
+    """The strategy called ``mode`` with those of ``options`` it has ("side-by-side": the
+    linearised strategy with its (α, bound) tracks followed side by side)."""
+    kind = Direct if mode == "direct" else Linearised
+    if mode == "side-by-side":
+        options = {**options, "tracks": "side-by-side"}
     return kind(**{k: v for k, v in options.items() if k in kind.__dataclass_fields__})  # type: ignore[arg-type]
 
 
@@ -172,7 +175,9 @@ def test_sin_truth_has_interior_extrema() -> None:
         ("direct", None, {"starts": 4}, 1e-6),
         # measured 4.5e-4 with the defaults: a secant search limited to 4 steps per node
         ("linearised", sin_jac, {}, 2e-3),
+        ("side-by-side", sin_jac, {}, 2e-3),
         ("linearised", None, {}, 2e-3),
+        ("side-by-side", None, {}, 2e-3),
         # more steps and a finer novelty tolerance close the gap (measured 1.3e-8)
         ("linearised", sin_jac, {"max_iterations": 20, "novelty_tol": 1e-7}, 1e-6),
     ],
@@ -214,7 +219,9 @@ def prod_truth(alphas) -> dict[float, tuple[np.ndarray, np.ndarray]]:
     [
         ("direct", None, {"starts": 4}, 1e-6),
         ("linearised", prod_jac, {}, 1.5e-3),  # measured 3.1e-4
+        ("side-by-side", prod_jac, {}, 1.5e-3),
         ("linearised", None, {}, 1.5e-3),
+        ("side-by-side", None, {}, 1.5e-3),
         ("linearised", prod_jac, {"max_iterations": 20, "novelty_tol": 1e-7}, 1e-6),  # measured ~3e-8
     ],
 )
@@ -274,6 +281,7 @@ def grid_reference() -> dict[float, tuple[np.ndarray, np.ndarray]]:
         # one coordinate within a few steps, and from the library's best entry the
         # search can stay in a neighbouring local optimum (8 steps: 1.1e-4)
         ("linearised", 1e-2),
+        ("side-by-side", 1e-2),
     ],
 )
 def test_two_parameter_coupled_model_against_grid(grid_reference, mode, tolerance) -> None:
@@ -296,7 +304,7 @@ def ball_model(p: np.ndarray) -> np.ndarray:
     return np.linalg.norm(C_BALL - (X_BALL + p[:3]), axis=1) + np.linalg.norm(X_BALL + p[3:] - E_BALL, axis=1)
 
 
-@pytest.mark.parametrize(("mode", "tolerance"), [("direct", 1e-6), ("linearised", 1e-6)])
+@pytest.mark.parametrize(("mode", "tolerance"), [("direct", 1e-6), ("linearised", 1e-6), ("side-by-side", 1e-6)])
 def test_fuzzy_balls_match_the_analytic_hull(mode, tolerance) -> None:
     balls = FuzzyBalls(np.zeros((2, 3)), R_BALL, ("A", "B"))
     result = graph_follower(FunctionModel(ball_model, T_BALL), balls, (0.0, 0.5), strategy=strategy_for(mode, starts=4))

@@ -118,6 +118,9 @@ def fuzzy_sim(
     parameter_plot: Annotated[
         Path | None, typer.Option("--parameter-plot", help="Also plot the extremising parameter sets (Fig. 5.6).")
     ] = None,
+    workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations (1: this "
+                                         "process); the hulls do not depend on it.")] = 2,
+    scheduler: SchedulerOption = None,
 ) -> None:
     """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
     (Graph Follower algorithm, linearised with the simulator's sensitivities)."""
@@ -145,7 +148,8 @@ def fuzzy_sim(
             result, written = fuzzy_simulation(
                 setup, spreads,
                 FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
-                target=target, alphas=levels, stride=stride, novelty=novelty, progress=StageBars(bars),
+                target=target, alphas=levels, stride=stride, novelty=novelty, workers=workers, scheduler=scheduler,
+                progress=StageBars(bars),
             )  # fmt: skip
     out.print(_fuzzy_summary(scenario, spreads, result.attrs), markup=False)
     _print_written(written)

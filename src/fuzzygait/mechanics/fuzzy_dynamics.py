@@ -73,6 +73,7 @@ def fuzzy_forward_dynamics(
     scheme: str = "variational",
     progress: Callable[[int, int], None] | None = None,
     evaluator: Evaluator | None = None,
+    tracks: str = "one-by-one",
 ) -> xr.Dataset:
     """Fuzzy target output of a scenario for triangular fuzzy parameters.
 
@@ -87,6 +88,9 @@ def fuzzy_forward_dynamics(
         dt, duration, scheme: simulation settings.
         evaluator: runs the forward simulations on its workers (default: in this
             process); the hulls are bit-identical either way.
+        tracks: the Linearised strategy's order (:class:`~fuzzygait.uncertainty.Linearised`):
+            "one-by-one" (the thesis') or "side-by-side" (the (α, bound) tracks at once,
+            their simulations of a round evaluated together: in parallel on ``evaluator``).
 
     Returns:
         The Graph Follower result (``hull (alpha, bound, time)``, ``deterministic``,
@@ -100,7 +104,7 @@ def fuzzy_forward_dynamics(
     model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
     numbers = [triangular_relative(model.base[LEG_PARAMETERS.index(n)], spreads[n], n) for n in names]
     start = time.perf_counter()
-    strategy = Linearised(stride=stride, novelty_tol=novelty_tol, max_iterations=max_iterations)
+    strategy = Linearised(stride=stride, novelty_tol=novelty_tol, max_iterations=max_iterations, tracks=tracks)
     engine_model = model if evaluator is None else evaluator.model(_recipe_of(model), sensitivities=True)
     result = graph_follower(engine_model, FuzzyVector(numbers), alphas, strategy=strategy, progress=progress)
     result.attrs.update(

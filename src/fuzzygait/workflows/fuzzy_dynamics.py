@@ -191,11 +191,19 @@ def fuzzy_simulation(
     alphas: Sequence[float] = (0.0, 0.5, 1.0),
     stride: int = 100,
     novelty: float = 1e-4,
+    workers: int = 1,
+    scheduler: str | None = None,
+    tracks: str = "side-by-side",
     progress: StageProgress = SILENT,
 ) -> tuple[xr.Dataset, list[Path]]:
     """Fuzzy forward dynamics of a scenario (hulls of ``target`` for triangular fuzzy
-    parameters with relative ``spreads``) and its outputs (all or none)."""
+    parameters with relative ``spreads``) and its outputs (all or none). The forward
+    simulations run on ``workers`` local processes (1: this one) or the Dask
+    ``scheduler``; with ``tracks="side-by-side"`` (the Graph Follower's (α, bound) tracks
+    at once) those of a round run in parallel, and the hulls do not depend on the
+    number of workers."""
     from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics
+    from fuzzygait.uncertainty.execution import Evaluator
     from fuzzygait.uncertainty.storage import save_result
     from fuzzygait.viz.figures import save_figure
     from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
@@ -205,11 +213,14 @@ def fuzzy_simulation(
         raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
     sim, base = build_simulator(setup, progress)
     progress.stage(f"{setup.scenario}: α-level optimisations")
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup), \
+            Evaluator(workers=workers, scheduler=scheduler) as evaluator:  # fmt: skip
         result = fuzzy_forward_dynamics(
             sim, spreads, target=target, base=base, alphas=alphas, stride=stride, novelty_tol=novelty,
             dt=setup.dt, duration=setup.duration, scheme=setup.scheme, progress=progress.update,
+            evaluator=None if evaluator.serial else evaluator, tracks=tracks,
         )  # fmt: skip
+    result.attrs["workers"] = workers if scheduler is None else f"scheduler {scheduler}"
     written = write_all_or_none([
         (outputs.out_file, lambda path: save_result(result, path)),
         (outputs.plot, lambda path: save_figure(hull_figure(result), path)),

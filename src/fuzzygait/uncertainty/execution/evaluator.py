@@ -556,6 +556,13 @@ class EvaluatedModel:
         out = self.batch(np.atleast_2d(np.asarray(P, dtype=float)))
         return out[0] if isinstance(out, tuple) else out
 
+    def evaluate_many_with_sensitivities(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of ``P`` in parallel with their sensitivities: ``(k, n_time)``, ``(k, n_time, n_p)``."""
+        out = self.batch(np.atleast_2d(np.asarray(P, dtype=float)))
+        if not isinstance(out, tuple):
+            raise ParameterError("this model was made without sensitivities (Evaluator.model(..., sensitivities=True))")
+        return np.asarray(out[0]), np.asarray(out[1])
+
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         out = self.batch(np.asarray(p, dtype=float).reshape(1, -1))
         if isinstance(out, tuple):

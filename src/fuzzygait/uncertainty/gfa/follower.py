@@ -14,7 +14,7 @@ repair (Fig. 2.11) in the caller. The α = 1 hull is the deterministic run.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,10 +85,22 @@ class _Follower:
         return self._direct(alpha, node, sense, warm)
 
     def _linearised(self, alpha: float, node: int, sense: float) -> np.ndarray:
+        steps = self.linearised_steps(alpha, node, sense)
+        try:
+            wanted = next(steps)
+            while True:
+                wanted = steps.send(self.simulate(wanted))
+        except StopIteration as done:
+            return np.asarray(done.value)
+
+    def linearised_steps(self, alpha: float, node: int, sense: float) -> Generator[np.ndarray, int, np.ndarray]:
+        """The linearised optimisation of one node as a generator: it yields each
+        parameter vector it needs simulated (with sensitivities) and is sent back that
+        simulation's library index; it returns the optimum found."""
         library, domain = self.library, self.domain(alpha)
         best = library.best(self.admissible(alpha), node, sense)
         if not library.has_sensitivities(best):  # stored without sensitivities: add them
-            best = self.simulate(library.parameters[best])
+            best = yield library.parameters[best]
         p0, f0 = library.parameters[best], library.trajectories[best, node]
         g0 = sense * library.gradient(best, node)
         step = self._linear_step(domain, g0, p0)  # the thesis' step: the linear model's optimum
@@ -99,7 +111,7 @@ class _Follower:
             candidate = domain.project(p0 + step)
             index, distance = library.closest(candidate)
             if distance > self.novelty_tol or not library.has_sensitivities(index):
-                index = self.simulate(candidate)
+                index = yield candidate
             f1 = library.trajectories[index, node]
             g1 = sense * library.gradient(index, node)
             if sense * f1 > sense * f0:  # improvement: continue from there
@@ -192,19 +204,61 @@ def run_follower(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: 
         follower.gain_tol = strategy.gain_tol * max(float(np.max(np.abs(deterministic))), np.finfo(float).tiny)
 
     below_one = levels[levels < 1.0][::-1]  # highest first: its finds help lower levels
-    total, done = 2 * nodes.size * below_one.size, 0
-    for alpha in below_one:
-        for bound in BOUNDS:
-            warm = None
-            for node in nodes:
-                warm = follower.optimise_node(float(alpha), int(node), SENSES[bound], warm)
-                done += 1
-                if progress is not None:
-                    progress(done, total)
+    if isinstance(strategy, Linearised) and strategy.tracks == "side-by-side":
+        _side_by_side(follower, [(float(a), SENSES[b]) for a in below_one for b in BOUNDS], nodes, progress)
+    else:
+        total, done = 2 * nodes.size * below_one.size, 0
+        for alpha in below_one:
+            for bound in BOUNDS:
+                warm = None
+                for node in nodes:
+                    warm = follower.optimise_node(float(alpha), int(node), SENSES[bound], warm)
+                    done += 1
+                    if progress is not None:
+                        progress(done, total)
 
     hull, extremiser = _post_process(follower, params, levels, deterministic)
     return {"hull": hull, "extremiser": extremiser, "deterministic": deterministic,
             "attrs": {"optimisations": follower.counts.optimisations, "library_size": len(follower.library)}}
+
+
+def _side_by_side(follower: _Follower, tracks: list[tuple[float, float]], nodes: np.ndarray,
+                  progress: Progress | None) -> None:
+    """Follow every ``(alpha, sense)`` track at once, node after node: in each round
+    every track runs until it needs a simulation (or finishes a node and starts its
+    next), then the round's simulations are evaluated together and added to the library
+    in track order. Everything depends on the tracks and the library only, never on how
+    the rows are evaluated."""
+    total, done = len(tracks) * nodes.size, 0
+    position = [0] * len(tracks)
+    steps: list[Generator[np.ndarray, int, np.ndarray] | None] = [None] * len(tracks)
+    wanted: list[np.ndarray | None] = [None] * len(tracks)
+    answer: list[int | None] = [None] * len(tracks)
+    while True:
+        for k, (alpha, sense) in enumerate(tracks):
+            while wanted[k] is None and position[k] < nodes.size:
+                if steps[k] is None:
+                    follower.counts.optimisations += 1
+                    steps[k] = follower.linearised_steps(alpha, int(nodes[position[k]]), sense)
+                generator, reply = steps[k], answer[k]
+                assert generator is not None
+                try:
+                    wanted[k] = next(generator) if reply is None else generator.send(reply)
+                    answer[k] = None
+                except StopIteration:
+                    steps[k], answer[k] = None, None
+                    position[k] += 1
+                    done += 1
+                    if progress is not None:
+                        progress(done, total)
+        asked = [k for k in range(len(tracks)) if wanted[k] is not None]
+        if not asked:
+            return
+        rows = np.array([wanted[k] for k in asked])
+        values, jacobians = follower.model.trajectories_and_sensitivities_many(rows)
+        for k, f, jac in zip(asked, values, jacobians, strict=True):
+            answer[k] = follower.library.add(np.asarray(wanted[k]), f, jac)
+            wanted[k] = None
 
 
 def _post_process(follower: _Follower, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,

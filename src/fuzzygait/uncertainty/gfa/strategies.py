@@ -34,6 +34,10 @@ def _non_negative(name: str, value: float) -> None:
         raise ParameterError(f"{name} must be >= 0; got {value!r}")
 
 
+#: The orders in which the Linearised strategy follows its (α-level, bound) tracks.
+TRACKS = ("one-by-one", "side-by-side")
+
+
 @dataclass(frozen=True)
 class Linearised:
     """Linearised α-level optimisation (OP-III).
@@ -45,12 +49,20 @@ class Linearised:
         max_iterations: linearised steps per node at most (1 = the thesis' single step).
         gain_tol: a step is not simulated when the linear model predicts a gain below
             ``gain_tol`` times the largest deterministic output magnitude.
+        tracks: ``"one-by-one"`` (the thesis' order: each α-level, highest first, its
+            upper then its lower hull, node after node) or ``"side-by-side"``: every
+            (α-level, bound) track advances at once, sharing one library, and the
+            simulations the tracks ask for in a round are evaluated together — in
+            parallel on a model that evaluates many parameter rows at once (an
+            :class:`~fuzzygait.uncertainty.execution.Evaluator`'s). The rounds do not
+            depend on the number of workers, so neither do the hulls.
     """
 
     stride: int = 1
     novelty_tol: float = 1e-4
     max_iterations: int = 4
     gain_tol: float = 1e-7
+    tracks: str = "one-by-one"
 
     name = "linearised"
 
@@ -59,6 +71,8 @@ class Linearised:
         _whole("max_iterations", self.max_iterations, 1)
         _non_negative("novelty_tol", self.novelty_tol)
         _non_negative("gain_tol", self.gain_tol)
+        if self.tracks not in TRACKS:
+            raise ParameterError(f"tracks must be {' or '.join(TRACKS)}; got {self.tracks!r}")
 
     def options(self) -> dict[str, object]:
         """The options, for the result's attributes."""
