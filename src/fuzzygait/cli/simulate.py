@@ -62,7 +62,6 @@ def simulate(
     from fuzzygait.workflows.fuzzy_dynamics import (
         SimulationOutputs,
         check_scenario,
-        check_scheme,
         command_setup,
         simulate_leg,
         simulation_timing,
@@ -75,8 +74,6 @@ def simulate(
         if nodes is not None and nodes < 2:
             raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
         step, span = simulation_timing(scenario, dt, duration)
-        if scheme is not None:
-            check_scheme(scheme)
         setup, note = command_setup(scenario, nodes, step, span, parse_overrides(overrides or []), scheme)
         if note:
             out.print(f"note: {note}", markup=False)
@@ -128,7 +125,6 @@ def fuzzy_sim(
     from fuzzygait.workflows.fuzzy_dynamics import (
         FuzzySimOutputs,
         check_scenario,
-        check_scheme,
         command_setup,
         fuzzy_simulation,
     )
@@ -139,8 +135,6 @@ def fuzzy_sim(
         check_output_suffixes(out_file, rrd, {"--plot": plot, "--parameter-plot": parameter_plot})
         spreads = parse_fuzzy(fuzzy)
         levels = parse_alphas(alphas)
-        if scheme is not None:
-            check_scheme(scheme)
         setup, note = command_setup(scenario, nodes, dt, duration, parse_overrides(overrides or []), scheme)
         if note:
             out.print(f"note: {note}", markup=False)

@@ -83,10 +83,8 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
 
     step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
     values = {**_scenario_values(setup.scenario), **{k: float(v) for k, v in setup.values.items()}}
-    if frv.value is not None:
-        values[frv.parameter] = float(frv.value)
-    elif frv.parameter not in setup.values:
-        values[frv.parameter] = FRV_STUDY_VALUES.get(setup.scenario, {}).get(frv.parameter, values[frv.parameter])
+    values[frv.parameter] = (float(frv.value) if frv.value is not None
+                             else deterministic_value(setup.scenario, frv.parameter, setup.values))  # fmt: skip
     return {"scenario": setup.scenario, "frv": frv.parameter, "value": values[frv.parameter], "set": values,
             "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
             "distribution": frv.distribution, "seed": int(frv.seed), "disc": int(frv.disc), "nodes": int(setup.nodes),

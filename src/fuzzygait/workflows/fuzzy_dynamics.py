@@ -84,6 +84,8 @@ def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: 
     from fuzzygait.mechanics.presets import COMMAND_DEFAULTS
 
     check_scenario(scenario)
+    if scheme is not None:
+        check_scheme(scheme)
     defaults = COMMAND_DEFAULTS[scenario]
     taken = {k: v for k, v in defaults.values.items() if k not in values}
     changed = [f"--set {k}={v:g}" for k, v in taken.items()]
