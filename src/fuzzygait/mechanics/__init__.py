@@ -11,8 +11,12 @@ Modules, from the bottom up:
 * :mod:`.discrete` — the CasADi functions of a built system and their buffered evaluation,
 * :mod:`.schemes` — the step equations of the variational (Eqs. 4.16–4.29) and the
   energy-momentum scheme: residuals, Jacobians, sensitivity terms,
+* :mod:`.step_functions` — each scheme's whole step (residual, Jacobian, sensitivity terms)
+  as single CasADi functions for generated C code,
+* :mod:`.native` — the compiled Newton loop (``native/stepper.c``: Newton, sparse LU with a
+  reused pivot order, folding check, sensitivities; one call per chunk of steps),
 * :mod:`.integrator` — time stepping: Newton with a kept sparse LU, forward parameter
-  sensitivities,
+  sensitivities (the compiled loop where there is one, else the same loop in Python),
 * :mod:`.trajectory` — the results: trajectory and energies,
 * :mod:`.codegen` — compiled CasADi code cached on disk by model structure,
 * :mod:`.leg`, :mod:`.scenarios` — the leg model and the swing/stance scenarios,

@@ -68,26 +68,38 @@ def compile_functions(
     cached = load_cached(structure_key, names)
     if cached is not None:
         return cached
+    target = build_library(cached_library(structure_key, names), functions, optimisation=optimisation)
+    if target is None:
+        return {f.name(): f for f in functions}
+    return {name: ca.external(name, str(target)) for name in names}
+
+
+def build_library(target: Path, functions: Sequence[ca.Function], sources: Sequence[Path] = (),
+                  optimisation: str = "-O1", header: str | None = None) -> Path | None:  # fmt: skip
+    """Generate C code for ``functions``, compile it with the C files ``sources`` into the
+    shared library ``target`` (written atomically) and return ``target``; None (with a
+    warning) without a compiler or when compilation fails.  ``header``: the generated
+    file's base name, for sources that include ``<header>.h``."""
     cc = compiler()
     if cc is None:
-        return {f.name(): f for f in functions}
-    target = cached_library(structure_key, names)
+        return None
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        source_name = f"fg_{library_key(structure_key, names)}.c"
-        generator = ca.CodeGenerator(source_name, {"with_header": False})
+        base = header or target.stem
+        generator = ca.CodeGenerator(f"{base}.c", {"with_header": header is not None})
         for f in functions:
             generator.add(f)
         generator.generate(tmp + os.sep)
         library = Path(tmp) / "lib.so"
-        command = [cc, optimisation, "-fPIC", "-shared", str(Path(tmp) / source_name), "-o", str(library), "-lm"]
+        command = [cc, optimisation, "-fPIC", "-shared", "-I", tmp, str(Path(tmp) / f"{base}.c"),
+                   *map(str, sources), "-o", str(library), "-lm"]  # fmt: skip
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
             warnings.warn(
                 f"compiling the simulator's generated code failed ({cc}: "
                 f"{result.stderr.strip().splitlines()[-1:] or ['?']}); running uncompiled (slower)",
-                stacklevel=2,
+                stacklevel=3,
             )
-            return {f.name(): f for f in functions}
+            return None
         os.replace(library, target)  # atomic: concurrent workers see a whole file or none
-    return {name: ca.external(name, str(target)) for name in names}
+    return target

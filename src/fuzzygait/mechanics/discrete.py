@@ -10,6 +10,7 @@ without copies.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -17,6 +18,7 @@ import scipy.sparse as sp
 
 from fuzzygait.mechanics.assembly import ElementGroup, SystemBuilder
 from fuzzygait.mechanics.codegen import compile_functions, load_cached
+from fuzzygait.mechanics.native import ensure_stepper
 
 GLOBAL_FUNCTIONS = ("mass", "mass_sens", "linear", "constraints", "constraint_hessian", "potential")
 
@@ -98,6 +100,8 @@ class DiscreteModel:
         constraint_labels: one label per constraint row.
         compiled: whether the functions come from a compiled library.
         structure_key: what identifies the generated code.
+        stepper: the compiled Newton loop of this structure (:mod:`.native`), or None
+            (no compiler: :func:`.integrator.integrate` steps in Python).
     """
 
     functions: dict[str, ca.Function]
@@ -109,6 +113,7 @@ class DiscreteModel:
     constraint_labels: tuple[str, ...]
     compiled: bool
     structure_key: str
+    stepper: Path | None = None
 
     @classmethod
     def from_builder(cls, builder: SystemBuilder, compile: bool = True) -> DiscreteModel:
@@ -121,6 +126,16 @@ class DiscreteModel:
             symbolic = _global_functions(builder) + [f for g in builder.element_groups for f in _group_functions(g)]
             functions = compile_functions(key, symbolic) if compile else {f.name(): f for f in symbolic}
             compiled = functions["mass"].is_a("External")
+        stepper = None
+        if compile:
+            symbolic_globals: dict[str, ca.Function] = {}
+
+            def global_function(name: str) -> ca.Function:  # built only when the stepper is compiled
+                if not symbolic_globals:
+                    symbolic_globals.update({f.name(): f for f in _global_functions(builder)})
+                return symbolic_globals[name]
+
+            stepper = ensure_stepper(builder, global_function)
         return cls(
             functions=functions,
             ndof=builder.ndof,
@@ -131,6 +146,7 @@ class DiscreteModel:
             constraint_labels=tuple(builder.constraint_labels),
             compiled=compiled,
             structure_key=key,
+            stepper=stepper,
         )
 
     def group_inputs(self, group: ElementGroup, q_a: np.ndarray, q_b: np.ndarray, h: float, p: np.ndarray):

@@ -16,8 +16,10 @@ import numpy as np
 from scipy.sparse.linalg import splu
 
 from fuzzygait.core.errors import ParameterError, SimulationError
+from fuzzygait.mechanics import native
 from fuzzygait.mechanics.discrete import DiscreteModel
 from fuzzygait.mechanics.schemes import SCHEMES, StepAssembler
+from fuzzygait.mechanics.step_functions import group_constants
 from fuzzygait.mechanics.trajectory import Trajectory
 
 # Newton keeps its LU factorisation across iterations and steps and refreshes it when an
@@ -27,6 +29,8 @@ REFRESH_CONTRACTION = 0.25
 # a time step of a few ms never moves a coordinate this far, so larger updates are divergence.
 MAX_UPDATE = 0.2
 
+
+ENGINES = ("auto", "compiled", "python")
 
 FOLD_COSINE = 0.0  # adjacent beam cross-sections turned by more than 90° = a folded element
 
@@ -41,12 +45,60 @@ def _check_folding(model: DiscreteModel, q: np.ndarray, t: float, p: np.ndarray)
         cosine = np.einsum("ek,ek->e", q[dofs[:, 9:12]], q[dofs[:, 21:24]])
         worst = int(np.argmin(cosine))
         if cosine[worst] < FOLD_COSINE:
-            angle = float(np.degrees(np.arccos(np.clip(cosine[worst], -1.0, 1.0))))
-            raise SimulationError(
-                f"{group.name} element {worst} folded at t = {t:.4f} s: its cross-sections turned by "
-                f"{angle:.0f}° (> 90°) within one element; parameters {_describe(model.parameter_names, p)}; "
-                "use more nodes, a stiffer blade or more damping (eta)"
-            )
+            raise _folded(model, group.name, worst, float(cosine[worst]), t, p)
+
+
+def _folded(model: DiscreteModel, group: str, element: int, cosine: float, t: float, p: np.ndarray) -> SimulationError:
+    angle = float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))))
+    return SimulationError(
+        f"{group} element {element} folded at t = {t:.4f} s: its cross-sections turned by "
+        f"{angle:.0f}° (> 90°) within one element; parameters {_describe(model.parameter_names, p)}; "
+        "use more nodes, a stiffer blade or more damping (eta)"
+    )
+
+
+def _not_converged(model: DiscreteModel, step: int, dt: float, norm: float, iterations: int,
+                   p: np.ndarray) -> SimulationError:  # fmt: skip
+    return SimulationError(
+        f"Newton did not converge at t = {(step + 1) * dt:.4f} s (step {step + 1}, dt = {dt:g} s): "
+        f"residual norm {norm:.3g} after {iterations} iterations; parameters {_describe(model.parameter_names, p)}; "
+        "try a smaller dt, more damping (eta) or the energy-momentum scheme"
+    )
+
+
+def _integrate_compiled(model: DiscreteModel, q0: np.ndarray, v0: np.ndarray, p: np.ndarray, dt: float,
+                        n_steps: int, sensitivities: bool, tolerance: float, constraint_tolerance: float,
+                        max_iterations: int, progress: Callable[[int], None] | None,
+                        scheme: str) -> Trajectory:  # fmt: skip
+    """:func:`integrate` by the compiled loop (:func:`.native.run`)."""
+    assert model.stepper is not None
+    pair_a = np.concatenate([g.dofs[:, 9] for g in model.groups]) if model.groups else np.zeros(0, dtype=int)
+    pair_b = np.concatenate([g.dofs[:, 21] for g in model.groups]) if model.groups else np.zeros(0, dtype=int)
+    starts = np.cumsum([0] + [len(g.dofs) for g in model.groups])
+    result = native.run(
+        model.stepper, n=model.ndof, m=model.nconstraints, p=p, constants=model.constants,
+        group_constants=group_constants(model.groups), fold_pairs=(pair_a, pair_b, starts), q0=q0, v0=v0, dt=dt,
+        n_steps=n_steps, scheme=scheme, sensitivities=sensitivities, tolerance=tolerance,
+        constraint_tolerance=constraint_tolerance, max_iterations=max_iterations, progress=progress,
+    )  # fmt: skip
+    stopped = result.stopped
+    if stopped is not None and stopped.kind == "fold":
+        group = int(np.searchsorted(starts, stopped.index, side="right") - 1)
+        raise _folded(model, model.groups[group].name, stopped.index - int(starts[group]), stopped.value,
+                      (stopped.step + 1) * dt, p)  # fmt: skip
+    if stopped is not None:
+        raise _not_converged(model, stopped.step, dt, stopped.value, stopped.iterations, p)
+    result.timings["pivot_orders"] = float(result.pivot_orders)
+    return Trajectory(
+        times=np.arange(n_steps + 1) * dt,
+        q=result.q,
+        multipliers=result.multipliers,
+        iterations=result.iterations,
+        sensitivities=result.sensitivities,
+        timings=result.timings,
+        velocities=result.velocities,
+        scheme=scheme,
+    )
 
 
 def _describe(parameter_names: Sequence[str], p: np.ndarray) -> str:
@@ -67,6 +119,7 @@ def integrate(
     max_iterations: int = 25,
     progress: Callable[[int], None] | None = None,
     scheme: str = "variational",
+    engine: str = "auto",
 ) -> Trajectory:
     """Integrate ``n_steps`` steps of size ``dt`` (s) from ``q0`` with velocity ``v0``.
 
@@ -79,6 +132,11 @@ def integrate(
     Newton stops when the last update is ≤ ``tolerance`` (m, unit directors) and the
     constraints hold to ``constraint_tolerance``.  Raises :class:`SimulationError` naming the
     time, the residual norm and the parameter values when a step does not converge.
+
+    ``engine``: "compiled" runs the whole Newton loop in C (:mod:`.native`; the model's
+    ``stepper`` library), "python" the loop below over the compiled kernels, "auto" (default)
+    the compiled loop where the model has one.  Both solve the same equations with the same
+    iteration; trajectories agree to the Newton tolerance.
     """
     import time as _time
 
@@ -102,6 +160,14 @@ def integrate(
         )
     if scheme not in SCHEMES:
         raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}; got {scheme!r}")
+    if engine not in ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
+    if engine == "compiled" and model.stepper is None:
+        raise ParameterError("no compiled stepper for this model (no C compiler, or FUZZYGAIT_NO_COMPILE set); "
+                             "use engine='python'")  # fmt: skip
+    if engine != "python" and model.stepper is not None:
+        return _integrate_compiled(model, q0, v0, p, dt, n_steps, sensitivities, tolerance, constraint_tolerance,
+                                   max_iterations, progress, scheme)  # fmt: skip
     energy_momentum = scheme == "energy-momentum"
     assembler = StepAssembler(model, p, dt, sensitivities, scheme)
     velocities = np.empty((n_steps + 1, n)) if energy_momentum else None
@@ -193,11 +259,7 @@ def integrate(
         if not converged:
             with np.errstate(all="ignore"):
                 norm = float(np.linalg.norm(residual)) if np.all(np.isfinite(residual)) else float("nan")
-            raise SimulationError(
-                f"Newton did not converge at t = {(j + 1) * dt:.4f} s (step {j + 1}, dt = {dt:g} s): "
-                f"residual norm {norm:.3g} after {k} iterations; parameters {_describe(model.parameter_names, p)}; "
-                "try a smaller dt, more damping (eta) or the energy-momentum scheme"
-            )
+            raise _not_converged(model, j, dt, norm, k, p)
         q[j + 1] = x[:n]
         lam[j] = x[n:]
         iterations[j] = k
