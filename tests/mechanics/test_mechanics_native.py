@@ -109,3 +109,15 @@ def test_progress_is_reported_between_chunks(swing):
     seen: list[int] = []
     integrate(swing.model, swing.leg.q0, swing.parameters(**STIFF), DT, 120, engine="compiled", progress=seen.append)
     assert seen[-1] == 120 and seen == sorted(seen) and len(seen) >= 3
+
+
+def test_newton_path_does_not_depend_on_sensitivities():
+    """The sensitivities' LU has its own pivot order: renewing it never touches Newton's,
+    so trajectories are bit-identical with and without sensitivities (the FRV and Graph
+    Follower studies rely on it: α = 1 is the deterministic run)."""
+    sim = LegSimulator("stance", nodes=40)
+    p = sim.parameters(E=59.39e9)
+    runs = [integrate(sim.model, sim.leg.q0, p, DT, 200, scheme="energy-momentum", engine="compiled",
+                      sensitivities=s) for s in (False, True)]  # fmt: skip
+    assert runs[0].timings["pivot_orders"] >= 2
+    assert np.array_equal(runs[0].q, runs[1].q) and np.array_equal(runs[0].iterations, runs[1].iterations)

@@ -33,6 +33,8 @@ HEADER = "fgs_gen"
 CHUNK_STEPS = 50
 
 OK, NEWTON, FOLD, PIVOT = 0, 1, 2, 3
+#: Pivot orders computed at one step before its Jacobian counts as singular.
+MAX_RENEWALS = 4
 
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
@@ -88,7 +90,8 @@ def load(path: Path) -> ctypes.CDLL:
     lib.fg_jacobian_pattern.restype = None
     lib.fg_jacobian.argtypes = [c_void, _double_p]
     lib.fg_jacobian.restype = None
-    lib.fg_set_pivots.argtypes = [c_void, _int_p, _int_p]
+    lib.fg_set_pivots.argtypes = [c_void, c_int, _int_p, _int_p]
+    lib.fg_pivot_which.argtypes = [c_void]
     lib.fg_factor_size.argtypes = [c_void]
     lib.fg_run.argtypes = [c_void, c_int]
     lib.fg_step.argtypes = [c_void]
@@ -173,7 +176,9 @@ def run(
         lib.fg_jacobian_pattern(ctx, indptr, indices)
         values = np.empty(nnz)
 
-        def new_pivot_order() -> bool:
+        def new_pivot_order(which: tuple[int, ...]) -> bool:
+            """SuperLU's order for the Jacobian where the stepper stands, for the Newton LU
+            (0) and/or the sensitivities' LU (1); False if that Jacobian is singular."""
             nonlocal pivot_orders
             lib.fg_jacobian(ctx, values)
             try:
@@ -181,20 +186,22 @@ def run(
             except RuntimeError:  # singular Jacobian: Newton cannot continue
                 return False
             pivot_orders += 1
-            return bool(lib.fg_set_pivots(ctx, np.ascontiguousarray(factor.perm_r, dtype=np.int32),
-                                          np.ascontiguousarray(factor.perm_c, dtype=np.int32)))  # fmt: skip
+            perm_r = np.ascontiguousarray(factor.perm_r, dtype=np.int32)
+            perm_c = np.ascontiguousarray(factor.perm_c, dtype=np.int32)
+            return all(lib.fg_set_pivots(ctx, w, perm_r, perm_c) for w in which)
 
-        if not new_pivot_order():
+        if not new_pivot_order((0, 1) if sensitivities else (0,)):
             stopped = Stopped("newton", 0, 0, 0, float("nan"))
-        renewed_at = -1  # the step at which the pivot order was last renewed
+        renewals: dict[tuple[int, int], int] = {}  # (step, which LU) -> orders computed there
         while stopped is None and lib.fg_step(ctx) < n_steps:
             before = lib.fg_step(ctx)
             status = lib.fg_run(ctx, min(before + CHUNK_STEPS, n_steps))
             if status == PIVOT:
-                # a fresh order that fails again at the same step: the Jacobian is (nearly) singular there
-                if lib.fg_step(ctx) == renewed_at or not new_pivot_order():
-                    stopped = Stopped("newton", lib.fg_step(ctx), 0, 0, float("nan"))
-                renewed_at = lib.fg_step(ctx)
+                where = (lib.fg_step(ctx), lib.fg_pivot_which(ctx))
+                renewals[where] = renewals.get(where, 0) + 1
+                # fresh orders failing again and again at one step: the Jacobian is (nearly) singular there
+                if renewals[where] > MAX_RENEWALS or not new_pivot_order((where[1],)):
+                    stopped = Stopped("newton", where[0], 0, 0, float("nan"))
                 continue
             if status in (NEWTON, FOLD):
                 step, its, index, value = ctypes.c_int(), ctypes.c_int(), ctypes.c_int(), ctypes.c_double()

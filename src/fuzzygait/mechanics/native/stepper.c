@@ -214,7 +214,10 @@ typedef struct {
   /* state */
   int step;          /* next step to take */
   int have_lu;
-  lu_symbolic_t symbolic;
+  int sens_pending; /* step `step` converged; its sensitivities wait for a new exact-LU order */
+  int pivot_which;  /* after FG_PIVOT: 0 the Newton LU, 1 the exact LU of the sensitivities */
+  lu_symbolic_t symbolic[2]; /* pivot orders: Newton's, and the sensitivities' own (so that the
+                                Newton path does not depend on whether sensitivities are computed) */
   lu_numeric_t newton, exact;
   double *x, *residual, *dx, *last_dx, *jx, *work, *zeros, *sens_v, *rhs, *column, *s_zero;
   /* outcome */
@@ -233,7 +236,8 @@ static double now(void) {
 
 static void context_free_members(fg_context *ctx) {
   for (int v = 0; v < 3; ++v) { fn_free(&ctx->res[v]); fn_free(&ctx->jac[v]); fn_free(&ctx->sens_fn[v]); }
-  lu_symbolic_free(&ctx->symbolic);
+  lu_symbolic_free(&ctx->symbolic[0]);
+  lu_symbolic_free(&ctx->symbolic[1]);
   free(ctx->newton.lx); free(ctx->newton.ux); free(ctx->exact.lx); free(ctx->exact.ux);
   free(ctx->jac_p); free(ctx->jac_i);
   free(ctx->x); free(ctx->residual); free(ctx->dx); free(ctx->last_dx); free(ctx->jx); free(ctx->work);
@@ -332,23 +336,29 @@ void fg_jacobian(fg_context *ctx, double *out) {
   evaluate(ctx, &ctx->jac[variant_of(ctx, ctx->step)], ctx->step, ctx->x, out);
 }
 
-int fg_set_pivots(fg_context *ctx, const int *perm_r, const int *perm_c) {
-  if (!lu_analyse(&ctx->symbolic, ctx->N, ctx->jac_p, ctx->jac_i, perm_r, perm_c)) return 0;
-  if (!lu_numeric_alloc(&ctx->newton, &ctx->symbolic) || !lu_numeric_alloc(&ctx->exact, &ctx->symbolic)) return 0;
-  ctx->have_lu = 0;
+/* A new pivot order for the Newton LU (which 0) or the sensitivities' exact LU (which 1). */
+int fg_set_pivots(fg_context *ctx, int which, const int *perm_r, const int *perm_c) {
+  lu_symbolic_t *symbolic = &ctx->symbolic[which];
+  lu_numeric_t *numeric = which == 0 ? &ctx->newton : &ctx->exact;
+  if (!lu_analyse(symbolic, ctx->N, ctx->jac_p, ctx->jac_i, perm_r, perm_c)) return 0;
+  if (!lu_numeric_alloc(numeric, symbolic)) return 0;
+  if (which == 0) ctx->have_lu = 0;
   return 1;
 }
 
+int fg_pivot_which(const fg_context *ctx) { return ctx->pivot_which; }
+
 int fg_factor_size(const fg_context *ctx) {
-  return ctx->symbolic.analysed ? ctx->symbolic.lp[ctx->N] + ctx->symbolic.up[ctx->N] : 0;
+  return ctx->symbolic[0].analysed ? ctx->symbolic[0].lp[ctx->N] + ctx->symbolic[0].up[ctx->N] : 0;
 }
 
 static int factorise(fg_context *ctx, lu_numeric_t *f, int step, const double *x) {
+  const lu_symbolic_t *symbolic = &ctx->symbolic[f == &ctx->exact];
   double t0 = now();
   evaluate(ctx, &ctx->jac[variant_of(ctx, step)], step, x, ctx->jx);
   double t1 = now();
   ctx->t_evaluation += t1 - t0;
-  int ok = lu_factorise(&ctx->symbolic, f, ctx->jx, ctx->work);
+  int ok = lu_factorise(symbolic, f, ctx->jx, ctx->work);
   ctx->t_factorisation += now() - t1;
   ctx->factorisations += 1;
   return ok;
@@ -364,12 +374,11 @@ static double max_abs(const double *a, int count) {
   return out;
 }
 
-/* One step; returns FG_OK, FG_NEWTON, FG_FOLD or FG_PIVOT. */
-static int take_step(fg_context *ctx) {
-  int n = ctx->n, N = ctx->N, j = ctx->step, variant = variant_of(ctx, j);
-  int first = j == 0;
+/* The predictor of step j: 2 q_j - q_{j-1} and the last multipliers (first step: q_0 + h v_0, 0). */
+static void predict(fg_context *ctx, int j) {
+  int n = ctx->n, N = ctx->N;
   double *x = ctx->x;
-  if (!first) {
+  if (j > 0) {
     const double *q_cur = ctx->q + (size_t)j * n, *q_prev = ctx->q + (size_t)(j - 1) * n;
     for (int i = 0; i < n; ++i) x[i] = 2.0 * q_cur[i] - q_prev[i];
     memcpy(x + n, ctx->lam + (size_t)(j - 1) * ctx->m, ctx->m * sizeof(double));
@@ -378,8 +387,27 @@ static int take_step(fg_context *ctx) {
     for (int i = 0; i < n; ++i) x[i] = q0[i] + ctx->h * ctx->v0[i];
     for (int i = n; i < N; ++i) x[i] = 0.0;
   }
+}
+
+/* The Newton LU failed the pivot test: the step restarts from its predictor, where the
+ * caller computes the new order (fg_jacobian evaluates there). */
+static int newton_pivot(fg_context *ctx, int j) {
+  ctx->have_lu = 0;
+  ctx->pivot_which = 0;
+  predict(ctx, j);
+  return FG_PIVOT;
+}
+
+static int sensitivity_step(fg_context *ctx);
+
+/* One step; returns FG_OK, FG_NEWTON, FG_FOLD or FG_PIVOT. */
+static int take_step(fg_context *ctx) {
+  int n = ctx->n, N = ctx->N, j = ctx->step, variant = variant_of(ctx, j);
+  int first = j == 0;
+  double *x = ctx->x;
+  predict(ctx, j);
   if (!ctx->have_lu || first) {
-    if (!factorise(ctx, &ctx->newton, j, x)) return FG_PIVOT;
+    if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx, j);
     ctx->have_lu = 1;
   }
   int converged = 0, k = 0, fresh_here = first, last_stale = 0, have_last = 0;
@@ -394,7 +422,7 @@ static int take_step(fg_context *ctx) {
     for (int i = 0; i < N; ++i) if (!isfinite(ctx->residual[i])) { finite = 0; break; }
     if (finite) {
       memcpy(ctx->dx, ctx->residual, N * sizeof(double));
-      lu_solve(&ctx->symbolic, &ctx->newton, ctx->dx, ctx->work);
+      lu_solve(&ctx->symbolic[0], &ctx->newton, ctx->dx, ctx->work);
       ctx->t_solve += now() - t1;
       size = max_abs(ctx->dx, n);
       finite = isfinite(size);
@@ -405,7 +433,7 @@ static int take_step(fg_context *ctx) {
       } else if (fresh_here || !finite) {
         break; /* a fresh Newton step diverged or left the domain */
       }
-      if (!factorise(ctx, &ctx->newton, j, x)) { ctx->have_lu = 0; return FG_PIVOT; }
+      if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx, j);
       fresh_here = 1; have_last = 0; last_stale = 0; previous = INFINITY;
       continue;
     }
@@ -459,9 +487,21 @@ static int take_step(fg_context *ctx) {
     for (int i = 0; i < n; ++i) v_next[i] = 2.0 * (q_next[i] - q_cur[i]) / ctx->h - v_cur[i];
   }
   if (ctx->sensitivities) {
+    ctx->sens_pending = 1;
+    return sensitivity_step(ctx);
+  }
+  ctx->step = j + 1;
+  return FG_OK;
+}
+
+/* Sensitivities of the converged step `step` (x holds it); then the step is done. */
+static int sensitivity_step(fg_context *ctx) {
+  int n = ctx->n, N = ctx->N, j = ctx->step, variant = variant_of(ctx, j), first = j == 0;
+  const double *x = ctx->x;
+  {
     double t0 = now();
     int n_p = ctx->n_p;
-    if (!factorise(ctx, &ctx->exact, j, x)) return FG_PIVOT; /* the Jacobian at the converged step */
+    if (!factorise(ctx, &ctx->exact, j, x)) { ctx->pivot_which = 1; return FG_PIVOT; } /* at the converged step */
     fn_t *fn = &ctx->sens_fn[variant];
     step_inputs(ctx, j, fn->arg, x);
     const double *s_cur = first ? ctx->s_zero : ctx->sens + (size_t)j * n * n_p;
@@ -472,7 +512,7 @@ static int take_step(fg_context *ctx) {
     double *s_next = ctx->sens + (size_t)(j + 1) * n * n_p;
     for (int a = 0; a < n_p; ++a) {
       for (int i = 0; i < N; ++i) ctx->column[i] = ctx->rhs[(size_t)i * n_p + a];
-      lu_solve(&ctx->symbolic, &ctx->exact, ctx->column, ctx->work);
+      lu_solve(&ctx->symbolic[1], &ctx->exact, ctx->column, ctx->work);
       for (int i = 0; i < n; ++i) s_next[(size_t)i * n_p + a] = -ctx->column[i];
     }
     if (ctx->scheme == 1) { /* dv_{j+1}/dp = 2 (S_{j+1} - S_j)/h - dv_j/dp */
@@ -480,14 +520,19 @@ static int take_step(fg_context *ctx) {
     }
     ctx->t_sensitivity += now() - t0;
   }
+  ctx->sens_pending = 0;
   ctx->step = j + 1;
   return FG_OK;
 }
 
 /* Advance until step `until` (exclusive upper bound on steps taken) or a failure. */
 int fg_run(fg_context *ctx, int until) {
-  if (!ctx->symbolic.analysed) return FG_PIVOT;
+  if (!ctx->symbolic[0].analysed || (ctx->sensitivities && !ctx->symbolic[1].analysed)) return FG_PIVOT;
   if (until > ctx->n_steps) until = ctx->n_steps;
+  if (ctx->sens_pending) {
+    int status = sensitivity_step(ctx);
+    if (status != FG_OK) return status;
+  }
   while (ctx->step < until) {
     int status = take_step(ctx);
     if (status != FG_OK) return status;
