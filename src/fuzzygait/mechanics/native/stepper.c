@@ -12,9 +12,9 @@
  * perm_c); the fill pattern of L and U for that order is computed once and every later
  * Jacobian is factorised into it (left-looking, no search for pivots).  When a pivot falls
  * below PIVOT_RATIO of the largest candidate of its eliminated column (the test of
- * threshold partial pivoting) the run returns FG_PIVOT and the caller
- * supplies a fresh order for the current Jacobian (fg_jacobian), then continues: the step
- * is restarted from its predictor.
+ * threshold partial pivoting) the run returns FG_PIVOT, the caller supplies a fresh
+ * order for the Jacobian at that point (fg_jacobian) and the run resumes there with it.
+ * The sensitivities' LU has its own order, so the Newton path does not depend on them.
  *
  * Layouts: q (n_steps + 1, n), multipliers (n_steps, m), velocities (n_steps + 1, n) and
  * sensitivities (n_steps + 1, n, n_p) are row-major numpy arrays owned by the caller.
@@ -197,6 +197,12 @@ static void lu_solve(const lu_symbolic_t *s, const lu_numeric_t *f, double *b, d
   for (int i = 0; i < N; ++i) b[i] = work[s->perm_c[i]];
 }
 
+/* Newton iteration state of the step in progress (kept across FG_PIVOT returns). */
+typedef struct {
+  int active, need_factor, k, fresh_here, last_stale, have_last;
+  double previous;
+} newton_state_t;
+
 /* ---- the integration context ------------------------------------------------------------ */
 typedef struct {
   int n, m, N, n_p, n_steps, scheme, sensitivities, max_iterations;
@@ -214,6 +220,7 @@ typedef struct {
   /* state */
   int step;          /* next step to take */
   int have_lu;
+  newton_state_t newton_state;
   int sens_pending; /* step `step` converged; its sensitivities wait for a new exact-LU order */
   int pivot_which;  /* after FG_PIVOT: 0 the Newton LU, 1 the exact LU of the sensitivities */
   lu_symbolic_t symbolic[2]; /* pivot orders: Newton's, and the sensitivities' own (so that the
@@ -389,31 +396,40 @@ static void predict(fg_context *ctx, int j) {
   }
 }
 
-/* The Newton LU failed the pivot test: the step restarts from its predictor, where the
- * caller computes the new order (fg_jacobian evaluates there). */
-static int newton_pivot(fg_context *ctx, int j) {
+/* The Newton LU failed the pivot test at the current x: the caller computes a new order for
+ * the Jacobian there (fg_jacobian evaluates at x) and the iteration resumes with that
+ * factorisation, exactly where it stopped. */
+static int newton_pivot(fg_context *ctx) {
   ctx->have_lu = 0;
   ctx->pivot_which = 0;
-  predict(ctx, j);
+  ctx->newton_state.need_factor = 1;
   return FG_PIVOT;
 }
 
 static int sensitivity_step(fg_context *ctx);
 
-/* One step; returns FG_OK, FG_NEWTON, FG_FOLD or FG_PIVOT. */
+/* One step; returns FG_OK, FG_NEWTON, FG_FOLD or FG_PIVOT (then call again to resume). */
 static int take_step(fg_context *ctx) {
   int n = ctx->n, N = ctx->N, j = ctx->step, variant = variant_of(ctx, j);
   int first = j == 0;
   double *x = ctx->x;
-  predict(ctx, j);
-  if (!ctx->have_lu || first) {
-    if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx, j);
-    ctx->have_lu = 1;
+  newton_state_t *st = &ctx->newton_state;
+  if (!st->active) {
+    predict(ctx, j);
+    st->active = 1; st->k = 0; st->fresh_here = first; st->last_stale = 0; st->have_last = 0;
+    st->previous = INFINITY;
+    st->need_factor = !ctx->have_lu || first;
+    for (int i = 0; i < N; ++i) ctx->residual[i] = NAN;
   }
-  int converged = 0, k = 0, fresh_here = first, last_stale = 0, have_last = 0;
-  double previous = INFINITY, size = 0.0;
-  for (int i = 0; i < N; ++i) ctx->residual[i] = NAN;
-  while (k < ctx->max_iterations) {
+  if (st->need_factor) {
+    if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx);
+    ctx->have_lu = 1;
+    st->fresh_here = 1; st->have_last = 0; st->last_stale = 0; st->previous = INFINITY; /* factorised at x */
+    st->need_factor = 0;
+  }
+  int converged = 0;
+  double size = 0.0;
+  while (st->k < ctx->max_iterations) {
     double t0 = now();
     evaluate(ctx, &ctx->res[variant], j, x, ctx->residual);
     double t1 = now();
@@ -427,14 +443,14 @@ static int take_step(fg_context *ctx) {
       size = max_abs(ctx->dx, n);
       finite = isfinite(size);
     }
-    if (!finite || size > REFRESH_CONTRACTION * previous) {
-      if (last_stale && have_last) {
+    if (!finite || size > REFRESH_CONTRACTION * st->previous) {
+      if (st->last_stale && st->have_last) {
         for (int i = 0; i < N; ++i) x[i] += ctx->last_dx[i]; /* undo the chord step that went astray */
-      } else if (fresh_here || !finite) {
+      } else if (st->fresh_here || !finite) {
         break; /* a fresh Newton step diverged or left the domain */
       }
-      if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx, j);
-      fresh_here = 1; have_last = 0; last_stale = 0; previous = INFINITY;
+      if (!factorise(ctx, &ctx->newton, j, x)) return newton_pivot(ctx);
+      st->fresh_here = 1; st->have_last = 0; st->last_stale = 0; st->previous = INFINITY;
       continue;
     }
     if (size > MAX_UPDATE) {
@@ -442,16 +458,18 @@ static int take_step(fg_context *ctx) {
       for (int i = 0; i < N; ++i) ctx->dx[i] *= scale;
     }
     for (int i = 0; i < N; ++i) x[i] -= ctx->dx[i];
-    k += 1;
+    st->k += 1;
     memcpy(ctx->last_dx, ctx->dx, N * sizeof(double));
-    have_last = 1; last_stale = !fresh_here; fresh_here = 0;
+    st->have_last = 1; st->last_stale = !st->fresh_here; st->fresh_here = 0;
     if (size <= ctx->tolerance * (1.0 + max_abs(x, n))
         && (max_abs(ctx->residual + n, ctx->m) <= ctx->constraint_tolerance || size == 0.0)) {
       converged = 1;
       break;
     }
-    previous = size;
+    st->previous = size;
   }
+  int k = st->k;
+  st->active = 0;
   if (converged) {
     evaluate(ctx, &ctx->res[variant], j, x, ctx->work);
     double limit = ctx->constraint_tolerance > 1e3 * ctx->tolerance ? ctx->constraint_tolerance : 1e3 * ctx->tolerance;
