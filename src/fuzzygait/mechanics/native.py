@@ -34,7 +34,7 @@ CHUNK_STEPS = 50
 
 OK, NEWTON, FOLD, PIVOT = 0, 1, 2, 3
 #: Pivot orders computed at one step before its Jacobian counts as singular.
-MAX_RENEWALS = 4
+MAX_RENEWALS = 50
 
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
@@ -65,7 +65,7 @@ def ensure_stepper(builder: SystemBuilder, globals_: Callable[[str], ca.Function
     target = stepper_library_path(builder.structure_key)
     if target.exists():
         return target
-    return build_library(target, step_functions(builder, globals_), [SOURCE], optimisation="-O1", header=HEADER)
+    return build_library(target, step_functions(builder, globals_), [SOURCE], optimisation="-O2", header=HEADER)
 
 
 _LIBRARIES: dict[Path, ctypes.CDLL] = {}
