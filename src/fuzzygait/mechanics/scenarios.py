@@ -187,8 +187,10 @@ class LegSimulator:
             compiled=int(self.model.compiled),
             blade=self.configuration.blade.name,
             anchored_nodes=list(self.configuration.anchored_nodes),
+            newton_loop="compiled" if "pivot_orders" in trajectory.timings else "python",
             factorisations=trajectory.timings.get("factorisations", 0.0),
-            **{f"time_{k}_s": v for k, v in trajectory.timings.items() if k != "factorisations"},
+            pivot_orders=trajectory.timings.get("pivot_orders", 0.0),
+            **{f"time_{k}_s": v for k, v in trajectory.timings.items() if k not in ("factorisations", "pivot_orders")},
         )
         return ds
 
