@@ -5,6 +5,7 @@ right]`` in the parameter's units."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -120,9 +121,15 @@ def _whole(value: object, name: str, minimum: int = 0) -> int:
     return int(value)
 
 
-def _sample_block(spec: FRVSpec, seed: int, block: int) -> np.ndarray:
+def _stream_seed(seed: int, block: int, stream: int) -> list[int]:
+    """The entropy of block ``block`` of parameter stream ``stream``: ``[seed, block]`` for
+    stream 0 (the one-parameter stream, unchanged), ``[seed, block, stream]`` otherwise."""
+    return [seed, block] if stream == 0 else [seed, block, stream]
+
+
+def _sample_block(spec: FRVSpec, seed: int, block: int, stream: int = 0) -> np.ndarray:
     """The ``BLOCK`` samples of block ``block`` (see :func:`generate_samples`)."""
-    rng = np.random.default_rng([seed, block])
+    rng = np.random.default_rng(_stream_seed(seed, block, stream))
     peak = spec.deterministic + rng.normal(spec.mean, spec.std, BLOCK) * spec.scale  # Eq. 2.28
     shape = (BLOCK, spec.n_alpha_divisor, 2)
     if spec.distribution == "beta":
@@ -145,7 +152,7 @@ def _sample_block(spec: FRVSpec, seed: int, block: int) -> np.ndarray:
     return cuts
 
 
-def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0) -> np.ndarray:
+def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0, stream: int = 0) -> np.ndarray:
     """Samples ``start … start+n−1`` of the FRV (thesis Eqs. 2.26–2.30).
 
     Each sample is a fuzzy number built from its peak downwards:
@@ -165,19 +172,51 @@ def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0) -> np
     Sample ``i`` is a function of ``(spec, seed, i)`` only: it is taken from block
     ``i // BLOCK`` generated with ``np.random.default_rng([seed, i // BLOCK])``, so two
     calls ``(start=0, n=a)`` and ``(start=a, n=b)`` give the samples of one call ``n=a+b``.
+    ``stream`` numbers independent streams of one seed (the parameter index of a study of
+    several FRVs, :func:`generate_box_samples`): stream ``k > 0`` seeds its blocks with
+    ``[seed, i // BLOCK, k]``; stream 0 is the one-parameter stream above.
 
     Returns:
         ``(n, n_alpha, 2)``: per sample and α-level (in ``spec.alphas`` order) the α-cut
         ``[left, right]``; the α = 1 cut is ``[peak, peak]``.
     """
     n, start, seed = _whole(n, "n"), _whole(start, "start"), _whole(seed, "seed")
+    stream = _whole(stream, "stream")
     out = np.empty((n, len(spec.alphas), 2))
     stop = start + n
     for block in range(start // BLOCK, (stop - 1) // BLOCK + 1 if n else start // BLOCK):
         first = block * BLOCK
         a, b = max(start, first), min(stop, first + BLOCK)
-        out[a - start : b - start] = _sample_block(spec, seed, block)[a - first : b - first]
+        out[a - start : b - start] = _sample_block(spec, seed, block, stream)[a - first : b - first]
     return out
+
+
+def check_specs(specs: FRVSpec | Sequence[FRVSpec]) -> tuple[FRVSpec, ...]:
+    """The FRV parameters of a study as a tuple: at least one, distinct names, one set of
+    α-levels (a sample's α-cut is a box, one interval per parameter at each level)."""
+    out = (specs,) if isinstance(specs, FRVSpec) else tuple(specs)
+    if not out or not all(isinstance(s, FRVSpec) for s in out):
+        raise ParameterError(f"give one FRVSpec per FRV parameter; got {specs!r}")
+    names = [s.name for s in out]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"FRV parameters must have distinct names; got {names}")
+    if any(s.alphas != out[0].alphas for s in out):
+        raise ParameterError(f"all FRV parameters need the same α-levels; got {[list(s.alphas) for s in out]}")
+    return out
+
+
+def generate_box_samples(specs: Sequence[FRVSpec], n: int, seed: int = 0, start: int = 0) -> np.ndarray:
+    """Samples ``start … start+n−1`` of independent FRVs (one :func:`generate_samples`
+    stream per parameter: parameter ``k`` is stream ``k``, so parameter 0 draws exactly
+    the samples of a one-parameter study with the same seed).
+
+    Returns:
+        ``(n, n_params, n_alpha, 2)``: per sample, parameter and α-level the α-cut
+        ``[left, right]`` in that parameter's units; at each α the sample's α-cut is the
+        box of its ``n_params`` intervals.
+    """
+    specs = check_specs(specs)
+    return np.stack([generate_samples(s, n, seed, start, stream=k) for k, s in enumerate(specs)], axis=1)
 
 
 def sample_increments(samples: np.ndarray) -> np.ndarray:
