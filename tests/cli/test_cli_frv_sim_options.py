@@ -72,6 +72,7 @@ def _refusal(store: Path, *args: str) -> str:
         (("--alphas", "0,0.5"), "made with --alphas 0,0.25,0.5,0.75,1; given 0,0.5,1."),
         (("--seed", "1"), "made with --seed 0; given 1."),
         (("--distribution", "beta"), "made with --distribution normal; given beta."),
+        (("--sampling", "lhs"), "made with --sampling random; given lhs."),
         (("--disc", "100"), "made with --disc 6; given 100."),
         (("--nodes", "20"), "made with --nodes 6; given 20."),
         (("--dt", "0.0005"), "made with --dt 0.001; given 0.0005."),
@@ -156,3 +157,15 @@ def test_several_frvs_take_no_value_and_unknown_or_repeated_names_are_refused(tm
                                      "--out", str(tmp_path / "new.zarr")])  # fmt: skip
         assert result.exit_code == 1 and said in result.stderr, result.output
         assert not (tmp_path / "new.zarr").exists()
+
+
+def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: Path) -> None:
+    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    options = study_options(setup, FRVRequest(disc=6), None)
+    del options["sampling"]  # as recorded before --sampling existed
+    old = _study(tmp_path / "old" / "study.zarr", options)
+    assert "made with --sampling random; given lhs." in _refusal(old, "stance", "--sampling", "lhs")
+    result = runner.invoke(app, ["frv-sim", "stance", "--sampling", "sobol", "--samples", "10", "--workers", "1",
+                                 "--out", str(tmp_path / "new.zarr")])  # fmt: skip
+    assert result.exit_code == 1 and "sampling must be 'random' or 'lhs'" in result.stderr, result.output
+    assert not (tmp_path / "new.zarr").exists()

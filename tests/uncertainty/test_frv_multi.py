@@ -233,3 +233,49 @@ def test_one_and_two_workers_are_bit_identical(tmp_path) -> None:
     np.testing.assert_array_equal(results[0][0], results[1][0])
     np.testing.assert_array_equal(results[0][1], results[1][1])
     assert results[0][2]["forward_simulations"] == results[1][2]["forward_simulations"]
+
+
+# ============================================================================ Latin-hypercube peaks (§2.7.5)
+def test_latin_hypercube_peaks_fill_every_stratum_once_per_block() -> None:
+    from fuzzygait.uncertainty.frv import BLOCK
+
+    s = [FRVSpec("p1", 1.0, alphas=ALPHAS, sampling="lhs"), FRVSpec("p2", 2.0, alphas=ALPHAS, sampling="lhs")]
+    cuts = generate_box_samples(s, 2 * BLOCK + 100, seed=9)
+    for d, spec in enumerate(s):
+        u = spec.peak_distribution().cdf(cuts[:, d, -1, 0])
+        for block in range(2):  # each full block: exactly one peak per equal-probability stratum
+            strata = np.floor(u[block * BLOCK : (block + 1) * BLOCK] * BLOCK).astype(int)
+            np.testing.assert_array_equal(np.sort(strata), np.arange(BLOCK))
+        assert stats.kstest(cuts[:, d, -1, 0], spec.peak_distribution().cdf).pvalue > 0.01
+    # the strata of the two parameters are permuted independently (a hypercube, not a diagonal)
+    assert abs(stats.spearmanr(cuts[:BLOCK, 0, -1, 0], cuts[:BLOCK, 1, -1, 0])[0]) < 4 / np.sqrt(BLOCK)
+    # still a function of the sample index: any split gives the same samples
+    halves = [generate_box_samples(s, 700, 9), generate_box_samples(s, 2 * BLOCK + 100 - 700, 9, 700)]
+    np.testing.assert_array_equal(np.concatenate(halves), cuts)
+    # the option is part of the spec (stored and read back)
+    assert FRVSpec.from_dict(s[0].to_dict()) == s[0]
+    with pytest.raises(ParameterError, match="sampling"):
+        FRVSpec("p", 1.0, sampling="sobol")
+
+
+def test_a_latin_hypercube_study_extends_bit_for_bit(tmp_path) -> None:
+    model = analytic_model()
+    s = [FRVSpec(x.name, x.deterministic, x.relative_scale, x.alphas, mean=x.mean, sampling="lhs") for x in specs()]
+    grown = FRVMultiStudy.create(model, s, 200, n_disc=10, seed=3, store=tmp_path / "g.zarr").add_samples(300)
+    one_shot = FRVMultiStudy.create(model, s, 500, seed=3, store=tmp_path / "o.zarr", grids=grown.grids)
+    np.testing.assert_array_equal(grown.hulls()["hull"].to_numpy(), one_shot.hulls()["hull"].to_numpy())
+    assert FRVMultiStudy.open(tmp_path / "g.zarr", model).specs == tuple(s)
+
+
+def test_figures_per_parameter_and_of_the_output(tmp_path) -> None:
+    from fuzzygait.viz import frv as figures
+
+    study = FRVMultiStudy.create(analytic_model(), specs(), 300, n_disc=10, seed=2, store=tmp_path / "s.zarr")
+    made = figures.parameter_figures(study.specs, seed=2, n_samples=300, grids=study.grids)
+    assert list(made) == ["p1", "p2"] and all(len(a.axes) == 4 and len(b.axes) == 2 for a, b in made.values())
+    # each parameter's figure shows its own stream: the grouping figure's points are its grid's
+    points = made["p2"][1].axes[1].lines[-1].get_xdata()
+    np.testing.assert_array_equal(points, study.grids[1].extended(study.samples()["cut"][:100, 1].to_numpy()).points())
+    out = [figures.output_distribution_figure(study, 4), figures.temporal_evolution_figure(study),
+           figures.fuzzy_random_output_figure(study, -1)]  # fmt: skip
+    assert [len(f.axes) for f in out] == [3, 3, 2]

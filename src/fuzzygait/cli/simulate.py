@@ -151,8 +151,8 @@ def fuzzy_sim(
 
 #: frv-sim's parameters that a study records, by the name of the recorded option
 _RECORDED = {"parameter": "frv", "value": "value", "disc": "disc", "alphas": "alphas", "distribution": "distribution",
-             "seed": "seed", "target": "target", "overrides": "set", "nodes": "nodes", "dt": "dt",
-             "duration": "duration", "scheme": "scheme"}  # fmt: skip
+             "seed": "seed", "sampling": "sampling", "target": "target", "overrides": "set", "nodes": "nodes",
+             "dt": "dt", "duration": "duration", "scheme": "scheme"}  # fmt: skip
 
 
 @app.command("frv-sim")
@@ -175,6 +175,8 @@ def frv_sim(
     alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
     distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
     seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
+    sampling: Annotated[str, typer.Option(help="Peaks: random (the thesis') or lhs (Latin hypercube per "
+                                          "block of 1024 samples, §2.7.5).")] = "random",
     target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
     overrides: FixedValuesOption = None,
     nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
@@ -208,7 +210,7 @@ def frv_sim(
         with progress_bars() as bars:
             study = run_frv_leg(
                 LegSetup(scenario, nodes, dt, duration, values, scheme),
-                FRVRequest(parameter, value, samples, disc, levels, distribution, seed), out_store,
+                FRVRequest(parameter, value, samples, disc, levels, distribution, seed, sampling), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
                 progress=StageBars(bars),
             )  # fmt: skip

@@ -29,8 +29,10 @@ __all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "frv_para
            "study_options"]  # fmt: skip
 
 #: the recorded options in the order they are compared (named as frv-sim's options)
-OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution", "seed", "disc", "nodes", "dt",
-           "duration", "scheme")  # fmt: skip
+OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution", "sampling", "seed", "disc", "nodes",
+           "dt", "duration", "scheme")  # fmt: skip
+#: options a study made before they existed is taken to have been made with
+OPTION_DEFAULTS = {"sampling": "random"}
 _NEW_STUDY = "start a new study (another --out, or --overwrite)"
 
 
@@ -80,7 +82,8 @@ class FRVRequest:
     (independent FRVs with the same settings; each one's ``p_det`` from the setup or the
     scenario, ``value`` not allowed), ``samples`` samples (to draw, or to add to an
     existing study), ``disc`` grouping grid points (per parameter), the α-levels, the
-    increments' ``distribution`` and the ``seed`` of the sample streams."""
+    increments' ``distribution``, the peaks' ``sampling`` (``"random"`` or ``"lhs"``:
+    Latin-hypercube per block of samples) and the ``seed`` of the sample streams."""
 
     parameter: str = "E"
     value: float | None = None
@@ -89,6 +92,7 @@ class FRVRequest:
     alphas: Sequence[float] = (0.0, 0.25, 0.5, 0.75, 1.0)
     distribution: str = "normal"
     seed: int = 0
+    sampling: str = "random"
 
 
 def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[str, Any]:
@@ -108,8 +112,8 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
     value: float | list[float] = values[names[0]] if len(names) == 1 else [values[n] for n in names]
     return {"scenario": setup.scenario, "frv": ",".join(names), "value": value, "set": values,
             "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
-            "distribution": frv.distribution, "seed": int(frv.seed), "disc": int(frv.disc), "nodes": int(setup.nodes),
-            "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
+            "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed), "disc": int(frv.disc),
+            "nodes": int(setup.nodes), "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
 
 
 def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mapping[str, Any],
@@ -120,7 +124,7 @@ def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mappi
     setup = replace(setup, values=values, **{k: stored[k] for k in ("nodes", "dt", "duration", "scheme")
                                              if k not in given})  # fmt: skip
     taken: dict[str, Any] = {"parameter": stored["frv"]} if "frv" not in given else {}
-    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "seed") if k not in given})
+    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "sampling", "seed") if k not in given})
     if "value" not in given:
         taken["value"] = None  # p_det: the --set value, else the stored one
     return setup, replace(frv, **taken), (stored["target"] if "target" not in given else target)
@@ -186,6 +190,7 @@ def run_frv_leg(
     extend = out_store.exists() and not overwrite
     if extend:
         made = read_meta(out_store).get("options") or {}
+        made = {**OPTION_DEFAULTS, **made} if made else made
         if not all(key in made for key in OPTIONS):
             raise FuzzyGaitError(f"{out_store}: the study does not record the options it was made with (an older "
                                  f"version or the library made it): it cannot be extended; {_NEW_STUDY}")  # fmt: skip
@@ -196,8 +201,8 @@ def run_frv_leg(
     if extend:
         _refuse_other_options(out_store, made, options, OPTIONS if given is None else given)
     names = frv_parameters(frv.parameter)
-    specs = [FRVSpec(name, options["set"][name], alphas=tuple(frv.alphas), distribution=frv.distribution)
-             for name in names]  # fmt: skip
+    specs = [FRVSpec(name, options["set"][name], alphas=tuple(frv.alphas), distribution=frv.distribution,
+                     sampling=frv.sampling) for name in names]  # fmt: skip
     made_folders = [p for p in (out_store.parent, *out_store.parent.parents) if not p.exists()]
     out_store.parent.mkdir(parents=True, exist_ok=True)
     progress.stage(f"{setup.scenario}: FRV-GFA ({frv.samples} samples)")

@@ -55,6 +55,7 @@ from fuzzygait.uncertainty.frv.multi import FRVMultiStudy, is_multi_store, open_
 from fuzzygait.uncertainty.frv.samples import (
     BLOCK,
     DISTRIBUTIONS,
+    SAMPLINGS,
     FRVSpec,
     check_specs,
     generate_box_samples,
@@ -69,6 +70,7 @@ __all__ = [
     "EDGE_TOL",
     "KEY_BASE",
     "KEY_BIAS",
+    "SAMPLINGS",
     "STORE_FORMAT",
     "BatchFunction",
     "FRVMultiStudy",

@@ -19,6 +19,8 @@ from fuzzygait.uncertainty.fuzzy import _as_levels
 #: so it is the same whatever blocks the samples are requested in.
 BLOCK = 1024
 DISTRIBUTIONS = ("normal", "beta")
+#: How the peaks are drawn: independently, or Latin-hypercube stratified per block (§2.7.5).
+SAMPLINGS = ("random", "lhs")
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,11 @@ class FRVSpec:
         mean, std: the normal distribution ``N(mean, std)`` of the peak draw (both
             distributions) and of the increments (``"normal"``); the thesis uses N(1, 1).
         beta_a, beta_b: shape parameters of the increments' beta distribution.
+        sampling: ``"random"`` (independent peak draws, the thesis') or ``"lhs"``
+            (Latin-hypercube peaks, thesis §2.7.5: within every block of :data:`BLOCK`
+            samples each of ``BLOCK`` equal-probability strata of the peak distribution
+            holds exactly one peak; with several FRVs each parameter's strata are
+            permuted independently, so every full block is a Latin hypercube).
     """
 
     name: str
@@ -47,6 +54,7 @@ class FRVSpec:
     std: float = 1.0
     beta_a: float = 2.0
     beta_b: float = 2.0
+    sampling: str = "random"
 
     def __post_init__(self) -> None:
         label = f"FRV {self.name!r}"
@@ -68,6 +76,8 @@ class FRVSpec:
             )
         if self.distribution not in DISTRIBUTIONS:
             raise ParameterError(f"{label}: distribution must be 'normal' or 'beta'; got {self.distribution!r}")
+        if self.sampling not in SAMPLINGS:
+            raise ParameterError(f"{label}: sampling must be 'random' or 'lhs'; got {self.sampling!r}")
         if values["beta_a"] <= 0 or values["beta_b"] <= 0:
             raise ParameterError(f"{label}: beta_a and beta_b must be > 0")
         if self.distribution == "normal" and values["mean"] / values["std"] < -3.0:
@@ -130,7 +140,13 @@ def _stream_seed(seed: int, block: int, stream: int) -> list[int]:
 def _sample_block(spec: FRVSpec, seed: int, block: int, stream: int = 0) -> np.ndarray:
     """The ``BLOCK`` samples of block ``block`` (see :func:`generate_samples`)."""
     rng = np.random.default_rng(_stream_seed(seed, block, stream))
-    peak = spec.deterministic + rng.normal(spec.mean, spec.std, BLOCK) * spec.scale  # Eq. 2.28
+    if spec.sampling == "lhs":  # one peak per equal-probability stratum of N(mean, std)
+        u = rng.uniform(size=BLOCK)
+        u[u == 0.0] = 0.5  # inside the stratum: ppf stays finite
+        z = stats.norm.ppf((rng.permutation(BLOCK) + u) / BLOCK)
+        peak = spec.deterministic + (spec.mean + spec.std * z) * spec.scale
+    else:
+        peak = spec.deterministic + rng.normal(spec.mean, spec.std, BLOCK) * spec.scale  # Eq. 2.28
     shape = (BLOCK, spec.n_alpha_divisor, 2)
     if spec.distribution == "beta":
         drawn = rng.beta(spec.beta_a, spec.beta_b, shape)
@@ -160,6 +176,9 @@ def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0, strea
     * peak (Eq. 2.28, implemented as printed): ``p_peak = p_det + X·s`` with
       ``X ~ N(mean, std)`` and ``s = relative_scale·|p_det|``. With the thesis' N(1, 1)
       the peak is *shifted* by one ``s`` on average: ``p_peak ~ N(p_det + mean·s, (std·s)²)``.
+      With ``spec.sampling == "lhs"`` the same distribution, Latin-hypercube stratified
+      per block: ``X = mean + std·Φ⁻¹((π_i + U_i)/BLOCK)``, ``π`` a random permutation of
+      the block's ``0 … BLOCK−1``, ``U_i ~ U(0, 1)``.
       (``|p_det|`` makes the scale a magnitude; the thesis' ``p_det`` is positive.)
     * increments (Eq. 2.29): ``Δ = X·s/N_α`` for every α-level below 1 and each side, with
       ``N_α`` the number of α-levels *below 1* (the number of increments per side), so
