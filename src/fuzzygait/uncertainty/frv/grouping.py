@@ -167,7 +167,7 @@ def occurring_intervals(bins: np.ndarray) -> np.ndarray:
 def possible_boxes(grids: Sequence[Grid]) -> int:
     """Possible α-cut boxes over per-parameter grids: the product of each parameter's
     possible intervals (Eq. 2.32) — the multi-parameter worst case the thesis states after
-    Eq. 2.33 (two bins per parameter, 4 and 3 points: ``6 · 3 = 18``)."""
+    Eq. 2.33 (grids of 4 and 3 points, 3 and 2 bins: ``6 · 3 = 18`` boxes)."""
     return math.prod(g.possible_intervals for g in grids)
 
 
