@@ -72,6 +72,7 @@ def _refusal(store: Path, *args: str) -> str:
         (("--alphas", "0,0.5"), "made with --alphas 0,0.25,0.5,0.75,1; given 0,0.5,1."),
         (("--seed", "1"), "made with --seed 0; given 1."),
         (("--distribution", "beta"), "made with --distribution normal; given beta."),
+        (("--sampling", "lhs"), "made with --sampling random; given lhs."),
         (("--disc", "100"), "made with --disc 6; given 100."),
         (("--nodes", "20"), "made with --nodes 6; given 20."),
         (("--dt", "0.0005"), "made with --dt 0.001; given 0.0005."),
@@ -112,3 +113,59 @@ def test_a_study_without_a_record_or_not_a_study_is_refused(tmp_path: Path) -> N
     other.mkdir(parents=True)
     (other / "notes.txt").write_text("not a study")
     assert "not an FRV study" in _refusal(other, *MADE)
+
+
+# ---------------------------------------------------------------------------- several FRVs (--frv E,rho)
+RHO = 8550.0  # kg/m³, the stance scenario's
+
+
+@pytest.fixture(scope="module")
+def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from fuzzygait.uncertainty.frv import FRVMultiStudy
+
+    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    options = study_options(setup, FRVRequest("E,rho", disc=6), None)
+    assert options["frv"] == "E,rho" and options["value"] == [MODULUS, options["set"]["rho"]]
+    times = np.linspace(0.0, 1.0, 5)
+    model = FunctionModel(lambda p: np.sin(p[..., :1] * 1e-10 * times) + p[..., 1:2] * 1e-4 * times, times)
+    path = tmp_path_factory.mktemp("multi") / "study.zarr"
+    specs = [FRVSpec("E", MODULUS, alphas=(0.0, 0.25, 0.5, 0.75, 1.0)),
+             FRVSpec("rho", options["set"]["rho"], alphas=(0.0, 0.25, 0.5, 0.75, 1.0))]  # fmt: skip
+    FRVMultiStudy.create(model, specs, 30, n_disc=6, store=path, options=options)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (("--frv", "E"), "made with --frv E,rho; given E. To extend it, leave --frv out"),
+        (("--set", "rho=9000"), f"made with --set rho={RHO:g}; given rho=9000. To extend it, leave --set rho out"),
+        (("--disc", "7"), "made with --disc 6; given 7."),
+    ],
+)  # fmt: skip
+def test_an_extension_of_several_frvs_with_another_option_is_refused(multi_store: Path, args: tuple[str, ...],
+                                                                     named: str) -> None:  # fmt: skip
+    line = _refusal(multi_store, "stance", *args)
+    assert line.startswith(f"fuzzygait: error: {multi_store}: this study was {named}")
+
+
+def test_several_frvs_take_no_value_and_unknown_or_repeated_names_are_refused(tmp_path: Path) -> None:
+    for args, said in ((("--frv", "E,rho", "--value", "6e10"), "--value applies to one --frv parameter"),
+                       (("--frv", "E,foo"), "--frv 'foo': unknown parameter"),
+                       (("--frv", "E,E"), "a parameter is named twice")):  # fmt: skip
+        result = runner.invoke(app, ["frv-sim", "stance", *args, "--samples", "10", "--workers", "1",
+                                     "--out", str(tmp_path / "new.zarr")])  # fmt: skip
+        assert result.exit_code == 1 and said in result.stderr, result.output
+        assert not (tmp_path / "new.zarr").exists()
+
+
+def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: Path) -> None:
+    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    options = study_options(setup, FRVRequest(disc=6), None)
+    del options["sampling"]  # as recorded before --sampling existed
+    old = _study(tmp_path / "old" / "study.zarr", options)
+    assert "made with --sampling random; given lhs." in _refusal(old, "stance", "--sampling", "lhs")
+    result = runner.invoke(app, ["frv-sim", "stance", "--sampling", "sobol", "--samples", "10", "--workers", "1",
+                                 "--out", str(tmp_path / "new.zarr")])  # fmt: skip
+    assert result.exit_code == 1 and "sampling must be 'random' or 'lhs'" in result.stderr, result.output
+    assert not (tmp_path / "new.zarr").exists()

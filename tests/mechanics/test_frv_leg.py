@@ -43,3 +43,28 @@ def test_frv_sim_command_creates_and_extends(tmp_path):
     bad = run("frv-sim", "stance", "--frv", "foo", "--out", tmp_path / "bad.zarr")
     assert_one_line_error(bad, "foo")
     assert not (tmp_path / "bad.zarr").exists()
+
+
+def test_two_frvs_one_and_two_workers_bit_identical_and_the_command(tmp_path, cluster):
+    """``E`` and ``rho`` as independent FRVs: the box study on 1 worker and on 2 workers
+    is bit-identical; ``frv-sim --frv E,rho`` writes and extends such a study."""
+    from fuzzygait.uncertainty.frv import FRVMultiStudy
+
+    alphas = (0.0, 0.5, 1.0)
+    specs = [FRVSpec("E", MODULUS, alphas=alphas), FRVSpec("rho", 8550.0, alphas=alphas)]
+    small = {**SMALL, "n_disc": 4, "duration": 0.02}
+    serial = leg_frv_study("stance", specs, 40, tmp_path / "one.zarr", workers=1, **small)
+    parallel = leg_frv_study("stance", specs, 40, tmp_path / "two.zarr", scheduler=cluster.scheduler_address, **small)
+    assert isinstance(serial, FRVMultiStudy) and serial.counts["possible_intervals"] == 6 * 6
+    a, b = serial.hulls()["hull"].values, parallel.hulls()["hull"].values
+    assert a.shape == (40, 3, 2, a.shape[-1]) and np.isfinite(a).all() and np.array_equal(a, b)
+    assert 0 < serial.counts["forward_simulations"] == parallel.counts["forward_simulations"] <= 9
+    store = tmp_path / "study.zarr"
+    args = ("frv-sim", "stance", "--frv", "E,rho", "--samples", "30", "--disc", "4", "--duration", "0.02",
+            "--nodes", "6", "--set", f"E={MODULUS}", "--workers", "1", "--out", store)  # fmt: skip
+    first = run(*args)
+    assert first.returncode == 0, first.stderr
+    assert "30 samples" in first.stdout and "occurring boxes" in first.stdout and "(6 × 6) possible" in first.stdout
+    second = run(*args)
+    assert second.returncode == 0, second.stderr
+    assert "60 samples" in second.stdout

@@ -151,8 +151,8 @@ def fuzzy_sim(
 
 #: frv-sim's parameters that a study records, by the name of the recorded option
 _RECORDED = {"parameter": "frv", "value": "value", "disc": "disc", "alphas": "alphas", "distribution": "distribution",
-             "seed": "seed", "target": "target", "overrides": "set", "nodes": "nodes", "dt": "dt",
-             "duration": "duration", "scheme": "scheme"}  # fmt: skip
+             "seed": "seed", "sampling": "sampling", "target": "target", "overrides": "set", "nodes": "nodes",
+             "dt": "dt", "duration": "duration", "scheme": "scheme"}  # fmt: skip
 
 
 @app.command("frv-sim")
@@ -162,16 +162,21 @@ def frv_sim(
     out_store: Annotated[Path, typer.Option("--out", "-o", help="FRV study, a .zarr directory; an existing "
                                             "study is extended with --samples more samples, with the options it "
                                             "was made with (an option given must match them).")],
-    parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter.")] = "E",
+    parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter, or several "
+                                           "independent ones comma-separated (E,rho: α-cut boxes on a "
+                                           "grid of --disc points per parameter).")] = "E",
     value: Annotated[
         float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the thesis' "
-                                    "study's (stance E: 59.958e9 Pa, Table 5.3), else the scenario's.")
+                                    "study's (stance E: 59.958e9 Pa, Table 5.3), else the scenario's. "
+                                    "One --frv parameter only (else --set NAME=VALUE).")
     ] = None,
     samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
     disc: Annotated[int, typer.Option(help="Grouping grid points N_p-disc.")] = 100,
     alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
     distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
     seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
+    sampling: Annotated[str, typer.Option(help="Peaks: random (the thesis') or lhs (Latin hypercube per "
+                                          "block of 1024 samples, §2.7.5).")] = "random",
     target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
     overrides: FixedValuesOption = None,
     nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
@@ -183,9 +188,9 @@ def frv_sim(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists (the "
                                             "old one is replaced once the new one is complete).")] = False,
 ) -> None:
-    """FRV-GFA (thesis §2.7, §5.7): a leg parameter as a fuzzy random variable, grouped
-    samples, Graph Follower hulls on the occurring intervals only, output samples and
-    their counts in a chunked zarr store.
+    """FRV-GFA (thesis §2.7, §5.7): a leg parameter (or several independent ones) as a
+    fuzzy random variable, grouped samples, Graph Follower hulls on the occurring
+    intervals (boxes) only, output samples and their counts in a chunked zarr store.
 
     Every write commits atomically: a run that fails or is killed leaves the study as it
     was (a new one: nothing); run the command again to complete it.
@@ -205,7 +210,7 @@ def frv_sim(
         with progress_bars() as bars:
             study = run_frv_leg(
                 LegSetup(scenario, nodes, dt, duration, values, scheme),
-                FRVRequest(parameter, value, samples, disc, levels, distribution, seed), out_store,
+                FRVRequest(parameter, value, samples, disc, levels, distribution, seed, sampling), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
                 progress=StageBars(bars),
             )  # fmt: skip
@@ -234,10 +239,15 @@ def _fuzzy_summary(scenario: str, spreads: Mapping[str, float], attrs: Mapping[s
 
 
 def _frv_summary(scenario: str, counts: Mapping[str, Any]) -> str:
-    """Samples, occurring and possible intervals, the engine's counts and the wall time."""
+    """Samples, occurring and possible intervals (boxes, with several FRVs: possible =
+    the product over the parameters), the engine's counts and the wall time."""
+    per = counts.get("possible_intervals_per_parameter")
+    kind = "intervals" if per is None else "boxes"
+    product = "" if per is None else " (" + " × ".join(str(n) for n in per) + ")"
     return (
-        f"{scenario}: {counts.get('samples')} samples; occurring intervals {counts.get('occurring_intervals')} of "
-        f"{counts.get('possible_intervals')} possible; forward simulations {counts.get('forward_simulations')}; "
+        f"{scenario}: {counts.get('samples')} samples; occurring {kind} {counts.get('occurring_intervals')} of "
+        f"{counts.get('possible_intervals')}{product} possible; "
+        f"forward simulations {counts.get('forward_simulations')}; "
         f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s"
     )
 

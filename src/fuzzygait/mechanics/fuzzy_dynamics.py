@@ -169,32 +169,45 @@ def leg_frv_study(
     """Run (or extend) the FRV-GFA of a leg scenario (thesis §5.7) into a zarr ``store``.
 
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
-    parameter; the other parameters are the scenario's with ``base_overrides``.  Forward
+    parameter, or a sequence of several (independent FRVs, one α-level set: an
+    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`, ``n_disc`` grid points per
+    parameter, no sensitivities needed); the other parameters are the scenario's with
+    ``base_overrides``.  Forward
     simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
     compiled simulator library from the on-disk cache.  An existing store is extended with
     ``n_samples`` more samples (every stored library trajectory and interval hull reused)
     unless ``overwrite``; a new study records ``options`` (what it was made with, for the
     caller to compare before extending it).  Returns the
-    :class:`~fuzzygait.uncertainty.frv.FRVStudy`.
+    :class:`~fuzzygait.uncertainty.frv.FRVStudy` (one parameter) or the
+    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` (several).
     """
     from pathlib import Path
 
-    from fuzzygait.uncertainty.frv import FRVStudy
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, check_specs, open_study
 
-    if spec.name not in LEG_PARAMETERS:
-        raise ParameterError(f"FRV parameter {spec.name!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
+    specs = check_specs(spec)
+    for one in specs:
+        if one.name not in LEG_PARAMETERS:
+            raise ParameterError(f"FRV parameter {one.name!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
     simulator = LegSimulator(scenario, nodes=nodes)
     base = simulator.parameters(**dict(base_overrides or {}))
     target = target or DEFAULT_TARGET[scenario]
-    model = LegTargetModel(simulator, target, (spec.name,), base=base, dt=dt, duration=duration, scheme=scheme)
+    names = tuple(one.name for one in specs)
+    model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
     path = Path(store)
+    multi = len(specs) > 1  # several FRVs: box hulls from the library, no sensitivities used
+    study: FRVStudy | FRVMultiStudy
     with Evaluator(workers=workers, scheduler=scheduler) as pool:
-        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities)
+        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities and not multi)
         if path.exists() and not overwrite:
-            study = FRVStudy.open(path, model, evaluator=evaluator)
+            study = open_study(path, model, evaluator=evaluator)
             study.add_samples(n_samples)
+        elif multi:
+            study = FRVMultiStudy.create(model, specs, n_samples, n_disc=n_disc, seed=seed, store=path,
+                                         evaluator=evaluator, chunk=chunk, overwrite=overwrite,
+                                         options=options)  # fmt: skip
         else:
-            study = FRVStudy.create(model, spec, n_samples, n_disc=n_disc, seed=seed, store=path,
+            study = FRVStudy.create(model, specs[0], n_samples, n_disc=n_disc, seed=seed, store=path,
                                     evaluator=evaluator, chunk=chunk, overwrite=overwrite, options=options)  # fmt: skip
     return study

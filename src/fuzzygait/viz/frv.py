@@ -4,9 +4,12 @@ Input side (from an :class:`~fuzzygait.uncertainty.frv.FRVSpec`, no study needed
 
 * :func:`input_samples_figure` — Fig. 5.14: input samples as fuzzy numbers and the
   histograms of their l_α r_α-increments per α-level with the generating pdf;
-* :func:`grouping_figure` — Fig. 5.15: samples before and after grouping.
+* :func:`grouping_figure` — Fig. 5.15: samples before and after grouping;
+* :func:`parameter_figures` — both, per parameter of a study of one or several FRVs
+  (each from its own sample stream and grid).
 
-Output side (from an :class:`~fuzzygait.uncertainty.frv.FRVStudy` or its store path;
+Output side (from an :class:`~fuzzygait.uncertainty.frv.FRVStudy`, an
+:class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` or its store path;
 the stored hulls are streamed, never loaded whole):
 
 * :func:`output_distribution_figure` — Figs. 5.16 / 5.17: histogram and fitted pdf of
@@ -24,6 +27,7 @@ All return a :class:`matplotlib.figure.Figure` (no pyplot state; save with
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -31,9 +35,11 @@ from scipy import stats
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.frv import (
+    FRVMultiStudy,
     FRVSpec,
     FRVStudy,
     Grid,
+    check_specs,
     fit_distributions,
     generate_samples,
     group,
@@ -42,7 +48,7 @@ from fuzzygait.uncertainty.frv import (
     stored_samples,
 )
 
-Store = FRVStudy | str | os.PathLike[str]
+Store = FRVStudy | FRVMultiStudy | str | os.PathLike[str]
 SIDES = (("lower", "left", "tab:green"), ("upper", "right", "tab:blue"))
 
 
@@ -54,10 +60,12 @@ def _membership_lines(cuts: np.ndarray, alphas: np.ndarray) -> tuple[np.ndarray,
     return x, y
 
 
-def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_show: int = 100) -> Figure:
+def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_show: int = 100,
+                         stream: int = 0) -> Figure:  # fmt: skip
     """Fig. 5.14: ``n_show`` input samples and, per α-level, histograms of the left and
-    right increments of ``n_samples`` samples with the generating pdf (α = 1: the peak)."""
-    cuts = generate_samples(spec, n_samples, seed)
+    right increments of ``n_samples`` samples with the generating pdf (α = 1: the peak).
+    ``stream``: the parameter's index in a study of several FRVs (its sample stream)."""
+    cuts = generate_samples(spec, n_samples, seed, stream=stream)
     alphas = np.asarray(spec.alphas)
     increments = sample_increments(cuts)
     fig = Figure(figsize=(3.0 * alphas.size, 6.5), layout="constrained")
@@ -89,10 +97,11 @@ def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n
 
 
 def grouping_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_disc: int = 100,
-                    n_show: int = 100, grid: Grid | None = None) -> Figure:  # fmt: skip
+                    n_show: int = 100, grid: Grid | None = None, stream: int = 0) -> Figure:  # fmt: skip
     """Fig. 5.15: ``n_show`` samples before and after grouping on ``grid`` (default: the
-    grid of ``n_samples`` samples with ``n_disc`` points); the grid points are marked."""
-    cuts = generate_samples(spec, n_samples, seed)
+    grid of ``n_samples`` samples with ``n_disc`` points); the grid points are marked.
+    ``stream``: the parameter's index in a study of several FRVs (its sample stream)."""
+    cuts = generate_samples(spec, n_samples, seed, stream=stream)
     grid = grid if grid is not None else Grid.from_samples(cuts, n_disc)
     grid = grid.extended(cuts[:n_show])
     grouped = grid.centres(group(cuts[:n_show], grid))
@@ -108,6 +117,25 @@ def grouping_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_disc
     axes[1].plot(points, np.zeros_like(points), "|", color="black", ms=6)
     axes[1].set_xlabel(spec.name)
     return fig
+
+
+def parameter_figures(specs: FRVSpec | Sequence[FRVSpec], seed: int = 0, n_samples: int = 10000,
+                      n_disc: int = 100, grids: Sequence[Grid] | None = None,
+                      n_show: int = 100) -> dict[str, tuple[Figure, Figure]]:  # fmt: skip
+    """Figs. 5.14 and 5.15 for every FRV parameter of a study (one or several), each from
+    its own sample stream and on its own grid (``grids``: e.g. a study's ``grids``, or
+    ``(study.grid,)``; default: each parameter's grid of ``n_samples`` samples).
+
+    Returns:
+        ``{name: (input_samples_figure, grouping_figure)}`` in parameter order.
+    """
+    spec_tuple = check_specs(specs)
+    if grids is not None and len(grids) != len(spec_tuple):
+        raise ParameterError(f"grids: one per parameter ({len(spec_tuple)}); got {len(grids)}")
+    return {s.name: (input_samples_figure(s, seed, n_samples, n_show, stream=k),
+                     grouping_figure(s, seed, n_samples, n_disc, n_show, None if grids is None else grids[k],
+                                     stream=k))
+            for k, s in enumerate(spec_tuple)}  # fmt: skip
 
 
 def _pdf(fit, a: int, b: int, node: int, xs: np.ndarray) -> np.ndarray:

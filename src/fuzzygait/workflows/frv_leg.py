@@ -1,6 +1,6 @@
 """FRV-GFA of a leg scenario as a job (``fuzzygait frv-sim``, thesis §2.7, §5.7): one leg
-parameter as a fuzzy random variable about its deterministic value, the study run (or
-extended) into a chunked zarr store by
+parameter — or several, independent (``--frv E,rho``) — as fuzzy random variables about
+their deterministic values, the study run (or extended) into a chunked zarr store by
 :func:`fuzzygait.mechanics.fuzzy_dynamics.leg_frv_study`.
 
 A study records the options it was made with (:func:`study_options`: the scenario, the
@@ -23,13 +23,16 @@ from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, simulation
 from fuzzygait.workflows.progress import SILENT, StageProgress
 
 if TYPE_CHECKING:
-    from fuzzygait.uncertainty.frv import FRVStudy
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy
 
-__all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "run_frv_leg", "study_options"]
+__all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "frv_parameters", "run_frv_leg",
+           "study_options"]  # fmt: skip
 
 #: the recorded options in the order they are compared (named as frv-sim's options)
-OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution", "seed", "disc", "nodes", "dt",
-           "duration", "scheme")  # fmt: skip
+OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution", "sampling", "seed", "disc", "nodes",
+           "dt", "duration", "scheme")  # fmt: skip
+#: options a study made before they existed is taken to have been made with
+OPTION_DEFAULTS = {"sampling": "random"}
 _NEW_STUDY = "start a new study (another --out, or --overwrite)"
 
 
@@ -40,10 +43,22 @@ _NEW_STUDY = "start a new study (another --out, or --overwrite)"
 FRV_STUDY_VALUES: dict[str, dict[str, float]] = {"stance": {"E": 59.958e9}}
 
 
+def frv_parameters(parameter: str) -> tuple[str, ...]:
+    """The FRV parameters of ``--frv``: one name or several, comma-separated (``"E,rho"``)."""
+    return tuple(name.strip() for name in parameter.split(",") if name.strip())
+
+
 def check_frv_parameter(parameter: str) -> None:
-    """A :class:`FuzzyGaitError` unless ``parameter`` is a leg parameter."""
-    if parameter not in LEG_PARAMETERS:
-        raise FuzzyGaitError(f"--frv {parameter!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
+    """A :class:`FuzzyGaitError` unless ``parameter`` names leg parameters (one, or several
+    distinct ones comma-separated)."""
+    names = frv_parameters(parameter)
+    if not names:
+        raise FuzzyGaitError(f"--frv {parameter!r}: name a leg parameter; known: {', '.join(LEG_PARAMETERS)}")
+    for name in names:
+        if name not in LEG_PARAMETERS:
+            raise FuzzyGaitError(f"--frv {name!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
+    if len(set(names)) != len(names):
+        raise FuzzyGaitError(f"--frv {parameter!r}: a parameter is named twice")
 
 
 def _scenario_values(scenario: str) -> dict[str, float]:
@@ -63,9 +78,12 @@ def deterministic_value(scenario: str, parameter: str, values: Mapping[str, floa
 @dataclass(frozen=True)
 class FRVRequest:
     """The FRV of an FRV-GFA study: the leg ``parameter`` (its deterministic value
-    ``value``, else the setup's, else the scenario's), ``samples`` samples (to draw, or to
-    add to an existing study), ``disc`` grouping grid points, the α-levels, the increments'
-    ``distribution`` and the ``seed`` of the sample streams."""
+    ``value``, else the setup's, else the scenario's) or several, comma-separated
+    (independent FRVs with the same settings; each one's ``p_det`` from the setup or the
+    scenario, ``value`` not allowed), ``samples`` samples (to draw, or to add to an
+    existing study), ``disc`` grouping grid points (per parameter), the α-levels, the
+    increments' ``distribution``, the peaks' ``sampling`` (``"random"`` or ``"lhs"``:
+    Latin-hypercube per block of samples) and the ``seed`` of the sample streams."""
 
     parameter: str = "E"
     value: float | None = None
@@ -74,6 +92,7 @@ class FRVRequest:
     alphas: Sequence[float] = (0.0, 0.25, 0.5, 0.75, 1.0)
     distribution: str = "normal"
     seed: int = 0
+    sampling: str = "random"
 
 
 def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[str, Any]:
@@ -83,12 +102,18 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
 
     step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
     values = {**_scenario_values(setup.scenario), **{k: float(v) for k, v in setup.values.items()}}
-    values[frv.parameter] = (float(frv.value) if frv.value is not None
-                             else deterministic_value(setup.scenario, frv.parameter, setup.values))  # fmt: skip
-    return {"scenario": setup.scenario, "frv": frv.parameter, "value": values[frv.parameter], "set": values,
+    names = frv_parameters(frv.parameter)
+    if len(names) > 1 and frv.value is not None:
+        raise FuzzyGaitError(f"--value applies to one --frv parameter; for {','.join(names)} give each p_det "
+                             "with --set NAME=VALUE")  # fmt: skip
+    for name in names:
+        values[name] = (float(frv.value) if frv.value is not None
+                        else deterministic_value(setup.scenario, name, setup.values))  # fmt: skip
+    value: float | list[float] = values[names[0]] if len(names) == 1 else [values[n] for n in names]
+    return {"scenario": setup.scenario, "frv": ",".join(names), "value": value, "set": values,
             "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
-            "distribution": frv.distribution, "seed": int(frv.seed), "disc": int(frv.disc), "nodes": int(setup.nodes),
-            "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
+            "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed), "disc": int(frv.disc),
+            "nodes": int(setup.nodes), "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
 
 
 def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mapping[str, Any],
@@ -99,7 +124,7 @@ def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mappi
     setup = replace(setup, values=values, **{k: stored[k] for k in ("nodes", "dt", "duration", "scheme")
                                              if k not in given})  # fmt: skip
     taken: dict[str, Any] = {"parameter": stored["frv"]} if "frv" not in given else {}
-    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "seed") if k not in given})
+    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "sampling", "seed") if k not in given})
     if "value" not in given:
         taken["value"] = None  # p_det: the --set value, else the stored one
     return setup, replace(frv, **taken), (stored["target"] if "target" not in given else target)
@@ -125,7 +150,8 @@ def _refuse_other_options(store: Path, made: Mapping[str, Any], asked: Mapping[s
             continue
         option, was, now = f"--{key}", _show(key, made[key]), _show(key, asked[key])
         if key == "set" or (key == "value" and key not in given):  # p_det given by --set
-            name = asked["frv"] if key == "value" else next(n for n in LEG_PARAMETERS if made[key][n] != asked[key][n])
+            pool = frv_parameters(asked["frv"]) if key == "value" else LEG_PARAMETERS
+            name = next(n for n in pool if made["set"][n] != asked["set"][n])
             was, now = (f"{name}={_num(record['set'][name])}" for record in (made, asked))
             option = f"--set {name}"
         named = "SCENARIO" if key == "scenario" else option.split()[0]
@@ -145,7 +171,7 @@ def run_frv_leg(
     overwrite: bool = False,
     given: Collection[str] | None = None,
     progress: StageProgress = SILENT,
-) -> FRVStudy:
+) -> FRVStudy | FRVMultiStudy:
     """Run the FRV-GFA of ``frv`` on the leg ``setup`` into ``out_store`` (an existing
     study is extended unless ``overwrite``), the forward simulations on ``workers`` local
     processes or the Dask ``scheduler``.  Returns the study (its ``counts`` say what was
@@ -164,6 +190,7 @@ def run_frv_leg(
     extend = out_store.exists() and not overwrite
     if extend:
         made = read_meta(out_store).get("options") or {}
+        made = {**OPTION_DEFAULTS, **made} if made else made
         if not all(key in made for key in OPTIONS):
             raise FuzzyGaitError(f"{out_store}: the study does not record the options it was made with (an older "
                                  f"version or the library made it): it cannot be extended; {_NEW_STUDY}")  # fmt: skip
@@ -173,12 +200,15 @@ def run_frv_leg(
         raise FuzzyGaitError(f"--target {options['target']!r}: unknown target; choose one of {', '.join(TARGETS)}")
     if extend:
         _refuse_other_options(out_store, made, options, OPTIONS if given is None else given)
-    spec = FRVSpec(frv.parameter, options["value"], alphas=tuple(frv.alphas), distribution=frv.distribution)
+    names = frv_parameters(frv.parameter)
+    specs = [FRVSpec(name, options["set"][name], alphas=tuple(frv.alphas), distribution=frv.distribution,
+                     sampling=frv.sampling) for name in names]  # fmt: skip
     made_folders = [p for p in (out_store.parent, *out_store.parent.parents) if not p.exists()]
     out_store.parent.mkdir(parents=True, exist_ok=True)
     progress.stage(f"{setup.scenario}: FRV-GFA ({frv.samples} samples)")
     try:
         with named_fixes(setup):
+            spec = specs[0] if len(specs) == 1 else specs
             return leg_frv_study(setup.scenario, spec, frv.samples, out_store, target=options["target"],
                                  base_overrides=options["set"], n_disc=frv.disc, seed=frv.seed, nodes=setup.nodes,
                                  dt=setup.dt, duration=setup.duration, scheme=setup.scheme, workers=workers,

@@ -31,14 +31,37 @@ steps of the FRV-GFA (thesis §2.7.4, "FRV-GFA steps"):
 samples later, simulating only new bin centres and computing only new intervals
 (the extension the thesis describes as "not yet implemented", §2.7.4).
 
-Only one FRV parameter is supported (the Table 5.3 case); see :class:`FRVStudy`.
+:class:`FRVStudy` takes one FRV parameter (the Table 5.3 case, with the Hermite
+refinement); :class:`FRVMultiStudy` several independent ones (boxes of per-parameter
+intervals on tensor grids, :func:`generate_box_samples`, :func:`occurring_boxes`,
+:func:`possible_boxes`, :func:`box_extrema`); :func:`open_study` opens either.
 """
 
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, serial_evaluator
 from fuzzygait.uncertainty.frv.fit import fit_distributions, iter_hull_blocks, stored_samples
-from fuzzygait.uncertainty.frv.grouping import EDGE_TOL, KEY_BASE, KEY_BIAS, Grid, group, occurring_intervals
-from fuzzygait.uncertainty.frv.hulls import hermite_segment_extrema, interval_hulls, range_extrema
-from fuzzygait.uncertainty.frv.samples import BLOCK, DISTRIBUTIONS, FRVSpec, generate_samples, sample_increments
+from fuzzygait.uncertainty.frv.grouping import (
+    EDGE_TOL,
+    KEY_BASE,
+    KEY_BIAS,
+    Grid,
+    box_rows,
+    group,
+    occurring_boxes,
+    occurring_intervals,
+    possible_boxes,
+)
+from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_segment_extrema, interval_hulls, range_extrema
+from fuzzygait.uncertainty.frv.multi import FRVMultiStudy, is_multi_store, open_study
+from fuzzygait.uncertainty.frv.samples import (
+    BLOCK,
+    DISTRIBUTIONS,
+    SAMPLINGS,
+    FRVSpec,
+    check_specs,
+    generate_box_samples,
+    generate_samples,
+    sample_increments,
+)
 from fuzzygait.uncertainty.frv.study import STORE_FORMAT, FRVStudy
 
 __all__ = [
@@ -47,18 +70,28 @@ __all__ = [
     "EDGE_TOL",
     "KEY_BASE",
     "KEY_BIAS",
+    "SAMPLINGS",
     "STORE_FORMAT",
     "BatchFunction",
+    "FRVMultiStudy",
     "FRVSpec",
     "FRVStudy",
     "Grid",
+    "box_extrema",
+    "box_rows",
+    "check_specs",
     "fit_distributions",
+    "generate_box_samples",
     "generate_samples",
     "group",
     "hermite_segment_extrema",
     "interval_hulls",
+    "is_multi_store",
     "iter_hull_blocks",
+    "occurring_boxes",
     "occurring_intervals",
+    "open_study",
+    "possible_boxes",
     "range_extrema",
     "sample_increments",
     "serial_evaluator",

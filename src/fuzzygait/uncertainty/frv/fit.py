@@ -12,21 +12,25 @@ import xarray as xr
 from scipy import stats
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.frv.multi import FRVMultiStudy
 from fuzzygait.uncertainty.frv.samples import DISTRIBUTIONS, sample_increments
 from fuzzygait.uncertainty.frv.store import read_group, read_meta
 from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks
 
+#: a study of one or several FRVs, or its store path
+StudyOrPath = FRVStudy | FRVMultiStudy | str | os.PathLike[str]
 
-def _store_path(store: FRVStudy | str | os.PathLike[str]) -> Path:
-    return store.path if isinstance(store, FRVStudy) else Path(store)
+
+def _store_path(store: StudyOrPath) -> Path:
+    return store.path if isinstance(store, (FRVStudy, FRVMultiStudy)) else Path(store)
 
 
-def stored_samples(store: FRVStudy | str | os.PathLike[str]) -> int:
+def stored_samples(store: StudyOrPath) -> int:
     """Number of samples in a stored study."""
     return int(read_meta(_store_path(store))["n_samples"])
 
 
-def iter_hull_blocks(store: FRVStudy | str | os.PathLike[str], data: str = "hulls") -> Iterator[np.ndarray]:
+def iter_hull_blocks(store: StudyOrPath, data: str = "hulls") -> Iterator[np.ndarray]:
     """The stored output block by block (one zarr chunk of samples at a time):
     ``(nb, n_alpha, 2, n_time)`` hulls, or their l_α r_α-increments
     (:func:`sample_increments` per time node) with ``data="increments"``."""
@@ -63,7 +67,7 @@ class _Moments:
         return self.m2 / self.n
 
 
-def fit_distributions(store: FRVStudy | str | os.PathLike[str], kind: str = "normal", data: str = "hulls",
+def fit_distributions(store: StudyOrPath, kind: str = "normal", data: str = "hulls",
                       exact_nodes: Sequence[int] = ()) -> xr.Dataset:  # fmt: skip
     """Fit a distribution per ``(alpha, bound, time)`` to the samples' output (step 9),
     streaming over the stored sample chunks.

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -34,17 +35,24 @@ class Grid:
     below ``origin``: bins ``−offset … n_bins − offset − 1``) and no existing bin is
     renumbered.
 
+    The first batch's largest value lies exactly on the top point and belongs to the bin
+    below it (within ``EDGE_TOL`` spacings); that bin's upper edge stays closed when the
+    grid is extended above it (``closed_top``), so a value is grouped to the same bin on
+    the first grid and on every extension of it.
+
     Attributes:
         origin: the first batch's smallest value (bin 0's lower edge).
         spacing: distance between neighbouring points.
         n_points: discretisation points currently covered (bins = ``n_points − 1``).
         offset: bins added below ``origin``.
+        closed_top: the bin whose upper edge is closed; None: the last bin.
     """
 
     origin: float
     spacing: float
     n_points: int
     offset: int = 0
+    closed_top: int | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.origin) and math.isfinite(self.spacing) and self.spacing > 0):
@@ -97,7 +105,7 @@ class Grid:
         """Bin index of each value (may lie outside the grid; see :meth:`extended`)."""
         u = (np.asarray(values, dtype=float) - self.origin) / self.spacing
         bins = np.floor(u).astype(np.int64)
-        top = self.last_bin + 1
+        top = (self.last_bin if self.closed_top is None else self.closed_top) + 1
         return np.where((bins == top) & (u - top <= EDGE_TOL), top - 1, bins)
 
     def extended(self, values: np.ndarray) -> Grid:
@@ -108,7 +116,8 @@ class Grid:
         first, last = min(self.first_bin, int(bins.min())), max(self.last_bin, int(bins.max()))
         if (first, last) == (self.first_bin, self.last_bin):
             return self
-        return Grid(self.origin, self.spacing, last - first + 2, -first)
+        closed = self.last_bin if self.closed_top is None else self.closed_top
+        return Grid(self.origin, self.spacing, last - first + 2, -first, closed)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -152,3 +161,28 @@ def occurring_intervals(bins: np.ndarray) -> np.ndarray:
     at α-levels below 1, sorted; α = 1 cuts are degenerate ``(b, b)`` (the library entry
     itself) and are not intervals to optimise."""
     return np.stack(_decode(_interval_keys(np.asarray(bins))), axis=1)
+
+
+# ---------------------------------------------------------------------------- several FRVs
+def possible_boxes(grids: Sequence[Grid]) -> int:
+    """Possible α-cut boxes over per-parameter grids: the product of each parameter's
+    possible intervals (Eq. 2.32) — the multi-parameter worst case the thesis states after
+    Eq. 2.33 (grids of 4 and 3 points, 3 and 2 bins: ``6 · 3 = 18`` boxes)."""
+    return math.prod(g.possible_intervals for g in grids)
+
+
+def box_rows(bins: np.ndarray) -> np.ndarray:
+    """The α < 1 boxes of grouped samples ``(n, n_params, n_alpha, 2)`` as rows
+    ``(n, n_alpha − 1, 2·n_params)``: ``(left_1, right_1, left_2, right_2, …)`` — the key
+    of a box, the tuple of its per-parameter ``(left bin, right bin)`` pairs."""
+    bins = np.asarray(bins, dtype=np.int64)
+    n, n_params, n_alpha, _ = bins.shape
+    return np.moveaxis(bins[:, :, :-1, :], 1, 2).reshape(n, n_alpha - 1, 2 * n_params)
+
+
+def occurring_boxes(bins: np.ndarray) -> np.ndarray:
+    """The keys ``(k, 2·n_params)`` of the boxes present in grouped samples ``(n, n_params,
+    n_alpha, 2)`` at α-levels below 1, unique and sorted lexicographically (for one
+    parameter: :func:`occurring_intervals`)."""
+    rows = box_rows(bins)
+    return np.unique(rows.reshape(-1, rows.shape[-1]), axis=0)

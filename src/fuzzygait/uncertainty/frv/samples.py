@@ -5,6 +5,7 @@ right]`` in the parameter's units."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -18,6 +19,8 @@ from fuzzygait.uncertainty.fuzzy import _as_levels
 #: so it is the same whatever blocks the samples are requested in.
 BLOCK = 1024
 DISTRIBUTIONS = ("normal", "beta")
+#: How the peaks are drawn: independently, or Latin-hypercube stratified per block (§2.7.5).
+SAMPLINGS = ("random", "lhs")
 
 
 @dataclass(frozen=True)
@@ -35,6 +38,11 @@ class FRVSpec:
         mean, std: the normal distribution ``N(mean, std)`` of the peak draw (both
             distributions) and of the increments (``"normal"``); the thesis uses N(1, 1).
         beta_a, beta_b: shape parameters of the increments' beta distribution.
+        sampling: ``"random"`` (independent peak draws, the thesis') or ``"lhs"``
+            (Latin-hypercube peaks, thesis §2.7.5: within every block of :data:`BLOCK`
+            samples each of ``BLOCK`` equal-probability strata of the peak distribution
+            holds exactly one peak; with several FRVs each parameter's strata are
+            permuted independently, so every full block is a Latin hypercube).
     """
 
     name: str
@@ -46,6 +54,7 @@ class FRVSpec:
     std: float = 1.0
     beta_a: float = 2.0
     beta_b: float = 2.0
+    sampling: str = "random"
 
     def __post_init__(self) -> None:
         label = f"FRV {self.name!r}"
@@ -67,6 +76,8 @@ class FRVSpec:
             )
         if self.distribution not in DISTRIBUTIONS:
             raise ParameterError(f"{label}: distribution must be 'normal' or 'beta'; got {self.distribution!r}")
+        if self.sampling not in SAMPLINGS:
+            raise ParameterError(f"{label}: sampling must be 'random' or 'lhs'; got {self.sampling!r}")
         if values["beta_a"] <= 0 or values["beta_b"] <= 0:
             raise ParameterError(f"{label}: beta_a and beta_b must be > 0")
         if self.distribution == "normal" and values["mean"] / values["std"] < -3.0:
@@ -120,10 +131,22 @@ def _whole(value: object, name: str, minimum: int = 0) -> int:
     return int(value)
 
 
-def _sample_block(spec: FRVSpec, seed: int, block: int) -> np.ndarray:
+def _stream_seed(seed: int, block: int, stream: int) -> list[int]:
+    """The entropy of block ``block`` of parameter stream ``stream``: ``[seed, block]`` for
+    stream 0 (the one-parameter stream, unchanged), ``[seed, block, stream]`` otherwise."""
+    return [seed, block] if stream == 0 else [seed, block, stream]
+
+
+def _sample_block(spec: FRVSpec, seed: int, block: int, stream: int = 0) -> np.ndarray:
     """The ``BLOCK`` samples of block ``block`` (see :func:`generate_samples`)."""
-    rng = np.random.default_rng([seed, block])
-    peak = spec.deterministic + rng.normal(spec.mean, spec.std, BLOCK) * spec.scale  # Eq. 2.28
+    rng = np.random.default_rng(_stream_seed(seed, block, stream))
+    if spec.sampling == "lhs":  # one peak per equal-probability stratum of N(mean, std)
+        u = rng.uniform(size=BLOCK)
+        u[u == 0.0] = 0.5  # inside the stratum: ppf stays finite
+        z = stats.norm.ppf((rng.permutation(BLOCK) + u) / BLOCK)
+        peak = spec.deterministic + (spec.mean + spec.std * z) * spec.scale
+    else:
+        peak = spec.deterministic + rng.normal(spec.mean, spec.std, BLOCK) * spec.scale  # Eq. 2.28
     shape = (BLOCK, spec.n_alpha_divisor, 2)
     if spec.distribution == "beta":
         drawn = rng.beta(spec.beta_a, spec.beta_b, shape)
@@ -145,7 +168,7 @@ def _sample_block(spec: FRVSpec, seed: int, block: int) -> np.ndarray:
     return cuts
 
 
-def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0) -> np.ndarray:
+def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0, stream: int = 0) -> np.ndarray:
     """Samples ``start … start+n−1`` of the FRV (thesis Eqs. 2.26–2.30).
 
     Each sample is a fuzzy number built from its peak downwards:
@@ -153,6 +176,9 @@ def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0) -> np
     * peak (Eq. 2.28, implemented as printed): ``p_peak = p_det + X·s`` with
       ``X ~ N(mean, std)`` and ``s = relative_scale·|p_det|``. With the thesis' N(1, 1)
       the peak is *shifted* by one ``s`` on average: ``p_peak ~ N(p_det + mean·s, (std·s)²)``.
+      With ``spec.sampling == "lhs"`` the same distribution, Latin-hypercube stratified
+      per block: ``X = mean + std·Φ⁻¹((π_i + U_i)/BLOCK)``, ``π`` a random permutation of
+      the block's ``0 … BLOCK−1``, ``U_i ~ U(0, 1)``.
       (``|p_det|`` makes the scale a magnitude; the thesis' ``p_det`` is positive.)
     * increments (Eq. 2.29): ``Δ = X·s/N_α`` for every α-level below 1 and each side, with
       ``N_α`` the number of α-levels *below 1* (the number of increments per side), so
@@ -165,19 +191,51 @@ def generate_samples(spec: FRVSpec, n: int, seed: int = 0, start: int = 0) -> np
     Sample ``i`` is a function of ``(spec, seed, i)`` only: it is taken from block
     ``i // BLOCK`` generated with ``np.random.default_rng([seed, i // BLOCK])``, so two
     calls ``(start=0, n=a)`` and ``(start=a, n=b)`` give the samples of one call ``n=a+b``.
+    ``stream`` numbers independent streams of one seed (the parameter index of a study of
+    several FRVs, :func:`generate_box_samples`): stream ``k > 0`` seeds its blocks with
+    ``[seed, i // BLOCK, k]``; stream 0 is the one-parameter stream above.
 
     Returns:
         ``(n, n_alpha, 2)``: per sample and α-level (in ``spec.alphas`` order) the α-cut
         ``[left, right]``; the α = 1 cut is ``[peak, peak]``.
     """
     n, start, seed = _whole(n, "n"), _whole(start, "start"), _whole(seed, "seed")
+    stream = _whole(stream, "stream")
     out = np.empty((n, len(spec.alphas), 2))
     stop = start + n
     for block in range(start // BLOCK, (stop - 1) // BLOCK + 1 if n else start // BLOCK):
         first = block * BLOCK
         a, b = max(start, first), min(stop, first + BLOCK)
-        out[a - start : b - start] = _sample_block(spec, seed, block)[a - first : b - first]
+        out[a - start : b - start] = _sample_block(spec, seed, block, stream)[a - first : b - first]
     return out
+
+
+def check_specs(specs: FRVSpec | Sequence[FRVSpec]) -> tuple[FRVSpec, ...]:
+    """The FRV parameters of a study as a tuple: at least one, distinct names, one set of
+    α-levels (a sample's α-cut is a box, one interval per parameter at each level)."""
+    out = (specs,) if isinstance(specs, FRVSpec) else tuple(specs)
+    if not out or not all(isinstance(s, FRVSpec) for s in out):
+        raise ParameterError(f"give one FRVSpec per FRV parameter; got {specs!r}")
+    names = [s.name for s in out]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"FRV parameters must have distinct names; got {names}")
+    if any(s.alphas != out[0].alphas for s in out):
+        raise ParameterError(f"all FRV parameters need the same α-levels; got {[list(s.alphas) for s in out]}")
+    return out
+
+
+def generate_box_samples(specs: Sequence[FRVSpec], n: int, seed: int = 0, start: int = 0) -> np.ndarray:
+    """Samples ``start … start+n−1`` of independent FRVs (one :func:`generate_samples`
+    stream per parameter: parameter ``k`` is stream ``k``, so parameter 0 draws exactly
+    the samples of a one-parameter study with the same seed).
+
+    Returns:
+        ``(n, n_params, n_alpha, 2)``: per sample, parameter and α-level the α-cut
+        ``[left, right]`` in that parameter's units; at each α the sample's α-cut is the
+        box of its ``n_params`` intervals.
+    """
+    specs = check_specs(specs)
+    return np.stack([generate_samples(s, n, seed, start, stream=k) for k, s in enumerate(specs)], axis=1)
 
 
 def sample_increments(samples: np.ndarray) -> np.ndarray:

@@ -38,8 +38,8 @@ def _single_spec(spec: FRVSpec | Sequence[FRVSpec]) -> FRVSpec:
     if len(specs) == 1 and isinstance(specs[0], FRVSpec):
         return specs[0]
     raise ParameterError(
-        f"FRV-GFA grouping supports one FRV parameter; got {len(specs)}. Several would need "
-        "tensor grids (their worst case is the product of Eq. 2.33 per parameter) — not implemented"
+        f"FRVStudy takes one FRV parameter; got {len(specs)}. For several use FRVMultiStudy "
+        "(fuzzygait.uncertainty.frv.multi: tensor grids, boxes of per-parameter intervals)"
     )
 
 
@@ -180,6 +180,9 @@ class FRVStudy:
         """Open a study written by :meth:`create` (the model must be the same one)."""
         path = Path(path)
         meta = read_meta(path)
+        if isinstance(meta["spec"], list):
+            raise FuzzyGaitError(f"{path}: an FRV study of several parameters; open it with FRVMultiStudy.open "
+                                 "(or fuzzygait.uncertainty.frv.open_study)")  # fmt: skip
         study = cls(path, model, FRVSpec.from_dict(meta["spec"]), meta, evaluator)
         tidy_beside(path)
         check(path, meta, repair=True)

@@ -1,0 +1,393 @@
+"""The FRV-GFA of several independent fuzzy random parameters (thesis §2.7.4, the
+multi-parameter case after Eq. 2.33): :class:`FRVMultiStudy`.
+
+Each parameter has its own :class:`~fuzzygait.uncertainty.frv.FRVSpec` (one set of
+α-levels for all), its own sample stream (:func:`generate_box_samples`: parameter 0 is
+the one-parameter stream) and its own :class:`Grid` of ``N_p-disc`` points. A sample's
+α-cut is a *box*, one grouped interval per parameter; its key is the tuple of the
+per-parameter ``(left bin, right bin)`` pairs (:func:`box_rows`) and only occurring boxes
+get an entry, out of the ``∏_d N_d(N_d+1)/2`` possible ones (:func:`possible_boxes`).
+
+The library holds one forward simulation per *grid point* (a tuple of bin centres, one
+per parameter) that lies inside at least one occurring box — exactly the points the
+hulls read; nothing else is simulated. A box's hull is the extreme library value over
+its grid points (:func:`~fuzzygait.uncertainty.frv.hulls.box_extrema`: direct reduction
+along the trailing parameters, sparse table along the first); α = 1 is the library value
+at the sample's grouped peak point, and the hulls are nesting-repaired as for one
+parameter. There is no sensitivity refinement here (the one-parameter Hermite
+interpolant has no tensor counterpart implemented): with one parameter this class gives
+exactly :class:`~fuzzygait.uncertainty.frv.FRVStudy` with ``refine=False``.
+
+The store is the one-parameter layout of :mod:`fuzzygait.uncertainty.frv.store` (same
+commit protocol) with a parameter axis: root ``spec``, ``grid`` and ``n_disc`` are
+lists (one entry per parameter); ``library``: ``value (bin, time)`` at ``point (bin,
+parameter)`` grid bins, ``centre (bin, parameter)``; ``intervals`` (the box dictionary):
+``left``, ``right (interval, parameter)``, ``lower``, ``upper (interval, time)``;
+``samples``: ``hull (sample, alpha, bound, time)`` as for one parameter, ``cut`` and
+``bin (sample, parameter, alpha, bound)``.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.schema import BOUNDS
+from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
+from fuzzygait.uncertainty.frv.hulls import box_extrema
+from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
+from fuzzygait.uncertainty.frv.store import append as _append
+from fuzzygait.uncertainty.frv.store import check, commit, new_store, open_group, read_meta
+from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks, _new_counts
+from fuzzygait.uncertainty.gfa import optimisation_nodes
+from fuzzygait.uncertainty.postprocess import repair_nesting
+from fuzzygait.uncertainty.protocol import FuzzyModel
+
+__all__ = ["FRVMultiStudy", "is_multi_store", "open_study"]
+
+
+def is_multi_store(meta: Mapping[str, Any]) -> bool:
+    """Whether a commit record (:func:`~fuzzygait.uncertainty.frv.store.read_meta`) is an
+    :class:`FRVMultiStudy`'s (its ``spec`` is a list, one entry per parameter)."""
+    return isinstance(meta.get("spec"), list)
+
+
+def _group_boxes(cuts: np.ndarray, grids: Sequence[Grid]) -> np.ndarray:
+    """Bins ``(n, n_params, n_alpha, 2)`` of box samples, parameter ``d`` on ``grids[d]``."""
+    return np.stack([group(cuts[:, d], g) for d, g in enumerate(grids)], axis=1)
+
+
+def _sample_ranges(specs: Sequence[FRVSpec], seed: int, start: int, n: int) -> np.ndarray:
+    """``(n_params, 2)``: per parameter the smallest and largest α-cut end of samples
+    ``start … start+n−1`` (pass 1)."""
+    out = np.array([[np.inf, -np.inf]] * len(specs))
+    for a, b in _blocks(start, start + n, BLOCK):
+        cuts = generate_box_samples(specs, b - a, seed, a)
+        out[:, 0] = np.minimum(out[:, 0], cuts[:, :, 0, 0].min(axis=0))
+        out[:, 1] = np.maximum(out[:, 1], cuts[:, :, 0, 1].max(axis=0))
+    return out
+
+
+class FRVMultiStudy:
+    """An FRV-GFA study of several independent FRV parameters in a zarr store,
+    extendable by samples (see the module docstring for the method and the layout).
+
+    Use :meth:`create`, :meth:`open`, :meth:`add_samples`; read with :meth:`hulls`,
+    :meth:`samples`, :meth:`library`, :meth:`boxes`, :attr:`counts`. The counts are the
+    one-parameter ones with boxes for intervals (``occurring_intervals`` = occurring
+    boxes, ``possible_intervals`` = possible boxes, ``interval_optimisations`` = 2 × time
+    nodes × occurring boxes wider than one point) plus ``possible_intervals_per_parameter``.
+    """
+
+    def __init__(self, path: Path, model: FuzzyModel, specs: tuple[FRVSpec, ...], meta: dict[str, Any],
+                 evaluator: BatchFunction | None) -> None:  # fmt: skip
+        self.path, self.model, self.specs = path, model, specs
+        self.seed: int = meta["seed"]
+        self.grids: tuple[Grid, ...] = tuple(Grid(**g) for g in meta["grid"])
+        self.n_disc: list[int] = [int(n) for n in meta["n_disc"]]
+        self.time_stride: int = meta["time_stride"]
+        self.refine: bool | None = False
+        self.chunk: int = meta["chunk"]
+        self.n_time: int = meta["n_time"]
+        self.n_samples: int = meta["n_samples"]
+        self.library_rows: int = int(meta["library_rows"])
+        self.interval_rows: int = int(meta["interval_rows"])
+        self.options: dict[str, Any] = dict(meta.get("options") or {})
+        self.counts: dict[str, Any] = dict(meta["counts"])
+        self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
+        times = np.asarray(model.times, dtype=float)
+        if times.ndim != 1 or times.size != self.n_time:
+            raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
+        self.nodes = optimisation_nodes(self.n_time, self.time_stride)
+        self.times = times[self.nodes]
+        n_params = len(specs)
+        # library rows in order of computation, and the row of each grid point
+        self._points: dict[tuple[int, ...], int] = {}
+        self._lib_values = np.empty((0, self.nodes.size))
+        # box dictionary: key (l_1, r_1, …, l_D, r_D) -> row
+        self._boxes: dict[tuple[int, ...], int] = {}
+        self._box_lower = np.empty((0, self.nodes.size))
+        self._box_upper = np.empty((0, self.nodes.size))
+        self._n_params = n_params
+
+    @property
+    def spec(self) -> tuple[FRVSpec, ...]:
+        """The FRV parameters (as :attr:`specs`)."""
+        return self.specs
+
+    @property
+    def alphas(self) -> tuple[float, ...]:
+        return self.specs[0].alphas
+
+    # ------------------------------------------------------------------ create / open
+    @classmethod
+    def create(cls, model: FuzzyModel, specs: Sequence[FRVSpec], n_samples: int,
+               n_disc: int | Sequence[int] = 30, seed: int = 0, store: str | os.PathLike[str] | None = None,
+               evaluator: BatchFunction | None = None, time_stride: int = 1, chunk: int = 256,
+               overwrite: bool = False, options: Mapping[str, Any] | None = None,
+               grids: Sequence[Grid] | None = None) -> FRVMultiStudy:  # fmt: skip
+        """Run the FRV-GFA of several FRV parameters for ``n_samples`` samples into a new
+        store (built beside it and moved into place when complete, as for one parameter).
+
+        Args:
+            model: a model of ``len(specs)`` parameters (``p`` in ``specs`` order, SI).
+            specs: one :class:`FRVSpec` per parameter, all with the same α-levels.
+            n_samples: ``N_s``.
+            n_disc: ``N_p-disc`` grid points per parameter over the first batch's range
+                (one number for all, or one per parameter).
+            seed: seed of the sample streams (parameter ``k`` is stream ``k``).
+            store: the zarr directory to create.
+            evaluator: batch evaluator ``P (k, n_params) -> (k, n_time)`` (a returned
+                Jacobian is ignored); default :func:`serial_evaluator`.
+            time_stride: keep every ``time_stride``-th time node (and the last).
+            chunk: samples per zarr chunk and per processing block.
+            overwrite: replace an existing store once the new one is complete.
+            options: JSON-compatible record of what the study is made with.
+            grids: the grids to group on (one per parameter) instead of the first
+                batch's ranges, e.g. another study's, to compare two studies bin by bin.
+        """
+        t0 = time.perf_counter()
+        spec_tuple = check_specs(specs)
+        n_params = len(spec_tuple)
+        n_samples = _whole(n_samples, "n_samples", 1)
+        seed, chunk = _whole(seed, "seed"), _whole(chunk, "chunk", 1)
+        time_stride = _whole(time_stride, "time_stride", 1)
+        discs = [n_disc] * n_params if isinstance(n_disc, (int, np.integer)) else list(n_disc)
+        if len(discs) != n_params:
+            raise ParameterError(f"n_disc: give one number or one per parameter ({n_params}); got {discs}")
+        discs = [_whole(n, "n_disc", 2) for n in discs]
+        if store is None:
+            raise ParameterError("store: give the path of the zarr directory to create")
+        path = Path(store)
+        if path.exists() and not overwrite:
+            raise FuzzyGaitError(f"{path}: already exists; open it with FRVMultiStudy.open or pass overwrite=True")
+        if not path.parent.exists():
+            raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
+        n_time = int(np.asarray(model.times).size)
+        if grids is None:
+            ranges = _sample_ranges(spec_tuple, seed, 0, n_samples)
+            grid_list = [Grid.from_range(lo, hi, n) for (lo, hi), n in zip(ranges, discs, strict=True)]
+        else:
+            grid_list = list(grids)
+            if len(grid_list) != n_params or not all(isinstance(g, Grid) for g in grid_list):
+                raise ParameterError(f"grids: give one Grid per parameter ({n_params})")
+            discs = [g.n_points for g in grid_list]
+        meta: dict[str, Any] = {"seed": seed, "grid": [g.to_dict() for g in grid_list], "n_disc": discs,
+                "time_stride": time_stride, "refine": False, "chunk": chunk, "n_time": n_time,
+                "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
+                "options": dict(options or {})}  # fmt: skip
+        staging = temporary_folder(path, "creating")
+        try:
+            new_store(staging, {"spec": [s.to_dict() for s in spec_tuple], **meta})
+            study = cls(staging, model, spec_tuple, meta, evaluator)
+            study._ingest(0, n_samples, t0)
+            replace_folder(staging, path)
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        study.path = path
+        return study
+
+    @classmethod
+    def open(cls, path: str | os.PathLike[str], model: FuzzyModel,
+             evaluator: BatchFunction | None = None) -> FRVMultiStudy:  # fmt: skip
+        """Open a study written by :meth:`create` (the model must be the same one)."""
+        path = Path(path)
+        meta = read_meta(path)
+        if not is_multi_store(meta):
+            raise FuzzyGaitError(f"{path}: a one-parameter FRV study; open it with FRVStudy.open")
+        specs = tuple(FRVSpec.from_dict(s) for s in meta["spec"])
+        study = cls(path, model, specs, meta, evaluator)
+        tidy_beside(path)
+        check(path, meta, repair=True)
+        if study.library_rows:
+            lib = open_group(path, "library", study.library_rows)
+            study._lib_values = lib["value"].to_numpy()
+            points = lib["point"].to_numpy()
+            study._points = {tuple(p): i for i, p in enumerate(points.tolist())}
+        if study.interval_rows:
+            table = study.boxes()
+            pairs = np.stack([table["left"].to_numpy(), table["right"].to_numpy()], axis=2)
+            keys = pairs.reshape(study.interval_rows, -1)
+            study._boxes = {tuple(k): i for i, k in enumerate(keys.tolist())}
+            study._box_lower = table["lower"].to_numpy()
+            study._box_upper = table["upper"].to_numpy()
+        return study
+
+    # ------------------------------------------------------------------ public
+    def add_samples(self, n: int) -> FRVMultiStudy:
+        """Add samples ``n_samples … n_samples + n − 1``: group them on the stored grids
+        (each extended by whole bins if they leave it), simulate only grid points not yet
+        in the library, compute only boxes not yet in the dictionary, append the new
+        samples' hulls. Earlier samples' hulls are not touched."""
+        t0 = time.perf_counter()
+        n = _whole(n, "n")
+        if n:
+            check(self.path, read_meta(self.path), repair=True)
+            ranges = _sample_ranges(self.specs, self.seed, self.n_samples, n)
+            self.grids = tuple(g.extended(r) for g, r in zip(self.grids, ranges, strict=True))
+            self._write_meta()
+            self._ingest(self.n_samples, n, t0)
+        return self
+
+    def hulls(self) -> xr.Dataset:
+        """The output ``hull (sample, alpha, bound, time)``, lazily, counts as attributes."""
+        ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
+        ds.attrs.update(self.counts)
+        return ds
+
+    def samples(self) -> xr.Dataset:
+        """The raw α-cuts ``cut`` and their ``bin`` ``(sample, parameter, alpha, bound)``, lazily."""
+        return open_group(self.path, "samples", self.n_samples)[["cut", "bin"]]
+
+    def library(self) -> xr.Dataset:
+        """The library: ``value (bin, time)`` at grid ``point`` / ``centre (bin, parameter)``,
+        rows in order of computation."""
+        return open_group(self.path, "library", self.library_rows)
+
+    def boxes(self) -> xr.Dataset:
+        """The box dictionary: ``left``, ``right (interval, parameter)`` bins, ``lower``,
+        ``upper (interval, time)`` hulls, rows in order of computation."""
+        return open_group(self.path, "intervals", self.interval_rows)
+
+    intervals = boxes
+
+    # ------------------------------------------------------------------ internals
+    def _write_meta(self) -> None:
+        """Commit: the record of the grids, counts and valid rows, rewritten in one file."""
+        possible = possible_boxes(self.grids)
+        self.counts["possible_intervals"] = possible
+        self.counts["possible_intervals_per_parameter"] = [g.possible_intervals for g in self.grids]
+        self.counts["time_nodes"] = int(self.nodes.size)
+        self.counts["worst_case_optimisations"] = 2 * int(self.nodes.size) * possible  # Eq. 2.33, product form
+        commit(self.path, {"grid": [g.to_dict() for g in self.grids], "n_samples": self.n_samples,
+                           "library_rows": self.library_rows, "interval_rows": self.interval_rows,
+                           "counts": self.counts})  # fmt: skip
+
+    def _ingest(self, start: int, n: int, t0: float) -> None:
+        """Steps 2–7 for samples ``start … start+n−1``: pass 2 collects their occurring
+        boxes; the library (grid points inside new boxes) and the box dictionary are
+        completed; pass 3 draws and groups the samples again and appends their hulls."""
+        stop, width = start + n, 2 * self._n_params
+        found = np.empty((0, width), dtype=np.int64)
+        for a, b in _blocks(start, stop, self.chunk):  # pass 2
+            rows = box_rows(_group_boxes(generate_box_samples(self.specs, b - a, self.seed, a), self.grids))
+            found = np.unique(np.concatenate([found, rows.reshape(-1, width)]), axis=0)
+        new = np.array([k for k in found.tolist() if tuple(k) not in self._boxes], dtype=np.int64).reshape(-1, width)
+        simulations = self._extend_library(new)
+        self._add_boxes(new)
+        repaired, n_alpha = 0, len(self.alphas)
+        chunks = {"chunks": (self.chunk, self._n_params, n_alpha, 2)}
+        encoding = {"hull": {"chunks": (self.chunk, n_alpha, 2, self.nodes.size)}, "cut": chunks, "bin": chunks}
+        names = [s.name for s in self.specs]
+        for a, b in _blocks(start, stop, self.chunk):  # pass 3
+            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
+            bins = _group_boxes(cuts, self.grids)
+            hull, changed = self._assemble(bins)
+            repaired += changed
+            dims = ("sample", "parameter", "alpha", "bound")
+            ds = xr.Dataset({"hull": (("sample", "alpha", "bound", "time"), hull), "cut": (dims, cuts),
+                             "bin": (dims, bins)}, coords={"sample": np.arange(a, b)})  # fmt: skip
+            if a == 0:  # the creating write carries the other coordinates
+                ds = ds.assign_coords(parameter=names, alpha=list(self.alphas), bound=list(BOUNDS), time=self.times)
+            _append(self.path, "samples", ds, "sample", encoding)
+        elapsed = time.perf_counter() - t0
+        self.n_samples = stop
+        self.counts.update(samples=stop, repaired_values=self.counts["repaired_values"] + repaired,
+                           wall_time=self.counts["wall_time"] + elapsed, last_forward_simulations=simulations,
+                           last_new_intervals=int(new.shape[0]), last_wall_time=elapsed)  # fmt: skip
+        self._write_meta()
+
+    def _extend_library(self, boxes: np.ndarray) -> int:
+        """Simulate the grid points inside ``boxes`` (keys ``(k, 2·n_params)``) not yet in
+        the library, in C order of their bins (one evaluator call); returns their number."""
+        if not boxes.shape[0]:
+            return 0
+        lefts, rights = boxes[:, 0::2], boxes[:, 1::2]
+        origin = lefts.min(axis=0)
+        covered = np.zeros(tuple(rights.max(axis=0) - origin + 1), dtype=bool)
+        for lo, hi in zip((lefts - origin).tolist(), (rights - origin + 1).tolist(), strict=True):
+            covered[tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))] = True
+        points = np.argwhere(covered) + origin
+        missing = np.array([p for p in points.tolist() if tuple(p) not in self._points], dtype=np.int64)
+        missing = missing.reshape(-1, self._n_params)
+        if not missing.shape[0]:
+            return 0
+        centres = np.stack([g.centres(missing[:, d]) for d, g in enumerate(self.grids)], axis=1)
+        F, _ = _run_evaluator(self.evaluator, centres, self.n_time)
+        values = F[:, self.nodes]
+        names = [s.name for s in self.specs]
+        ds = xr.Dataset({"value": (("bin", "time"), values)},
+                        coords={"point": (("bin", "parameter"), missing), "centre": (("bin", "parameter"), centres),
+                                "time": self.times, "parameter": names})  # fmt: skip
+        _append(self.path, "library", ds, "bin")
+        first = self._lib_values.shape[0]
+        self._points.update({tuple(p): first + i for i, p in enumerate(missing.tolist())})
+        self._lib_values = np.concatenate([self._lib_values, values])
+        self.library_rows += int(missing.shape[0])
+        self.counts["forward_simulations"] += int(missing.shape[0])
+        self._write_meta()
+        return int(missing.shape[0])
+
+    def _add_boxes(self, boxes: np.ndarray) -> None:
+        """Hulls of new ``boxes`` (keys ``(k, 2·n_params)``) from the library; store them."""
+        if not boxes.shape[0]:
+            return
+        lefts, rights = boxes[:, 0::2], boxes[:, 1::2]
+        origin = lefts.min(axis=0)
+        shape = tuple(rights.max(axis=0) - origin + 1)
+        dense = np.full((*shape, self.nodes.size), np.nan)  # the library on the boxes' bounding grid
+        points = np.array(list(self._points), dtype=np.int64).reshape(-1, self._n_params) - origin
+        rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
+        inside = np.all((points >= 0) & (points < np.array(shape)), axis=1)
+        dense[tuple(points[inside].T)] = self._lib_values[rows[inside]]
+        lower, upper = box_extrema(dense, dense, lefts - origin, rights - origin)
+        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise FuzzyGaitError("internal: a box reaches a grid point without a library entry")
+        ds = xr.Dataset({"left": (("interval", "parameter"), lefts), "right": (("interval", "parameter"), rights),
+                         "lower": (("interval", "time"), lower), "upper": (("interval", "time"), upper)},
+                        coords={"time": self.times, "parameter": [s.name for s in self.specs]})  # fmt: skip
+        _append(self.path, "intervals", ds, "interval")
+        first = self._box_lower.shape[0]
+        self._boxes.update({tuple(k): first + i for i, k in enumerate(boxes.tolist())})
+        self._box_lower = np.concatenate([self._box_lower, lower])
+        self._box_upper = np.concatenate([self._box_upper, upper])
+        self.interval_rows += int(boxes.shape[0])
+        proper = int(np.count_nonzero(np.any(rights > lefts, axis=1)))
+        self.counts["occurring_intervals"] = len(self._boxes)
+        self.counts["occurring_proper_intervals"] += proper
+        self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
+        self._write_meta()
+
+    def _assemble(self, bins: np.ndarray) -> tuple[np.ndarray, int]:
+        """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped box samples ``(nb, n_params,
+        n_alpha, 2)``, nesting-repaired; α = 1 is the library value at the grouped peak."""
+        rows = box_rows(bins)
+        nb, levels, width = rows.shape
+        idx = np.array([self._boxes[tuple(k)] for k in rows.reshape(-1, width).tolist()], dtype=np.int64)
+        idx = idx.reshape(nb, levels)
+        peaks = np.array([self._points[tuple(p)] for p in bins[:, :, -1, 0].tolist()], dtype=np.int64)
+        hull = np.empty((nb, levels + 1, 2, self.nodes.size))
+        hull[:, :-1, 0] = self._box_lower[idx]
+        hull[:, :-1, 1] = self._box_upper[idx]
+        hull[:, -1, :] = self._lib_values[peaks][:, None, :]
+        repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
+        return repaired, int(np.count_nonzero(repaired != hull))
+
+
+def open_study(path: str | os.PathLike[str], model: FuzzyModel,
+               evaluator: BatchFunction | None = None) -> FRVStudy | FRVMultiStudy:  # fmt: skip
+    """Open a stored FRV study of one parameter (:class:`FRVStudy`) or of several
+    (:class:`FRVMultiStudy`), whichever the store holds."""
+    if is_multi_store(read_meta(Path(path))):
+        return FRVMultiStudy.open(path, model, evaluator)
+    return FRVStudy.open(path, model, evaluator)
