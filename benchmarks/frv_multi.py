@@ -1,0 +1,134 @@
+"""FRV-GFA with two fuzzy random parameters (issue 18, Deliver 4): Young's modulus E and the
+density ρ of the blade, independent FRVs (Eqs. 2.28–2.30, N(1, 1) increments), stance
+scenario (Table 4.4 with the Table 5.3 p_det of E), target maximum element energy (Eq. 5.2),
+energy-momentum scheme, N_s samples grouped on N_p-disc points per parameter.
+
+Reports: occurring boxes against the possible ones (the product over the parameters of
+Eq. 2.32's interval counts), forward simulations (grid points inside an occurring box),
+wall time; the cost of adding N_s more samples as a fraction of the first run; the α = 1
+output distribution against a Monte Carlo of the deterministic model at a random subset of
+the same (ungrouped) peak samples (two-sample KS test at five times); and whether a smaller
+study is bit-identical on 1 and 2 workers.
+
+Usage::
+
+    python benchmarks/frv_multi.py [--samples 10000] [--disc 30] [--duration 1] [--mc 400]
+        [--workers 2] [--store results/frv_multi.zarr]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
+
+from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
+from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, generate_box_samples  # noqa: E402
+
+MODULUS = 59.958e9  # Pa, Table 5.3
+ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
+SCHEME = "energy-momentum"
+TARGET = "max_element_energy"
+
+
+def build(duration: float):
+    sim = LegSimulator("stance")
+    base = sim.parameters(E=MODULUS)
+    names = ("E", "rho")
+    model = LegTargetModel(sim, TARGET, names, base=base, duration=duration, scheme=SCHEME)
+    recipe = LegModelRecipe("stance", TARGET, names, tuple(float(v) for v in base), duration=duration, scheme=SCHEME)
+    density = float(base[list(sim.parameter_names).index("rho")])
+    specs = [FRVSpec("E", MODULUS, alphas=ALPHAS), FRVSpec("rho", density, alphas=ALPHAS)]
+    return model, recipe, specs
+
+
+def study(model, recipe, specs, n, disc, workers, store):
+    with Evaluator(workers=workers) as pool:
+        evaluator = pool.batch(recipe)
+        start = time.perf_counter()
+        result = FRVMultiStudy.create(model, specs, n, n_disc=disc, seed=0, store=store, evaluator=evaluator,
+                                      overwrite=True)  # fmt: skip
+        return result, time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=10_000)
+    parser.add_argument("--disc", type=int, default=30)
+    parser.add_argument("--duration", type=float, default=1.0)
+    parser.add_argument("--mc", type=int, default=400, help="Monte Carlo runs for the KS check")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--check-samples", type=int, default=500, help="samples of the 1-vs-2-worker study")
+    parser.add_argument("--check-disc", type=int, default=8)
+    parser.add_argument("--store", type=Path, default=Path("results/frv_multi.zarr"))
+    args = parser.parse_args()
+    print(f"load average at start: {os.getloadavg()[0]:.2f}")
+    model, recipe, specs = build(args.duration)
+    args.store.parent.mkdir(parents=True, exist_ok=True)
+
+    first, first_wall = study(model, recipe, specs, args.samples, args.disc, args.workers, args.store)
+    counts = dict(first.counts)
+    print(f"\nFRV-GFA, stance, E and rho independent FRVs about {MODULUS:g} Pa / {specs[1].deterministic:g} kg/m³, "
+          f"{args.samples} samples, N_p-disc = {args.disc} each, {len(ALPHAS)} α-levels, {args.duration:g} s at "
+          f"1 ms ({SCHEME}), {args.workers} workers")  # fmt: skip
+    for key in ("occurring_intervals", "possible_intervals", "possible_intervals_per_parameter",
+                "forward_simulations", "interval_optimisations", "worst_case_optimisations"):  # fmt: skip
+        print(f"   {key}: {counts.get(key)}")
+    print(f"   wall time: {first_wall:.1f} s")
+
+    with Evaluator(workers=args.workers) as pool:
+        reopened = FRVMultiStudy.open(args.store, model, evaluator=pool.batch(recipe))
+        start = time.perf_counter()
+        reopened.add_samples(args.samples)
+        added = time.perf_counter() - start
+    after = dict(reopened.counts)
+    print(f"\nadding {args.samples} samples: {added:.1f} s = {100 * added / first_wall:.1f} % of the first run; "
+          f"new forward simulations {after['forward_simulations'] - counts['forward_simulations']}, "
+          f"new boxes {after['occurring_intervals'] - counts['occurring_intervals']}")  # fmt: skip
+
+    # α = 1 outputs vs Monte Carlo of the deterministic model at the raw peaks of the first N_s samples
+    peaks = generate_box_samples(specs, args.samples, seed=0)[:, :, -1, 0]  # (n, 2): E, rho
+    rng = np.random.default_rng(1)
+    subset = np.sort(rng.choice(args.samples, size=min(args.mc, args.samples), replace=False))
+    with Evaluator(workers=args.workers) as pool:
+        start = time.perf_counter()
+        monte_carlo = np.asarray(pool.batch(recipe)(peaks[subset]))
+        mc_wall = time.perf_counter() - start
+    hulls = reopened.hulls()["hull"]
+    times = hulls["time"].values
+    print(f"\nα = 1 outputs (first {args.samples} samples) vs Monte Carlo at their raw peaks "
+          f"({subset.size} runs, {mc_wall:.1f} s):")  # fmt: skip
+    for fraction in (0.2, 0.4, 0.6, 0.8, 1.0):
+        node = int(np.argmin(np.abs(times - fraction * args.duration)))
+        frv = hulls.isel(time=node).sel(alpha=1.0, bound="upper").values[: args.samples]
+        mc_node = int(np.argmin(np.abs(model.times - times[node])))
+        result = stats.ks_2samp(frv, monte_carlo[:, mc_node])
+        print(f"   t = {times[node]:.3f} s: KS statistic {result.statistic:.4f}, p = {result.pvalue:.3f}")
+
+    folder = Path(tempfile.mkdtemp())
+    try:
+        runs = [study(model, recipe, specs, args.check_samples, args.check_disc, w, folder / f"w{w}.zarr")
+                for w in (1, 2)]  # fmt: skip
+        same = all(
+            np.array_equal(runs[0][0].hulls()[name].values, runs[1][0].hulls()[name].values, equal_nan=True)
+            for name in runs[0][0].hulls().data_vars
+        )
+        print(f"\n{args.check_samples} samples, N_p-disc = {args.check_disc}: 1 worker {runs[0][1]:.1f} s, "
+              f"2 workers {runs[1][1]:.1f} s; hulls bit-identical: {same}")  # fmt: skip
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
