@@ -228,7 +228,7 @@ def test_frv_sim_interrupted(tmp_path, signum):
 
     store = tmp_path / "out" / "study.zarr"
     store.parent.mkdir()
-    study = ["frv-sim", "stance", "--out", str(store), "--disc", "12", "--duration", "0.3", "--nodes", "10",
+    study = ["frv-sim", "stance", "--out", str(store), "--disc", "12", "--duration", "2.0", "--nodes", "10",
              "--set", f"E={MODULUS}"]  # fmt: skip
     _complete([*study, "--samples", "20", "--workers", "1"], tmp_path / "tmp")
 
@@ -239,7 +239,7 @@ def test_frv_sim_interrupted(tmp_path, signum):
     before = first_hulls()
     assert before.shape[0] == 20 and np.isfinite(before).all()
     zarr_metadata = (".zattrs", ".zgroup", ".zarray", ".zmetadata")
-    _interrupted_cleanly([*study, "--samples", "4000", "--workers", "2"], tmp_path / "tmp", signum,
+    _interrupted_cleanly([*study, "--samples", "40000", "--workers", "2"], tmp_path / "tmp", signum,
                          BUSY_CPU["frv-sim"], store, allowed=zarr_metadata)  # fmt: skip
     assert np.array_equal(first_hulls(), before)  # the first run's samples untouched
 
