@@ -42,14 +42,13 @@ import xarray as xr
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
 from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
-from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
 from fuzzygait.uncertainty.frv.hulls import box_extrema
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
 from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.frv.store import check, commit, new_store, open_group, read_meta
-from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks, _new_counts
-from fuzzygait.uncertainty.gfa import optimisation_nodes
+from fuzzygait.uncertainty.frv.study import FRVStudy, StudyState, _blocks, _new_counts
 from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
 
@@ -78,7 +77,7 @@ def _sample_ranges(specs: Sequence[FRVSpec], seed: int, start: int, n: int) -> n
     return out
 
 
-class FRVMultiStudy:
+class FRVMultiStudy(StudyState):
     """An FRV-GFA study of several independent FRV parameters in a zarr store,
     extendable by samples (see the module docstring for the method and the layout).
 
@@ -92,24 +91,10 @@ class FRVMultiStudy:
     def __init__(self, path: Path, model: FuzzyModel, specs: tuple[FRVSpec, ...], meta: dict[str, Any],
                  evaluator: BatchFunction | None) -> None:  # fmt: skip
         self.path, self.model, self.specs = path, model, specs
-        self.seed: int = meta["seed"]
         self.grids: tuple[Grid, ...] = tuple(Grid(**g) for g in meta["grid"])
         self.n_disc: list[int] = [int(n) for n in meta["n_disc"]]
-        self.time_stride: int = meta["time_stride"]
         self.refine: bool | None = False
-        self.chunk: int = meta["chunk"]
-        self.n_time: int = meta["n_time"]
-        self.n_samples: int = meta["n_samples"]
-        self.library_rows: int = int(meta["library_rows"])
-        self.interval_rows: int = int(meta["interval_rows"])
-        self.options: dict[str, Any] = dict(meta.get("options") or {})
-        self.counts: dict[str, Any] = dict(meta["counts"])
-        self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
-        times = np.asarray(model.times, dtype=float)
-        if times.ndim != 1 or times.size != self.n_time:
-            raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
-        self.nodes = optimisation_nodes(self.n_time, self.time_stride)
-        self.times = times[self.nodes]
+        self._read_common_meta(path, model, meta, evaluator)
         n_params = len(specs)
         # library rows in order of computation, and the row of each grid point
         self._points: dict[tuple[int, ...], int] = {}

@@ -59,7 +59,48 @@ def _new_counts() -> dict[str, Any]:
             "last_new_intervals": 0, "last_wall_time": 0.0}  # fmt: skip
 
 
-class FRVStudy:
+class StudyState:
+    """What every FRV study (one parameter or several) reads from its commit record:
+    seed, time stride and optimisation nodes, chunk, sizes, options, counts, evaluator."""
+
+    seed: int
+    time_stride: int
+    chunk: int
+    n_time: int
+    n_samples: int
+    library_rows: int
+    interval_rows: int
+    options: dict[str, Any]
+    counts: dict[str, Any]
+    evaluator: BatchFunction
+    nodes: np.ndarray
+    times: np.ndarray
+
+    def _read_common_meta(self, path: Path, model: FuzzyModel, meta: dict[str, Any],
+                          evaluator: BatchFunction | None) -> None:  # fmt: skip
+        """Set the attributes above from ``meta``.
+
+        Raises:
+            ParameterError: the model's time nodes are not the study's.
+        """
+        self.seed = int(meta["seed"])
+        self.time_stride = int(meta["time_stride"])
+        self.chunk = int(meta["chunk"])
+        self.n_time = int(meta["n_time"])
+        self.n_samples = int(meta["n_samples"])
+        self.library_rows = int(meta["library_rows"])
+        self.interval_rows = int(meta["interval_rows"])
+        self.options = dict(meta.get("options") or {})
+        self.counts = dict(meta["counts"])
+        self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
+        times = np.asarray(model.times, dtype=float)
+        if times.ndim != 1 or times.size != self.n_time:
+            raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
+        self.nodes = optimisation_nodes(self.n_time, self.time_stride)
+        self.times = times[self.nodes]
+
+
+class FRVStudy(StudyState):
     """An FRV-GFA study persisted in a zarr store (directory), extendable by samples.
 
     Store layout (zarr v2 groups, written through xarray):
@@ -88,24 +129,10 @@ class FRVStudy:
     def __init__(self, path: Path, model: FuzzyModel, spec: FRVSpec, meta: dict[str, Any],
                  evaluator: BatchFunction | None) -> None:  # fmt: skip
         self.path, self.model, self.spec = path, model, spec
-        self.seed: int = meta["seed"]
         self.grid = Grid(**meta["grid"])
         self.n_disc: int = meta["n_disc"]
-        self.time_stride: int = meta["time_stride"]
         self.refine: bool | None = meta["refine"]
-        self.chunk: int = meta["chunk"]
-        self.n_time: int = meta["n_time"]
-        self.n_samples: int = meta["n_samples"]
-        self.library_rows: int = int(meta["library_rows"])
-        self.interval_rows: int = int(meta["interval_rows"])
-        self.options: dict[str, Any] = dict(meta.get("options") or {})
-        self.counts: dict[str, Any] = dict(meta["counts"])
-        self.evaluator = evaluator if evaluator is not None else serial_evaluator(model)
-        times = np.asarray(model.times, dtype=float)
-        if times.ndim != 1 or times.size != self.n_time:
-            raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
-        self.nodes = optimisation_nodes(self.n_time, self.time_stride)
-        self.times = times[self.nodes]
+        self._read_common_meta(path, model, meta, evaluator)
         # library: contiguous bins lib_first … lib_first + m − 1
         self._lib_first = 0
         self._lib_values = np.empty((0, self.nodes.size))
