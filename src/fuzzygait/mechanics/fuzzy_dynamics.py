@@ -171,7 +171,7 @@ def leg_frv_study(
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
     parameter, or a sequence of several (independent FRVs, one α-level set: an
     :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`, ``n_disc`` grid points per
-    parameter, no sensitivities needed); the other parameters are the scenario's with
+    parameter, refined with the sensitivities as one parameter is); the other parameters are the scenario's with
     ``base_overrides``.  Forward
     simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
@@ -196,10 +196,10 @@ def leg_frv_study(
     names = tuple(one.name for one in specs)
     model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
     path = Path(store)
-    multi = len(specs) > 1  # several FRVs: box hulls from the library, no sensitivities used
+    multi = len(specs) > 1
     study: FRVStudy | FRVMultiStudy
     with Evaluator(workers=workers, scheduler=scheduler) as pool:
-        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities and not multi)
+        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities)
         if path.exists() and not overwrite:
             study = open_study(path, model, evaluator=evaluator)
             study.add_samples(n_samples)

@@ -35,6 +35,7 @@ def serial_evaluator(model: FuzzyModel) -> BatchFunction:
 
 
 def _run_evaluator(evaluator: BatchFunction, P: np.ndarray, n_time: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """``F (k, n_time)`` and, when the evaluator returns it, ``J (k, n_time, n_p)``, checked."""
     out = evaluator(P)
     F, J = (out[0], out[1]) if isinstance(out, tuple) else (out, None)
     F = np.asarray(F, dtype=float)
@@ -45,5 +46,5 @@ def _run_evaluator(evaluator: BatchFunction, P: np.ndarray, n_time: int) -> tupl
         bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
         raise ParameterError(f"the model returned non-finite outputs for parameters {P[bad, 0].tolist()}")
     if J is not None:
-        J = np.asarray(J, dtype=float).reshape(k, n_time, -1)[..., 0]
+        J = np.asarray(J, dtype=float).reshape(k, n_time, -1)
     return F, J

@@ -162,3 +162,100 @@ def box_extrema(low_values: np.ndarray, high_values: np.ndarray, first: np.ndarr
         hi = high_values[..., a : b + 1, :].max(axis=-2)
         minimum[sel], maximum[sel] = box_extrema(lo, hi, first[sel, :-1], last[sel, :-1], time_block)
     return minimum, maximum
+
+
+def hermite_box_extrema(values: np.ndarray, slopes: np.ndarray, spacings: np.ndarray, first: np.ndarray,
+                        last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`box_extrema` refined by the sensitivities: the extrema over each box's grid
+    points and over the cubic Hermite interpolant along every grid line segment inside it
+    (along parameter ``d``, between neighbouring points, from their values and ``∂f/∂p_d``)
+    — the one-parameter refinement of :func:`interval_hulls` applied axis by axis. With
+    one parameter it is exactly that refinement; with several, the interpolant's extrema
+    inside a cell (off the grid lines) are not searched.
+
+    Args:
+        values: ``(m_1, …, m_D, n_columns)`` values on the grid points (NaN where none).
+        slopes: ``(m_1, …, m_D, n_columns, D)`` their derivatives ``∂f/∂p_d``.
+        spacings: ``(D,)`` grid spacing per parameter (units of ``p_d``).
+        first, last: ``(n_queries, D)`` grid indices of each box's corners.
+
+    Returns:
+        ``(minimum, maximum)``, each ``(n_queries, n_columns)``.
+    """
+    values, slopes = np.asarray(values, dtype=float), np.asarray(slopes, dtype=float)
+    first, last = np.asarray(first, dtype=np.int64), np.asarray(last, dtype=np.int64)
+    minimum, maximum = box_extrema(values, values, first, last)
+    for d in range(values.ndim - 1):
+        proper = np.flatnonzero(last[:, d] > first[:, d])
+        if not proper.size:
+            continue
+        along = np.moveaxis(values, d, 0)
+        shape = along.shape
+        with np.errstate(invalid="ignore"):  # NaN grid points lie outside every box
+            seg_lo, seg_hi = hermite_segment_extrema(along.reshape(shape[0], -1),
+                                                     np.moveaxis(slopes[..., d], d, 0).reshape(shape[0], -1),
+                                                     float(spacings[d]))  # fmt: skip
+        seg_lo = np.moveaxis(seg_lo.reshape(shape[0] - 1, *shape[1:]), 0, d)
+        seg_hi = np.moveaxis(seg_hi.reshape(shape[0] - 1, *shape[1:]), 0, d)
+        segment_last = last[proper].copy()
+        segment_last[:, d] -= 1
+        lo, hi = box_extrema(seg_lo, seg_hi, first[proper], segment_last)
+        minimum[proper] = np.minimum(minimum[proper], lo)
+        maximum[proper] = np.maximum(maximum[proper], hi)
+    return minimum, maximum
+
+
+def hermite_cells(origins: np.ndarray, spacings: np.ndarray, first_bins: np.ndarray, last_bins: np.ndarray,
+                  x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The grid cell of each point for :func:`hermite_values`: per parameter the lower
+    corner bin ``k`` (bin centres ``origin + (k + ½)·spacing``) and the position
+    ``t = (x − centre_k)/spacing`` (in [0, 1] inside the grid's centres; beyond its
+    outermost centres the end cell is extrapolated, ``|t − ½| ≤ 1``). A parameter with a
+    single bin has ``t = 0`` and no upper corner.
+
+    Args:
+        origins, spacings, first_bins, last_bins: ``(D,)`` per-parameter grids.
+        x: ``(n, D)`` points.
+
+    Returns:
+        ``(k (n, D) int64, t (n, D))``.
+    """
+    u = (np.asarray(x, dtype=float) - origins) / spacings - 0.5
+    k = np.clip(np.floor(u).astype(np.int64), first_bins, np.maximum(first_bins, last_bins - 1))
+    t = np.where(last_bins > first_bins, u - k, 0.0)
+    return k, t
+
+
+def hermite_values(values: np.ndarray, slopes: np.ndarray, spacings: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Cubic Hermite interpolation in ``D`` parameters, one parameter at a time.
+
+    Along the last parameter the corner pairs are joined by the cubic Hermite interpolant
+    of their values and ``∂f/∂p_D``, and the other slopes are interpolated linearly; then
+    the next parameter, down to the first. The result takes every grid point's value and
+    first derivatives exactly, reproduces ``f = Σ_d c_d(p_d) + Σ bilinear terms`` with
+    cubic ``c_d`` exactly, and for one parameter is the cubic Hermite interpolant of
+    :func:`hermite_segment_extrema`.
+
+    Args:
+        values: ``(n, 2^D, n_columns)`` values at each point's cell corners, corner ``j``
+            having bit ``D−1−d`` of ``j`` set for the upper corner along parameter ``d``
+            (the order of ``itertools.product((0, 1), repeat=D)``).
+        slopes: ``(n, 2^D, n_columns, D)`` their derivatives ``∂f/∂p_d``.
+        spacings: ``(D,)`` grid spacing per parameter.
+        t: ``(n, D)`` positions in the cell (:func:`hermite_cells`).
+
+    Returns:
+        ``(n, n_columns)``.
+    """
+    f, m = np.asarray(values, dtype=float), np.asarray(slopes, dtype=float)
+    n, corners, n_col = f.shape
+    for d in range(t.shape[1] - 1, -1, -1):
+        f = f.reshape(n, corners // 2, 2, n_col)
+        m = m.reshape(n, corners // 2, 2, n_col, d + 1)
+        s = t[:, d][:, None, None]
+        h = float(spacings[d])
+        f = ((2 * s**3 - 3 * s**2 + 1) * f[:, :, 0] + (s**3 - 2 * s**2 + s) * h * m[:, :, 0, :, d]
+             + (-2 * s**3 + 3 * s**2) * f[:, :, 1] + (s**3 - s**2) * h * m[:, :, 1, :, d])  # fmt: skip
+        m = (1 - s[..., None]) * m[:, :, 0, :, :d] + s[..., None] * m[:, :, 1, :, :d]
+        corners //= 2
+    return f[:, 0]

@@ -10,18 +10,28 @@ get an entry, out of the ``∏_d N_d(N_d+1)/2`` possible ones (:func:`possible_b
 
 The library holds one forward simulation per *grid point* (a tuple of bin centres, one
 per parameter) that lies inside at least one occurring box — exactly the points the
-hulls read; nothing else is simulated. A box's hull is the extreme library value over
-its grid points (:func:`~fuzzygait.uncertainty.frv.hulls.box_extrema`: direct reduction
-along the trailing parameters, sparse table along the first); α = 1 is the library value
-at the sample's grouped peak point, and the hulls are nesting-repaired as for one
-parameter. There is no sensitivity refinement here (the one-parameter Hermite
-interpolant has no tensor counterpart implemented): with one parameter this class gives
-exactly :class:`~fuzzygait.uncertainty.frv.FRVStudy` with ``refine=False``.
+hulls read. A box's hull is the extreme library value over its grid points
+(:func:`~fuzzygait.uncertainty.frv.hulls.box_extrema`: direct reduction along the
+trailing parameters, sparse table along the first), and the hulls are nesting-repaired
+as for one parameter.
+
+α = 1 without sensitivities is the library value at the sample's grouped peak point
+(with one parameter this is exactly :class:`~fuzzygait.uncertainty.frv.FRVStudy` with
+``refine=False``). When the evaluator returns sensitivities (``refine``), α = 1 is the
+model at the sample's *own* peak by cubic Hermite interpolation in every parameter
+(:func:`~fuzzygait.uncertainty.frv.hulls.hermite_values`, from the values and gradients
+at the ``2^D`` grid points around the peak, which the library then also holds), and the
+box hulls take the Hermite extrema along every grid line inside the box too
+(:func:`~fuzzygait.uncertainty.frv.hulls.hermite_box_extrema`). The grouped peak alone
+misses where the output changes quickly within a bin (the stance blade's energy changes
+by up to 50 % within 4 % of E, its vibration phase turning over), and the α = 1 outputs
+would then not follow the peak distribution.
 
 The store is the one-parameter layout of :mod:`fuzzygait.uncertainty.frv.store` (same
 commit protocol) with a parameter axis: root ``spec``, ``grid`` and ``n_disc`` are
 lists (one entry per parameter); ``library``: ``value (bin, time)`` at ``point (bin,
-parameter)`` grid bins, ``centre (bin, parameter)``; ``intervals`` (the box dictionary):
+parameter)`` grid bins, ``centre (bin, parameter)``, with ``refine`` also ``slope (bin,
+time, parameter)`` = ∂value/∂p; ``intervals`` (the box dictionary):
 ``left``, ``right (interval, parameter)``, ``lower``, ``upper (interval, time)``;
 ``samples``: ``hull (sample, alpha, bound, time)`` as for one parameter, ``cut`` and
 ``bin (sample, parameter, alpha, bound)``.
@@ -29,6 +39,7 @@ parameter)`` grid bins, ``centre (bin, parameter)``; ``intervals`` (the box dict
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import time
@@ -44,7 +55,7 @@ from fuzzygait.core.schema import BOUNDS
 from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
-from fuzzygait.uncertainty.frv.hulls import box_extrema
+from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_box_extrema, hermite_cells, hermite_values
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
 from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.frv.store import check, commit, new_store, open_group, read_meta
@@ -93,12 +104,13 @@ class FRVMultiStudy(StudyState):
         self.path, self.model, self.specs = path, model, specs
         self.grids: tuple[Grid, ...] = tuple(Grid(**g) for g in meta["grid"])
         self.n_disc: list[int] = [int(n) for n in meta["n_disc"]]
-        self.refine: bool | None = False
+        self.refine: bool | None = meta["refine"]
         self._read_common_meta(path, model, meta, evaluator)
         n_params = len(specs)
         # library rows in order of computation, and the row of each grid point
         self._points: dict[tuple[int, ...], int] = {}
         self._lib_values = np.empty((0, self.nodes.size))
+        self._lib_slopes = np.empty((0, self.nodes.size, n_params))
         # box dictionary: key (l_1, r_1, …, l_D, r_D) -> row
         self._boxes: dict[tuple[int, ...], int] = {}
         self._box_lower = np.empty((0, self.nodes.size))
@@ -120,7 +132,7 @@ class FRVMultiStudy(StudyState):
                n_disc: int | Sequence[int] = 30, seed: int = 0, store: str | os.PathLike[str] | None = None,
                evaluator: BatchFunction | None = None, time_stride: int = 1, chunk: int = 256,
                overwrite: bool = False, options: Mapping[str, Any] | None = None,
-               grids: Sequence[Grid] | None = None) -> FRVMultiStudy:  # fmt: skip
+               grids: Sequence[Grid] | None = None, refine: bool | None = None) -> FRVMultiStudy:  # fmt: skip
         """Run the FRV-GFA of several FRV parameters for ``n_samples`` samples into a new
         store (built beside it and moved into place when complete, as for one parameter).
 
@@ -132,14 +144,16 @@ class FRVMultiStudy(StudyState):
                 (one number for all, or one per parameter).
             seed: seed of the sample streams (parameter ``k`` is stream ``k``).
             store: the zarr directory to create.
-            evaluator: batch evaluator ``P (k, n_params) -> (k, n_time)`` (a returned
-                Jacobian is ignored); default :func:`serial_evaluator`.
+            evaluator: batch evaluator ``P (k, n_params) -> (k, n_time)`` or ``(F, J (k,
+                n_time, n_params))``; default :func:`serial_evaluator`.
             time_stride: keep every ``time_stride``-th time node (and the last).
             chunk: samples per zarr chunk and per processing block.
             overwrite: replace an existing store once the new one is complete.
             options: JSON-compatible record of what the study is made with.
             grids: the grids to group on (one per parameter) instead of the first
                 batch's ranges, e.g. another study's, to compare two studies bin by bin.
+            refine: Hermite refinement with the sensitivities (α = 1 at the sample's own
+                peak, box hulls along grid lines); default: when the evaluator returns them.
         """
         t0 = time.perf_counter()
         spec_tuple = check_specs(specs)
@@ -168,7 +182,7 @@ class FRVMultiStudy(StudyState):
                 raise ParameterError(f"grids: give one Grid per parameter ({n_params})")
             discs = [g.n_points for g in grid_list]
         meta: dict[str, Any] = {"seed": seed, "grid": [g.to_dict() for g in grid_list], "n_disc": discs,
-                "time_stride": time_stride, "refine": False, "chunk": chunk, "n_time": n_time,
+                "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
         staging = temporary_folder(path, "creating")
@@ -197,6 +211,8 @@ class FRVMultiStudy(StudyState):
         if study.library_rows:
             lib = open_group(path, "library", study.library_rows)
             study._lib_values = lib["value"].to_numpy()
+            if "slope" in lib:
+                study._lib_slopes = lib["slope"].to_numpy()
             points = lib["point"].to_numpy()
             study._points = {tuple(p): i for i, p in enumerate(points.tolist())}
         if study.interval_rows:
@@ -254,21 +270,32 @@ class FRVMultiStudy(StudyState):
         self.counts["possible_intervals_per_parameter"] = [g.possible_intervals for g in self.grids]
         self.counts["time_nodes"] = int(self.nodes.size)
         self.counts["worst_case_optimisations"] = 2 * int(self.nodes.size) * possible  # Eq. 2.33, product form
-        commit(self.path, {"grid": [g.to_dict() for g in self.grids], "n_samples": self.n_samples,
-                           "library_rows": self.library_rows, "interval_rows": self.interval_rows,
-                           "counts": self.counts})  # fmt: skip
+        commit(self.path, {"grid": [g.to_dict() for g in self.grids], "refine": self.refine,
+                           "n_samples": self.n_samples, "library_rows": self.library_rows,
+                           "interval_rows": self.interval_rows, "counts": self.counts})  # fmt: skip
 
     def _ingest(self, start: int, n: int, t0: float) -> None:
         """Steps 2–7 for samples ``start … start+n−1``: pass 2 collects their occurring
-        boxes; the library (grid points inside new boxes) and the box dictionary are
-        completed; pass 3 draws and groups the samples again and appends their hulls."""
+        boxes (and, refining, their peaks' Hermite cells); the library (grid points inside
+        new boxes, cell corners) and the box dictionary are completed; pass 3 draws and
+        groups the samples again and appends their hulls."""
         stop, width = start + n, 2 * self._n_params
         found = np.empty((0, width), dtype=np.int64)
+        corners = np.empty((0, self._n_params), dtype=np.int64)
         for a, b in _blocks(start, stop, self.chunk):  # pass 2
-            rows = box_rows(_group_boxes(generate_box_samples(self.specs, b - a, self.seed, a), self.grids))
+            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
+            rows = box_rows(_group_boxes(cuts, self.grids))
             found = np.unique(np.concatenate([found, rows.reshape(-1, width)]), axis=0)
+            if self.refine is not False:
+                cells = self._cell_corners(cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
+                corners = np.unique(np.concatenate([corners, cells]), axis=0)
         new = np.array([k for k in found.tolist() if tuple(k) not in self._boxes], dtype=np.int64).reshape(-1, width)
-        simulations = self._extend_library(new)
+        points = _box_points(new)
+        if self.refine:
+            points = np.unique(np.concatenate([points, corners]), axis=0)
+        simulations = self._extend_library(points)
+        if self.refine:  # decided by the first evaluator call when not given
+            simulations += self._extend_library(corners)
         self._add_boxes(new)
         repaired, n_alpha = 0, len(self.alphas)
         chunks = {"chunks": (self.chunk, self._n_params, n_alpha, 2)}
@@ -277,7 +304,7 @@ class FRVMultiStudy(StudyState):
         for a, b in _blocks(start, stop, self.chunk):  # pass 3
             cuts = generate_box_samples(self.specs, b - a, self.seed, a)
             bins = _group_boxes(cuts, self.grids)
-            hull, changed = self._assemble(bins)
+            hull, changed = self._assemble(bins, cuts[:, :, -1, 0])
             repaired += changed
             dims = ("sample", "parameter", "alpha", "bound")
             ds = xr.Dataset({"hull": (("sample", "alpha", "bound", "time"), hull), "cut": (dims, cuts),
@@ -292,28 +319,38 @@ class FRVMultiStudy(StudyState):
                            last_new_intervals=int(new.shape[0]), last_wall_time=elapsed)  # fmt: skip
         self._write_meta()
 
-    def _extend_library(self, boxes: np.ndarray) -> int:
-        """Simulate the grid points inside ``boxes`` (keys ``(k, 2·n_params)``) not yet in
-        the library, in C order of their bins (one evaluator call); returns their number."""
-        if not boxes.shape[0]:
-            return 0
-        lefts, rights = boxes[:, 0::2], boxes[:, 1::2]
-        origin = lefts.min(axis=0)
-        covered = np.zeros(tuple(rights.max(axis=0) - origin + 1), dtype=bool)
-        for lo, hi in zip((lefts - origin).tolist(), (rights - origin + 1).tolist(), strict=True):
-            covered[tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))] = True
-        points = np.argwhere(covered) + origin
+    def _cell_corners(self, peaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The Hermite cell of each raw peak ``(n, n_params)``: its ``2^D`` corner grid
+        points ``(n, 2^D, n_params)`` (:func:`hermite_values`' order) and positions ``t``."""
+        origins, spacings, first, last = (np.array([getattr(g, k) for g in self.grids])
+                                          for k in ("origin", "spacing", "first_bin", "last_bin"))  # fmt: skip
+        k, t = hermite_cells(origins, spacings, first, last, peaks)
+        bits = np.array(list(itertools.product((0, 1), repeat=self._n_params)), dtype=np.int64)
+        step = (last > first).astype(np.int64)  # a single-bin parameter has no upper corner
+        return k[:, None, :] + bits[None] * step, t
+
+    def _extend_library(self, points: np.ndarray) -> int:
+        """Simulate the grid ``points (k, n_params)`` not yet in the library, in the given
+        order (one evaluator call); returns their number."""
         missing = np.array([p for p in points.tolist() if tuple(p) not in self._points], dtype=np.int64)
         missing = missing.reshape(-1, self._n_params)
         if not missing.shape[0]:
             return 0
         centres = np.stack([g.centres(missing[:, d]) for d, g in enumerate(self.grids)], axis=1)
-        F, _ = _run_evaluator(self.evaluator, centres, self.n_time)
+        F, J = _run_evaluator(self.evaluator, centres, self.n_time)
+        if self.refine is None:
+            self.refine = J is not None
+        if self.refine and J is None:
+            raise ParameterError("this study refines hulls with sensitivities; the evaluator returned none")
         values = F[:, self.nodes]
         names = [s.name for s in self.specs]
         ds = xr.Dataset({"value": (("bin", "time"), values)},
                         coords={"point": (("bin", "parameter"), missing), "centre": (("bin", "parameter"), centres),
                                 "time": self.times, "parameter": names})  # fmt: skip
+        if self.refine and J is not None:
+            slopes = J[:, self.nodes]
+            ds["slope"] = (("bin", "time", "parameter"), slopes)
+            self._lib_slopes = np.concatenate([self._lib_slopes, slopes])
         _append(self.path, "library", ds, "bin")
         first = self._lib_values.shape[0]
         self._points.update({tuple(p): first + i for i, p in enumerate(missing.tolist())})
@@ -335,7 +372,13 @@ class FRVMultiStudy(StudyState):
         rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
         inside = np.all((points >= 0) & (points < np.array(shape)), axis=1)
         dense[tuple(points[inside].T)] = self._lib_values[rows[inside]]
-        lower, upper = box_extrema(dense, dense, lefts - origin, rights - origin)
+        if self.refine:
+            dense_slopes = np.full((*shape, self.nodes.size, self._n_params), np.nan)
+            dense_slopes[tuple(points[inside].T)] = self._lib_slopes[rows[inside]]
+            spacings = np.array([g.spacing for g in self.grids])
+            lower, upper = hermite_box_extrema(dense, dense_slopes, spacings, lefts - origin, rights - origin)
+        else:
+            lower, upper = box_extrema(dense, dense, lefts - origin, rights - origin)
         if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
             raise FuzzyGaitError("internal: a box reaches a grid point without a library entry")
         ds = xr.Dataset({"left": (("interval", "parameter"), lefts), "right": (("interval", "parameter"), rights),
@@ -353,20 +396,46 @@ class FRVMultiStudy(StudyState):
         self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
         self._write_meta()
 
-    def _assemble(self, bins: np.ndarray) -> tuple[np.ndarray, int]:
+    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
+        """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library."""
+        corners, t = self._cell_corners(peaks)
+        rows = np.array([self._points[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
+                        dtype=np.int64).reshape(corners.shape[:2])  # fmt: skip
+        spacings = np.array([g.spacing for g in self.grids])
+        return hermite_values(self._lib_values[rows], self._lib_slopes[rows], spacings, t)
+
+    def _assemble(self, bins: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, int]:
         """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped box samples ``(nb, n_params,
-        n_alpha, 2)``, nesting-repaired; α = 1 is the library value at the grouped peak."""
+        n_alpha, 2)`` with raw peaks ``(nb, n_params)``, nesting-repaired; α = 1 is the
+        model at the raw peak (refining) or the library value at the grouped peak."""
         rows = box_rows(bins)
         nb, levels, width = rows.shape
         idx = np.array([self._boxes[tuple(k)] for k in rows.reshape(-1, width).tolist()], dtype=np.int64)
         idx = idx.reshape(nb, levels)
-        peaks = np.array([self._points[tuple(p)] for p in bins[:, :, -1, 0].tolist()], dtype=np.int64)
         hull = np.empty((nb, levels + 1, 2, self.nodes.size))
         hull[:, :-1, 0] = self._box_lower[idx]
         hull[:, :-1, 1] = self._box_upper[idx]
-        hull[:, -1, :] = self._lib_values[peaks][:, None, :]
+        if self.refine:
+            hull[:, -1, :] = self._peak_values(peaks)[:, None, :]
+        else:
+            grouped = np.array([self._points[tuple(p)] for p in bins[:, :, -1, 0].tolist()], dtype=np.int64)
+            hull[:, -1, :] = self._lib_values[grouped][:, None, :]
         repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
         return repaired, int(np.count_nonzero(repaired != hull))
+
+
+def _box_points(boxes: np.ndarray) -> np.ndarray:
+    """The grid points ``(k, n_params)`` inside any of ``boxes`` (keys ``(m,
+    2·n_params)``), in C order of their bins."""
+    n_params = boxes.shape[1] // 2
+    if not boxes.shape[0]:
+        return np.empty((0, n_params), dtype=np.int64)
+    lefts, rights = boxes[:, 0::2], boxes[:, 1::2]
+    origin = lefts.min(axis=0)
+    covered = np.zeros(tuple(rights.max(axis=0) - origin + 1), dtype=bool)
+    for lo, hi in zip((lefts - origin).tolist(), (rights - origin + 1).tolist(), strict=True):
+        covered[tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))] = True
+    return np.argwhere(covered) + origin
 
 
 def open_study(path: str | os.PathLike[str], model: FuzzyModel,

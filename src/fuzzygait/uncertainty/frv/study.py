@@ -333,7 +333,7 @@ class FRVStudy(StudyState):
         if self.refine and J is None:
             raise ParameterError("this study refines hulls with sensitivities; the evaluator returned none")
         values = F[:, self.nodes]
-        slopes = J[:, self.nodes] if self.refine and J is not None else None
+        slopes = J[:, self.nodes, 0] if self.refine and J is not None else None
         ds = xr.Dataset({"value": (("bin", "time"), values)},
                         coords={"bin": missing, "centre": ("bin", centres), "time": self.times})
         if slopes is not None:
