@@ -271,7 +271,8 @@ def test_figures_per_parameter_and_of_the_output(tmp_path) -> None:
     from fuzzygait.viz import frv as figures
 
     study = FRVMultiStudy.create(analytic_model(), specs(), 300, n_disc=10, seed=2, store=tmp_path / "s.zarr")
-    made = figures.parameter_figures(study.specs, seed=2, n_samples=300, grids=study.grids)
+    made = figures.parameter_figures(study.specs, seed=2, n_samples=300, grids=study.grids, units={"p2": "kg/m³"})
+    assert made["p2"][0].axes[0].get_xlabel() == "p2 (kg/m³)" and made["p1"][1].axes[1].get_xlabel() == "p1"
     assert list(made) == ["p1", "p2"] and all(len(a.axes) == 4 and len(b.axes) == 2 for a, b in made.values())
     # each parameter's figure shows its own stream: the grouping figure's points are its grid's
     points = made["p2"][1].axes[1].lines[-1].get_xdata()

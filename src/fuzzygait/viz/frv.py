@@ -27,7 +27,7 @@ All return a :class:`matplotlib.figure.Figure` (no pyplot state; save with
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -60,11 +60,16 @@ def _membership_lines(cuts: np.ndarray, alphas: np.ndarray) -> tuple[np.ndarray,
     return x, y
 
 
+def _axis_label(spec: FRVSpec, unit: str) -> str:
+    return f"{spec.name} ({unit})" if unit else spec.name
+
+
 def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_show: int = 100,
-                         stream: int = 0) -> Figure:  # fmt: skip
+                         stream: int = 0, unit: str = "") -> Figure:  # fmt: skip
     """Fig. 5.14: ``n_show`` input samples and, per α-level, histograms of the left and
     right increments of ``n_samples`` samples with the generating pdf (α = 1: the peak).
-    ``stream``: the parameter's index in a study of several FRVs (its sample stream)."""
+    ``stream``: the parameter's index in a study of several FRVs (its sample stream);
+    ``unit``: the parameter's unit for the axis label (e.g. "Pa")."""
     cuts = generate_samples(spec, n_samples, seed, stream=stream)
     alphas = np.asarray(spec.alphas)
     increments = sample_increments(cuts)
@@ -75,7 +80,7 @@ def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n
     top.plot(x, y, color="tab:blue", lw=0.6, alpha=0.5)
     top.axvline(spec.deterministic, color="black", lw=1, ls="--", label="p_det")
     title = f"{min(n_show, n_samples)} of {n_samples} samples of the FRV {spec.name}"
-    top.set(xlabel=spec.name, ylabel="α", title=title)
+    top.set(xlabel=_axis_label(spec, unit), ylabel="α", title=title)
     top.legend(fontsize=8)
     for k, alpha in enumerate(alphas):
         ax = fig.add_subplot(grid[1, k])
@@ -97,10 +102,12 @@ def input_samples_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n
 
 
 def grouping_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_disc: int = 100,
-                    n_show: int = 100, grid: Grid | None = None, stream: int = 0) -> Figure:  # fmt: skip
+                    n_show: int = 100, grid: Grid | None = None, stream: int = 0,
+                    unit: str = "") -> Figure:  # fmt: skip
     """Fig. 5.15: ``n_show`` samples before and after grouping on ``grid`` (default: the
     grid of ``n_samples`` samples with ``n_disc`` points); the grid points are marked.
-    ``stream``: the parameter's index in a study of several FRVs (its sample stream)."""
+    ``stream``: the parameter's index in a study of several FRVs (its sample stream);
+    ``unit``: the parameter's unit for the axis label."""
     cuts = generate_samples(spec, n_samples, seed, stream=stream)
     grid = grid if grid is not None else Grid.from_samples(cuts, n_disc)
     grid = grid.extended(cuts[:n_show])
@@ -115,16 +122,19 @@ def grouping_figure(spec: FRVSpec, seed: int = 0, n_samples: int = 10000, n_disc
         ax.set(ylabel="α", title=title)
     points = grid.points()
     axes[1].plot(points, np.zeros_like(points), "|", color="black", ms=6)
-    axes[1].set_xlabel(spec.name)
+    axes[1].set_xlabel(_axis_label(spec, unit))
     return fig
 
 
 def parameter_figures(specs: FRVSpec | Sequence[FRVSpec], seed: int = 0, n_samples: int = 10000,
                       n_disc: int = 100, grids: Sequence[Grid] | None = None,
-                      n_show: int = 100) -> dict[str, tuple[Figure, Figure]]:  # fmt: skip
+                      n_show: int = 100, units: Mapping[str, str] | None = None,
+                      ) -> dict[str, tuple[Figure, Figure]]:  # fmt: skip
     """Figs. 5.14 and 5.15 for every FRV parameter of a study (one or several), each from
     its own sample stream and on its own grid (``grids``: e.g. a study's ``grids``, or
     ``(study.grid,)``; default: each parameter's grid of ``n_samples`` samples).
+    ``units``: unit per parameter name for the axis labels (e.g. the leg's
+    ``fuzzygait.mechanics.leg.PARAMETER_UNITS``).
 
     Returns:
         ``{name: (input_samples_figure, grouping_figure)}`` in parameter order.
@@ -132,9 +142,10 @@ def parameter_figures(specs: FRVSpec | Sequence[FRVSpec], seed: int = 0, n_sampl
     spec_tuple = check_specs(specs)
     if grids is not None and len(grids) != len(spec_tuple):
         raise ParameterError(f"grids: one per parameter ({len(spec_tuple)}); got {len(grids)}")
-    return {s.name: (input_samples_figure(s, seed, n_samples, n_show, stream=k),
+    units = dict(units or {})
+    return {s.name: (input_samples_figure(s, seed, n_samples, n_show, stream=k, unit=units.get(s.name, "")),
                      grouping_figure(s, seed, n_samples, n_disc, n_show, None if grids is None else grids[k],
-                                     stream=k))
+                                     stream=k, unit=units.get(s.name, "")))
             for k, s in enumerate(spec_tuple)}  # fmt: skip
 
 
