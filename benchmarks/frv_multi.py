@@ -6,9 +6,10 @@ with sensitivities, so α = 1 is the Hermite interpolant at each sample's own pe
 
 Reports: occurring boxes against the possible ones (the product over the parameters of
 Eq. 2.32's interval counts), forward simulations (grid points inside an occurring box and
-the peaks' Hermite cells), wall time and the part of it spent simulating; the cost of adding N_s more samples as a fraction of the first run; the α = 1
-output distribution against a Monte Carlo of the deterministic model at a random subset of
-the same (ungrouped) peak samples (two-sample KS test at five times); and whether a smaller
+the peaks' Hermite cells), wall time and the part of it spent simulating; the cost of
+adding N_s more samples as a fraction of the first run; the α = 1 output distribution
+against a Monte Carlo of the deterministic model at a random subset of the same
+(ungrouped) peak samples (two-sample KS test at five times); and whether a smaller
 study is bit-identical on 1 and 2 workers.
 
 Usage::

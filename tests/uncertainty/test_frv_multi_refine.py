@@ -85,8 +85,9 @@ def test_hermite_values_converge_at_third_order_and_are_the_one_parameter_interp
     slopes = np.cos(np.arange(12.0))[:, None] * np.array([1.0, 2.0])
     xs = np.random.default_rng(2).uniform(0.0, 11.0, size=40) * 0.7 + 4.0
     k, t = hermite_cells(np.array([4.0 - 0.35]), np.array([0.7]), np.array([0]), np.array([11]), xs[:, None])
-    got = hermite_values(np.stack([rows[k[:, 0]], rows[k[:, 0] + 1]], axis=1),
-                         np.stack([slopes[k[:, 0]], slopes[k[:, 0] + 1]], axis=1)[..., None], np.array([0.7]), t)  # fmt: skip
+    corner_values = np.stack([rows[k[:, 0]], rows[k[:, 0] + 1]], axis=1)
+    corner_slopes = np.stack([slopes[k[:, 0]], slopes[k[:, 0] + 1]], axis=1)[..., None]
+    got = hermite_values(corner_values, corner_slopes, np.array([0.7]), t)
     np.testing.assert_allclose(got, _hermite_rows(rows, slopes, 4.0, 0.7, xs), rtol=1e-13, atol=1e-14)
 
 
