@@ -169,3 +169,29 @@ def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: 
                                  "--out", str(tmp_path / "new.zarr")])  # fmt: skip
     assert result.exit_code == 1 and "sampling must be 'random' or 'lhs'" in result.stderr, result.output
     assert not (tmp_path / "new.zarr").exists()
+
+
+def test_disc_per_parameter_reaches_the_grids_and_the_record(tmp_path: Path) -> None:
+    from fuzzygait.uncertainty.frv import FRVMultiStudy
+    from fuzzygait.uncertainty.frv.store import read_meta
+
+    out = tmp_path / "boxes.zarr"
+    args = ["--frv", "E,rho", "--disc", "5,4", "--samples", "40", "--duration", "0.02", "--nodes", "6"]
+    result = runner.invoke(app, ["frv-sim", "stance", *args, "--workers", "1", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    meta = read_meta(out)
+    assert meta["options"]["disc"] == [5, 4] and meta["n_disc"] == [5, 4]
+    study = FRVMultiStudy.open(out, FunctionModel(lambda p: p, np.linspace(0.0, 0.02, 21)))
+    assert [g.n_points for g in study.grids] == [5, 4] and study.grids[0].spacing != study.grids[1].spacing
+    assert study.refine is True  # the leg's sensitivities refine the study
+    line = _refusal(out, "stance", "--disc", "5")
+    assert line.startswith(f"fuzzygait: error: {out}: this study was made with --disc 5,4; given 5."), line
+
+
+@pytest.mark.parametrize("disc", ["6,5,4", "1", "x", "6,1"])
+def test_a_disc_that_does_not_fit_the_parameters_is_refused(tmp_path: Path, disc: str) -> None:
+    result = runner.invoke(app, ["frv-sim", "stance", "--frv", "E,rho", "--disc", disc, "--samples", "10",
+                                 "--workers", "1", "--out", str(tmp_path / "new.zarr")])  # fmt: skip
+    assert result.exit_code == 1 and "--disc must be one whole number of at least 2, or one per --frv parameter " \
+        "(E,rho)" in result.stderr, result.output
+    assert not (tmp_path / "new.zarr").exists()

@@ -235,6 +235,21 @@ def parse_alphas(text: str) -> tuple[float, ...]:
     return (*sorted(values), 1.0)
 
 
+def parse_disc(text: str, parameters: str) -> int | tuple[int, ...]:
+    """``--disc``: ``"100"`` (every FRV parameter) or one count per ``--frv`` parameter,
+    ``"59,30"`` for ``E,rho``; each at least 2."""
+    names = [n for n in parameters.split(",") if n.strip()]
+    message = (f"--disc must be one whole number of at least 2, or one per --frv parameter ({','.join(names)}), "
+               f"e.g. 60,30; got {text!r}")  # fmt: skip
+    try:
+        counts = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise FuzzyGaitError(message) from None
+    if not counts or len(counts) not in (1, len(names)) or min(counts) < 2:
+        raise FuzzyGaitError(message)
+    return counts[0] if len(counts) == 1 else tuple(counts)
+
+
 def parse_overrides(texts: Sequence[str]) -> dict[str, float]:
     """``["E=6e5,eta=2", "rho=1700"]`` -> ``{"E": 6e5, "eta": 2.0, "rho": 1700.0}``."""
     from fuzzygait.mechanics.leg import LEG_PARAMETERS

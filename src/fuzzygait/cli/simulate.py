@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from fuzzygait.cli.app import StageBars, app, out, progress_bars, user_errors
-from fuzzygait.cli.options import SchedulerOption, parse_alphas, parse_overrides
+from fuzzygait.cli.options import SchedulerOption, parse_alphas, parse_disc, parse_overrides
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
@@ -171,7 +171,8 @@ def frv_sim(
                                     "One --frv parameter only (else --set NAME=VALUE).")
     ] = None,
     samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
-    disc: Annotated[int, typer.Option(help="Grouping grid points N_p-disc.")] = 100,
+    disc: Annotated[str, typer.Option(help="Grouping grid points N_p-disc: one number, or one per --frv "
+                                      "parameter (e.g. 60,30 for E,rho).")] = "100",
     alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
     distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
     seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
@@ -206,11 +207,12 @@ def frv_sim(
         check_frv_parameter(parameter)
         values = parse_overrides(overrides or [])
         levels = parse_alphas(alphas)
+        grid_points = parse_disc(disc, parameter)
         given = {"scenario"} | {k for name, k in _RECORDED.items() if _given(ctx, name)}
         with progress_bars() as bars:
             study = run_frv_leg(
                 LegSetup(scenario, nodes, dt, duration, values, scheme),
-                FRVRequest(parameter, value, samples, disc, levels, distribution, seed, sampling), out_store,
+                FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
                 progress=StageBars(bars),
             )  # fmt: skip

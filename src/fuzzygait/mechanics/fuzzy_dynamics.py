@@ -153,7 +153,7 @@ def leg_frv_study(
     *,
     target: str | None = None,
     base_overrides: Mapping[str, float] | None = None,
-    n_disc: int = 100,
+    n_disc: int | Sequence[int] = 100,
     seed: int = 0,
     nodes: int = 20,
     dt: float | None = None,
@@ -208,6 +208,10 @@ def leg_frv_study(
                                          evaluator=evaluator, chunk=chunk, overwrite=overwrite,
                                          options=options)  # fmt: skip
         else:
+            if not isinstance(n_disc, int):
+                if len(n_disc) != 1:
+                    raise ParameterError(f"n_disc: one FRV parameter takes one grid size; got {list(n_disc)}")
+                n_disc = int(n_disc[0])
             study = FRVStudy.create(model, specs[0], n_samples, n_disc=n_disc, seed=seed, store=path,
                                     evaluator=evaluator, chunk=chunk, overwrite=overwrite, options=options)  # fmt: skip
     return study

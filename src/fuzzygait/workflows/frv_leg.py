@@ -81,14 +81,15 @@ class FRVRequest:
     ``value``, else the setup's, else the scenario's) or several, comma-separated
     (independent FRVs with the same settings; each one's ``p_det`` from the setup or the
     scenario, ``value`` not allowed), ``samples`` samples (to draw, or to add to an
-    existing study), ``disc`` grouping grid points (per parameter), the α-levels, the
+    existing study), ``disc`` grouping grid points (one count for every parameter, or one
+    per parameter), the α-levels, the
     increments' ``distribution``, the peaks' ``sampling`` (``"random"`` or ``"lhs"``:
     Latin-hypercube per block of samples) and the ``seed`` of the sample streams."""
 
     parameter: str = "E"
     value: float | None = None
     samples: int = 10000
-    disc: int = 100
+    disc: int | Sequence[int] = 100
     alphas: Sequence[float] = (0.0, 0.25, 0.5, 0.75, 1.0)
     distribution: str = "normal"
     seed: int = 0
@@ -112,8 +113,17 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
     value: float | list[float] = values[names[0]] if len(names) == 1 else [values[n] for n in names]
     return {"scenario": setup.scenario, "frv": ",".join(names), "value": value, "set": values,
             "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
-            "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed), "disc": int(frv.disc),
-            "nodes": int(setup.nodes), "dt": float(step), "duration": float(span), "scheme": setup.scheme}  # fmt: skip
+            "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed),
+            "disc": _disc_record(frv.disc), "nodes": int(setup.nodes), "dt": float(step), "duration": float(span),
+            "scheme": setup.scheme}  # fmt: skip
+
+
+def _disc_record(disc: int | Sequence[int]) -> int | list[int]:
+    """``disc`` as a study records it: one count, or a list of one per parameter."""
+    if isinstance(disc, int):
+        return int(disc)
+    counts = [int(n) for n in disc]
+    return counts[0] if len(set(counts)) == 1 else counts
 
 
 def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mapping[str, Any],
@@ -139,6 +149,8 @@ def _num(value: float) -> str:
 def _show(key: str, value: Any) -> str:
     if key == "alphas":
         return ",".join(_num(a) for a in value)
+    if key == "disc" and isinstance(value, list):
+        return ",".join(str(n) for n in value)
     return _num(value) if isinstance(value, float) else str(value)
 
 
