@@ -13,8 +13,16 @@ import pytest
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy, interval_hulls
-from fuzzygait.uncertainty.frv.hulls import _hermite_rows, hermite_box_extrema, hermite_cells, hermite_values
+from fuzzygait.uncertainty.frv import (
+    FRVMultiStudy,
+    FRVSpec,
+    FRVStudy,
+    hermite_box_extrema,
+    hermite_cells,
+    hermite_values,
+    interval_hulls,
+)
+from fuzzygait.uncertainty.frv.hulls import _hermite_rows
 
 TIMES = np.linspace(0.0, 2.0, 9)
 A, B = 2.0, 3.0

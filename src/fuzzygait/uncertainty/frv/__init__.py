@@ -34,7 +34,9 @@ samples later, simulating only new bin centres and computing only new intervals
 :class:`FRVStudy` takes one FRV parameter (the Table 5.3 case, with the Hermite
 refinement); :class:`FRVMultiStudy` several independent ones (boxes of per-parameter
 intervals on tensor grids, :func:`generate_box_samples`, :func:`occurring_boxes`,
-:func:`possible_boxes`, :func:`box_extrema`); :func:`open_study` opens either.
+:func:`possible_boxes`, :func:`box_extrema`, refined with sensitivities by
+:func:`hermite_box_extrema` and, for α = 1 at each sample's own peak, :func:`hermite_values`);
+:func:`open_study` opens either.
 """
 
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, serial_evaluator
@@ -50,7 +52,15 @@ from fuzzygait.uncertainty.frv.grouping import (
     occurring_intervals,
     possible_boxes,
 )
-from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_segment_extrema, interval_hulls, range_extrema
+from fuzzygait.uncertainty.frv.hulls import (
+    box_extrema,
+    hermite_box_extrema,
+    hermite_cells,
+    hermite_segment_extrema,
+    hermite_values,
+    interval_hulls,
+    range_extrema,
+)
 from fuzzygait.uncertainty.frv.multi import FRVMultiStudy, is_multi_store, open_study
 from fuzzygait.uncertainty.frv.samples import (
     BLOCK,
@@ -84,7 +94,10 @@ __all__ = [
     "generate_box_samples",
     "generate_samples",
     "group",
+    "hermite_box_extrema",
+    "hermite_cells",
     "hermite_segment_extrema",
+    "hermite_values",
     "interval_hulls",
     "is_multi_store",
     "iter_hull_blocks",
