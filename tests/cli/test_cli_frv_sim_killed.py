@@ -55,15 +55,21 @@ def same(a: dict[str, Any], b: dict[str, Any]) -> bool:
 
 
 def state(folder: Path) -> set[tuple[str, int, int]]:
-    """Every file under ``folder`` (hidden temporaries included) with its size and mtime."""
-    found = set()
-    for path in folder.rglob("*"):
+    """Every file under ``folder`` (hidden temporaries included) with its size and mtime.
+    A folder renamed or removed while it is walked (the command moving its temporary
+    store into place) makes the walk start again."""
+    while True:
+        found = set()
         try:
-            info = path.stat()
-        except FileNotFoundError:  # removed while we looked
+            for path in folder.rglob("*"):
+                try:
+                    info = path.stat()
+                except FileNotFoundError:  # removed while we looked
+                    continue
+                found.add((str(path.relative_to(folder)), info.st_size, info.st_mtime_ns))
+        except FileNotFoundError:  # a folder vanished between listing and entering it
             continue
-        found.add((str(path.relative_to(folder)), info.st_size, info.st_mtime_ns))
-    return found
+        return found
 
 
 def killed(store: Path, moment: str) -> bool:

@@ -10,6 +10,7 @@ import itertools
 
 import numpy as np
 import pytest
+from test_frv_multi import TIMES, A, B, specs  # the two-parameter study of the unrefined tests
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
@@ -23,10 +24,6 @@ from fuzzygait.uncertainty.frv import (
     interval_hulls,
 )
 from fuzzygait.uncertainty.frv.hulls import _hermite_rows
-
-TIMES = np.linspace(0.0, 2.0, 9)
-A, B = 2.0, 3.0
-ALPHAS = (0.0, 0.5, 1.0)
 
 
 def corners_of(f, grad, origins, spacings, first, last, x):
@@ -135,10 +132,6 @@ def sensitive_model() -> FunctionModel:
     Hermite interpolant is exact and every refined hull is known in closed form."""
     return FunctionModel(lambda p: (A * p[..., :1] + B * p[..., 1:2] ** 2) * TIMES, TIMES,
                          jacobian=lambda p: np.stack([A * TIMES, 2 * B * p[1] * TIMES], axis=1))  # fmt: skip
-
-
-def specs() -> list[FRVSpec]:
-    return [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, relative_scale=1.0, mean=-1.0, alphas=ALPHAS)]
 
 
 def test_a_refined_study_gives_the_model_at_the_raw_peaks_and_the_closed_form_box_hulls(tmp_path) -> None:
