@@ -12,6 +12,7 @@ import itertools
 import numpy as np
 import pytest
 from scipy import stats
+from test_frv import CountingEvaluator  # the serial evaluator, counting rows and calls
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty import FunctionModel
@@ -27,7 +28,6 @@ from fuzzygait.uncertainty.frv import (
     occurring_boxes,
     open_study,
     possible_boxes,
-    serial_evaluator,
 )
 
 TIMES = np.linspace(0.0, 2.0, 9)
@@ -44,18 +44,6 @@ def analytic_model() -> FunctionModel:
 def specs() -> list[FRVSpec]:
     """p1 about 1 (positive); p2 with its peak ~ N(0, 1) so its boxes straddle 0."""
     return [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, relative_scale=1.0, mean=-1.0, alphas=ALPHAS)]
-
-
-class CountingEvaluator:
-    """The serial evaluator, counting forward simulations (rows) and calls."""
-
-    def __init__(self, model: FunctionModel) -> None:
-        self.inner, self.rows, self.calls = serial_evaluator(model), 0, 0
-
-    def __call__(self, P: np.ndarray):
-        self.calls += 1
-        self.rows += P.shape[0]
-        return self.inner(P)
 
 
 def closed_form_hull(grids: tuple[Grid, ...], bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import itertools
 import os
-import shutil
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -52,13 +51,13 @@ import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
-from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
+from fuzzygait.io.atomic import tidy_beside
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
 from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_box_extrema, hermite_cells, hermite_values
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
 from fuzzygait.uncertainty.frv.store import append as _append
-from fuzzygait.uncertainty.frv.store import check, commit, new_store, open_group, read_meta
+from fuzzygait.uncertainty.frv.store import check, commit, open_group, read_meta
 from fuzzygait.uncertainty.frv.study import FRVStudy, StudyState, _blocks, _new_counts
 from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
@@ -185,16 +184,9 @@ class FRVMultiStudy(StudyState):
                 "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
-        staging = temporary_folder(path, "creating")
-        try:
-            new_store(staging, {"spec": [s.to_dict() for s in spec_tuple], **meta})
-            study = cls(staging, model, spec_tuple, meta, evaluator)
-            study._ingest(0, n_samples, t0)
-            replace_folder(staging, path)
-        finally:
-            shutil.rmtree(staging, ignore_errors=True)
-        study.path = path
-        return study
+        record = {"spec": [s.to_dict() for s in spec_tuple], **meta}
+        return cls._build(path, record, lambda folder: cls(folder, model, spec_tuple, meta, evaluator), n_samples,
+                          t0)  # fmt: skip
 
     @classmethod
     def open(cls, path: str | os.PathLike[str], model: FuzzyModel,
@@ -239,16 +231,6 @@ class FRVMultiStudy(StudyState):
             self._write_meta()
             self._ingest(self.n_samples, n, t0)
         return self
-
-    def hulls(self) -> xr.Dataset:
-        """The output ``hull (sample, alpha, bound, time)``, lazily, counts as attributes."""
-        ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
-        ds.attrs.update(self.counts)
-        return ds
-
-    def samples(self) -> xr.Dataset:
-        """The raw α-cuts ``cut`` and their ``bin`` ``(sample, parameter, alpha, bound)``, lazily."""
-        return open_group(self.path, "samples", self.n_samples)[["cut", "bin"]]
 
     def library(self) -> xr.Dataset:
         """The library: ``value (bin, time)`` at grid ``point`` / ``centre (bin, parameter)``,

@@ -7,9 +7,9 @@ from __future__ import annotations
 import os
 import shutil
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 import xarray as xr
@@ -61,8 +61,10 @@ def _new_counts() -> dict[str, Any]:
 
 class StudyState:
     """What every FRV study (one parameter or several) reads from its commit record:
-    seed, time stride and optimisation nodes, chunk, sizes, options, counts, evaluator."""
+    seed, time stride and optimisation nodes, chunk, sizes, options, counts, evaluator —
+    and how a new study is built into place (:meth:`_build`)."""
 
+    path: Path
     seed: int
     time_stride: int
     chunk: int
@@ -98,6 +100,39 @@ class StudyState:
             raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
         self.nodes = optimisation_nodes(self.n_time, self.time_stride)
         self.times = times[self.nodes]
+
+    def hulls(self) -> xr.Dataset:
+        """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
+        with the counts as attributes."""
+        ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
+        ds.attrs.update(self.counts)
+        return ds
+
+    def samples(self) -> xr.Dataset:
+        """The raw α-cuts ``cut`` and their ``bin`` (lazily; with several parameters
+        ``(sample, parameter, alpha, bound)``)."""
+        return open_group(self.path, "samples", self.n_samples)[["cut", "bin"]]
+
+    def _ingest(self, start: int, n: int, t0: float) -> None:
+        """Process samples ``start … start+n−1`` (each study kind's own steps)."""
+        raise NotImplementedError
+
+    @classmethod
+    def _build(cls, path: Path, record: dict[str, Any], make: Callable[[Path], Self], n_samples: int,
+               t0: float) -> Self:  # fmt: skip
+        """A new study of ``n_samples`` samples: its store (commit record ``record``) built
+        in a temporary folder beside ``path`` by the study ``make(folder)`` returns, and
+        moved into place only when complete; the temporary folder is removed either way."""
+        staging = temporary_folder(path, "creating")
+        try:
+            new_store(staging, record)
+            study = make(staging)
+            study._ingest(0, n_samples, t0)
+            replace_folder(staging, path)
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        study.path = path
+        return study
 
 
 class FRVStudy(StudyState):
@@ -191,16 +226,8 @@ class FRVStudy(StudyState):
                 "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
-        staging = temporary_folder(path, "creating")
-        try:
-            new_store(staging, {"spec": spec.to_dict(), **meta})
-            study = cls(staging, model, spec, meta, evaluator)
-            study._ingest(0, n_samples, t0)
-            replace_folder(staging, path)
-        finally:
-            shutil.rmtree(staging, ignore_errors=True)
-        study.path = path
-        return study
+        record = {"spec": spec.to_dict(), **meta}
+        return cls._build(path, record, lambda folder: cls(folder, model, spec, meta, evaluator), n_samples, t0)
 
     @classmethod
     def open(cls, path: str | os.PathLike[str], model: FuzzyModel, evaluator: BatchFunction | None = None) -> FRVStudy:
@@ -242,17 +269,6 @@ class FRVStudy(StudyState):
             self._write_meta()
             self._ingest(self.n_samples, n, t0)
         return self
-
-    def hulls(self) -> xr.Dataset:
-        """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
-        with the counts as attributes."""
-        ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
-        ds.attrs.update(self.counts)
-        return ds
-
-    def samples(self) -> xr.Dataset:
-        """The raw α-cuts ``cut`` and their ``bin`` (lazily)."""
-        return open_group(self.path, "samples", self.n_samples)[["cut", "bin"]]
 
     def library(self) -> xr.Dataset:
         """The library: ``value (bin, time)`` at bin ``centre`` (and ``slope``), sorted."""
