@@ -170,9 +170,9 @@ def leg_frv_study(
 
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
     parameter, or a sequence of several (independent FRVs, one α-level set: an
-    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`, ``n_disc`` grid points per
-    parameter, refined with the sensitivities as one parameter is); the other parameters are the scenario's with
-    ``base_overrides``.  Forward
+    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`; ``n_disc`` one grid size for all
+    or one per parameter; refined with the sensitivities as one parameter is); the other
+    parameters are the scenario's with ``base_overrides``.  Forward
     simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
     compiled simulator library from the on-disk cache.  An existing store is extended with
