@@ -2,6 +2,11 @@
 against Monte Carlo sampling given the same wall time (thesis §5.5, Fig. 5.11, Table 5.2).
 
 Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/markererror_speed.py [--joints] [--model auto]
+          [--trial walking|cgm24] [--starts N] [--compare-gradients]
+
+``--compare-gradients`` first runs the same analysis with forward-difference gradients
+(``gradients="differences"``) in the same process and prints the wall ratio and how the
+bands differ; ``--trial cgm24`` runs on the synthetic CGM 2.4 session instead.
 
 1. Graph Follower (``BatchedDirect`` strategy, Cartesian deviations, Table 3.1 radii with all
    three sources): ``sample_data/walking.c3d`` (static calibration of ``static.c3d``; the
@@ -65,25 +70,69 @@ def _monte_carlo_task(args: tuple[ComponentTask, float, int]) -> tuple[str, np.n
             time.perf_counter() - start)  # fmt: skip
 
 
+def _compare_gradients(baseline, fuzzy, components: list[str], fd_wall: float, wall: float,
+                       fd_evaluations: int) -> None:  # fmt: skip
+    """Exact gradients against forward differences: wall time and the α < 1 hulls (both
+    are inner approximations of the true range: the wider band is the better one)."""
+    ratios, wider, narrower, largest = [], 0, 0, (0.0, "", 0.0)
+    for name in components:
+        old, new = component_hull(baseline, name), component_hull(fuzzy, name)
+        keep = ~(component_undetermined(baseline, name) | component_undetermined(fuzzy, name))
+        keep = keep.sel(alpha=keep.alpha < 1).to_numpy()
+        w_old = (old.sel(bound="upper") - old.sel(bound="lower")).sel(alpha=old.alpha < 1).to_numpy()[keep]
+        w_new = (new.sel(bound="upper") - new.sel(bound="lower")).sel(alpha=new.alpha < 1).to_numpy()[keep]
+        ok = np.isfinite(w_old) & np.isfinite(w_new)
+        change = w_new[ok] - w_old[ok]
+        ratios.append(np.median(w_new[ok] / np.maximum(w_old[ok], 1e-12)))
+        wider, narrower = wider + int(np.sum(change > 0.01)), narrower + int(np.sum(change < -0.01))
+        if change.size and np.abs(change).max() > abs(largest[0]):
+            at = int(np.argmax(np.abs(change)))
+            largest = (float(change[at]), name, float(w_old[ok][at]))
+    print()
+    print("## Exact gradients against forward differences (same process, same options otherwise)")
+    print(f"forward differences: wall {fd_wall:.1f} s, node evaluations {fd_evaluations:,}; exact gradients: wall "
+          f"{wall:.1f} s, node evaluations {int(fuzzy.attrs['node_evaluations']):,} + gradient rows "
+          f"{int(fuzzy.attrs.get('node_gradients', 0)):,}; speed-up {fd_wall / wall:.2f}x")  # fmt: skip
+    print(f"band width exact/differences over determined (α < 1, frame): median per component "
+          f"{np.median(ratios):.4f} (range {min(ratios):.4f}-{max(ratios):.4f}); wider by > 0.01 deg at {wider}, "
+          f"narrower at {narrower} (α, frame) points; largest change {largest[0]:+.3f} deg ({largest[1]}, "
+          f"differences' width there {largest[2]:.3f} deg)")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--joints", action="store_true", help="hip/knee/ankle only (18 components)")
     parser.add_argument("--model", default="auto", help="model version (default: auto)")
+    parser.add_argument("--trial", choices=("walking", "cgm24"), default="walking",
+                        help="sample_data/walking.c3d (Plug-in Gait markers) or cgm24_walking.c3d (CGM 2.4 set)")
+    parser.add_argument("--starts", type=int, default=FuzzyAngleOptions.starts, help="multistart points per frame")
+    parser.add_argument("--compare-gradients", action="store_true",
+                        help="first run the optimiser with forward differences in the same process: wall ratio and "
+                             "how the hulls differ")  # fmt: skip
     args = parser.parse_args()
     print(f"command: OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']} .venv/bin/python "
           f"benchmarks/markererror_speed.py {' '.join(sys.argv[1:])}  ({os.cpu_count()} cores, Python "
           f"{sys.version.split()[0]}, load {os.getloadavg()[0]:.2f})")  # fmt: skip
-    run = run_angles(DATA / "walking.c3d", static=DATA / "static.c3d", subject_file=DATA / "subject.toml",
-                     model=args.model)  # fmt: skip
+    prefix = "" if args.trial == "walking" else "cgm24_"
+    run = run_angles(DATA / f"{prefix}walking.c3d", static=DATA / f"{prefix}static.c3d",
+                     subject_file=DATA / f"{prefix}subject.toml", model=args.model)  # fmt: skip
     trial, result = run.trial, run.result
     angles = [n for n in result.angles if not args.joints or n in JOINT_ANGLES]
 
     # ------------------------------------------------------------------ Graph Follower
-    options = FuzzyAngleOptions(alphas=ALPHAS, workers=WORKERS)
+    options = FuzzyAngleOptions(alphas=ALPHAS, workers=WORKERS, starts=args.starts)
+    components = [f"{n}_{a}" for n in angles for a in AXES]
+    baseline = None
+    if args.compare_gradients:
+        fd_options = FuzzyAngleOptions(alphas=ALPHAS, workers=WORKERS, starts=args.starts, gradients="differences")
+        start = time.perf_counter()
+        baseline = fuzzy_joint_angles(trial, run.subject, result, fd_options, angles, clusters=run.clusters)
+        fd_wall = time.perf_counter() - start
     start = time.perf_counter()
     fuzzy = fuzzy_joint_angles(trial, run.subject, result, options, angles, clusters=run.clusters)
     wall = time.perf_counter() - start
-    components = [f"{n}_{a}" for n in angles for a in AXES]
+    if baseline is not None:
+        _compare_gradients(baseline, fuzzy, components, fd_wall, wall, int(baseline.attrs["node_evaluations"]))
     print()
     print(f"## Fuzzy joint angles, {trial.n_frames} frames at {trial.rate:g} Hz, {len(components)} components, "
           f"α = {', '.join(f'{a:g}' for a in ALPHAS)}")  # fmt: skip

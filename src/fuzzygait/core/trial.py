@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import MarkerError, ParameterError
 
 #: Kinds of model-output points, after the ``POINT`` group's type lists of Vicon files.
@@ -121,7 +122,7 @@ class Trial:
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.markers = np.asarray(self.markers, dtype=float)
+        self.markers = floats(self.markers)  # a traced array stays traced (fuzzygait.core.arrays)
         if self.markers.ndim != 3 or self.markers.shape[2] != 3:
             raise ParameterError(
                 f"markers must have shape (frames, markers, 3); got {self.markers.shape}"

@@ -37,6 +37,7 @@ is wrapped into (-180°, 180°] like the others.
 
 from __future__ import annotations
 
+import autograd.numpy as anp
 import numpy as np
 
 from fuzzygait.kinematics.vectors import relative_rotation
@@ -67,25 +68,25 @@ def cardan_yxz(rotation: np.ndarray) -> np.ndarray:
     """Intrinsic Y-X-Z angles ``(a, b, c)`` in **degrees** of ``(n, 3, 3)`` rotations
     ``R = R_y(a) R_x(b) R_z(c)``; NaN rows stay NaN."""
     r = rotation
-    a = np.arctan2(r[:, 0, 2], r[:, 2, 2])
-    b = np.arcsin(np.clip(-r[:, 1, 2], -1.0, 1.0))
-    c = np.arctan2(r[:, 1, 0], r[:, 1, 1])
-    return np.degrees(np.stack([a, b, c], axis=-1))
+    a = anp.arctan2(r[:, 0, 2], r[:, 2, 2])
+    b = anp.arcsin(anp.clip(-r[:, 1, 2], -1.0, 1.0))
+    c = anp.arctan2(r[:, 1, 0], r[:, 1, 1])
+    return anp.degrees(anp.stack([a, b, c], axis=-1))
 
 
 def cardan_zxy(rotation: np.ndarray) -> np.ndarray:
     """Intrinsic Z-X-Y angles ``(c, b, a)`` in **degrees** of ``(n, 3, 3)`` rotations
     ``R = R_z(c) R_x(b) R_y(a)`` (rotation, obliquity, tilt); NaN rows stay NaN."""
     r = rotation
-    c = np.arctan2(-r[:, 0, 1], r[:, 1, 1])
-    b = np.arcsin(np.clip(r[:, 2, 1], -1.0, 1.0))
-    a = np.arctan2(-r[:, 2, 0], r[:, 2, 2])
-    return np.degrees(np.stack([c, b, a], axis=-1))
+    c = anp.arctan2(-r[:, 0, 1], r[:, 1, 1])
+    b = anp.arcsin(anp.clip(r[:, 2, 1], -1.0, 1.0))
+    a = anp.arctan2(-r[:, 2, 0], r[:, 2, 2])
+    return anp.degrees(anp.stack([c, b, a], axis=-1))
 
 
 def wrap_degrees(angles: np.ndarray) -> np.ndarray:
     """Angles wrapped into (-180, 180] degrees."""
-    return 180.0 - np.mod(180.0 - angles, 360.0)
+    return 180.0 - anp.mod(180.0 - angles, 360.0)
 
 
 def joint_angles(proximal: np.ndarray, distal: np.ndarray, joint: str, side: str) -> np.ndarray:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import autograd.numpy as anp
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError
@@ -181,29 +182,29 @@ class ClusterChain(LowerBodyChain):
         if len(present) < MIN_MARKERS:
             raise MarkerError(f"{self.trial.name}: the {side} {name} cluster has fewer than {MIN_MARKERS} markers")
         rows = [cluster.markers.index(m) for m in present]
-        observed = np.stack([self.marker(m) for m in present], axis=1)
+        observed = anp.stack([self.marker(m) for m in present], axis=1)
         return fit_rigid(cluster.local[rows], observed)
 
     def kjc(self, side: str) -> np.ndarray:
         """Knee joint centre: the thigh cluster's anatomical origin, mm."""
-        return np.asarray(self.fit(side + "thigh").origin)
+        return self.fit(side + "thigh").origin
 
     def thigh(self, side: str) -> np.ndarray:
         """Thigh anatomical frame from the thigh cluster fit."""
-        return np.asarray(self.fit(side + "thigh").rotation)
+        return self.fit(side + "thigh").rotation
 
     def ajc(self, side: str) -> np.ndarray:
         """Ankle joint centre: the shank cluster's anatomical origin, mm."""
-        return np.asarray(self.fit(side + "tibia").origin)
+        return self.fit(side + "tibia").origin
 
     def torsioned_tibia(self, side: str) -> np.ndarray:
         """Torsioned tibia (ankle axis) frame from the shank cluster fit."""
-        return np.asarray(self.fit(side + "tibia").rotation)
+        return self.fit(side + "tibia").rotation
 
     def forefoot(self, side: str) -> np.ndarray:
         """CGM 2.4 forefoot anatomical frame (x dorsal, y left, z posterior) from the
         forefoot cluster fit."""
-        return np.asarray(self.fit(side + "forefoot").rotation)
+        return self.fit(side + "forefoot").rotation
 
     @_memo
     def fjc(self, side: str) -> np.ndarray:

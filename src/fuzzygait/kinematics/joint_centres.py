@@ -23,8 +23,10 @@ whose exported joint centres they reproduce to float32 storage, 2e-4 mm):
 
 from __future__ import annotations
 
+import autograd.numpy as anp
 import numpy as np
 
+from fuzzygait.core.arrays import plain
 from fuzzygait.kinematics.vectors import cross, dot, norm, rotate_about, unit
 
 #: Davis et al. (1991) regression angles used by Plug-in Gait, rad.
@@ -122,7 +124,7 @@ def chord_joint_centre(
     normal = unit(cross(wand - marker, to_proximal))
     mid = 0.5 * (proximal + marker)
     with np.errstate(invalid="ignore"):
-        angle = 2.0 * np.arccos(offset / norm(to_proximal))
+        angle = 2.0 * anp.arccos(offset / norm(to_proximal))
     return rotate_about(proximal, mid, normal, angle)
 
 
@@ -174,13 +176,13 @@ def rotated_chord_joint_centre(
         return v - dot(v, axis)[:, None] * axis
 
     # signed radius: the side of the line the chord takes relative to the wand
-    radius = norm(radial) * np.sign(dot(radial, across(wand)))
+    radius = norm(radial) * np.sign(plain(dot(radial, across(wand))))
     for _ in range(ROTATED_CHORD_MAX_ITERATIONS):
         turned = rotate_about(wand, centre, unit(proximal - centre), -rotation)
         moved = foot + radius[:, None] * unit(across(turned))
         change = norm(moved - centre)
         centre = moved
-        if not np.any(change > ROTATED_CHORD_TOLERANCE_MM):  # NaN frames do not count
+        if not np.any(plain(change) > ROTATED_CHORD_TOLERANCE_MM):  # NaN frames do not count
             break
     return centre
 

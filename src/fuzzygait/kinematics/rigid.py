@@ -19,9 +19,14 @@ on which markers are visible, so it is decided once per visibility pattern.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
+import autograd.numpy as anp
 import numpy as np
+from autograd.extend import defvjp, primitive
+
+from fuzzygait.core.arrays import floats, plain
 
 #: Fewest visible markers that fix a rigid pose.
 MIN_MARKERS = 3
@@ -67,32 +72,32 @@ def fit_rigid(local: np.ndarray, observed: np.ndarray, weights: np.ndarray | Non
         positive weight, or collinear ones, are NaN.
     """
     local = np.asarray(local, dtype=float)
-    observed = np.asarray(observed, dtype=float)
+    observed = floats(observed)
     m = local.shape[0]
     if observed.ndim != 3 or observed.shape[1:] != (m, 3) or local.shape != (m, 3):
         raise ValueError(f"fit_rigid: local {local.shape} and observed {observed.shape} do not match (m, 3), (n, m, 3)")
     w = np.ones(m) if weights is None else np.asarray(weights, dtype=float)
     if w.shape != (m,) or np.any(w < 0) or not np.all(np.isfinite(w)):
         raise ValueError(f"fit_rigid: weights must be {m} finite non-negative numbers")
-    visible = np.all(np.isfinite(observed), axis=2) & (w > 0)
+    visible = np.all(np.isfinite(plain(observed)), axis=2) & (w > 0)
     wv = np.where(visible, w, 0.0)  # (n, m)
     total = wv.sum(axis=1)  # (n,)
     safe_total = np.where(total > 0, total, 1.0)
-    x = np.where(visible[:, :, None], observed, 0.0)
-    x_bar = np.matmul(wv[:, None, :], x)[:, 0, :] / safe_total[:, None]
+    x = anp.where(visible[:, :, None], observed, 0.0)
+    x_bar = anp.matmul(wv[:, None, :], x)[:, 0, :] / safe_total[:, None]
     r_bar = (wv @ local) / safe_total[:, None]
     xc = x - x_bar[:, None, :]
     rc = local[None, :, :] - r_bar[:, None, :]
-    covariance = np.matmul(np.swapaxes(xc * wv[:, :, None], 1, 2), rc)  # sum_m w x_c r_cᵀ
+    covariance = anp.matmul(anp.swapaxes(xc * wv[:, :, None], 1, 2), rc)  # sum_m w x_c r_cᵀ
     rotation = polar_rotation(covariance)
-    origin = x_bar - np.einsum("nij,nj->ni", rotation, r_bar)
-    fitted = origin[:, None, :] + np.matmul(local, np.swapaxes(rotation, 1, 2))
-    squared = np.sum((fitted - observed) ** 2, axis=2)
-    residual = np.sqrt(np.einsum("nm,nm->n", wv, np.where(visible, squared, 0.0)) / safe_total)
+    origin = x_bar - anp.einsum("nij,nj->ni", rotation, r_bar)
+    fitted = origin[:, None, :] + anp.matmul(local, anp.swapaxes(rotation, 1, 2))
+    squared = anp.sum((fitted - anp.where(visible[:, :, None], observed, fitted)) ** 2, axis=2)
+    residual = anp.sqrt(anp.einsum("nm,nm->n", wv, squared) / safe_total)
     bad = (visible.sum(axis=1) < MIN_MARKERS) | _collinear(local, w, visible)
-    rotation[bad] = np.nan
-    origin[bad] = np.nan
-    residual[bad] = np.nan
+    rotation = anp.where(bad[:, None, None], np.nan, rotation)
+    origin = anp.where(bad[:, None], np.nan, origin)
+    residual = anp.where(bad, np.nan, residual)
     return RigidFit(rotation, origin, residual, visible)
 
 
@@ -133,11 +138,15 @@ POLAR_ITERATIONS = 12
 POLAR_TOLERANCE = 1e-13
 
 
+@primitive
 def polar_rotation(covariance: np.ndarray) -> np.ndarray:
     """The rotation ``U diag(1, 1, det(U Vᵀ)) Vᵀ`` of the SVD ``U S Vᵀ`` of each ``(3, 3)``
     matrix in ``(n, 3, 3)`` ``covariance`` (the least-squares rotation of
     :func:`fit_rigid`), by scaled Newton iteration for the polar factor where ``det > 0``
-    and by the SVD elsewhere (module docstring)."""
+    and by the SVD elsewhere (module docstring).
+
+    Traced for derivatives (:mod:`fuzzygait.core.arrays`), its reverse sweep is the
+    closed form of :func:`_polar_rotation_vjp`, not the iteration's."""
     covariance = np.asarray(covariance, dtype=float)
     entries = np.ascontiguousarray(np.moveaxis(covariance, 0, -1))  # (3, 3, n)
     _, det = _cofactor([[entries[i, j] for j in range(3)] for i in range(3)])
@@ -166,6 +175,44 @@ def polar_rotation(covariance: np.ndarray) -> np.ndarray:
         u[:, :, 2] *= np.where(sign == 0.0, 1.0, sign)[:, None]
         out[rest] = u @ vt
     return out
+
+
+def _hat(x: np.ndarray) -> np.ndarray:
+    """Skew matrices ``[x]×`` ``(k, 3, 3)`` of vectors ``(k, 3)``."""
+    zero = np.zeros(x.shape[0])
+    return np.stack([np.stack([zero, -x[:, 2], x[:, 1]], -1), np.stack([x[:, 2], zero, -x[:, 0]], -1),
+                     np.stack([-x[:, 1], x[:, 0], zero], -1)], axis=1)  # fmt: skip
+
+
+def _polar_rotation_vjp(rotation: np.ndarray, covariance: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """Reverse-mode derivative of :func:`polar_rotation` at ``covariance`` (``(k, 3, 3)``)
+    with result ``rotation``.
+
+    ``R`` maximises ``tr(Rᵀ C)`` over rotations, so ``S = Rᵀ C`` is symmetric; keeping it so
+    under ``dC`` gives ``dR = R Ω`` with ``Ω`` skew and ``S Ω + Ω S = Rᵀ dC − dCᵀ R``.  That
+    operator is self-adjoint, so the cotangent ``G`` of ``R`` becomes ``C̄ = 2 R X`` with
+    ``S X + X S = skew(Rᵀ G)``, and for ``X = [x]×`` the equation is ``(tr(S) I − S) x =
+    vee(skew(Rᵀ G))``: one 3×3 solve per matrix.  Rows where that system is singular (a
+    degenerate cluster: the rotation is not unique) or not finite get NaN."""
+    s = np.swapaxes(rotation, 1, 2) @ covariance
+    s = 0.5 * (s + np.swapaxes(s, 1, 2))
+    system = np.trace(s, axis1=1, axis2=2)[:, None, None] * np.eye(3) - s
+    with np.errstate(invalid="ignore"):
+        det = np.linalg.det(np.where(np.isfinite(system), system, 0.0))
+        size = np.abs(system).max(axis=(1, 2)) if system.size else np.zeros(0)
+        ok = np.isfinite(system).all(axis=(1, 2)) & (np.abs(det) > 1e-12 * size**3)
+
+    def vjp(cotangent: np.ndarray) -> np.ndarray:
+        m = np.swapaxes(rotation, 1, 2) @ cotangent
+        a = 0.5 * np.stack([m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]], axis=-1)
+        x = np.full(a.shape, np.nan)
+        x[ok] = np.linalg.solve(system[ok], a[ok][:, :, None])[:, :, 0]
+        return np.asarray(2.0 * rotation @ _hat(x))
+
+    return vjp
+
+
+defvjp(polar_rotation, _polar_rotation_vjp)
 
 
 def frame_from_points(origin: np.ndarray, along: np.ndarray, plane: np.ndarray) -> np.ndarray:

@@ -10,11 +10,18 @@ Conventions
 * Missing samples are NaN and simply propagate (no interpolation, no warnings).
 
 Everything works on whole trials at once; there are no per-frame Python loops.
+
+The operations are ``autograd.numpy``'s (``anp``): on plain arrays they are numpy's, and
+arrays traced for derivatives pass through them (see :mod:`fuzzygait.core.arrays`).
 """
 
 from __future__ import annotations
 
+import autograd.numpy as anp
 import numpy as np
+from autograd.extend import defvjp, primitive
+
+from fuzzygait.core.arrays import floats
 
 __all__ = [
     "axis_rotation",
@@ -31,12 +38,25 @@ __all__ = [
 ]
 
 
+def _unbroadcast(gradient: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``gradient`` summed back to the shape of the operand ``like`` it was broadcast from."""
+    shape = np.shape(like)
+    while gradient.ndim > len(shape):
+        gradient = gradient.sum(axis=0)
+    for axis, size in enumerate(shape):
+        if size == 1 and gradient.shape[axis] != 1:
+            gradient = gradient.sum(axis=axis, keepdims=True)
+    return gradient
+
+
+@primitive
 def norm(v: np.ndarray) -> np.ndarray:
     """Euclidean length of each vector of ``(n, 3)`` -> ``(n,)``."""
     v = np.asarray(v, dtype=float)
     return np.sqrt(v[..., 0] ** 2 + v[..., 1] ** 2 + v[..., 2] ** 2)
 
 
+@primitive
 def unit(v: np.ndarray) -> np.ndarray:
     """Vectors scaled to unit length (NaN for zero-length or missing vectors)."""
     v = np.asarray(v, dtype=float)
@@ -44,11 +64,13 @@ def unit(v: np.ndarray) -> np.ndarray:
         return v / norm(v)[..., None]
 
 
+@primitive
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot product of ``(n, 3)`` arrays -> ``(n,)``."""
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
+@primitive
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product ``a x b`` of ``(n, 3)`` arrays (broadcasting)."""
     a = np.asarray(a, dtype=float)
@@ -63,9 +85,20 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+# Reverse-mode derivatives of the four (one recorded operation each when traced, see
+# fuzzygait.core.arrays): d|v| = u·dv;  du = (dv - u (u·dv)) / |v|;  d(a·b) = b·da + a·db;
+# d(a × b) = da × b + a × db, whose adjoints are ḡ·(da × b) = da·(b × ḡ), ḡ·(a × db) = db·(ḡ × a).
+defvjp(norm, lambda n, v: lambda g: g[..., None] * np.asarray(v) / n[..., None])
+defvjp(unit, lambda u, v: lambda g: (g - u * dot(u, g)[..., None]) / norm(v)[..., None])
+defvjp(dot, lambda d, a, b: lambda g: _unbroadcast(g[..., None] * np.asarray(b), a),
+       lambda d, a, b: lambda g: _unbroadcast(g[..., None] * np.asarray(a), b))  # fmt: skip
+defvjp(cross, lambda c, a, b: lambda g: _unbroadcast(cross(np.broadcast_to(b, g.shape), g), a),
+       lambda c, a, b: lambda g: _unbroadcast(cross(g, np.broadcast_to(a, g.shape)), b))  # fmt: skip
+
+
 def frame_from_axes(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
     """Stack three ``(n, 3)`` axis arrays as the columns of ``(n, 3, 3)`` frames."""
-    return np.stack([x, y, z], axis=-1)
+    return anp.stack([x, y, z], axis=-1)
 
 
 def axis_rotation(axis: int, angle: np.ndarray | float) -> np.ndarray:
@@ -95,8 +128,8 @@ def rotate_about(
     """``points`` ``(n, 3)`` rotated by ``angle`` (rad, ``(n,)`` or scalar, right-handed)
     about the line through ``origin`` along the **unit** vector ``axis`` (Rodrigues)."""
     v = points - origin
-    angle = np.asarray(angle, dtype=float)[..., None]
-    cos_a, sin_a = np.cos(angle), np.sin(angle)
+    angle = floats(angle)[..., None]
+    cos_a, sin_a = anp.cos(angle), anp.sin(angle)
     along = (1.0 - cos_a) * dot(axis, v)[..., None] * axis
     return origin + cos_a * v + sin_a * cross(axis, v) + along
 
@@ -106,18 +139,18 @@ def relative_rotation(proximal: np.ndarray, distal: np.ndarray) -> np.ndarray:
 
     Either argument may be a single ``(3, 3)`` frame (e.g. the progression frame).
     """
-    return np.swapaxes(proximal, -1, -2) @ distal
+    return anp.swapaxes(proximal, -1, -2) @ distal
 
 
 def to_local(frame: np.ndarray, origin: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Coordinates of lab ``points`` ``(n, 3)`` in the frame at ``origin``."""
-    return np.einsum("nji,nj->ni", frame, points - origin)
+    return anp.einsum("nji,nj->ni", frame, points - origin)
 
 
 def to_lab(frame: np.ndarray, origin: np.ndarray, local: np.ndarray) -> np.ndarray:
     """Lab positions of ``local`` coordinates (``(3,)`` or ``(n, 3)``) in the frame at
     ``origin``: ``origin + frame @ local``."""
-    local = np.asarray(local, dtype=float)
+    local = floats(local)
     if local.ndim == 1:
         return origin + frame @ local
-    return origin + np.einsum("nij,nj->ni", frame, local)
+    return origin + anp.einsum("nij,nj->ni", frame, local)

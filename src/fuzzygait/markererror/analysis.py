@@ -26,7 +26,7 @@ a ``component`` dimension, on the trial's frames:
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
 * attributes: ``trial``, ``model`` (the model version), ``sources``, ``method``,
   ``starts``, ``output``, ``units``, ``strategy``, ``forward_simulations``,
-  ``node_evaluations`` (in total), ``seconds``.
+  ``node_evaluations`` and ``node_gradients`` (exact gradient rows; in total), ``seconds``.
 
 Hulls are taken of each angle on the continuous branch through the measured angle
 (:class:`~fuzzygait.markererror.angle_model.JointAngleModel` ``reference``), so a band
@@ -93,6 +93,10 @@ class FuzzyAngleOptions:
         workers: processes for the angle components (1: in this process), when no
             :class:`~fuzzygait.uncertainty.execution.Evaluator` is given.
         seed: seed of the random starting points.
+        gradients: ``"auto"``: the optimiser takes the exact gradients of the angle with
+            respect to the marker deviations (reverse-mode differentiation of the
+            kinematic model); ``"differences"``: forward differences (``1 + n_p``
+            evaluations per gradient; for comparison).
     """
 
     alphas: Sequence[float] = DEFAULT_ALPHAS
@@ -105,6 +109,7 @@ class FuzzyAngleOptions:
     follow: int = 5
     workers: int = 1
     seed: int = 0
+    gradients: str = "auto"
 
 
 class ComponentTask(NamedTuple):
@@ -162,7 +167,7 @@ def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray
             ]
         params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(model)
     strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
-                             stride=options.stride, follow=options.follow)  # fmt: skip
+                             stride=options.stride, follow=options.follow, gradients=options.gradients)  # fmt: skip
     result = graph_follower(fuzzy_model, params, options.alphas, strategy=strategy)
     extremiser = result["extremiser"].to_numpy().reshape(*result["hull"].shape, len(markers), 3)
     if options.method == "spherical":
@@ -171,7 +176,7 @@ def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray
         norms = np.linalg.norm(extremiser, axis=-1)
     # a cluster marker missing at a frame (the pose from the others) has no deviation there
     norms = np.where(model.seen(), norms, np.nan)
-    counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations")}
+    counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations", "node_gradients")}
     return f"{args.name}_{AXES[args.axis]}", result["hull"].to_numpy(), norms, counts
 
 
@@ -288,7 +293,7 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
     n_frames = trial.n_frames
     hulls: dict[str, np.ndarray] = {}
     deviations: dict[str, np.ndarray] = {}
-    totals = {"forward_simulations": 0, "node_evaluations": 0}
+    totals = {"forward_simulations": 0, "node_evaluations": 0, "node_gradients": 0}
     for task, (column, values, norms, counts) in zip(tasks, outputs, strict=True):
         frames, used = task.frames, task.markers
         hulls[column] = np.full((alphas.size, 2, n_frames), np.nan)
@@ -299,7 +304,8 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
         for key in totals:
             totals[key] += counts[key]
     attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method,
-             "starts": options.starts, "output": "joint angle", "strategy": BatchedDirect.name, **totals,
+             "starts": options.starts, "gradients": options.gradients, "output": "joint angle",
+             "strategy": BatchedDirect.name, **totals,
              "seconds": round(seconds, 3)}  # fmt: skip
     measured_index = int(np.argmin(np.abs(alphas - 1.0)))
     flags = {column: undetermined(hull[:, 0], hull[:, 1], hull[measured_index, 1][None, :])

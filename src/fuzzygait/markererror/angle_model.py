@@ -43,10 +43,14 @@ hull is not a band any more; :func:`undetermined` marks it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
+import autograd.numpy as anp
 import numpy as np
+from autograd import make_vjp
 
+from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
@@ -56,7 +60,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.uncertainty.protocol import NODES, Evaluation, Output
+from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, Evaluation, Output
 
 AXES = ("X", "Y", "Z")
 
@@ -179,7 +183,7 @@ class JointAngleModel:
     def output(self) -> Output:
         return Output(f"{self.name}_{AXES[self.axis]}", "deg")
 
-    capabilities = frozenset({NODES})
+    capabilities = frozenset({NODES, NODE_GRADIENTS})
 
     def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``
@@ -187,7 +191,7 @@ class JointAngleModel:
         if self.fixed_markers:
             if fixed is None:
                 raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
-            positions = np.concatenate([positions, fixed], axis=1)
+            positions = anp.concatenate([positions, fixed], axis=1)
         rows = Trial(markers=positions, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
         chain = model_chain(rows, self.subject, self.model, self.clusters, use_medial_markers=self.use_medial_markers)
         return angle_from_chain(chain, self.name, self.progression)
@@ -205,18 +209,39 @@ class JointAngleModel:
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """Angle component at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
         nodes = np.asarray(nodes, dtype=int)
-        positions = self._base[nodes] + np.asarray(P, dtype=float).reshape(len(nodes), -1, 3)
+        positions = self._base[nodes] + floats(P).reshape(len(nodes), -1, 3)
         angle = self.angles_of(positions, self._fixed[nodes])[:, self.axis]
         if self.reference is None:
             return angle
         reference = np.asarray(self.reference, dtype=float)[nodes]
         return reference + wrap_degrees(angle - reference)
 
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The angle component (degrees) at ``nodes`` (k,) for deviations ``P`` (k, n_p) and
+        its exact gradient with respect to each row's deviations, ``(k, n_p)`` degrees/mm
+        (:func:`row_gradients`)."""
+        return row_gradients(self.evaluate_nodes, P, nodes)
+
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """The angle component over all time nodes with one deviation ``p`` (n_p,); no
         sensitivities (the engine's direct strategies use finite differences)."""
         nodes = np.arange(self.frames.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+def row_gradients(function: Callable[[np.ndarray, np.ndarray], np.ndarray], P: np.ndarray,
+                  nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """``function(P, nodes)`` (k,) and the gradient of each row's value with respect to its
+    own row of ``P`` (k, n_p), exact, by one reverse sweep through the kinematic model
+    (autograd, :mod:`fuzzygait.core.arrays`): every row is computed from its own row of
+    ``P`` only, so the gradient of the sum of the values is the rows' gradients.  A row
+    whose angle is not defined (a marker missing there) has NaN values and gradients."""
+    P = np.asarray(P, dtype=float)
+    if P.shape[0] == 0:
+        return np.empty(0), np.empty_like(P)
+    vjp, values = make_vjp(lambda rows: function(rows, nodes))(P)
+    values = np.asarray(values, dtype=float)
+    return values, np.asarray(vjp(np.ones_like(values)), dtype=float)
 
 
 #: Excursion (degrees) of a hull bound from the measured angle beyond which the band is
@@ -295,10 +320,12 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
 def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:
     """Deviations given per marker as (r, θ, φ) — radius mm, polar and azimuthal angles
     in rad — to Cartesian (x, y, z) mm; any leading shape, last axis 3 per marker."""
-    q = np.asarray(P, dtype=float).reshape(*np.shape(P)[:-1], -1, 3)
+    P = floats(P)
+    q = P.reshape(*P.shape[:-1], -1, 3)
     r, theta, phi = q[..., 0], q[..., 1], q[..., 2]
-    xyz = np.stack([r * np.sin(theta) * np.cos(phi), r * np.sin(theta) * np.sin(phi), r * np.cos(theta)], axis=-1)
-    return xyz.reshape(np.shape(P))
+    xyz = anp.stack([r * anp.sin(theta) * anp.cos(phi), r * anp.sin(theta) * anp.sin(phi), r * anp.cos(theta)],
+                    axis=-1)  # fmt: skip
+    return xyz.reshape(P.shape)
 
 
 @dataclass
@@ -308,7 +335,7 @@ class SphericalDeviationModel:
 
     cartesian: JointAngleModel
 
-    capabilities = frozenset({NODES})
+    capabilities = frozenset({NODES, NODE_GRADIENTS})
 
     @property
     def times(self) -> np.ndarray:
@@ -329,6 +356,10 @@ class SphericalDeviationModel:
 
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         return self.cartesian.evaluate_nodes(spherical_to_cartesian(P), nodes)
+
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Values and exact gradients with respect to (r mm, θ, φ rad) per marker."""
+        return row_gradients(self.evaluate_nodes, P, nodes)
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         return self.cartesian.evaluate(spherical_to_cartesian(p))

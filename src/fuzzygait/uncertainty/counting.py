@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Array, FuzzyModel
+from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, SENSITIVITIES, Array, FuzzyModel
 
 
 @dataclass
@@ -19,7 +19,10 @@ class CountedModel:
         scale: per-parameter scale for the finite-difference step.
         fd_step: relative step of forward finite differences (times the parameter scale).
         evaluations: forward simulations run (finite-difference runs included).
-        node_evaluations: single-node evaluations (``evaluate_nodes`` rows).
+        node_evaluations: single-node evaluations (``evaluate_nodes`` rows, forward
+            differences included).
+        node_gradients: single-node gradients (``evaluate_nodes_gradients`` rows; each
+            row's value comes with it and is not counted again).
     """
 
     model: FuzzyModel
@@ -27,6 +30,7 @@ class CountedModel:
     fd_step: float = 1e-6
     evaluations: int = 0
     node_evaluations: int = 0
+    node_gradients: int = 0
     n_time: int = field(init=False)
 
     def __post_init__(self) -> None:
@@ -40,6 +44,12 @@ class CountedModel:
     @property
     def has_nodes(self) -> bool:
         return NODES in self.model.capabilities
+
+    @property
+    def has_node_gradients(self) -> bool:
+        """Whether the model gives exact gradients of single-node outputs (declares
+        ``"node_gradients"``)."""
+        return NODE_GRADIENTS in self.model.capabilities
 
     def _check(self, f: Array, p: Array) -> Array:
         f = np.asarray(f, dtype=float).reshape(-1)

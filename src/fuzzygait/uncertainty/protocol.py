@@ -7,14 +7,18 @@ of one scalar output over its time nodes, and declares what else it can do::
     model.times              (n_time,)  time of each node (any unit, e.g. s)
     model.parameter_names    tuple of n_p names (checked against the FuzzyVector)
     model.output             Output(name, units)
-    model.capabilities       frozenset, a subset of {"sensitivities", "nodes"}
+    model.capabilities       frozenset, a subset of {"sensitivities", "nodes", "node_gradients"}
     model.evaluate(p, sensitivities=False) -> Evaluation(values (n_time,), jacobian (n_time, n_p) | None)
     model.evaluate_nodes(P, nodes) -> (k,)      only with "nodes": output of row P[i] at node nodes[i]
+    model.evaluate_nodes_gradients(P, nodes) -> ((k,), (k, n_p))
+                                                only with "node_gradients": those outputs and their
+                                                gradients with respect to each row's parameters
 
 One call of ``evaluate`` is one forward simulation. Without ``"sensitivities"`` the
 engine uses forward finite differences (``1 + n_p`` forward simulations, all counted).
 ``"nodes"`` lets the direct strategies evaluate single time nodes without a whole
-trajectory (a joint angle at one frame, say).
+trajectory (a joint angle at one frame, say); with ``"node_gradients"`` as well, their
+first-order iterations take the model's gradients instead of forward differences.
 
 A plain function ``p -> (n_time,)`` becomes a model with :class:`FunctionModel`, or
 implicitly by :func:`as_model` (which :func:`~fuzzygait.uncertainty.graph_follower`
@@ -36,7 +40,8 @@ Array = NDArray[np.float64]
 
 SENSITIVITIES = "sensitivities"
 NODES = "nodes"
-CAPABILITIES = frozenset({SENSITIVITIES, NODES})
+NODE_GRADIENTS = "node_gradients"
+CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS})
 
 
 @dataclass(frozen=True)
@@ -146,6 +151,10 @@ def model_problem(model: object) -> str | None:
         return f"{name} declares unknown capabilities {sorted(unknown)}; known: {sorted(CAPABILITIES)}"
     if NODES in capabilities and not callable(getattr(model, "evaluate_nodes", None)):
         return f"{type(model).__name__} declares 'nodes' but has no evaluate_nodes(P, nodes)"
+    if NODE_GRADIENTS in capabilities and not (NODES in capabilities
+                                               and callable(getattr(model, "evaluate_nodes_gradients", None))):
+        return (f"{type(model).__name__} declares 'node_gradients' but not 'nodes' with "
+                "evaluate_nodes_gradients(P, nodes)")  # fmt: skip
     return None
 
 

@@ -5,18 +5,23 @@ Cheap models such as joint angles from markers (thesis §3.7.3, OP-II) offer::
 
     model.evaluate_nodes(P, nodes) -> values      # P (k, n_p), nodes (k,) -> (k,)
 
+and, with the ``"node_gradients"`` capability, their exact gradients::
+
+    model.evaluate_nodes_gradients(P, nodes) -> (values (k,), gradients (k, n_p))
+
 The α-level optimisations of different nodes are independent, so they are solved side by
-side: every iteration evaluates forward-difference gradients of all nodes' current
-points in one call, moves each towards the optimum of its linearisation over the α-level
-set (a point on the ball surfaces or a box vertex, closed form) with a line search
-(Frank–Wolfe steps, ``τ ∈ {1, 1/2, …, 1/16}``), and keeps a node's point only if it
-improves. Starting points (multistart): the deterministic parameters, the higher
-α-level's optimum of the same node (admissible, since the α-level sets are nested — this
-also makes the hulls nested by construction) and the best of a screen of seeded random
-points (inside the set and on its boundary). After the optimisation each
-node's optimum is also evaluated at the ``window`` neighbouring nodes on either side
-and the best value found there counts (the library post-processing of the Graph
-Follower, restricted to neighbours because whole trajectories are not needed).
+side: every iteration evaluates the gradients of all nodes' current points in one call
+(the model's exact ones, or forward differences: ``1 + n_p`` rows per point), moves
+each towards the optimum of its linearisation over the α-level set (a point on the ball
+surfaces or a box vertex, closed form) with a line search (Frank–Wolfe steps,
+``τ ∈ {1, 1/2, …, 1/16}``), and keeps a node's point only if it improves. Starting
+points (multistart): the deterministic parameters, the higher α-level's optimum of the
+same node (admissible, since the α-level sets are nested — this also makes the hulls
+nested by construction) and the best of a screen of seeded random points (inside the
+set and on its boundary). After the optimisation each node's optimum is also evaluated
+at the ``window`` neighbouring nodes on either side and the best value found there
+counts (the library post-processing of the Graph Follower, restricted to neighbours
+because whole trajectories are not needed).
 """
 
 from __future__ import annotations
@@ -39,17 +44,21 @@ MIN_REACH = 1e-6
 
 @dataclass
 class BatchCounts:
-    """Work done: node evaluations (rows) and iterations."""
+    """Work done: node evaluations (rows), exact node gradients (rows) and iterations."""
 
     node_evaluations: int = 0
+    node_gradients: int = 0
     iterations: int = 0
 
 
 class BatchedObjective:
-    """``sense · f(P, nodes)`` with counting and forward-difference gradients."""
+    """``sense · f(P, nodes)`` with counting and gradients: the model's exact ones when
+    ``exact`` (it declares ``"node_gradients"``), else forward differences of step
+    ``fd_step · scale``."""
 
-    def __init__(self, model: CountedModel, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts):
-        self.model, self.sense, self.counts = model, sense, counts
+    def __init__(self, model: CountedModel, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts,
+                 exact: bool = False):  # fmt: skip
+        self.model, self.sense, self.counts, self.exact = model, sense, counts, exact
         self.h = fd_step * np.asarray(scale, dtype=float)
 
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -60,6 +69,10 @@ class BatchedObjective:
         return self.sense * out
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.exact:
+            self.counts.node_gradients += int(P.shape[0])
+            values, gradients = self.model.model.evaluate_nodes_gradients(P, nodes)  # type: ignore[attr-defined]
+            return self.sense * np.asarray(values, dtype=float), self.sense * np.asarray(gradients, dtype=float)
         k, n_p = P.shape
         shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
         shifted[:, 1:, :] += np.diag(self.h)[None]
@@ -216,6 +229,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     others = np.setdiff1d(np.arange(n_time), nodes)
     everywhere = np.arange(n_time)
     counts = BatchCounts()
+    exact = strategy.gradients == "auto" and model.has_node_gradients
     hull = np.empty((levels.size, 2, n_time))
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
@@ -226,7 +240,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     for step, a in enumerate(below_one):
         domain = params.domain(float(levels[a]))
         for b, bound in enumerate(BOUNDS):
-            objective = BatchedObjective(model, SENSES[bound], params.scale, 1e-6, counts)
+            objective = BatchedObjective(model, SENSES[bound], params.scale, 1e-6, counts, exact)
             higher: list[np.ndarray] = []
             if bound in previous:  # the higher level's optimum, as it is and scaled out
                 higher = [previous[bound], domain.rescale_from(previous_domain, previous[bound])]  # type: ignore[arg-type]
@@ -248,5 +262,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
                 progress(2 * step + b + 1, 2 * below_one.size)
         previous_domain = domain
     model.node_evaluations += counts.node_evaluations
-    attrs = {"optimisations": int(2 * below_one.size * nodes.size), "solver_iterations": counts.iterations}
+    model.node_gradients += counts.node_gradients
+    attrs = {"optimisations": int(2 * below_one.size * nodes.size), "solver_iterations": counts.iterations,
+             "node_gradients": counts.node_gradients, "gradient_source": "exact" if exact else "forward differences"}
     return {"hull": hull, "extremiser": extremiser, "deterministic": deterministic, "attrs": attrs}

@@ -107,6 +107,10 @@ class Direct:
         return asdict(self)
 
 
+#: Where :class:`BatchedDirect` takes its gradients from.
+GRADIENT_SOURCES = ("auto", "differences")
+
+
 @dataclass(frozen=True)
 class BatchedDirect:
     """All optimisation nodes solved side by side (needs the ``"nodes"`` capability).
@@ -125,6 +129,9 @@ class BatchedDirect:
             re-evaluated.
         screen: random points per node screened for the random starts.
         seed: seed of the random points.
+        gradients: ``"auto"``: the model's exact gradients where it declares
+            ``"node_gradients"``, else forward differences; ``"differences"``: forward
+            differences always (``1 + n_p`` evaluations per gradient).
     """
 
     stride: int = 1
@@ -134,10 +141,14 @@ class BatchedDirect:
     screen: int = 64
     seed: int = 0
     follow: int = 0
+    gradients: str = "auto"
 
     name = "batched-direct"
 
     def __post_init__(self) -> None:
+        if self.gradients not in GRADIENT_SOURCES:
+            raise ParameterError(f"BatchedDirect gradients must be one of {', '.join(GRADIENT_SOURCES)}; "
+                                 f"got {self.gradients!r}")  # fmt: skip
         _whole("stride", self.stride, 1)
         _whole("follow", self.follow, 0)
         _whole("starts", self.starts, 1)
