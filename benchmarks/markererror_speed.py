@@ -2,11 +2,12 @@
 against Monte Carlo sampling given the same wall time (thesis §5.5, Fig. 5.11, Table 5.2).
 
 Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/markererror_speed.py [--joints] [--model auto]
-          [--trial walking|cgm24] [--starts N] [--compare-gradients]
+          [--trial walking|cgm24] [--starts N] [--compare-gradients | --compare-starts N]
 
 ``--compare-gradients`` first runs the same analysis with forward-difference gradients
-(``gradients="differences"``) in the same process and prints the wall ratio and how the
-bands differ; ``--trial cgm24`` runs on the synthetic CGM 2.4 session instead.
+(``gradients="differences"``), ``--compare-starts N`` with N multistart points, in the
+same process, and prints the wall ratio and how the bands differ; ``--trial cgm24`` runs
+on the synthetic CGM 2.4 session instead.
 
 1. Graph Follower (``BatchedDirect`` strategy, Cartesian deviations, Table 3.1 radii with all
    three sources): ``sample_data/walking.c3d`` (static calibration of ``static.c3d``; the
@@ -33,6 +34,7 @@ from _setup import ROOT, one_thread
 one_thread()
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -70,10 +72,10 @@ def _monte_carlo_task(args: tuple[ComponentTask, float, int]) -> tuple[str, np.n
             time.perf_counter() - start)  # fmt: skip
 
 
-def _compare_gradients(baseline, fuzzy, components: list[str], fd_wall: float, wall: float,
-                       fd_evaluations: int) -> None:  # fmt: skip
-    """Exact gradients against forward differences: wall time and the α < 1 hulls (both
-    are inner approximations of the true range: the wider band is the better one)."""
+def _compare_runs(baseline, fuzzy, components: list[str], label: str, baseline_wall: float, wall: float) -> None:
+    """The run against a baseline run of the same components (``label``: what differs):
+    wall time, work and the α < 1 hulls (both are inner approximations of the true range:
+    the wider band is the better one)."""
     ratios, wider, narrower, largest = [], 0, 0, (0.0, "", 0.0)
     for name in components:
         old, new = component_hull(baseline, name), component_hull(fuzzy, name)
@@ -88,15 +90,19 @@ def _compare_gradients(baseline, fuzzy, components: list[str], fd_wall: float, w
         if change.size and np.abs(change).max() > abs(largest[0]):
             at = int(np.argmax(np.abs(change)))
             largest = (float(change[at]), name, float(w_old[ok][at]))
+
+    def work(run) -> str:
+        return (f"node evaluations {int(run.attrs['node_evaluations']):,} + gradient rows "
+                f"{int(run.attrs.get('node_gradients', 0)):,}")  # fmt: skip
+
     print()
-    print("## Exact gradients against forward differences (same process, same options otherwise)")
-    print(f"forward differences: wall {fd_wall:.1f} s, node evaluations {fd_evaluations:,}; exact gradients: wall "
-          f"{wall:.1f} s, node evaluations {int(fuzzy.attrs['node_evaluations']):,} + gradient rows "
-          f"{int(fuzzy.attrs.get('node_gradients', 0)):,}; speed-up {fd_wall / wall:.2f}x")  # fmt: skip
-    print(f"band width exact/differences over determined (α < 1, frame): median per component "
+    print(f"## Against {label} (same process, same options otherwise)")
+    print(f"baseline: wall {baseline_wall:.1f} s, {work(baseline)}; this run: wall {wall:.1f} s, {work(fuzzy)}; "
+          f"speed-up {baseline_wall / wall:.2f}x")  # fmt: skip
+    print(f"band width this run / baseline over determined (α < 1, frame): median per component "
           f"{np.median(ratios):.4f} (range {min(ratios):.4f}-{max(ratios):.4f}); wider by > 0.01 deg at {wider}, "
           f"narrower at {narrower} (α, frame) points; largest change {largest[0]:+.3f} deg ({largest[1]}, "
-          f"differences' width there {largest[2]:.3f} deg)")  # fmt: skip
+          f"baseline width there {largest[2]:.3f} deg)")  # fmt: skip
 
 
 def main() -> None:
@@ -109,6 +115,8 @@ def main() -> None:
     parser.add_argument("--compare-gradients", action="store_true",
                         help="first run the optimiser with forward differences in the same process: wall ratio and "
                              "how the hulls differ")  # fmt: skip
+    parser.add_argument("--compare-starts", type=int, default=0, metavar="N",
+                        help="first run with N multistart points instead (exact gradients): wall ratio and hulls")
     args = parser.parse_args()
     print(f"command: OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']} .venv/bin/python "
           f"benchmarks/markererror_speed.py {' '.join(sys.argv[1:])}  ({os.cpu_count()} cores, Python "
@@ -122,17 +130,19 @@ def main() -> None:
     # ------------------------------------------------------------------ Graph Follower
     options = FuzzyAngleOptions(alphas=ALPHAS, workers=WORKERS, starts=args.starts)
     components = [f"{n}_{a}" for n in angles for a in AXES]
-    baseline = None
-    if args.compare_gradients:
-        fd_options = FuzzyAngleOptions(alphas=ALPHAS, workers=WORKERS, starts=args.starts, gradients="differences")
+    baseline, label = None, ""
+    if args.compare_gradients or args.compare_starts:
+        changes = {"gradients": "differences"} if args.compare_gradients else {"starts": args.compare_starts}
+        label = "forward differences" if args.compare_gradients else f"starts={args.compare_starts}"
         start = time.perf_counter()
-        baseline = fuzzy_joint_angles(trial, run.subject, result, fd_options, angles, clusters=run.clusters)
-        fd_wall = time.perf_counter() - start
+        baseline = fuzzy_joint_angles(trial, run.subject, result, dataclasses.replace(options, **changes), angles,
+                                      clusters=run.clusters)  # fmt: skip
+        baseline_wall = time.perf_counter() - start
     start = time.perf_counter()
     fuzzy = fuzzy_joint_angles(trial, run.subject, result, options, angles, clusters=run.clusters)
     wall = time.perf_counter() - start
     if baseline is not None:
-        _compare_gradients(baseline, fuzzy, components, fd_wall, wall, int(baseline.attrs["node_evaluations"]))
+        _compare_runs(baseline, fuzzy, components, label, baseline_wall, wall)
     print()
     print(f"## Fuzzy joint angles, {trial.n_frames} frames at {trial.rate:g} Hz, {len(components)} components, "
           f"α = {', '.join(f'{a:g}' for a in ALPHAS)}")  # fmt: skip

@@ -21,6 +21,7 @@ from autograd.test_util import check_grads
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.kinematics import vectors
+from fuzzygait.kinematics.angles import capped_arcsin
 from fuzzygait.kinematics.rigid import polar_rotation
 from fuzzygait.kinematics.versions import MODEL_VERSIONS
 from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
@@ -146,6 +147,17 @@ def test_vector_primitives_reverse_sweeps_with_broadcasting() -> None:
         weights = np.sin(np.arange(np.prod(shape))).reshape(shape)
         check_grads(lambda x, y, f=function, w=weights: anp.sum(f(x, y) * w), modes=["rev"], order=1)(a, b)
         assert grad(lambda y, f=function: anp.sum(f(a, y)))(b).shape == (3,)
+
+
+def test_capped_arcsin_has_a_finite_slope_at_the_cap() -> None:
+    """The Cardan middle angle's asin: the exact derivative inside (-1, 1), a finite
+    steep one at ±1 (gimbal lock: the plain chain rule through a clip gives NaN)."""
+    slope = np.vectorize(grad(capped_arcsin))
+    x = np.array([-0.9, 0.0, 0.5])
+    np.testing.assert_allclose(slope(x), 1.0 / np.sqrt(1.0 - x**2), rtol=1e-12)
+    at_cap = slope(np.array([-1.0, 1.0, 1.0 + 1e-15]))
+    assert np.all(np.isfinite(at_cap)) and np.all(at_cap >= 1e5)
+    np.testing.assert_array_equal(capped_arcsin(np.array([1.0 + 1e-15, -1.0 - 1e-15])), [np.pi / 2, -np.pi / 2])
 
 
 def test_polar_rotation_reverse_sweep_matches_differences() -> None:

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import autograd.numpy as anp
 import numpy as np
+from autograd.extend import defvjp, primitive
 
 from fuzzygait.kinematics.vectors import relative_rotation
 
@@ -69,7 +70,7 @@ def cardan_yxz(rotation: np.ndarray) -> np.ndarray:
     ``R = R_y(a) R_x(b) R_z(c)``; NaN rows stay NaN."""
     r = rotation
     a = anp.arctan2(r[:, 0, 2], r[:, 2, 2])
-    b = anp.arcsin(anp.clip(-r[:, 1, 2], -1.0, 1.0))
+    b = capped_arcsin(-r[:, 1, 2])
     c = anp.arctan2(r[:, 1, 0], r[:, 1, 1])
     return anp.degrees(anp.stack([a, b, c], axis=-1))
 
@@ -79,9 +80,21 @@ def cardan_zxy(rotation: np.ndarray) -> np.ndarray:
     ``R = R_z(c) R_x(b) R_y(a)`` (rotation, obliquity, tilt); NaN rows stay NaN."""
     r = rotation
     c = anp.arctan2(-r[:, 0, 1], r[:, 1, 1])
-    b = anp.arcsin(anp.clip(r[:, 2, 1], -1.0, 1.0))
+    b = capped_arcsin(r[:, 2, 1])
     a = anp.arctan2(-r[:, 2, 0], r[:, 2, 2])
     return anp.degrees(anp.stack([c, b, a], axis=-1))
+
+
+@primitive
+def capped_arcsin(x: np.ndarray) -> np.ndarray:
+    """``arcsin`` (rad) of ``x`` clipped to [-1, 1] (a rotation matrix's entry may exceed
+    1 by rounding).  Its reverse sweep stays finite at the cap, where the derivative is
+    infinite: ``1 / sqrt(max(1 - x², 1e-12))``, a steep but usable ascent direction for
+    the α-level optimiser (the plain chain rule gives ``inf · 0 = NaN`` there)."""
+    return np.arcsin(np.clip(x, -1.0, 1.0))
+
+
+defvjp(capped_arcsin, lambda b, x: lambda g: g / np.sqrt(np.maximum(1.0 - np.square(x), 1e-12)))
 
 
 def wrap_degrees(angles: np.ndarray) -> np.ndarray:

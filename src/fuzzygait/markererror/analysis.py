@@ -103,7 +103,7 @@ class FuzzyAngleOptions:
     sources: Sequence[str] = SOURCES
     error_model: ErrorModel = field(default_factory=ErrorModel)
     method: str = "cartesian"
-    starts: int = 3
+    starts: int = 5
     iterations: int = 25
     stride: int = 8
     follow: int = 5
