@@ -52,10 +52,11 @@ def test_joint_angle_models(angles_run) -> None:
 
     cartesian = joint_angle_model(angles_run)
     p = np.random.default_rng(1).uniform(-5.0, 5.0, cartesian.n_parameters)
-    assert check_model(cartesian, p, scale=np.full(p.size, 10.0))["nodes_error"] <= 1e-9
+    report = check_model(cartesian, p, scale=np.full(p.size, 10.0))
+    assert report["nodes_error"] <= 1e-9 and 0.0 < report["node_gradients_error"] <= 1e-4
     spherical = SphericalDeviationModel(cartesian)
     q = np.tile([4.0, 1.0, 0.5], len(cartesian.markers))
-    check_model(spherical, q)
+    assert 0.0 < check_model(spherical, q)["node_gradients_error"] <= 1e-4
     assert spherical.parameter_names[:3] == (f"{cartesian.markers[0]}_r", f"{cartesian.markers[0]}_theta",
                                              f"{cartesian.markers[0]}_phi")  # fmt: skip
     assert cartesian.output == Output("LKneeAngles_X", "deg")
@@ -99,7 +100,8 @@ class Broken:
         self.times = np.linspace(0.0, 1.0, 5)
         self.parameter_names = ("a", "b") if defect == "names" else ("a",)
         self.output = Output()
-        self.capabilities = frozenset({"sensitivities", "nodes"}) if defect != "undeclared" else frozenset({"magic"})
+        self.capabilities = frozenset({"sensitivities", "nodes", "node_gradients"}) if defect != "undeclared" \
+            else frozenset({"magic"})  # fmt: skip
         self.calls = 0
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation | np.ndarray:
@@ -121,6 +123,10 @@ class Broken:
         offset = 1.0 if self.defect == "nodes" else 0.0
         return P[:, 0] * self.times[nodes] + offset
 
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        slope = self.times[nodes] * (1.1 if self.defect == "node_gradients" else 1.0)
+        return self.evaluate_nodes(P, nodes), slope[:, None]
+
 
 @pytest.mark.parametrize(
     ("defect", "needle"),
@@ -131,6 +137,7 @@ class Broken:
         ("random", "deterministic"),
         ("jacobian", "finite differences"),
         ("nodes", "evaluate_nodes differs"),
+        ("node_gradients", "node gradients differ from central differences"),
         ("names", "2 parameter names"),
         ("undeclared", "unknown capabilities"),
     ],

@@ -224,7 +224,8 @@ class JointAngleModel:
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """The angle component over all time nodes with one deviation ``p`` (n_p,); no
-        sensitivities (the engine's direct strategies use finite differences)."""
+        whole-trajectory sensitivities (the batched optimiser takes the per-node exact ones
+        of :meth:`evaluate_nodes_gradients`, other strategies finite differences)."""
         nodes = np.arange(self.frames.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
 

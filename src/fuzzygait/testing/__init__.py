@@ -18,7 +18,7 @@ import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.execution import SharedArray
-from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Evaluation, Output, model_problem
+from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, SENSITIVITIES, Evaluation, Output, model_problem
 
 
 class ModelCheckError(ParameterError):
@@ -36,11 +36,14 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     shape ``(n_time, n_p)`` with the same values (to 1e-8 relative), that agrees with central finite
     differences (step ``fd_step`` × ``scale``) to ``sensitivity_rtol`` of the largest
     derivative; with ``"nodes"``, ``evaluate_nodes`` at ``n_nodes`` random
-    (node, parameter) pairs equals the full trajectories there (to 1e-9 relative).
+    (node, parameter) pairs equals the full trajectories there (to 1e-9 relative); with
+    ``"node_gradients"``, ``evaluate_nodes_gradients`` at those pairs gives the same
+    values and gradients that agree with central differences of ``evaluate_nodes`` to
+    ``sensitivity_rtol`` of the largest derivative.
 
     Returns:
         The measured figures: ``n_time``, ``sensitivity_error`` (relative, or 0),
-        ``nodes_error`` (relative, or 0).
+        ``nodes_error`` (relative, or 0), ``node_gradients_error`` (relative, or 0).
 
     Raises:
         ModelCheckError: naming the first check that failed.
@@ -58,11 +61,14 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     if not np.array_equal(first, _values(model, p, n_time)):
         raise ModelCheckError("two evaluations at the same parameters differ (the model must be deterministic)")
     scale = np.maximum(np.abs(p), 1.0) if scale is None else np.asarray(scale, dtype=float)
-    report = {"n_time": float(n_time), "sensitivity_error": 0.0, "nodes_error": 0.0}
+    report = {"n_time": float(n_time), "sensitivity_error": 0.0, "nodes_error": 0.0, "node_gradients_error": 0.0}
     if SENSITIVITIES in capabilities:
         report["sensitivity_error"] = _check_sensitivities(model, p, first, scale, fd_step, sensitivity_rtol)
     if NODES in capabilities:
         report["nodes_error"] = _check_nodes(model, p, scale, n_time, n_nodes, seed)
+    if NODE_GRADIENTS in capabilities:
+        report["node_gradients_error"] = _check_node_gradients(model, p, scale, n_time, n_nodes, seed, fd_step,
+                                                               sensitivity_rtol)  # fmt: skip
     return report
 
 
@@ -105,9 +111,7 @@ def _check_sensitivities(model: object, p: np.ndarray, values: np.ndarray, scale
 
 
 def _check_nodes(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int, seed: int) -> float:
-    rng = np.random.default_rng(seed)
-    P = p + 1e-3 * scale * rng.standard_normal((n_nodes, p.size))
-    nodes = rng.integers(0, n_time, n_nodes)
+    P, nodes = _random_pairs(p, scale, n_time, n_nodes, seed)
     at_nodes: np.ndarray = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
     if at_nodes.shape != (n_nodes,):
         raise ModelCheckError(f"evaluate_nodes returned shape {at_nodes.shape} for {n_nodes} pairs")
@@ -115,6 +119,39 @@ def _check_nodes(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n
     error = float(np.max(np.abs(at_nodes - full)) / max(float(np.max(np.abs(full))), 1.0))
     if error > 1e-9:
         raise ModelCheckError(f"evaluate_nodes differs from the full trajectories by {error:.2e} (relative)")
+    return error
+
+
+def _random_pairs(p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int,
+                  seed: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """``n_nodes`` parameter rows near ``p`` and time nodes, seeded."""
+    rng = np.random.default_rng(seed)
+    return p + 1e-3 * scale * rng.standard_normal((n_nodes, p.size)), rng.integers(0, n_time, n_nodes)
+
+
+def _check_node_gradients(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int, seed: int,
+                          fd_step: float, rtol: float) -> float:  # fmt: skip
+    P, nodes = _random_pairs(p, scale, n_time, n_nodes, seed)
+    values, gradients = model.evaluate_nodes_gradients(P, nodes)  # type: ignore[attr-defined]
+    values, gradients = np.asarray(values, dtype=float), np.asarray(gradients, dtype=float)
+    if values.shape != (n_nodes,) or gradients.shape != P.shape:
+        raise ModelCheckError(f"evaluate_nodes_gradients returned shapes {values.shape} and {gradients.shape} for "
+                              f"{n_nodes} pairs of {p.size} parameters")  # fmt: skip
+    at_nodes = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
+    if np.max(np.abs(values - at_nodes)) > 1e-9 * max(float(np.max(np.abs(at_nodes))), 1.0):
+        raise ModelCheckError("evaluate_nodes_gradients gives other values than evaluate_nodes")
+    fd = np.empty_like(gradients)
+    for i in range(p.size):
+        h = fd_step * scale[i]
+        up, down = P.copy(), P.copy()
+        up[:, i] += h
+        down[:, i] -= h
+        difference = np.asarray(model.evaluate_nodes(up, nodes)) - np.asarray(model.evaluate_nodes(down, nodes))  # type: ignore[attr-defined]
+        fd[:, i] = difference / (2 * h)
+    error = float(np.max(np.abs(gradients - fd))) / max(float(np.max(np.abs(fd))), np.finfo(float).tiny)
+    if not error <= rtol:
+        raise ModelCheckError(f"node gradients differ from central differences of evaluate_nodes by {error:.2e} "
+                              f"of the largest derivative (tolerance {rtol:g})")  # fmt: skip
     return error
 
 
