@@ -132,12 +132,13 @@ def _random_pairs(p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int,
 def _check_node_gradients(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int, seed: int,
                           fd_step: float, rtol: float) -> float:  # fmt: skip
     P, nodes = _random_pairs(p, scale, n_time, n_nodes, seed)
-    values, gradients = model.evaluate_nodes_gradients(P, nodes)  # type: ignore[attr-defined]
-    values, gradients = np.asarray(values, dtype=float), np.asarray(gradients, dtype=float)
+    returned = model.evaluate_nodes_gradients(P, nodes)  # type: ignore[attr-defined]
+    values: np.ndarray = np.asarray(returned[0], dtype=float)
+    gradients: np.ndarray = np.asarray(returned[1], dtype=float)
     if values.shape != (n_nodes,) or gradients.shape != P.shape:
         raise ModelCheckError(f"evaluate_nodes_gradients returned shapes {values.shape} and {gradients.shape} for "
                               f"{n_nodes} pairs of {p.size} parameters")  # fmt: skip
-    at_nodes = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
+    at_nodes: np.ndarray = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
     if np.max(np.abs(values - at_nodes)) > 1e-9 * max(float(np.max(np.abs(at_nodes))), 1.0):
         raise ModelCheckError("evaluate_nodes_gradients gives other values than evaluate_nodes")
     fd = np.empty_like(gradients)
