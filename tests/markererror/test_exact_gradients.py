@@ -26,6 +26,8 @@ from fuzzygait.kinematics.rigid import polar_rotation
 from fuzzygait.kinematics.versions import MODEL_VERSIONS
 from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
+from fuzzygait.uncertainty.counting import CountedModel
+from fuzzygait.uncertainty.gfa.batched import BatchCounts, BatchedObjective
 from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, Evaluation, Output, model_problem
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from support import SAMPLE_DATA
@@ -201,6 +203,23 @@ def test_exact_and_differenced_gradients_give_the_same_hulls(cgm24_runs: dict[st
     assert results["differences"].attrs["gradient_source"] == "forward differences"
     assert results["differences"].attrs["node_gradients"] == 0
     assert results["auto"].attrs["node_evaluations"] < results["differences"].attrs["node_evaluations"] / 2
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_one_objective_call_serves_both_bounds(cgm24_runs: dict[str, AnglesRun], exact: bool) -> None:
+    """Bound node ``b · n_time + t``: the lower bound's rows are the negated angle and
+    gradient at frame ``t``, the upper bound's the angle itself (exact and differenced)."""
+    angle = model_of(cgm24_runs["cgm2.4"], "LKneeAngles", 0)
+    n_time = angle.frames.size
+    objective = BatchedObjective(CountedModel(angle, np.ones(angle.n_parameters)), np.array([-1.0, 1.0]), n_time, np.ones(angle.n_parameters),
+                                 1e-6, BatchCounts(), exact)  # fmt: skip
+    P = np.concatenate([deviations(angle)] * 2)
+    frames = np.arange(n_time)
+    values, gradients = objective.values_and_gradients(P, np.concatenate([frames, frames + n_time]))
+    truth, truth_gradients = angle.evaluate_nodes_gradients(P[:n_time], frames)
+    np.testing.assert_allclose(values, np.concatenate([-truth, truth]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gradients, np.concatenate([-truth_gradients, truth_gradients]), rtol=0,
+                               atol=1e-12 if exact else 1e-4)  # fmt: skip
 
 
 def test_an_unknown_gradient_source_is_refused() -> None:

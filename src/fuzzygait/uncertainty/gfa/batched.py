@@ -9,8 +9,9 @@ and, with the ``"node_gradients"`` capability, their exact gradients::
 
     model.evaluate_nodes_gradients(P, nodes) -> (values (k,), gradients (k, n_p))
 
-The α-level optimisations of different nodes are independent, so they are solved side by
-side: every iteration evaluates the gradients of all nodes' current points in one call
+The α-level optimisations of different nodes and of the two bounds are independent, so
+they are solved side by side (:class:`BatchedObjective`'s bound nodes): every iteration
+evaluates the gradients of all nodes' current points, lower and upper, in one call
 (the model's exact ones, or forward differences: ``1 + n_p`` rows per point), moves
 each towards the optimum of its linearisation over the α-level set (a point on the ball
 surfaces or a box vertex, closed form) with a line search (Frank–Wolfe steps,
@@ -52,27 +53,39 @@ class BatchCounts:
 
 
 class BatchedObjective:
-    """``sense · f(P, nodes)`` with counting and gradients: the model's exact ones when
-    ``exact`` (it declares ``"node_gradients"``), else forward differences of step
-    ``fd_step · scale``."""
+    """``sense · f(P, nodes)`` for both bounds at once, with counting and gradients.
 
-    def __init__(self, model: CountedModel, sense: float, scale: np.ndarray, fd_step: float, counts: BatchCounts,
-                 exact: bool = False):  # fmt: skip
-        self.model, self.sense, self.counts, self.exact = model, sense, counts, exact
+    The objective's nodes are *bound nodes* ``b · n_time + t``: time node ``t`` of bound
+    ``b`` (:data:`~fuzzygait.core.schema.BOUNDS` order, sense ``senses[b]``), so one call
+    serves the lower and the upper bound's optimisations side by side.  Gradients are the
+    model's exact ones when ``exact`` (it declares ``"node_gradients"``), else forward
+    differences of step ``fd_step · scale``."""
+
+    def __init__(self, model: CountedModel, senses: np.ndarray, n_time: int, scale: np.ndarray, fd_step: float,
+                 counts: BatchCounts, exact: bool = False):  # fmt: skip
+        self.model, self.counts, self.exact = model, counts, exact
+        self.senses, self.n_time = np.asarray(senses, dtype=float), int(n_time)
         self.h = fd_step * np.asarray(scale, dtype=float)
+
+    def _split(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(sense per row, time node per row)`` of bound nodes."""
+        nodes = np.asarray(nodes, dtype=int)
+        return self.senses[nodes // self.n_time], nodes % self.n_time
 
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         if P.shape[0] == 0:  # e.g. no neighbours at this shift: nothing to evaluate
             return np.empty(0)
         self.counts.node_evaluations += int(P.shape[0])
-        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
-        return self.sense * out
+        sense, times = self._split(nodes)
+        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, times), dtype=float)  # type: ignore[attr-defined]
+        return sense * out
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self.exact:
             self.counts.node_gradients += int(P.shape[0])
-            values, gradients = self.model.model.evaluate_nodes_gradients(P, nodes)  # type: ignore[attr-defined]
-            return self.sense * np.asarray(values, dtype=float), self.sense * np.asarray(gradients, dtype=float)
+            sense, times = self._split(nodes)
+            values, gradients = self.model.model.evaluate_nodes_gradients(P, times)  # type: ignore[attr-defined]
+            return sense * np.asarray(values, dtype=float), sense[:, None] * np.asarray(gradients, dtype=float)
         k, n_p = P.shape
         shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
         shifted[:, 1:, :] += np.diag(self.h)[None]
@@ -234,32 +247,39 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
     tolerance = 1e-7 * max(float(np.max(np.abs(deterministic))), 1.0)
-    previous: dict[str, np.ndarray] = {}  # the higher level's optima, every node
     previous_domain = params.domain(1.0)
     below_one = np.arange(levels.size - 1)[::-1]
+    senses = np.array([SENSES[bound] for bound in BOUNDS])
+    objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, counts, exact)
+    both = senses.size
+    # bound nodes (BatchedObjective): both bounds' optimisations in the same calls
+    nodes_b, others_b = (np.concatenate([n + b * n_time for b in range(both)]) for n in (nodes, others))
+    previous: np.ndarray | None = None  # the higher level's optima, every bound node
     for step, a in enumerate(below_one):
         domain = params.domain(float(levels[a]))
-        for b, bound in enumerate(BOUNDS):
-            objective = BatchedObjective(model, SENSES[bound], params.scale, 1e-6, counts, exact)
-            higher: list[np.ndarray] = []
-            if bound in previous:  # the higher level's optimum, as it is and scaled out
-                higher = [previous[bound], domain.rescale_from(previous_domain, previous[bound])]  # type: ignore[arg-type]
-            first = [np.tile(params.deterministic, (nodes.size, 1))] + [h[nodes] for h in higher]
-            extra = screened_starts(objective, domain, nodes, rng, max(0, strategy.starts - len(first)),
-                                    strategy.screen)  # fmt: skip
-            points = np.empty((n_time, params.dim))
-            values = np.empty(n_time)
-            points[nodes], values[nodes] = maximise(objective, domain, nodes, first + extra, strategy.iterations,
+        higher: list[np.ndarray] = []
+        if previous is not None:  # the higher level's optimum, as it is and scaled out
+            higher = [previous, domain.rescale_from(previous_domain, previous)]  # type: ignore[arg-type]
+        first = [np.tile(params.deterministic, (nodes_b.size, 1))] + [h[nodes_b] for h in higher]
+        extra = screened_starts(objective, domain, nodes_b, rng, max(0, strategy.starts - len(first)),
+                                strategy.screen)  # fmt: skip
+        points = np.empty((both * n_time, params.dim))
+        values = np.empty(both * n_time)
+        points[nodes_b], values[nodes_b] = maximise(objective, domain, nodes_b, first + extra, strategy.iterations,
                                                     tolerance)  # fmt: skip
-            if others.size:  # nodes between optimisation nodes: started from the bracketing optima
-                points[others], values[others] = follow_nodes(objective, domain, nodes, points[nodes], others,
-                                                              [h[others] for h in higher], strategy.follow,
+        if others.size:  # nodes between optimisation nodes: started from the bracketing optima (same bound)
+            points[others_b], values[others_b] = follow_nodes(objective, domain, nodes_b, points[nodes_b], others_b,
+                                                              [h[others_b] for h in higher], strategy.follow,
                                                               tolerance)  # fmt: skip
-            points, values = neighbour_pass(objective, everywhere, points, values, strategy.window)
-            previous[bound] = points
-            hull[a, b], extremiser[a, b] = SENSES[bound] * values, points
-            if progress is not None:
-                progress(2 * step + b + 1, 2 * below_one.size)
+        for b in range(both):  # neighbours within each bound's curve
+            span = slice(b * n_time, (b + 1) * n_time)
+            points[span], values[span] = neighbour_pass(objective, everywhere + b * n_time, points[span],
+                                                        values[span], strategy.window)  # fmt: skip
+        previous = points
+        hull[a] = senses[:, None] * values.reshape(both, n_time)
+        extremiser[a] = points.reshape(both, n_time, params.dim)
+        if progress is not None:
+            progress(step + 1, below_one.size)
         previous_domain = domain
     model.node_evaluations += counts.node_evaluations
     model.node_gradients += counts.node_gradients
