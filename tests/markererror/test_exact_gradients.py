@@ -211,8 +211,9 @@ def test_one_objective_call_serves_both_bounds(cgm24_runs: dict[str, AnglesRun],
     gradient at frame ``t``, the upper bound's the angle itself (exact and differenced)."""
     angle = model_of(cgm24_runs["cgm2.4"], "LKneeAngles", 0)
     n_time = angle.frames.size
-    objective = BatchedObjective(CountedModel(angle, np.ones(angle.n_parameters)), np.array([-1.0, 1.0]), n_time, np.ones(angle.n_parameters),
-                                 1e-6, BatchCounts(), exact)  # fmt: skip
+    scale = np.ones(angle.n_parameters)
+    objective = BatchedObjective(CountedModel(angle, scale), np.array([-1.0, 1.0]), n_time, scale, 1e-6,
+                                 BatchCounts(), exact)  # fmt: skip
     P = np.concatenate([deviations(angle)] * 2)
     frames = np.arange(n_time)
     values, gradients = objective.values_and_gradients(P, np.concatenate([frames, frames + n_time]))
