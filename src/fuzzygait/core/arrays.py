@@ -17,12 +17,7 @@ from typing import Any
 import numpy as np
 from autograd.tracer import getval, isbox
 
-__all__ = ["floats", "is_traced", "plain"]
-
-
-def is_traced(x: Any) -> bool:
-    """Whether ``x`` is an array being traced for derivatives."""
-    return bool(isbox(x))
+__all__ = ["floats", "plain"]
 
 
 def floats(x: Any) -> np.ndarray:

@@ -11,7 +11,7 @@ The seeded C3D fault campaign shared by the fuzz tests and ``benchmarks/fuzz_c3d
 
 from __future__ import annotations
 
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,13 +95,7 @@ def _check_sensitivities(model: object, p: np.ndarray, values: np.ndarray, scale
     drift = float(np.max(np.abs(np.asarray(evaluation.values, dtype=float) - values)))
     if drift > 1e-8 * max(float(np.max(np.abs(values))), 1.0):  # adaptive integrators may step differently
         raise ModelCheckError(f"evaluate(p, sensitivities=True) gives values {drift:.2e} away from evaluate(p)")
-    fd = np.empty_like(jac)
-    for i in range(p.size):
-        h = fd_step * scale[i]
-        up, down = p.copy(), p.copy()
-        up[i] += h
-        down[i] -= h
-        fd[:, i] = (_values(model, up, values.size) - _values(model, down, values.size)) / (2 * h)
+    fd = _central_differences(lambda q: _values(model, q, values.size), p, fd_step * scale)
     reference = max(float(np.max(np.abs(fd))), np.finfo(float).tiny)
     error = float(np.max(np.abs(jac - fd))) / reference
     if error > rtol:
@@ -120,6 +114,19 @@ def _check_nodes(model: object, p: np.ndarray, scale: np.ndarray, n_time: int, n
     if error > 1e-9:
         raise ModelCheckError(f"evaluate_nodes differs from the full trajectories by {error:.2e} (relative)")
     return error
+
+
+def _central_differences(function: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
+                         steps: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Central differences of ``function`` with respect to each entry of ``x``'s last axis
+    (steps ``steps``), stacked on a new last axis: ``(*function(x).shape, x.shape[-1])``."""
+    columns = []
+    for i, h in enumerate(steps):
+        up, down = x.copy(), x.copy()
+        up[..., i] += h
+        down[..., i] -= h
+        columns.append((function(up) - function(down)) / (2 * h))
+    return np.stack(columns, axis=-1)
 
 
 def _random_pairs(p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int,
@@ -141,14 +148,8 @@ def _check_node_gradients(model: object, p: np.ndarray, scale: np.ndarray, n_tim
     at_nodes: np.ndarray = np.asarray(model.evaluate_nodes(P, nodes), dtype=float)  # type: ignore[attr-defined]
     if np.max(np.abs(values - at_nodes)) > 1e-9 * max(float(np.max(np.abs(at_nodes))), 1.0):
         raise ModelCheckError("evaluate_nodes_gradients gives other values than evaluate_nodes")
-    fd = np.empty_like(gradients)
-    for i in range(p.size):
-        h = fd_step * scale[i]
-        up, down = P.copy(), P.copy()
-        up[:, i] += h
-        down[:, i] -= h
-        difference = np.asarray(model.evaluate_nodes(up, nodes)) - np.asarray(model.evaluate_nodes(down, nodes))  # type: ignore[attr-defined]
-        fd[:, i] = difference / (2 * h)
+    fd = _central_differences(lambda Q: np.asarray(model.evaluate_nodes(Q, nodes), dtype=float),  # type: ignore[attr-defined]
+                              P, fd_step * scale)  # fmt: skip
     error = float(np.max(np.abs(gradients - fd))) / max(float(np.max(np.abs(fd))), np.finfo(float).tiny)
     if not error <= rtol:
         raise ModelCheckError(f"node gradients differ from central differences of evaluate_nodes by {error:.2e} "
