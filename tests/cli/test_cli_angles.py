@@ -111,6 +111,9 @@ def test_demo_writes_results(tmp_path: Path) -> None:
     summary = (out / "summary.md").read_text()
     assert "| LKneeAngles_X |" in summary
     assert "ΔΦ" in summary
+    # how far to trust the knee angles leads; the accuracy against the truth follows
+    assert summary.index("known within ±2.5°") < summary.index("ΔΦ") < summary.index("against the known truth")
+    assert "| LKneeAngles | " in summary.split("against the known truth")[1]
     index = (out / "report" / "index.html").read_text()
     assert "walking_noisy" in index and "OK" in index
     # the session report of the synthetic session: both walking trials, their summary

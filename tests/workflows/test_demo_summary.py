@@ -70,3 +70,31 @@ def test_every_band_determined(noisy_run: AnglesRun) -> None:
     assert "- every band is determined at α = 0" in lines
     rows = [line for line in lines if line.startswith("| ") and "KneeAngles" in line]
     assert len(rows) == 6 and all("undetermined" not in row for row in rows)
+
+
+def test_accuracy_table_one_row_per_angle(noisy_run: AnglesRun) -> None:
+    """The accuracy table groups the per-component comparison by angle: every value of
+    :func:`truth_comparison` appears in its angle's row at its axis' position."""
+    import pandas as pd
+
+    from fuzzygait.workflows.demo import accuracy_lines, truth_comparison
+
+    comparison = truth_comparison(noisy_run, pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv"))
+    lines = accuracy_lines(comparison)
+    rows = lines[2:]
+    assert len(comparison) == 24 and len(rows) == 8  # 4 joints x 2 sides, X/Y/Z each
+    for record in comparison.itertuples():
+        name, axis = record.angle[:-2], "XYZ".index(record.angle[-1])
+        rms, top = (cell.split(" / ") for cell in _row(lines, name)[1:])
+        assert float(rms[axis]) == pytest.approx(record.rms_deg, abs=5e-4)
+        assert float(top[axis]) == pytest.approx(record.max_deg, abs=5e-4)
+
+
+def test_accuracy_table_marks_missing_components() -> None:
+    import pandas as pd
+
+    from fuzzygait.workflows.demo import accuracy_lines
+
+    comparison = pd.DataFrame({"angle": ["LHipAngles_X", "LHipAngles_Z"], "rms_deg": [0.1, 0.3],
+                               "max_deg": [0.2, 0.6], "frames": [10, 10]})  # fmt: skip
+    assert accuracy_lines(comparison)[2] == "| LHipAngles | 0.100 / – / 0.300 | 0.200 / – / 0.600 |"

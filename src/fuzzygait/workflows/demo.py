@@ -6,11 +6,12 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
 * ``angles.csv`` -- Plug-in Gait angles per frame (degrees),
 * ``cycles.csv`` -- mean and SD over gait cycles,
 * ``gait_cycles.png`` -- the gait-report grid,
-* ``summary.md`` -- what was done, how close the angles are to the known truth, how
-  small the marker errors must be for knee flexion to be known within ±2.5° (the
-  allowable marker error), how wide the knee angles' fuzzy bands are (determined
-  bands first; "undetermined" where a segment frame can flip) and which marker error
-  source dominates knee flexion (each source alone, thesis Fig. 5.9),
+* ``summary.md`` -- what was done; then how far to trust the knee angles: how small the
+  marker errors must be for knee flexion to be known within ±2.5° (the allowable marker
+  error), how wide their fuzzy bands are (determined bands first; "undetermined" where a
+  segment frame can flip) and which marker error source dominates knee flexion (each
+  source alone, thesis Fig. 5.9); then how close the angles are to the known truth
+  (one row per angle, X / Y / Z),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
 * ``session/session.html`` -- the session report of the synthetic Plug-in Gait session
   (``walking.c3d`` and ``walking_noisy.c3d`` with ``static.c3d`` and ``subject.toml``;
@@ -95,6 +96,22 @@ def truth_comparison(run: AnglesRun, truth: pd.DataFrame, pelvis_sequence: str =
             rows.append({"angle": column, "rms_deg": float(np.sqrt(np.mean(diff**2))),
                          "max_deg": float(np.max(np.abs(diff))), "frames": diff.size})  # fmt: skip
     return pd.DataFrame(rows, columns=["angle", "rms_deg", "max_deg", "frames"])
+
+
+def accuracy_lines(comparison: pd.DataFrame) -> list[str]:
+    """The per-component :func:`truth_comparison` as a Markdown table with one row per
+    angle (``LHipAngles``) and its X / Y / Z values in one cell each: RMS and max
+    |computed - truth| in degrees, 3 decimals; a component the comparison lacks is "–"."""
+    lines = ["| angle | RMS X / Y / Z (°) | max X / Y / Z (°) |", "|---|---|---|"]
+    by_component = comparison.set_index("angle")
+    names = dict.fromkeys(str(column)[:-2] for column in comparison["angle"])
+
+    def cell(name: str, quantity: str) -> str:
+        values = (by_component[quantity].get(f"{name}_{axis}") for axis in AXES)
+        return " / ".join("–" if value is None else f"{value:.3f}" for value in values)
+
+    lines += [f"| {name} | {cell(name, 'rms_deg')} | {cell(name, 'max_deg')} |" for name in names]
+    return lines
 
 
 def _centre_error(run: AnglesRun, truth: pd.DataFrame) -> tuple[float, list[str]]:
@@ -258,14 +275,10 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
         f"R {np.degrees(run.subject.right.static_plant_flex):.3f}°; rotation L "
         f"{np.degrees(run.subject.left.static_rot_off):.3f}°, R {np.degrees(run.subject.right.static_rot_off):.3f}°",
         f"- gait cycles: left {n_cycles['L']}, right {n_cycles['R']} (events: {run.event_source})",
-        "",
-        "Computed angles against the known truth of the synthetic trial (degrees):",
-        "",
-        "| angle | RMS | max |",
-        "|---|---|---|",
     ]
-    lines += [f"| {r.angle} | {r.rms_deg:.3f} | {r.max_deg:.3f} |" for r in comparison.itertuples()]
     lines += uncertainty_lines(analysis)
+    lines += ["", "Computed angles against the known truth of the synthetic trial (degrees):", ""]
+    lines += accuracy_lines(comparison)
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
     lines += ["", f"Session report (walking.c3d and walking_noisy.c3d, angles only): `{session.session_pages[0]}` "
               f"(mean ± SD over all cycles of both trials), trial pages from `{session.index}`"]
