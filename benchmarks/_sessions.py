@@ -3,8 +3,8 @@
 * synthetic CGM 2.4: ``sample_data/cgm24_walking.c3d`` calibrated on ``cgm24_static.c3d``
   with ``cgm24_subject.toml``;
 * real CGM 2.4: ``../shared/data/cgm2/qualisys-cgm24-input`` (``Gait - CGM2 1.c3d``, static
-  ``Static - CGM2 1.c3d``, session.xml's subject: LL 1000 mm, KW 95, AW 65, 14 mm markers,
-  70 kg, 1800 mm; foot flat on as session.xml);
+  ``Static - CGM2 1.c3d``, subject from its QTM session.xml: LL 1000 mm, KW 95, AW 65, 14 mm
+  markers, 70 kg, 1800 mm; foot flat on as session.xml);
 * Movement_trial: ``../shared/data/vicon/Movement_trial.c3d`` with ``Static_trial.c3d``,
   its subject from the trial's PROCESSING group (a Plug-in Gait session).
 
@@ -25,10 +25,6 @@ from fuzzygait.workflows.angles import AnglesRun, run_angles
 
 SAMPLE = ROOT / "sample_data"
 SESSION = ROOT.parent / "shared" / "data" / "cgm2" / "qualisys-cgm24-input"
-#: session.xml of the real CGM 2.4 session (metres there, mm here).
-SESSION_SUBJECT = {"Bodymass": 70.0, "Height": 1800.0, "LLegLength": 1000.0, "RLegLength": 1000.0,
-                   "LKneeWidth": 95.0, "RKneeWidth": 95.0, "LAnkleWidth": 65.0, "RAnkleWidth": 65.0,
-                   "MarkerDiameter": 14.0}  # fmt: skip
 
 
 @dataclass
@@ -44,16 +40,14 @@ class Case:
     flat_foot: bool = False
 
 
-def cases(tmp: Path) -> list[Case]:
-    """The synthetic and (when present) the real CGM 2.4 session; ``tmp`` receives the
-    real session's subject file."""
+def cases() -> list[Case]:
+    """The synthetic and (when present) the real CGM 2.4 session (its subject file: its
+    QTM session.xml)."""
     out = [Case("synthetic CGM 2.4", SAMPLE / "cgm24_walking.c3d", SAMPLE / "cgm24_static.c3d",
                 SAMPLE / "cgm24_subject.toml", 4)]  # fmt: skip
     if SESSION.is_dir():
-        subject = tmp / "session_subject.toml"
-        subject.write_text("".join(f"{k} = {v}\n" for k, v in SESSION_SUBJECT.items()))
         out.append(Case("real CGM 2.4 session", SESSION / "Gait - CGM2 1.c3d", SESSION / "Static - CGM2 1.c3d",
-                        subject, 2, flat_foot=True))  # fmt: skip
+                        SESSION / "session.xml", 2, flat_foot=True))  # fmt: skip
     else:
         print(f"(skipped the real session: {SESSION} is absent)")
     return out

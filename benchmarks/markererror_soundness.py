@@ -36,10 +36,8 @@ one_thread()
 import argparse  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
-import tempfile  # noqa: E402
 import time  # noqa: E402
 import zlib  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _sessions import Case, cases, load, movement_case, sparse_run  # noqa: E402
@@ -63,9 +61,9 @@ CHECKED = (0.0, 0.5)
 TOLERANCE = 1e-6
 
 
-def trials(tmp: Path) -> list[tuple[Case, str]]:
+def trials() -> list[tuple[Case, str]]:
     """(session, model version) of the three trials."""
-    out = [(case, "cgm2.4") for case in cases(tmp)]
+    out = [(case, "cgm2.4") for case in cases()]
     movement = movement_case()
     return out + ([(movement, "cgm1.0")] if movement is not None else [])
 
@@ -220,8 +218,8 @@ def main() -> None:
           f"{'checked frames only' if args.only_checked_frames else 'whole trials'}, {args.samples:,} MC samples "
           "per frame")  # fmt: skip
     total = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp, Evaluator(workers=args.workers) as evaluator:
-        for case, model in trials(Path(tmp)):
+    with Evaluator(workers=args.workers) as evaluator:
+        for case, model in trials():
             if args.trials and not any(t.lower() in case.name.lower() for t in args.trials):
                 continue
             print_trial(run_trial(case, model, args, evaluator))

@@ -36,9 +36,7 @@ one_thread()
 import argparse  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
-import tempfile  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
@@ -218,37 +216,36 @@ def main() -> None:
           + (" --quick" if args.quick else "") + f"   ({os.cpu_count()} cores, Python {sys.version.split()[0]}, "
           f"load {os.getloadavg()[0]:.2f})")  # fmt: skip
     total = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        for case in cases(Path(tmp)):
-            results = {model: analyse(case, model, args.workers, args.quick) for model in MODELS}
-            first = results["cgm2.4"]
-            print(f"\n### {case.name}: {first['frames'].size} of {first['run'].trial.n_frames} frames "
-                  f"(every {case.step * (4 if args.quick else 1)}th); fuzzy analysis "
-                  + ", ".join(f"{m} {r['seconds']:.0f} s ({r['fuzzy'].sizes['component']} components)"
-                              for m, r in results.items()) + f"; workers={args.workers}")  # fmt: skip
-            print()
-            print("\n".join(flexion_table(case, results)))
-            print()
-            print("Undetermined (component: α-levels where some frame's band is undetermined, frames at the lowest):")
-            for model, res in results.items():
-                table = res["undetermined"]
-                flagged = [(c, [a for a in table.columns if table.loc[c, a]])
-                           for c in table.index if table.loc[c].any()]  # fmt: skip
-                counts = [int(component_undetermined(res["fuzzy"], c).sel(alpha=min(a)).sum()) for c, a in flagged]
-                print(f"* {model}: " + ("none" if not flagged else "; ".join(
-                    f"{c} α = {', '.join(f'{x:g}' for x in a)} ({n} frames)" for (c, a), n in zip(flagged, counts))))
-            for model, res in results.items():
-                table = res["undetermined"]
-                for component in [c for c in table.index if c.endswith("_X") and table.loc[c].any()]:
-                    alpha = max(a for a in table.columns if table.loc[component, a])
-                    mask = component_undetermined(res["fuzzy"], component).sel(alpha=alpha).to_numpy()
-                    hull = component_hull(res["fuzzy"], component).sel(alpha=alpha).to_numpy()
-                    print(f"  - {model} {component}, highest undetermined α = {alpha:g} ({int(mask.sum())} frames): "
-                          + flip_diagnosis(res["sparse"], hull, component, alpha, res["frames"], np.flatnonzero(mask)))
-            print()
-            print("cgm2.4 left flexion ΔΦ (%) at α = 0 with one segment's markers perturbed (others at their measured "
-                  "positions), every 4th analysed frame:")  # fmt: skip
-            print("\n".join(segment_attribution(first["sparse"], first["frames"][::4])))
+    for case in cases():
+        results = {model: analyse(case, model, args.workers, args.quick) for model in MODELS}
+        first = results["cgm2.4"]
+        print(f"\n### {case.name}: {first['frames'].size} of {first['run'].trial.n_frames} frames "
+              f"(every {case.step * (4 if args.quick else 1)}th); fuzzy analysis "
+              + ", ".join(f"{m} {r['seconds']:.0f} s ({r['fuzzy'].sizes['component']} components)"
+                          for m, r in results.items()) + f"; workers={args.workers}")  # fmt: skip
+        print()
+        print("\n".join(flexion_table(case, results)))
+        print()
+        print("Undetermined (component: α-levels where some frame's band is undetermined, frames at the lowest):")
+        for model, res in results.items():
+            table = res["undetermined"]
+            flagged = [(c, [a for a in table.columns if table.loc[c, a]])
+                       for c in table.index if table.loc[c].any()]  # fmt: skip
+            counts = [int(component_undetermined(res["fuzzy"], c).sel(alpha=min(a)).sum()) for c, a in flagged]
+            print(f"* {model}: " + ("none" if not flagged else "; ".join(
+                f"{c} α = {', '.join(f'{x:g}' for x in a)} ({n} frames)" for (c, a), n in zip(flagged, counts))))
+        for model, res in results.items():
+            table = res["undetermined"]
+            for component in [c for c in table.index if c.endswith("_X") and table.loc[c].any()]:
+                alpha = max(a for a in table.columns if table.loc[component, a])
+                mask = component_undetermined(res["fuzzy"], component).sel(alpha=alpha).to_numpy()
+                hull = component_hull(res["fuzzy"], component).sel(alpha=alpha).to_numpy()
+                print(f"  - {model} {component}, highest undetermined α = {alpha:g} ({int(mask.sum())} frames): "
+                      + flip_diagnosis(res["sparse"], hull, component, alpha, res["frames"], np.flatnonzero(mask)))
+        print()
+        print("cgm2.4 left flexion ΔΦ (%) at α = 0 with one segment's markers perturbed (others at their measured "
+              "positions), every 4th analysed frame:")  # fmt: skip
+        print("\n".join(segment_attribution(first["sparse"], first["frames"][::4])))
     print(f"\ntotal {time.perf_counter() - total:.0f} s")
     pd.set_option("display.width", 200)
 

@@ -442,7 +442,8 @@ def report(
     inputs: Annotated[
         list[Path],
         typer.Argument(metavar="INPUT", help="Session folders (a folder per visit: static trial, walking trials, "
-                       ".vsk/.toml/.mp subject file; or a folder of such folders) or walking-trial C3D files."),
+                       ".vsk/.toml/.mp/session.xml subject file; or a folder of such folders) or walking-trial "
+                       "C3D files."),
     ],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html, a folder per session).")],
     calibration: CalibrationOptions = DEFAULT_CALIBRATION,

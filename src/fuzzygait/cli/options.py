@@ -27,7 +27,8 @@ if TYPE_CHECKING:
 StaticOption = Annotated[Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")]
 SubjectOption = Annotated[
     Path | None,
-    typer.Option("--subject", help="Subject parameters (.toml or .vsk); default: the file's PROCESSING group."),
+    typer.Option("--subject", help="Subject parameters (.toml, .vsk, pyCGM2 .mp or QTM session.xml); "
+                 "default: the file's PROCESSING group."),
 ]
 MarkerDiameterOption = Annotated[
     float | None,

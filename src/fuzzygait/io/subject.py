@@ -27,6 +27,7 @@ from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.atomic import atomic_output
+from fuzzygait.io.qtm_session import is_qtm_session, qtm_session_values
 from fuzzygait.io.tomlfile import TomlData, load_toml, toml_text
 
 #: Default marker diameter (mm) when a source does not give one.
@@ -339,28 +340,38 @@ def read_mp(path: str | os.PathLike[str]) -> SubjectParameters:
     return subject_from_processing(values, source=str(path))
 
 
-#: Subject file types :func:`read_subject` reads.
-SUBJECT_SUFFIXES = (".toml", ".vsk", ".mp")
+_KINDS = ".toml, .vsk, a pyCGM2 .mp or a QTM session.xml"
+
+
+def is_subject_file(path: Path) -> bool:
+    """``path`` is a subject file a session folder may hold: ``.toml``, ``.vsk``, ``.mp``
+    or QTM's ``session.xml`` (other XML files of a folder are not subject files)."""
+    suffix = path.suffix.lower()
+    return suffix in (".toml", ".vsk", ".mp") or is_qtm_session(path)
+
+
+def read_qtm_session(path: str | os.PathLike[str]) -> SubjectParameters:
+    """Read a Qualisys Track Manager ``session.xml`` (:mod:`fuzzygait.io.qtm_session`:
+    the session's leg lengths, knee and ankle widths, sole deltas, marker diameter,
+    height in metres and weight in kg)."""
+    return subject_from_processing(qtm_session_values(path), source=str(path))
 
 
 def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
-    """Read a subject file by extension: ``.toml``, ``.vsk`` or pyCGM2 ``.mp``.
+    """Read a subject file by extension: ``.toml``, ``.vsk``, pyCGM2 ``.mp`` or a QTM
+    ``session.xml`` (any ``.xml`` is read as one).
 
     Raises:
         ParameterError: a folder, a missing or unreadable file, another extension, or
             implausible parameters (one line naming the file and the parameter).
     """
     if Path(path).is_dir():
-        raise ParameterError(f"{path}: is a folder, not a subject file; give the subject file itself "
-                             "(.toml, .vsk or a pyCGM2 .mp)")  # fmt: skip
+        raise ParameterError(f"{path}: is a folder, not a subject file; give the subject file itself ({_KINDS})")
     suffix = Path(path).suffix.lower()
-    if suffix == ".toml":
-        return read_subject_toml(path)
-    if suffix == ".vsk":
-        return read_vsk(path)
-    if suffix == ".mp":
-        return read_mp(path)
-    raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use .toml, .vsk or a pyCGM2 .mp")
+    readers = {".toml": read_subject_toml, ".vsk": read_vsk, ".mp": read_mp, ".xml": read_qtm_session}
+    if suffix not in readers:
+        raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use {_KINDS}")
+    return readers[suffix](path)
 
 
 

@@ -19,8 +19,8 @@ In a session folder a C3D file is a **static trial** by the first rule that fire
 Every other C3D file is a walking trial.  Each walking trial gets the static trial of
 the same subject (C3D ``SUBJECTS:NAMES``) whose name shares the longest start with its
 own (a folder may hold several calibrations: ``PiGKad_Calibration`` for
-``PiGKad_Motion``), and the subject file (``.vsk``, ``.toml``, pyCGM2 ``.mp``) named
-after its subject, else the folder's only one.  A subject file or static trial of
+``PiGKad_Motion``), and the subject file (``.vsk``, ``.toml``, pyCGM2 ``.mp``, QTM ``session.xml``)
+named after its subject, else the folder's only one.  A subject file or static trial of
 another subject than the trial's is used but gives a warning (on the trial's page and
 in the index).
 """
@@ -36,7 +36,8 @@ from pathlib import Path
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
-from fuzzygait.io.subject import SUBJECT_SUFFIXES
+from fuzzygait.io.qtm_session import is_qtm_session, qtm_subject_name
+from fuzzygait.io.subject import is_subject_file
 from fuzzygait.io.tomlfile import load_toml
 from fuzzygait.mocap.sanity import MOTIONLESS_TRAVEL, STATIC_MAX_TRAVEL, pelvis_range
 
@@ -138,8 +139,10 @@ def static_rule(path: Path, trial: Trial | None) -> tuple[str, str] | None:
 
 def subject_file_name(path: Path) -> str | None:
     """The subject a subject file belongs to: a ``.vsk`` / ``.mp`` file's stem (Nexus and
-    pyCGM2 name them after the subject), a TOML file's ``Name`` / ``SubjectName`` text;
-    None when unknown."""
+    pyCGM2 name them after the subject), a TOML file's ``Name`` / ``SubjectName`` text,
+    a QTM ``session.xml``'s patient ("First Last"); None when unknown."""
+    if is_qtm_session(path):
+        return qtm_subject_name(path)
     if path.suffix.lower() != ".toml":
         return path.stem
     try:
@@ -192,7 +195,7 @@ def find_session(folder: Path, output: str) -> Session:
     """The session in ``folder`` (see the module docstring); ``output`` is its report
     sub-folder."""
     c3d = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".c3d")
-    subject_files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in SUBJECT_SUFFIXES)
+    subject_files = sorted(p for p in folder.iterdir() if p.is_file() and is_subject_file(p))
     read = {p: _read(p) for p in c3d}
     statics, walking = [], []
     for path in c3d:
@@ -209,7 +212,7 @@ def find_session(folder: Path, output: str) -> Session:
     if not statics:
         notes.append("no static trial found: the trials use their own PROCESSING offsets")
     if not subject_files:
-        notes.append("no subject file (.vsk, .toml, .mp): the trials' PROCESSING groups give the subject")
+        notes.append("no subject file (.vsk, .toml, .mp, session.xml): the trials' PROCESSING groups give the subject")
     trials = []
     for path in walking:
         trial = read[path]
