@@ -151,3 +151,33 @@ def test_shared_qtm_session_angles_equal_the_toml_route(tmp_path: Path) -> None:
     assert sorted(runs[0].result.angles) == names and len(names) >= 10
     for name in names:
         np.testing.assert_array_equal(runs[0].result.angles[name], runs[1].result.angles[name], err_msg=name)
+
+
+def test_cli_angles_with_session_xml(tmp_path: Path) -> None:
+    """``angles --subject session.xml`` as a user runs it: the synthetic trial with its
+    subject's values in metres gives the angles of its TOML subject file; the same file
+    in mm is one line naming the field."""
+    import pandas as pd
+
+    from fuzzygait.io.subject import read_subject_toml
+    from support import assert_one_line_error, run
+
+    toml = read_subject_toml(SAMPLE_DATA / "subject.toml")
+    metres = {"Height": toml.height, "Weight": toml.body_mass, "Marker_diameter": toml.marker_diameter}
+    for side, values in (("left", toml.left), ("right", toml.right)):
+        metres |= {f"Leg_length_{side}": values.leg_length, f"Knee_width_{side}": values.knee_width,
+                   f"Ankle_width_{side}": values.ankle_width}  # fmt: skip
+    xml = tmp_path / "session.xml"
+    xml.write_text(session_xml({k: f"{v / 1000:.9f}" if k != "Weight" else f"{v:.9f}" for k, v in metres.items()}),
+                   encoding="utf-16")  # fmt: skip
+    outs = []
+    for subject in (xml, SAMPLE_DATA / "subject.toml"):
+        outs.append(tmp_path / f"{subject.suffix[1:]}.csv")
+        result = run("angles", SAMPLE_DATA / "walking.c3d", "--static", SAMPLE_DATA / "static.c3d",
+                     "--subject", subject, "--out", outs[-1])  # fmt: skip
+        assert result.returncode == 0, result.stderr
+    pd.testing.assert_frame_equal(pd.read_csv(outs[0]), pd.read_csv(outs[1]))
+    xml.write_text(session_xml(VISIT | {"Knee_width_left": "102"}), encoding="utf-16")
+    result = run("angles", SAMPLE_DATA / "walking.c3d", "--subject", xml, "--out", tmp_path / "x.csv")
+    assert_one_line_error(result, "session.xml", "Knee_width_left = 102 is not in metres")
+    assert not (tmp_path / "x.csv").exists()
