@@ -189,3 +189,19 @@ def test_sections_render_in_chromium(content_dir: Path, tmp_path: Path) -> None:
         html = (content_dir / page).read_text(encoding="utf-8")
         for section in sections:
             assert re.search(rf'<h2 id="{section}">[^<]+', html), section
+
+
+def test_subject_row_names_the_subject_or_where_its_parameters_came_from() -> None:
+    from types import SimpleNamespace
+
+    from fuzzygait.viz.report.clinical_html import _subject_text
+
+    def run(name: str, source: str) -> SimpleNamespace:
+        return SimpleNamespace(trial=SimpleNamespace(subject=name), raw=SimpleNamespace(subject=""),
+                               subject=SimpleNamespace(source=source))  # fmt: skip
+
+    assert _subject_text(run("A22", "/lab/visit/session.xml")) == "A22"
+    assert _subject_text(run("", "/lab/visit/session.xml")) == "not named in the C3D file (parameters from session.xml)"
+    assert _subject_text(run("", "Movement_trial.c3d PROCESSING group")) == "not named in the C3D file"
+    assert _subject_text(run("", "")) == "not named in the C3D file"
+    assert _subject_text(run("<b>", "")) == "&lt;b&gt;"

@@ -128,12 +128,22 @@ def header_facts(run: ReportRun, source: Path, clinical: ClinicalData, session: 
     markers = clinical.markers
     listing = ", ".join(markers)
     return [
-        ("Subject", _esc(run.trial.subject or run.raw.subject or "not named in the file")),
+        ("Subject", _subject_text(run)),
         ("Session", _session_text(source, session)),
         ("Model", _esc(_model_name(run.result.model))),
         ("Marker set", f"{len(markers)} markers used by the model: <span class=\"small mono\">{_esc(listing)}</span>"),
         ("Gaps and filter", _processing_text(run)),
     ]
+
+
+def _subject_text(run: ReportRun) -> str:
+    """The subject's name as the C3D file gives it, else where its parameters came from."""
+    name = run.trial.subject or run.raw.subject
+    if name:
+        return _esc(name)
+    source = run.subject.source
+    origin = f" (parameters from {Path(source).name})" if source and not source.endswith("PROCESSING group") else ""
+    return _esc(f"not named in the C3D file{origin}")
 
 
 def _model_name(model: str) -> str:
