@@ -18,15 +18,20 @@ from support import SAMPLE_DATA, SHARED_DATA, needs_shared, trial_window
 QTM_SESSION = SHARED_DATA / "cgm2" / "qualisys-cgm24-input"
 
 
-def session_xml(fields: dict[str, str], first: str = "Ada", last: str = "Lovelace") -> str:
+def session_xml(fields: dict[str, str], first: str = "Ada", last: str = "Lovelace",
+                feet: tuple[str, str] | None = None) -> str:
     """A QTM session.xml shaped as QTM writes it: the patient, one visit with ``fields``,
-    a subsession with a measurement."""
+    a subsession with ``feet`` = its (left, right) "foot normalised to static trial"
+    fields (None: absent) and a measurement."""
     visit = "".join(f"<{k}>{v}</{k}>" for k, v in fields.items())
+    flags = "" if feet is None else (f"<Left_foot_normalised_to_static_trial>{feet[0]}"
+                                     "</Left_foot_normalised_to_static_trial><Right_foot_normalised_to_static_trial>"
+                                     f"{feet[1]}</Right_foot_normalised_to_static_trial>")  # fmt: skip
     return ('<?xml version="1.0"?>\n<Subject Type="Patient" Filename="x">'
             f"<Fields><First_name>{first}</First_name><Last_name>{last}</Last_name></Fields>"
             f'<Session Type="Clinical Gait Session" Filename="2020-05-13"><Fields>{visit}</Fields>'
-            '<Subsession Type="CGM2"><Fields><Left_foot_normalised_to_static_trial>True'
-            "</Left_foot_normalised_to_static_trial></Fields><Measurement Type=\"Gait\" Filename=\"g.qtm\">"
+            '<Subsession Type="CGM2"><Fields><IkAccuracy>0.0001</IkAccuracy>'
+            f"{flags}</Fields><Measurement Type=\"Gait\" Filename=\"g.qtm\">"
             "<Fields><Used>True</Used></Fields></Measurement></Subsession></Session></Subject>\n")  # fmt: skip
 
 
@@ -136,7 +141,8 @@ def test_shared_qtm_session_reads_its_stated_values() -> None:
 @needs_shared
 def test_shared_qtm_session_angles_equal_the_toml_route(tmp_path: Path) -> None:
     """The CGM 2.4 session with ``--subject session.xml`` gives the angles of the same
-    values typed into a TOML subject file (the route the benchmarks took before)."""
+    values typed into a TOML subject file with ``--flat-foot`` (the route the benchmarks
+    took before; its session.xml sets foot flat)."""
     from fuzzygait.workflows.angles import run_angles
 
     toml = tmp_path / "subject.toml"
@@ -144,8 +150,10 @@ def test_shared_qtm_session_angles_equal_the_toml_route(tmp_path: Path) -> None:
                     "LKneeWidth = 95.0\nRKneeWidth = 95.0\nLAnkleWidth = 65.0\nRAnkleWidth = 65.0\n"
                     "MarkerDiameter = 14.0\n")  # fmt: skip
     runs = [run_angles(QTM_SESSION / "Gait - CGM2 1.c3d", static=QTM_SESSION / "Static - CGM2 1.c3d",
-                       subject_file=subject, model="auto", flat_foot=True)
-            for subject in (QTM_SESSION / "session.xml", toml)]  # fmt: skip
+                       subject_file=subject, model="auto", flat_foot=flat)
+            for subject, flat in ((QTM_SESSION / "session.xml", None), (toml, True))]  # fmt: skip
+    # session.xml normalises both feet to the static trial: foot flat on by default, noted
+    assert any("foot flat on as session.xml sets it" in note for note in runs[0].notes)
     assert runs[0].result.model == "cgm2.4"
     names = sorted(runs[1].result.angles)
     assert sorted(runs[0].result.angles) == names and len(names) >= 10
@@ -181,3 +189,62 @@ def test_cli_angles_with_session_xml(tmp_path: Path) -> None:
     result = run("angles", SAMPLE_DATA / "walking.c3d", "--subject", xml, "--out", tmp_path / "x.csv")
     assert_one_line_error(result, "session.xml", "Knee_width_left = 102 is not in metres")
     assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize(
+    ("feet", "expected"),
+    [(("True", "True"), True), (("False", "False"), False), (("True", "False"), None), (None, None),
+     (("yes", "yes"), None)],
+)
+def test_foot_flat_setting(tmp_path: Path, feet: tuple[str, str] | None, expected: bool | None) -> None:
+    """Both feet agree: their setting; they differ, or it is absent or not True/False: none."""
+    from fuzzygait.io.qtm_session import qtm_foot_flat
+
+    path = tmp_path / "session.xml"
+    path.write_text(session_xml(VISIT, feet=feet), encoding="utf-16")
+    assert qtm_foot_flat(path) is expected
+    assert read_subject(path).flat_foot is expected
+
+
+def test_foot_flat_default_follows_session_xml(tmp_path: Path) -> None:
+    """``flat_foot=None`` takes the file's setting (noted); an explicit value overrides it;
+    a TOML subject has none (off). (The synthetic static foot stands with heel and toe at
+    one height, so its offsets are the same either way; the angles differ on the shared
+    session: test_shared_foot_flat_default_changes_the_angles.)"""
+    from fuzzygait.io.subject import read_subject_toml
+    from fuzzygait.workflows.angles import calibrate_static
+
+    toml = read_subject_toml(SAMPLE_DATA / "subject.toml")
+    xml = tmp_path / "session.xml"
+    xml.write_text(session_xml(VISIT, feet=("True", "True")), encoding="utf-16")
+    by_file = read_subject(xml)
+    static = SAMPLE_DATA / "static.c3d"
+    default = calibrate_static(static, by_file)
+    assert default.flat_foot is True and "foot flat on" in default.describe()
+    assert ("foot flat on as session.xml sets it (feet normalised to the static trial); --no-flat-foot "
+            "overrides it") in default.notes  # fmt: skip
+    overridden = calibrate_static(static, by_file, flat_foot=False)
+    assert overridden.flat_foot is False and not any("sets it" in n for n in overridden.notes)
+    plain = calibrate_static(static, toml)
+    assert plain.flat_foot is False and not any("sets it" in n for n in plain.notes)
+    xml.write_text(session_xml(VISIT, feet=("False", "False")), encoding="utf-16")
+    off = calibrate_static(static, read_subject(xml))
+    assert off.flat_foot is False
+    assert ("foot flat off as session.xml sets it (feet not normalised to the static trial); --flat-foot "
+            "overrides it") in off.notes  # fmt: skip
+
+
+@needs_shared
+def test_shared_foot_flat_default_changes_the_angles() -> None:
+    """On the shared CGM 2.4 session (session.xml: both feet normalised) the default is
+    the explicit ``--flat-foot`` run, and ``--no-flat-foot`` gives other ankle angles."""
+    from fuzzygait.workflows.angles import run_angles
+
+    def ankle(flat: bool | None) -> np.ndarray:
+        run = run_angles(QTM_SESSION / "Gait - CGM2 1.c3d", static=QTM_SESSION / "Static - CGM2 1.c3d",
+                         subject_file=QTM_SESSION / "session.xml", model="cgm2.4", flat_foot=flat)  # fmt: skip
+        return run.result.angles["LAnkleAngles"]
+
+    default, on, off = ankle(None), ankle(True), ankle(False)
+    np.testing.assert_array_equal(default, on)
+    assert np.nanmax(np.abs(on - off)) > 1.0

@@ -147,7 +147,7 @@ def calibrate(
         Path, typer.Option("--out", "-o", help="Calibrated subject parameters, .toml or .vsk.")
     ],
     subject: SubjectOption = None,
-    flat_foot: FlatFootOption = False,
+    flat_foot: FlatFootOption = None,
     marker_diameter: MarkerDiameterOption = None,
     max_gap: MaxGapOption = 10,
     model: Annotated[
@@ -222,7 +222,7 @@ def angles(
         Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
     ] = None,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
-    flat_foot: FlatFootOption = False,
+    flat_foot: FlatFootOption = None,
     marker_diameter: MarkerDiameterOption = None,
     model: Annotated[
         str,

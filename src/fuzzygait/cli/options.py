@@ -39,7 +39,9 @@ MarkerDiameterOption = Annotated[
     ),
 ]  # fmt: skip
 FlatFootOption = Annotated[
-    bool, typer.Option("--flat-foot", help="Static calibration with Plug-in Gait's foot flat (uses SoleDelta).")
+    bool | None,
+    typer.Option("--flat-foot/--no-flat-foot", help="Static calibration with Plug-in Gait's foot flat (uses "
+                 "SoleDelta); default: the subject file's setting (a QTM session.xml's), else off."),
 ]
 KneeAnkleCentresOption = Annotated[
     str | None,
@@ -159,7 +161,7 @@ class CalibrationOptions:
     static: StaticOption = None
     subject: SubjectOption = None
     marker_diameter: MarkerDiameterOption = None
-    flat_foot: FlatFootOption = False
+    flat_foot: FlatFootOption = None
 
 
 DEFAULT_CALIBRATION = CalibrationOptions()

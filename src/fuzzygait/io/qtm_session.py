@@ -29,10 +29,15 @@ session.xml field                         fuzzygait (Vicon) name, unit
 ``Marker_diameter``                       ``MarkerDiameter``, mm
 =======================================  ====================================
 
-A length of 0 is QTM's "not measured" (sole delta excepted: 0 is a value).  Other fields
-(upper-body widths, the subsession's model choice and "foot normalised to static trial"
-flags, filter settings) are not read: the model options are the command's
-(``--model``, ``--flat-foot``, ``--cutoff``).
+A length of 0 is QTM's "not measured" (sole delta excepted: 0 is a value).
+
+:func:`qtm_foot_flat` reads the subsession's ``Left_foot_normalised_to_static_trial`` /
+``Right_…`` (``True``/``False``): pyCGM2's foot-flat option, Plug-in Gait's "foot flat"
+(the sole parallel to the floor in the static trial).  It is the default of the static
+calibration when both feet agree (a command's ``--flat-foot`` / ``--no-flat-foot``
+overrides it; fuzzygait's foot flat is one setting for both feet).  Other fields
+(upper-body widths, the CGM2 model choice, filter settings) are not read: those options
+are the command's (``--model``, ``--cutoff``).
 """
 
 from __future__ import annotations
@@ -43,7 +48,7 @@ from pathlib import Path
 
 from fuzzygait.core.errors import ParameterError
 
-__all__ = ["QTM_SESSION_FILE", "is_qtm_session", "qtm_session_values", "qtm_subject_name"]
+__all__ = ["QTM_SESSION_FILE", "is_qtm_session", "qtm_foot_flat", "qtm_session_values", "qtm_subject_name"]
 
 #: The file name QTM gives a session's subject file.
 QTM_SESSION_FILE = "session.xml"
@@ -131,3 +136,23 @@ def qtm_subject_name(path: str | os.PathLike[str]) -> str | None:
         return None
     parts = [(fields.findtext(tag) or "").strip() for tag in ("First_name", "Last_name")]
     return " ".join(p for p in parts if p) or None
+
+
+#: The subsession fields of pyCGM2's foot-flat option, per side.
+FOOT_FLAT_FIELDS = ("Left_foot_normalised_to_static_trial", "Right_foot_normalised_to_static_trial")
+
+
+def qtm_foot_flat(path: str | os.PathLike[str]) -> bool | None:
+    """The session's foot-flat setting: True/False when both feet's "foot normalised to
+    static trial" fields say so, None when a field is absent, not True/False, or the two
+    feet differ (then the command's own default, foot flat off, applies).
+
+    Raises:
+        ParameterError: a missing or unreadable file, another XML document.
+    """
+    root = _root(Path(path))
+    for fields in root.iter("Fields"):
+        said = [(fields.findtext(tag) or "").strip().lower() for tag in FOOT_FLAT_FIELDS]
+        if any(said):
+            return said[0] == "true" if said[0] == said[1] and said[0] in ("true", "false") else None
+    return None

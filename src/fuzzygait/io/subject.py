@@ -27,7 +27,7 @@ from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.atomic import atomic_output
-from fuzzygait.io.qtm_session import is_qtm_session, qtm_session_values
+from fuzzygait.io.qtm_session import is_qtm_session, qtm_foot_flat, qtm_session_values
 from fuzzygait.io.tomlfile import TomlData, load_toml, toml_text
 
 #: Default marker diameter (mm) when a source does not give one.
@@ -119,6 +119,9 @@ class SubjectParameters:
         inter_asis_distance: mm (``InterAsisDistance``); None: measure it from the
             static trial (or, failing that, from the dynamic trial's ASIS markers).
         source: where the values came from, for messages.
+        flat_foot: the subject file's own foot-flat setting for the static calibration
+            (a QTM session.xml's "foot normalised to static trial"); None: the file has
+            none. A command's ``--flat-foot`` / ``--no-flat-foot`` overrides it.
     """
 
     left: SideParameters
@@ -128,6 +131,7 @@ class SubjectParameters:
     marker_diameter: float = DEFAULT_MARKER_DIAMETER
     inter_asis_distance: float | None = None
     source: str = field(default="", compare=False)
+    flat_foot: bool | None = field(default=None, compare=False)
 
     @property
     def marker_radius(self) -> float:
@@ -353,8 +357,10 @@ def is_subject_file(path: Path) -> bool:
 def read_qtm_session(path: str | os.PathLike[str]) -> SubjectParameters:
     """Read a Qualisys Track Manager ``session.xml`` (:mod:`fuzzygait.io.qtm_session`:
     the session's leg lengths, knee and ankle widths, sole deltas, marker diameter,
-    height in metres and weight in kg)."""
-    return subject_from_processing(qtm_session_values(path), source=str(path))
+    height in metres and weight in kg; its "foot normalised to static trial" setting
+    as ``flat_foot``)."""
+    subject = subject_from_processing(qtm_session_values(path), source=str(path))
+    return replace(subject, flat_foot=qtm_foot_flat(path))
 
 
 def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:

@@ -213,7 +213,7 @@ def calibrate_static(
     subject: SubjectParameters,
     *,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    flat_foot: bool = False,
+    flat_foot: bool | None = None,
     model: str = "cgm1.0",
     knee_ankle_centres: str | None = None,
 ) -> StaticCalibration:
@@ -227,6 +227,8 @@ def calibrate_static(
     foot-flat static trial, 6 Hz: StaticPlantFlex 1.3e-4 rad off Nexus' value,
     unfiltered 1e-8 rad).  ``knee_ankle_centres``: a cluster model's knee/ankle centre
     rule (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when present, else chord).
+    ``flat_foot`` None takes the subject file's own setting (``subject.flat_foot``: a QTM
+    session.xml's "foot normalised to static trial"; noted), else off.
 
     The content checks run first (:func:`fuzzygait.mocap.sanity.check_trial`): a trial
     that moves (a walking trial given as the static one), in the wrong unit or at an
@@ -235,6 +237,13 @@ def calibrate_static(
     trial = static if isinstance(static, Trial) else read_c3d(static)
     checked = check_trial(trial, static=True)
     clean, _ = replace(preprocessing, filter=False).apply(checked)
+    notes = tuple(checked.notes[len(trial.notes) :])
+    if flat_foot is None:
+        flat_foot = bool(subject.flat_foot)
+        if subject.flat_foot is not None:
+            notes += (f"foot flat {'on' if flat_foot else 'off'} as {Path(subject.source).name} sets it (feet "
+                      f"{'' if flat_foot else 'not '}normalised to the static trial); --{'no-' if flat_foot else ''}"
+                      "flat-foot overrides it",)  # fmt: skip
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
                                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     method = knee_method(clean)
@@ -242,7 +251,6 @@ def calibrate_static(
     if model_version(model).clusters:
         clusters = calibrate_clusters(clean, calibrated, knee_ankle_centres, forefoot=model_version(model).forefoot)
         method = f"{model} clusters, {RULE_NAMES[knee_ankle_rule(clean, knee_ankle_centres)]} knee/ankle centres"
-    notes = tuple(checked.notes[len(trial.notes) :])
     return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters, notes)
 
 
@@ -252,7 +260,7 @@ def run_angles(
     static: str | os.PathLike[str] | Trial | None = None,
     subject_file: str | os.PathLike[str] | None = None,
     preprocessing: Preprocessing = Preprocessing(),
-    flat_foot: bool = False,
+    flat_foot: bool | None = None,
     marker_diameter: float | None = None,
     model: str = "cgm1.0",
     knee_ankle_centres: str | None = None,
@@ -268,7 +276,8 @@ def run_angles(
             group.
         preprocessing: gap filling and filter options (the static trial: gap filling
             only, see :func:`calibrate_static`).
-        flat_foot: static calibration with the flat-foot option (uses SoleDelta).
+        flat_foot: static calibration with the flat-foot option (uses SoleDelta); None:
+            the subject file's own setting when it has one (QTM session.xml), else off.
         marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
         model: a model version (:data:`fuzzygait.kinematics.versions.MODEL_VERSIONS`) or
             ``"auto"``: the richest the markers support, or without ``static`` the model
@@ -464,7 +473,7 @@ def angles_to_files(
     static: str | os.PathLike[str] | Trial | None = None,
     subject_file: str | os.PathLike[str] | None = None,
     preprocessing: Preprocessing = Preprocessing(),
-    flat_foot: bool = False,
+    flat_foot: bool | None = None,
     marker_diameter: float | None = None,
     model: str = "cgm1.0",
     knee_ankle_centres: str | None = None,

@@ -297,7 +297,7 @@ def write_batch_report(
     static: Path | None = None,
     subject_file: Path | None = None,
     marker_diameter: float | None = None,
-    flat_foot: bool = False,
+    flat_foot: bool | None = None,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
     uncertainty: str = "full",

@@ -90,7 +90,7 @@ def calibrate_to_file(
     subject_file: str | os.PathLike[str] | None = None,
     marker_diameter: float | None = None,
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    flat_foot: bool = False,
+    flat_foot: bool | None = None,
     model: str = "auto",
     knee_ankle_centres: str | None = None,
 ) -> CalibrationFile:
@@ -113,7 +113,8 @@ def calibrate_to_file(
         marker_diameter: mm, in place of the subject's (default: the subject's, else 14).
         preprocessing: gap filling of the static trial (never low-passed, see
             :func:`fuzzygait.workflows.angles.calibrate_static`).
-        flat_foot: Plug-in Gait's foot-flat option (uses ``SoleDelta``).
+        flat_foot: Plug-in Gait's foot-flat option (uses ``SoleDelta``); None: the
+            subject file's own setting when it has one (QTM session.xml), else off.
         model: the model version to calibrate for, or ``"auto"`` (:func:`calibration_model`).
         knee_ankle_centres: a cluster model's knee/ankle centre rule
             (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when the static trial
@@ -132,13 +133,13 @@ def calibrate_to_file(
     comments = [
         f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate --model {name}`) "
         f"from {static_name}, measurements from {source}.",
-        f"Method {calibration.method}, foot flat {'on' if flat_foot else 'off'}, "
+        f"Method {calibration.method}, foot flat {'on' if calibration.flat_foot else 'off'}, "
         f"{calibration.subject.marker_diameter:g} mm markers.",
         "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
         *(f"Static trial note: {note}" for note in calibration.notes),
     ]
     metadata: dict[str, TomlData] = {"model": name, "static": static_name, "method": calibration.method,
-                                     "flat_foot": flat_foot, "fuzzygait": __version__}  # fmt: skip
+                                     "flat_foot": calibration.flat_foot, "fuzzygait": __version__}  # fmt: skip
     clusters = cluster_table(calibration.clusters) if calibration.clusters is not None else None
     if clusters is not None:
         comments.append("[calibration.clusters.*]: each tracking marker's mean static position (mm) in its "

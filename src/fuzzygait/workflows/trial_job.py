@@ -107,7 +107,7 @@ class TrialJob:
     static: Path | None = None
     subject_file: Path | None = None
     marker_diameter: float | None = None
-    flat_foot: bool = False
+    flat_foot: bool | None = None
     preprocessing: Preprocessing = DEFAULT_PREPROCESSING
     model: str = "auto"
     settings: MarkerErrorSettings | None = None
