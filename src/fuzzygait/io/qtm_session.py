@@ -150,8 +150,7 @@ def qtm_foot_flat(path: str | os.PathLike[str]) -> bool | None:
     Raises:
         ParameterError: a missing or unreadable file, another XML document.
     """
-    root = _root(Path(path))
-    for fields in root.iter("Fields"):
+    for fields in _root(Path(path)).iter("Fields"):
         said = [(fields.findtext(tag) or "").strip().lower() for tag in FOOT_FLAT_FIELDS]
         if any(said):
             return said[0] == "true" if said[0] == said[1] and said[0] in ("true", "false") else None

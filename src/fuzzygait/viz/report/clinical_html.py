@@ -13,6 +13,7 @@ from pathlib import Path
 
 from fuzzygait.gait.normative import GPS_VARIABLES
 from fuzzygait.gait.spatiotemporal import NAMES, UNITS, TrialParameters
+from fuzzygait.io.subject import is_subject_file
 from fuzzygait.viz.report.bands import ReportRun
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.markup import escape as _esc
@@ -141,8 +142,8 @@ def _subject_text(run: ReportRun) -> str:
     name = run.trial.subject or run.raw.subject
     if name:
         return _esc(name)
-    source = run.subject.source
-    origin = f" (parameters from {Path(source).name})" if source and not source.endswith("PROCESSING group") else ""
+    source = Path(run.subject.source)
+    origin = f" (parameters from {source.name})" if is_subject_file(source) else ""
     return _esc(f"not named in the C3D file{origin}")
 
 
