@@ -123,7 +123,7 @@ def test_thap_moves_the_cgm23_hip_but_not_the_cgm10_hip(runs: dict[str, AnglesRu
     for axis in range(3):
         moved = dataclasses.replace(cgm23, axis=axis)
         change = moved.evaluate(shift).values - moved.evaluate(np.zeros(3)).values
-        assert np.all(np.abs(change) > 0.05), (axis, change)
+        assert np.all(np.abs(change) > 0.01), (axis, change)  # round-off is ~1e-12 deg; cgm1.0 below: exactly 0
     # Plug-in Gait's hip does not read THAP: not a parameter, and moving it in the trial changes nothing
     run = runs["cgm1.0"]
     assert "LTHAP" not in model_of(run, "LHipAngles").markers
@@ -179,6 +179,26 @@ def test_cgm24_hull_contains_a_monte_carlo_sample(runs: dict[str, AnglesRun], na
     assert np.all(np.abs(hull - run.result.angles[name][FRAMES, 0]) < 90.0)  # determined: a band
     assert np.all(hull[0] <= lower + 1e-9) and np.all(hull[1] >= upper - 1e-9), (hull, lower, upper)
     assert np.all(hull[1] - hull[0] > upper - lower)  # and it reaches further than the sample
+
+
+#: A stride of the synthetic walker (1.1 s at 100 Hz) in eight frames.
+STRIDE_FRAMES = np.arange(100, 212, 14)
+
+
+def test_cgm24_flexion_is_determined_at_every_alpha(runs: dict[str, AnglesRun]) -> None:
+    """Issue 15: on the CGM 2.4 set with Table 3.1's radii, hip, knee and ankle flexion of
+    both sides are determined at every α-level over a stride, and the α = 0 bands are
+    wide (tens of degrees) — determined does not mean a narrow band.  (With the earlier,
+    too compact synthetic shank cluster the ankle flexion was undetermined at α = 0.)"""
+    run = sparse(runs["cgm2.4"], STRIDE_FRAMES)
+    names = [side + joint for side in "LR" for joint in ("HipAngles", "KneeAngles", "AnkleAngles")]
+    fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, FuzzyAngleOptions(alphas=(0.0, 0.25, 0.5, 0.75)),
+                               names, clusters=run.clusters)  # fmt: skip
+    for name in names:
+        undetermined = component_undetermined(fuzzy, name + "_X").to_numpy()[:, STRIDE_FRAMES]
+        assert not undetermined.any(), (name, np.argwhere(undetermined))
+        hull = component_hull(fuzzy, name + "_X").sel(alpha=0.0).to_numpy()[:, STRIDE_FRAMES]
+        assert np.all(hull[1] - hull[0] > 10.0), (name, hull[1] - hull[0])
 
 
 def test_undetermined_flag_is_per_component(runs: dict[str, AnglesRun]) -> None:

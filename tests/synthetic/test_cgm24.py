@@ -19,6 +19,7 @@ from fuzzygait.synthetic.cgm24 import (
     neutral_forefoot_angles,
 )
 from fuzzygait.synthetic.generate import angle_columns, joint_centre_columns
+from fuzzygait.synthetic.leg_model import SubjectGeometry
 
 SIDE_MARKERS = ["THAP", "THAD", "THI", "KNE", "TIAP", "TIAD", "TIB", "ANK",
                 "HEE", "TOE", "FMH", "SMH", "VMH"]  # fmt: skip
@@ -202,9 +203,12 @@ def test_hara_hjc(trial, truth, static):
 def test_davis_option_reproduces_plug_in_gait_trial():
     """With ``hjc="davis"`` and the Plug-in Gait foot (TOE, HEE) the shared skeleton and its
     truth are exactly those of the (unchanged) Plug-in Gait generator."""
+    plug_in_gait = SubjectGeometry()  # its THI/TIB wands (the CGM 2.4 defaults are a real session's)
     pig_foot = Cgm24Geometry(toe_local=(140.0, 0.0, -60.0), hee_local=(-50.0, 0.0, -60.0),
                              fmh_local=(185.0, -35.0, -72.0), smh_local=(190.0, -5.0, -65.0),
-                             vmh_local=(170.0, 38.0, -74.0))  # fmt: skip
+                             vmh_local=(170.0, 38.0, -74.0),
+                             thi_fraction=plug_in_gait.thi_fraction, thi_offset=plug_in_gait.thi_offset,
+                             tib_fraction=plug_in_gait.tib_fraction, tib_offset=plug_in_gait.tib_offset)  # fmt: skip
     trial, truth = make_cgm24_walking(geometry=pig_foot, hjc="davis")
     pig, pig_truth = make_walking_trial()
     assert pig.marker_labels == list(DYNAMIC_LABELS)

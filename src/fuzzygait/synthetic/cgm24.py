@@ -31,17 +31,24 @@ Marker placement (default :class:`Cgm24Geometry`)
   ``(-46.8, ±82.7, -96.6)``.  The walking trial is lowered by
   :meth:`Cgm24Geometry.height_shift` (-17.385 mm for Hara, 0 for Davis) and the static
   trial stands with its soles on the floor.
-* Thigh (thigh frame, origin KJC): THI ``(0, 75, 0.5 L_t)`` and KNE ``(0, KneeWidth/2 +
-  r, 0)`` (as Plug-in Gait); **THAP** ``(60, 15, 2/3 L_t)`` (a third of the way down
-  from the HJC, anterior, a little lateral); **THAD** ``(55, 35, 1/3 L_t)``.  Static
+* Cluster layout: the marker positions of the calibrated clusters of a real CGM 2.4
+  session (the shared Qualisys session's static trial, mean of both sides, heights as a
+  fraction of its segment lengths, rounded) -- a lateral wand marker (THI, TIB) about
+  110 mm out and two anterior markers on each segment.  An earlier, more compact layout
+  (THI/TIB 75/65 mm lateral, the shank's anterior pair 12 and 28 mm lateral) let a
+  Table 3.1 ball turn the shank cluster about its long axis by 74 deg; real clusters are
+  wider than that.
+* Thigh (thigh frame, origin KJC): THI ``(0, 110, 0.24 L_t)`` (in the thigh's y-z plane,
+  ThighRotation 0) and KNE ``(0, KneeWidth/2 + r, 0)`` (as Plug-in Gait); **THAP** ``(63,
+  -23, 0.71 L_t)`` (anterior, a little medial); **THAD** ``(80, -20, 0.33 L_t)``.  Static
   **KNM** ``(0, -(KneeWidth/2 + r), 0)``: KNE and KNM on the knee flexion axis (thigh y),
   symmetric about the true KJC, so their midpoint -- and pyCGM2's ``KNE + (KneeWidth +
   d)/2 unit(KNM - KNE)`` -- is the KJC.
-* Shank (shank frame, origin AJC): TIB ``(0, 65, 0.5 L_s)`` and ANK ``(0, AnkleWidth/2 +
-  r, 0)`` (as Plug-in Gait); **TIAP** ``(50, 12, 2/3 L_s)``; **TIAD** ``(40, 28, 1/3
-  L_s)``; static **MED** ``(0, -(AnkleWidth/2 + r), 0)`` (ankle axis = shank y, no
-  tibial torsion): the ANK-MED midpoint is the AJC.  Smallest singular value of the
-  centred 4-marker cluster: 12.1 mm (thigh), 9.4 mm (shank).
+* Shank (shank frame, origin AJC): TIB ``(0, 108, 0.47 L_s)`` and ANK ``(0, AnkleWidth/2
+  + r, 0)`` (as Plug-in Gait); **TIAP** ``(62, -18, 0.725 L_s)`` and **TIAD** ``(62, -9,
+  0.425 L_s)`` (on the tibial crest); static **MED** ``(0, -(AnkleWidth/2 + r), 0)``
+  (ankle axis = shank y, no tibial torsion): the ANK-MED midpoint is the AJC.  Smallest
+  singular value of the centred 4-marker cluster: 21.9 mm (thigh), 13.5 mm (shank).
 * Hindfoot (foot frame, origin AJC): CGM 2.4's TOE sits on the dorsal mid-foot (pyCGM2
   "TOE = CUN"): **TOE** ``(95, 0, -40)``; **HEE** ``(-50, 0, -40)`` (same height, so
   HEE->TOE is the foot's x axis, as pyCGM2's anatomical hindfoot needs); the sole is 90
@@ -200,6 +207,8 @@ class Cgm24Geometry(SubjectGeometry):
 
     Attributes:
         hjc: ``"hara"`` or ``"davis"``: where the true hip joint centre is.
+        thi_fraction, thi_offset, tib_fraction, tib_offset: as in ``SubjectGeometry``,
+            defaults of a real CGM 2.4 session's wand markers (module docstring).
         thap, thad: thigh cluster markers ``(anterior, lateral, fraction)``: ``anterior``
             and ``lateral`` in mm along the thigh's x and ``s y``, ``fraction`` = height
             above the KJC as a fraction of the thigh length.
@@ -215,10 +224,14 @@ class Cgm24Geometry(SubjectGeometry):
     """
 
     hjc: str = "hara"
-    thap: tuple[float, float, float] = (60.0, 15.0, 2.0 / 3.0)
-    thad: tuple[float, float, float] = (55.0, 35.0, 1.0 / 3.0)
-    tiap: tuple[float, float, float] = (50.0, 12.0, 2.0 / 3.0)
-    tiad: tuple[float, float, float] = (40.0, 28.0, 1.0 / 3.0)
+    thi_fraction: float = 0.24
+    thi_offset: float = 110.0
+    tib_fraction: float = 0.47
+    tib_offset: float = 108.0
+    thap: tuple[float, float, float] = (63.0, -23.0, 0.71)
+    thad: tuple[float, float, float] = (80.0, -20.0, 0.33)
+    tiap: tuple[float, float, float] = (62.0, -18.0, 0.725)
+    tiad: tuple[float, float, float] = (62.0, -9.0, 0.425)
     toe_local: tuple[float, float, float] = (95.0, 0.0, -40.0)
     hee_local: tuple[float, float, float] = (-50.0, 0.0, -40.0)
     fmh_local: tuple[float, float, float] = (150.0, -35.0, -68.0)

@@ -142,7 +142,8 @@ def readme_section() -> str:
         shift=-g.height_shift(),
         standing=g.standing_pelvis_height(),
         toe=g.toe_local, hee=g.hee_local, fmh=g.fmh_local, smh=g.smh_local, vmh=g.vmh_local,
-        thap=g.thap, thad=g.thad, tiap=g.tiap, tiad=g.tiad,
+        thap=g.thap, thad=g.thad, tiap=g.tiap, tiad=g.tiad, thi_offset=g.thi_offset,
+        thi_fraction=g.thi_fraction, tib_offset=g.tib_offset, tib_fraction=g.tib_fraction,
         pf_rad=static_offsets(g)["plantarflexion"],
         fjc="({:.6f}, {:.6f}, {:.6f})".format(*fjc_local(g, "L")),
         fjc_depth=float(np.linalg.norm(fjc_local(g, "L") - np.asarray(g.toe_local))),
@@ -178,11 +179,13 @@ curves, timing and sign conventions as the Plug-in Gait trials above, except:
   marker, 2 mm base plate): {hjc} mm in the pelvis frame (leg
   length 900 mm). The walking trial is {shift:.6f} mm lower than `walking.c3d`; the static
   pelvis stands at Z = {standing:.3f} mm, soles on the floor.
-* Clusters (segment frame, left side, mm; y lateral): THAP {thap[0]:g} anterior, {thap[1]:g} lateral at
-  2/3 of the thigh above the KJC, THAD {thad[0]:g}, {thad[1]:g} at 1/3; TIAP {tiap[0]:g}, {tiap[1]:g}
-  and TIAD {tiad[0]:g}, {tiad[1]:g} at 2/3 and 1/3 of the shank above the AJC. THI, KNE, TIB, ANK
-  as in the Plug-in Gait trials; KNM/MED mirror KNE/ANK on the knee/ankle axis (their
-  midpoints are the KJC/AJC).
+* Clusters (segment frame, left side, mm; y lateral, a negative value is medial), laid out as
+  the calibrated clusters of a real CGM 2.4 session (mean of both sides): THI {thi_offset:g} lateral
+  at {thi_fraction:g} of the thigh above the KJC, THAP {thap[0]:g} anterior, {thap[1]:g} lateral at
+  {thap[2]:g}, THAD {thad[0]:g}, {thad[1]:g} at {thad[2]:g}; TIB {tib_offset:g} lateral at {tib_fraction:g} of the
+  shank above the AJC, TIAP {tiap[0]:g}, {tiap[1]:g} at {tiap[2]:g} and TIAD {tiad[0]:g}, {tiad[1]:g} at
+  {tiad[2]:g} (on the tibial crest). KNE and ANK as in the Plug-in Gait trials; KNM/MED mirror
+  KNE/ANK on the knee/ankle axis (their midpoints are the KJC/AJC).
 * Hindfoot (foot frame, origin AJC, mm): TOE {toe} (CGM 2.4's mid-foot TOE), HEE
   {hee}; static plantarflexion offset {pf_rad:.6f} rad (in the parameters).
   Forefoot markers in the static hindfoot frame: FMH {fmh}, SMH {smh},
