@@ -31,13 +31,14 @@ Marker placement (default :class:`Cgm24Geometry`)
   ``(-46.8, ±82.7, -96.6)``.  The walking trial is lowered by
   :meth:`Cgm24Geometry.height_shift` (-17.385 mm for Hara, 0 for Davis) and the static
   trial stands with its soles on the floor.
-* Cluster layout: the marker positions of the calibrated clusters of a real CGM 2.4
-  session (the shared Qualisys session's static trial, mean of both sides, heights as a
-  fraction of its segment lengths, rounded) -- a lateral wand marker (THI, TIB) about
-  110 mm out and two anterior markers on each segment.  An earlier, more compact layout
-  (THI/TIB 75/65 mm lateral, the shank's anterior pair 12 and 28 mm lateral) let a
-  Table 3.1 ball turn the shank cluster about its long axis by 74 deg; real clusters are
-  wider than that.
+* Cluster layout: that of a real CGM 2.4 session's clusters (the shared Qualisys
+  session's static cluster calibration, mean of both sides, heights as a fraction of its
+  segment lengths, rounded; its walking trial's markers in its segment frames agree to
+  about 20 mm) -- a lateral wand marker (THI, TIB) about 110 mm out and two anterior
+  markers on each segment.  An earlier, more compact layout (THI/TIB 75/65 mm lateral,
+  the shank's anterior pair 12 and 28 mm lateral: a shank cross-section of rms 26 mm
+  against the real session's 41-49 mm) let a Table 3.1 ball turn the shank cluster about
+  its long axis by 74 deg.
 * Thigh (thigh frame, origin KJC): THI ``(0, 110, 0.24 L_t)`` (in the thigh's y-z plane,
   ThighRotation 0) and KNE ``(0, KneeWidth/2 + r, 0)`` (as Plug-in Gait); **THAP** ``(63,
   -23, 0.71 L_t)`` (anterior, a little medial); **THAD** ``(80, -20, 0.33 L_t)``.  Static
