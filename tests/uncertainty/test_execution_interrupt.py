@@ -80,6 +80,7 @@ def test_interrupted_pool_stops_its_workers_and_removes_its_files(tmp_path, monk
     evaluator = Evaluator(workers=2)
     pids = sorted(evaluator.client.run(os.getpid).values())
     assert len(pids) == 2
+    cluster = evaluator._resources.cluster
     for pid in pids:
         assert _ignored_signals(pid) & (1 << (signal.SIGINT - 1)), "a worker does not ignore SIGINT"
     assert [p.name.startswith(TMPDIR_PREFIX) for p in scratch.iterdir()] == [True]
@@ -91,3 +92,54 @@ def test_interrupted_pool_stops_its_workers_and_removes_its_files(tmp_path, monk
     assert sorted(int(Path(m).read_text()) for m in markers) == pids  # both were busy when interrupted
     assert [pid for pid in pids if _running(pid)] == []
     assert list(scratch.iterdir()) == []  # neither the evaluator's directory nor Dask's scratch space
+    from distributed.deploy.spec import SpecCluster
+
+    assert cluster not in SpecCluster._instances  # nothing left for distributed to close (again) at exit
+
+
+class _HalfStarted:
+    """A local cluster whose start is cut short: it registers itself for distributed's
+    close at exit, as ``SpecCluster.__init__`` does first, and then fails (``error``)."""
+
+    error: type[BaseException] = KeyboardInterrupt
+    closed: list[_HalfStarted] = []
+    shutdown_on_close = True
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        from distributed.deploy.spec import SpecCluster
+
+        self.workers: dict[str, object] = {}
+        SpecCluster._instances.add(self)  # type: ignore[arg-type]
+        raise self.error("cut short while starting")
+
+    def close(self, timeout: float | None = None) -> None:
+        _HalfStarted.closed.append(self)
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+def test_a_cluster_cut_short_while_starting_is_released(tmp_path, monkeypatch, error):
+    """Interrupted (or failing) while the local cluster starts: the half-started cluster
+    is closed by the evaluator and taken off distributed's exit list, whose own close would
+    print a traceback (``assert w.status in ...: Status.init``) after the one-line message."""
+    distributed = pytest.importorskip("distributed")
+    from distributed.deploy.spec import SpecCluster
+
+    from fuzzygait.uncertainty.execution.evaluator import ParallelEvaluationError
+
+    def half_started() -> list[object]:
+        return [c for c in SpecCluster._instances if isinstance(c, _HalfStarted)]
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(distributed, "LocalCluster", type("Cut", (_HalfStarted,), {"error": error}))
+    _HalfStarted.closed.clear()
+    evaluator = Evaluator(workers=2)
+    with pytest.raises(KeyboardInterrupt if error is KeyboardInterrupt else ParallelEvaluationError, match="cut short"):
+        _ = evaluator.client
+    if error is KeyboardInterrupt:  # the evaluator holds it; the interrupt's handler closes the evaluator
+        assert len(half_started()) == 1 and not _HalfStarted.closed
+    else:  # released at once
+        assert len(_HalfStarted.closed) == 1 and not half_started()
+    evaluator.close()
+    assert len(_HalfStarted.closed) == 1
+    assert not half_started()
+    assert list(tmp_path.iterdir()) == []

@@ -35,7 +35,6 @@ import logging
 import math
 import os
 import shutil
-import signal
 import tempfile
 import threading
 import uuid
@@ -48,6 +47,14 @@ from typing import Any, TypeVar
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.uncertainty.execution.teardown import (
+    CLOSE_TIMEOUT,
+    discard_cluster,
+    forget_cluster,
+    kill_workers,
+    started_clusters,
+    stop_workers_now,
+)
 from fuzzygait.uncertainty.execution.workers import (
     WORKER_ENV,
     WORKER_PRELOAD,
@@ -82,9 +89,6 @@ class ParallelEvaluationError(FuzzyGaitError):
 #: Prefix of an evaluator's temporary directory (``fuzzygait-parallel-<pid>-<random>``
 #: in the system's temporary folder; the Dask workers' scratch space is inside it).
 TMPDIR_PREFIX = "fuzzygait-parallel-"
-#: Seconds the local cluster is given to stop its workers before they are killed.
-CLOSE_TIMEOUT = 10.0
-
 
 @dataclass(eq=False)
 class _Resources:
@@ -114,7 +118,7 @@ class _Resources:
             _LIVE.discard(self)
             try:
                 if cluster is not None and (_QUICKLY.is_set() or interrupted):
-                    _stop_workers_now(cluster)
+                    stop_workers_now(cluster)
                 for owned, thing in ((self.owns_client, client), (True, cluster)):
                     if thing is not None and owned:
                         try:
@@ -123,7 +127,8 @@ class _Resources:
                             pass
             finally:  # even when the close is interrupted: no worker and no file left
                 if cluster is not None:
-                    _kill_workers(cluster)
+                    kill_workers(cluster)
+                    forget_cluster(cluster)
                 if tmpdir is not None:
                     shutil.rmtree(tmpdir, ignore_errors=True)
 
@@ -134,45 +139,12 @@ _LIVE: set[_Resources] = set()
 
 #: Set by :func:`stop_quickly`: every evaluator closing from now on stops its workers at once.
 _QUICKLY = threading.Event()
-#: Seconds a worker is given to stop by itself when its evaluator stops quickly.
-QUICK_STOP_SECONDS = 0.5
-
-
 def stop_quickly() -> None:
     """From now on, an evaluator closing does not wait for its workers' running tasks (the
     command was interrupted: they are abandoned anyway), and Dask logs nothing in this
     process below CRITICAL (its reports of connections closed by the shutdown)."""
     _QUICKLY.set()
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
-
-
-async def _close_nannies(nannies: list[Any], timeout: float) -> None:
-    import asyncio
-
-    await asyncio.gather(*(nanny.close(timeout=timeout) for nanny in nannies), return_exceptions=True)
-
-
-def _stop_workers_now(cluster: Any) -> None:
-    """Close a local cluster's nannies with a short timeout: a worker busy with a task is
-    killed after :data:`QUICK_STOP_SECONDS` instead of the close's usual 4 s."""
-    nannies = list(getattr(cluster, "workers", {}).values())
-    try:
-        cluster.sync(_close_nannies, nannies, QUICK_STOP_SECONDS)
-    except Exception:  # noqa: BLE001 - best effort: the close and the kill below follow
-        pass
-
-
-def _kill_workers(cluster: Any) -> None:
-    """SIGKILL what is left of a closed local cluster's worker processes (a close that
-    timed out, or one interrupted)."""
-    for nanny in list(getattr(cluster, "workers", {}).values()):
-        process = getattr(getattr(nanny, "process", None), "process", None)
-        pid = getattr(process, "pid", None)
-        if pid:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except OSError:
-                pass
 
 
 def remove_temporary_directories() -> list[str]:
@@ -284,11 +256,13 @@ class Evaluator:
     def _connect(self, res: _Resources) -> None:
         import dask
         from distributed import Client, LocalCluster
+        from distributed.deploy.spec import SpecCluster
 
         logging.getLogger("asyncio").addFilter(_ABANDONED_WAITS)  # once: a filter is added only once
         if self.scheduler is None:
             _LIVE.add(res)
             scratch = os.path.join(res.make_tmpdir(), "dask")  # removed with the evaluator's directory
+            before = {id(cluster) for cluster in list(SpecCluster._instances)}
             try:
                 with dask.config.set({"distributed.nanny.pre-spawn-environ": _pre_spawn_environ(),
                                       "temporary-directory": scratch}):  # the scheduler's scratch too
@@ -299,7 +273,12 @@ class Evaluator:
                         # no dashboard; the scheduler's health endpoint on a free local port
                         scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                     )  # fmt: skip
-            except Exception as err:  # noqa: BLE001
+            except BaseException as err:  # a half-started cluster (failed or interrupted) is released
+                res.cluster = next(iter(started_clusters(before)), None)  # by the interrupt's release
+                if not isinstance(err, Exception):
+                    raise
+                discard_cluster(res.cluster)
+                res.cluster = None
                 raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}") from None
             res.cluster = cluster
             res.client, res.owns_client = Client(cluster, set_as_default=False), True
