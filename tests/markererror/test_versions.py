@@ -117,13 +117,13 @@ def _with_static_only_markers(trial: Trial, static: Trial) -> Trial:
 
 
 def test_thap_moves_the_cgm23_hip_but_not_the_cgm10_hip(runs: dict[str, AnglesRun]) -> None:
-    shift = np.array([15.0, -10.0, 8.0])
+    shift = np.array([15.0, 10.0, -8.0])  # mm; (15, -10, 8) turns the wider clusters' hip Z by only 0.02° at one frame
     cgm23 = model_of(runs["cgm2.3"], "LHipAngles", markers=["LTHAP"])
     assert cgm23.fixed_markers and "LTHAP" not in cgm23.fixed_markers
     for axis in range(3):
         moved = dataclasses.replace(cgm23, axis=axis)
         change = moved.evaluate(shift).values - moved.evaluate(np.zeros(3)).values
-        assert np.all(np.abs(change) > 0.01), (axis, change)  # round-off is ~1e-12 deg; cgm1.0 below: exactly 0
+        assert np.all(np.abs(change) > 0.05), (axis, change)
     # Plug-in Gait's hip does not read THAP: not a parameter, and moving it in the trial changes nothing
     run = runs["cgm1.0"]
     assert "LTHAP" not in model_of(run, "LHipAngles").markers

@@ -139,6 +139,8 @@ _LIVE: set[_Resources] = set()
 
 #: Set by :func:`stop_quickly`: every evaluator closing from now on stops its workers at once.
 _QUICKLY = threading.Event()
+
+
 def stop_quickly() -> None:
     """From now on, an evaluator closing does not wait for its workers' running tasks (the
     command was interrupted: they are abandoned anyway), and Dask logs nothing in this
@@ -273,8 +275,9 @@ class Evaluator:
                         # no dashboard; the scheduler's health endpoint on a free local port
                         scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                     )  # fmt: skip
-            except BaseException as err:  # a half-started cluster (failed or interrupted) is released
-                res.cluster = next(iter(started_clusters(before)), None)  # by the interrupt's release
+            except BaseException as err:
+                # a half-started cluster is the evaluator's: an interrupt's release closes it
+                res.cluster = next(iter(started_clusters(before)), None)
                 if not isinstance(err, Exception):
                     raise
                 discard_cluster(res.cluster)

@@ -65,11 +65,14 @@ def started_clusters(before: set[int]) -> list[Any]:
 
 
 def discard_cluster(cluster: Any) -> None:
-    """Close, kill and forget a cluster that failed to start (None: nothing to do)."""
-    if cluster is not None:
-        try:
-            cluster.close(timeout=CLOSE_TIMEOUT)
-        except BaseException:  # noqa: BLE001 - best effort: the kill follows
-            pass
+    """Close, kill and forget a cluster that failed to start (None: nothing to do); an
+    interrupt during the close still kills its workers."""
+    if cluster is None:
+        return
+    try:
+        cluster.close(timeout=CLOSE_TIMEOUT)
+    except Exception:  # noqa: BLE001 - best effort: the kill follows
+        pass
+    finally:
         kill_workers(cluster)
         forget_cluster(cluster)
