@@ -38,7 +38,8 @@ WORKER_PRELOAD = __name__
 
 #: Loggers of a worker process whose shutdown noise :class:`_ShutdownNoise` drops.
 _NOISY_LOGGERS = ("distributed.worker", "distributed.core", "distributed.comm", "distributed.batched",
-                  "distributed.nanny", "distributed.worker.state_machine")  # fmt: skip
+                  "distributed.nanny", "distributed.worker.state_machine",
+                  "distributed.diskutils")  # fmt: skip  # its scratch directory: the evaluator removes it
 
 
 class _ShutdownNoise(logging.Filter):
