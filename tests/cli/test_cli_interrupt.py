@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -183,37 +184,67 @@ def _complete(args: list[str], tmp: Path) -> None:
     assert result.returncode == 0, result.stderr
 
 
+def _earlier_run(factory: pytest.TempPathFactory, name: str, args: list[str]) -> Path:
+    """Run ``args`` (which write under ``{out}``) to completion once per module in a folder
+    of its own and return that folder; each test copies it (:func:`_copy_of`)."""
+    folder = factory.mktemp(name)
+    _complete([a.replace("{out}", str(folder / "out")) for a in args], folder / "tmp")
+    shutil.rmtree(folder / "tmp")
+    return folder / "out"
+
+
+def _copy_of(earlier: Path, tmp_path: Path) -> Path:
+    """A copy of an earlier run's output folder for one test to interrupt a run over."""
+    return Path(shutil.copytree(earlier, tmp_path / "out"))
+
+
+UNCERTAINTY = ["uncertainty", str(SAMPLE_DATA / "walking.c3d"), "--static", str(SAMPLE_DATA / "static.c3d")]
+
+
+@pytest.fixture(scope="module")
+def earlier_uncertainty(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The output folder of a completed (short) ``uncertainty`` run: ``fuzzy.nc``."""
+    return _earlier_run(tmp_path_factory, "uncertainty", [*UNCERTAINTY, "--out", "{out}/fuzzy.nc", "--workers", "1",
+                        "--angles", "LKneeAngles", "--alphas", "0", "--no-per-source", "--tolerance", "0"])  # fmt: skip
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_uncertainty_interrupted(tmp_path, signum):
-    out = tmp_path / "out" / "fuzzy.nc"
-    out.parent.mkdir()
-    trial = ["uncertainty", str(SAMPLE_DATA / "walking.c3d"), "--static", str(SAMPLE_DATA / "static.c3d"),
-             "--out", str(out)]  # fmt: skip
-    _complete([*trial, "--workers", "1", "--angles", "LKneeAngles", "--alphas", "0", "--no-per-source",
-               "--tolerance", "0"], tmp_path / "tmp")  # fmt: skip
+def test_uncertainty_interrupted(tmp_path, signum, earlier_uncertainty):
     import xarray as xr
 
+    out = _copy_of(earlier_uncertainty, tmp_path) / "fuzzy.nc"
     with xr.open_dataset(out) as ds:
         before = ds.load()
     digest = hashlib.sha256(out.read_bytes()).hexdigest()
-    _interrupted_cleanly([*trial, "--workers", "2"], tmp_path / "tmp", signum, BUSY_CPU["uncertainty"], out)
+    _interrupted_cleanly([*UNCERTAINTY, "--out", str(out), "--workers", "2"], tmp_path / "tmp", signum,
+                         BUSY_CPU["uncertainty"], out)  # fmt: skip
     assert hashlib.sha256(out.read_bytes()).hexdigest() == digest
     with xr.open_dataset(out) as ds:
         xr.testing.assert_identical(ds.load(), before)
     assert sorted(p.name for p in out.parent.iterdir()) == ["fuzzy.nc"]
 
 
+@pytest.fixture(scope="module")
+def visit(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A synthetic session folder of two 200-frame walking trials."""
+    return synthetic_session(tmp_path_factory.mktemp("session") / "visit", 200)
+
+
+@pytest.fixture(scope="module")
+def earlier_report(tmp_path_factory: pytest.TempPathFactory, visit: Path) -> Path:
+    """The output folder of a completed angles-only ``report`` of :func:`visit`."""
+    return _earlier_run(tmp_path_factory, "report", ["report", str(visit), "--out", "{out}", "--uncertainty", "none",
+                                                     "--workers", "1"])  # fmt: skip
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_report_interrupted(tmp_path, signum):
+def test_report_interrupted(tmp_path, signum, visit, earlier_report):
     from fuzzygait.workflows.batch_report import load_page_data
 
-    session = synthetic_session(tmp_path / "visit", 200)
-    out = tmp_path / "report"
-    _complete(["report", str(session), "--out", str(out), "--uncertainty", "none", "--workers", "1"],
-              tmp_path / "tmp")  # fmt: skip
+    out = _copy_of(earlier_report, tmp_path)
     before = _digests(out)
     pages = {name: load_page_data(out / "visit", name) for name in ("walk01", "walk02")}
-    args = ["report", str(session), "--out", str(out), "--uncertainty", "fast", "--workers", "2"]
+    args = ["report", str(visit), "--out", str(out), "--uncertainty", "fast", "--workers", "2"]
     _interrupted_cleanly(args, tmp_path / "tmp", signum, BUSY_CPU["report"], out / "index.html")
     assert _digests(out) == before  # every page of the first run as it was (none finished in between)
     for name, data in pages.items():
@@ -222,15 +253,21 @@ def test_report_interrupted(tmp_path, signum):
         assert all(np.array_equal(again[k], data[k]) for k in data)
 
 
+STUDY = ["frv-sim", "stance", "--disc", "12", "--duration", "2.0", "--nodes", "10", "--set", f"E={MODULUS}"]
+
+
+@pytest.fixture(scope="module")
+def earlier_study(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The output folder of a completed 20-sample ``frv-sim`` study: ``study.zarr``."""
+    return _earlier_run(tmp_path_factory, "study", [*STUDY, "--out", "{out}/study.zarr", "--samples", "20",
+                                                    "--workers", "1"])  # fmt: skip
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_frv_sim_interrupted(tmp_path, signum):
+def test_frv_sim_interrupted(tmp_path, signum, earlier_study):
     import xarray as xr
 
-    store = tmp_path / "out" / "study.zarr"
-    store.parent.mkdir()
-    study = ["frv-sim", "stance", "--out", str(store), "--disc", "12", "--duration", "2.0", "--nodes", "10",
-             "--set", f"E={MODULUS}"]  # fmt: skip
-    _complete([*study, "--samples", "20", "--workers", "1"], tmp_path / "tmp")
+    store = _copy_of(earlier_study, tmp_path) / "study.zarr"
 
     def first_hulls() -> np.ndarray:
         with xr.open_zarr(store, group="samples", consolidated=False) as ds:
@@ -239,8 +276,8 @@ def test_frv_sim_interrupted(tmp_path, signum):
     before = first_hulls()
     assert before.shape[0] == 20 and np.isfinite(before).all()
     zarr_metadata = (".zattrs", ".zgroup", ".zarray", ".zmetadata")
-    _interrupted_cleanly([*study, "--samples", "40000", "--workers", "2"], tmp_path / "tmp", signum,
-                         BUSY_CPU["frv-sim"], store, allowed=zarr_metadata)  # fmt: skip
+    _interrupted_cleanly([*STUDY, "--out", str(store), "--samples", "40000", "--workers", "2"], tmp_path / "tmp",
+                         signum, BUSY_CPU["frv-sim"], store, allowed=zarr_metadata)  # fmt: skip
     assert np.array_equal(first_hulls(), before)  # the first run's samples untouched
 
 
