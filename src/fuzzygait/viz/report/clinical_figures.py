@@ -17,6 +17,7 @@ from fuzzygait.gait.normative import GPS_VARIABLES, GaitProfile
 from fuzzygait.viz.layout import SIDE_STYLE
 from fuzzygait.viz.report.clinical import KINETIC_JOINTS, N_POINTS, ClinicalData
 from fuzzygait.viz.report.figures import SIDE_LINE, _add_legend, _right_hatch, _save, foot_off_lines
+from fuzzygait.viz.report.grid import KINETICS_GRID
 
 __all__ = ["gait_profile_figure", "kinetics_figure", "plot_gait_profile", "plot_kinetics"]
 
@@ -86,7 +87,7 @@ def kinetics_figure(clinical: ClinicalData, title: str) -> Figure:
         face = {"facecolor": "white", "hatch": _right_hatch(3)} if side == "R" else {"facecolor": colour, "alpha": 0.2}
         handles.append(Patch(edgecolor=colour, lw=0.5, label=f"{name} ± 1 SD over cycles", **face))
     handles.append(Line2D([], [], color="0.2", lw=1.0, label="foot off (vertical, per side)"))
-    return _add_legend(fig, handles, ncol=3)
+    return _add_legend(fig, handles, ncol=3, margins=KINETICS_GRID)
 
 
 def plot_kinetics(clinical: ClinicalData, stem: Path, title: str) -> None:

@@ -34,6 +34,7 @@ from fuzzygait.viz.report.bands import (  # noqa: E402
     cycle_bands,
 )
 from fuzzygait.viz.report.clinical import ClinicalData  # noqa: E402
+from fuzzygait.viz.report.grid import ANGLE_GRID, GridMargins, place_grid  # noqa: E402
 
 __all__ = ["cycle_figure", "plot_cycle_bands", "plot_time_series", "time_series_figure"]
 
@@ -132,15 +133,16 @@ def _panel_grid(title: str, rows: Sequence[tuple[str, str]] = ANGLE_ROWS) -> tup
     return fig, axes
 
 
-def _add_legend(fig: Figure, handles: list[Artist], ncol: int = 7) -> Figure:
-    """Add the legend above the grid and lay the figure out (room for its rows)."""
+def _add_legend(fig: Figure, handles: list[Artist], ncol: int = 7, margins: GridMargins = ANGLE_GRID) -> Figure:
+    """Add the legend above the grid and lay the figure out (room for its rows; the grid's
+    ``margins`` in inches, :mod:`.grid`)."""
     ncol = min(len(handles), ncol)
     rows = -(-len(handles) // max(ncol, 1))
     height = fig.get_size_inches()[1]
     legend_top = 1.0 - 0.42 / height
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, legend_top),
                ncol=ncol, fontsize=8, frameon=False)  # fmt: skip
-    fig.tight_layout(rect=(0, 0, 1, legend_top - (0.16 * rows + 0.05) / height))
+    place_grid(fig, legend_top - (0.16 * rows + 0.05) / height, margins)
     return fig
 
 

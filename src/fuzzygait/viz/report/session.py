@@ -21,6 +21,7 @@ from fuzzygait import __version__
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
 from fuzzygait.viz.report.clinical_html import spatiotemporal_table
+from fuzzygait.viz.report.grid import SESSION_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
 from fuzzygait.viz.report.pages import CSS
 
@@ -118,7 +119,7 @@ def plot_session_cycles(cycles: Mapping[str, np.ndarray], path: Path, title: str
             if (r, c) == (0, 0) and ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7, loc="lower right", frameon=False)
     figure.suptitle(title, fontsize=11)
-    figure.tight_layout(rect=(0, 0, 1, 0.97))
+    place_grid(figure, 0.97, SESSION_GRID)
     for suffix in (".png", ".svg"):
         figure.savefig(path.with_suffix(suffix), dpi=100)
     plt.close(figure)

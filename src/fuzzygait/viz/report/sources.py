@@ -42,6 +42,7 @@ from fuzzygait.markererror.per_source import (
 from fuzzygait.viz.report.bands import N_POINTS, TrialData, alpha_text, band_undetermined, cycle_bands
 from fuzzygait.viz.report.clinical_html import footnote
 from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt, time_limits
+from fuzzygait.viz.report.grid import SOURCES_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
 
 if TYPE_CHECKING:
@@ -162,7 +163,7 @@ def source_figure(data: TrialData, title: str) -> Figure:
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.962), ncol=3, fontsize=8.5,
                frameon=False, title=f"α = {alpha_text(alpha)} bands (worst case of each)",
                title_fontsize=8.5)  # fmt: skip
-    fig.tight_layout(rect=(0, 0, 1, 0.9))
+    place_grid(fig, 0.9, SOURCES_GRID)
     return fig
 
 
