@@ -263,7 +263,7 @@ def test_an_extension_killed_in_each_phase_completes_bit_identical(root: Path) -
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["create", "extend", "overwrite", "repair"])
 def test_killed_at_every_phase(root: Path, name: str) -> None:
-    """8 writes of each phase (first, last and evenly between: about 30-40 kills of the
+    """5 writes of each phase (first, last and evenly between: about 20-25 kills of the
     90-140 writes of each run) of a new study, an extension, an overwrite and the repair
     after a kill."""
     run = scenario(root, name)
@@ -272,7 +272,7 @@ def test_killed_at_every_phase(root: Path, name: str) -> None:
                                                      "overwrite": {"publish", "discard"},
                                                      "repair": {"discard"}}.get(name, set())  # fmt: skip
     assert all(sum(p == phase for p, _ in run.events) >= 3 for phase in expected)
-    chosen = moments(run.events, 8)
+    chosen = moments(run.events, 5)
     outcomes = {k: run.check_kill(k) for k in chosen if not (run.root / f"k{k}").exists()}
     # a kill leaves the new study only once it is in place (after the rename / the exchange)
     published = next((i + 1 for i, (p, _) in enumerate(run.events) if p == "publish"), len(run.events) + 1)
