@@ -143,3 +143,43 @@ def test_a_cluster_cut_short_while_starting_is_released(tmp_path, monkeypatch, e
     assert len(_HalfStarted.closed) == 1
     assert not half_started()
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("main", ["script", "worker", "command", "notebook"])
+def test_a_pool_that_cannot_start_from_a_script_says_how_to_guard_it(tmp_path, monkeypatch, main):
+    """A script that runs its analysis at top level makes every spawned worker run it again,
+    and the pool fails to start ("Nanny failed to start"): the one-line error then names the
+    script and the ``if __name__ == "__main__":`` guard (or workers=1); the ``fuzzygait``
+    command and a notebook (no file) get the plain message."""
+    import types
+
+    distributed = pytest.importorskip("distributed")
+    from fuzzygait.uncertainty.execution.evaluator import ParallelEvaluationError
+
+    module = types.ModuleType("__main__")
+    if main == "script":
+        module.__file__, module.__spec__ = str(tmp_path / "gait_analysis.py"), None
+    elif main == "worker":  # a spawned worker importing the script: that is __mp_main__, __main__ is spawn's
+        monkeypatch.setitem(sys.modules, "__mp_main__", types.ModuleType("__mp_main__"))
+    elif main == "command":
+        module.__file__ = "/x/fuzzygait/__main__.py"
+        module.__spec__ = types.SimpleNamespace(name="fuzzygait.__main__")  # type: ignore[assignment]
+    monkeypatch.setitem(sys.modules, "__main__", module)
+    if main != "worker":
+        monkeypatch.setitem(sys.modules, "__mp_main__", module)  # as multiprocessing sets it in the main process
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(distributed, "LocalCluster", type("Failed", (_HalfStarted,), {"error": RuntimeError}))
+    evaluator = Evaluator(workers=2)
+    with pytest.raises(ParallelEvaluationError) as caught:
+        _ = evaluator.client
+    evaluator.close()
+    message = str(caught.value)
+    assert message.startswith("cannot start a local Dask cluster: cut short while starting")
+    if main == "script":
+        assert 'if the script gait_analysis.py starts this run at its top level, put that code under `if __name__ == ' \
+               '"__main__":`' in message and "workers=1" in message
+    elif main == "worker":
+        assert "this is a worker process re-importing the script: put the script's top-level code under `if " \
+               '__name__ == "__main__":`' in message
+    else:
+        assert message == "cannot start a local Dask cluster: cut short while starting"

@@ -35,6 +35,7 @@ import logging
 import math
 import os
 import shutil
+import sys
 import tempfile
 import threading
 import uuid
@@ -213,6 +214,25 @@ def _pre_spawn_environ() -> dict[str, object]:
     return environ
 
 
+def _script_hint() -> str:
+    """Advice for the commonest reason a local pool does not start from a script: its
+    worker processes are started by re-importing the script (``spawn``), and a script that
+    runs its analysis at top level starts it again in every worker, which Python stops.
+    Empty when the program is not a plain script (the ``fuzzygait`` command, a notebook)."""
+    main = sys.modules.get("__main__")
+    guard = "`if __name__ == \"__main__\":`"
+    script = sys.modules.get("__mp_main__")  # the same module as __main__, except in a spawned process
+    if script is not None and script is not main:  # a spawned worker, importing the script
+        return f" (this is a worker process re-importing the script: put the script's top-level code under {guard}, " \
+               "or run with workers=1)"
+    path = getattr(main, "__file__", None)
+    spec = getattr(main, "__spec__", None)
+    if not path or (spec is not None and spec.name.startswith("fuzzygait")):
+        return ""
+    return (f" (if the script {os.path.basename(path)} starts this run at its top level, put that code under {guard}: "
+            "the workers re-import the script; or run with workers=1)")
+
+
 class Evaluator:
     """Where the engine's work runs (see the module docstring).
 
@@ -282,7 +302,7 @@ class Evaluator:
                     raise
                 discard_cluster(res.cluster)
                 res.cluster = None
-                raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}") from None
+                raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}{_script_hint()}") from None
             res.cluster = cluster
             res.client, res.owns_client = Client(cluster, set_as_default=False), True
         elif isinstance(self.scheduler, str):
