@@ -67,7 +67,10 @@ def test_leg_target_model() -> None:
     from fuzzygait.mechanics.scenarios import LegSimulator
     from fuzzygait.mechanics.targets import LegTargetModel
 
-    swing = LegSimulator("swing", nodes=6)
+    # uncompiled (CasADi's virtual machine, the same functions): the contract is what is checked here, and
+    # 30 steps do not repay a 15 s compilation; tests/mechanics/test_mechanics_native.py checks that the
+    # compiled stepper agrees with these functions
+    swing = LegSimulator("swing", nodes=6, compile=False)
     base = swing.parameters(eta=1e5)
     for scheme in ("variational", "energy-momentum"):
         model = LegTargetModel(swing, "total_deformation_energy", ("E", "rho"), base=base, duration=0.03, scheme=scheme)
@@ -77,8 +80,10 @@ def test_leg_target_model() -> None:
 
 
 @pytest.mark.slow
-def test_layered_blade_model() -> None:
+def test_layered_blade_model(monkeypatch: pytest.MonkeyPatch) -> None:
     from fuzzygait.mechanics.layered_blade import LayeredBladeModel
+
+    monkeypatch.setenv("FUZZYGAIT_NO_COMPILE", "1")  # 20 steps: uncompiled, as test_leg_target_model
 
     model = LayeredBladeModel(target="toe_z", nodes=8, duration=0.02, dt=1e-3, tip_force=(0.0, 0.0, 100.0))
     check_model(model, model.base)

@@ -253,7 +253,8 @@ def test_report_interrupted(tmp_path, signum, visit, earlier_report):
         assert all(np.array_equal(again[k], data[k]) for k in data)
 
 
-STUDY = ["frv-sim", "stance", "--disc", "12", "--duration", "2.0", "--nodes", "10", "--set", f"E={MODULUS}"]
+#: 6 nodes: the model structure of the other frv-sim command tests, whose compiled library it shares
+STUDY = ["frv-sim", "stance", "--disc", "12", "--duration", "2.0", "--nodes", "6", "--set", f"E={MODULUS}"]
 
 
 @pytest.fixture(scope="module")

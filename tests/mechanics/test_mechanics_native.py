@@ -120,8 +120,9 @@ def test_progress_is_reported_between_chunks(swing):
 def test_newton_path_does_not_depend_on_sensitivities():
     """The sensitivities' LU has its own pivot order: renewing it never touches Newton's,
     so trajectories are bit-identical with and without sensitivities (the FRV and Graph
-    Follower studies rely on it: α = 1 is the deterministic run)."""
-    sim = LegSimulator("stance", nodes=40)
+    Follower studies rely on it: α = 1 is the deterministic run).  The default 20 nodes
+    (the library the scheme and README tests compile too): 7 pivot orders in 200 steps."""
+    sim = LegSimulator("stance")
     p = sim.parameters(E=59.39e9)
     runs = [integrate(sim.model, sim.leg.q0, p, DT, 200, scheme="energy-momentum", engine="compiled",
                       sensitivities=s) for s in (False, True)]  # fmt: skip

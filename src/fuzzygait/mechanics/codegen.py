@@ -3,7 +3,8 @@
 The library is keyed by the model structure (body count, joints, outputs — see
 :attr:`SystemBuilder.structure_key`), the CasADi version and this module's code version;
 parameters and constants are function inputs, so every run and every worker process with
-the same structure loads the same file instead of recompiling.  The cache directory is
+the same structure loads the same file instead of recompiling (it is compiled once: a
+process that needs it meanwhile waits on its ``.lock`` file).  The cache directory is
 ``$FUZZYGAIT_CACHE_DIR`` or ``~/.cache/fuzzygait``.  Without a C compiler (or with
 ``FUZZYGAIT_NO_COMPILE=1``) the functions run in CasADi's virtual machine: same numbers,
 slower.
@@ -17,7 +18,8 @@ import shutil
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import casadi as ca
@@ -84,6 +86,35 @@ def build_library(target: Path, functions: Sequence[ca.Function], sources: Seque
     if cc is None:
         return None
     target.parent.mkdir(parents=True, exist_ok=True)
+    with _compiling(target):
+        if target.exists():  # another process compiled it while this one waited
+            return target
+        return _build(cc, target, functions, sources, optimisation, header)
+
+
+@contextmanager
+def _compiling(target: Path) -> Iterator[None]:
+    """Hold the lock file beside ``target`` while it is compiled, so that processes
+    needing the same library at once (the workers of a pool on a fresh machine) compile
+    it once and the others wait for it.  An advisory ``flock``: released when its holder
+    ends, however it ends; without ``fcntl`` (Windows) no lock (each compiles, and the
+    atomic rename keeps the file whole)."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    with open(target.with_name(target.name + ".lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def _build(cc: str, target: Path, functions: Sequence[ca.Function], sources: Sequence[Path], optimisation: str,
+           header: str | None) -> Path | None:  # fmt: skip
+    """Generate, compile and move into place (:func:`build_library`, under its lock)."""
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         base = header or target.stem
         generator = ca.CodeGenerator(f"{base}.c", {"with_header": header is not None})
@@ -98,7 +129,7 @@ def build_library(target: Path, functions: Sequence[ca.Function], sources: Seque
             warnings.warn(
                 f"compiling the simulator's generated code failed ({cc}: "
                 f"{result.stderr.strip().splitlines()[-1:] or ['?']}); running uncompiled (slower)",
-                stacklevel=3,
+                stacklevel=4,
             )
             return None
         os.replace(library, target)  # atomic: concurrent workers see a whole file or none
