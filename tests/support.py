@@ -43,6 +43,38 @@ def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
     )
 
 
+def run_here(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """Run the `fuzzygait` command in this process, as :func:`run` does in a subprocess
+    (the same entry point, exit code, stdout and stderr; ``tests/cli/test_cli.py::
+    test_run_here_gives_what_a_subprocess_gives`` compares them) without an interpreter's
+    start-up and imports, ~2 s a command: for the checks of arguments and inputs that end
+    with one line before any work.  The signal handlers the command installs and its
+    one-line warning display are restored afterwards."""
+    import contextlib
+    import io
+    import signal
+    import warnings
+
+    from fuzzygait.cli.app import main
+
+    argv = [str(a) for a in args]
+    stdout, stderr = io.StringIO(), io.StringIO()
+    handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    showwarning = warnings.showwarning
+    code = 0
+    try:
+        with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+            try:
+                main(argv)
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
+        warnings.showwarning = showwarning
+    return subprocess.CompletedProcess(["fuzzygait", *argv], code, stdout.getvalue(), stderr.getvalue())
+
+
 def assert_one_line_error(result: subprocess.CompletedProcess[str], *needles: str) -> None:
     assert result.returncode != 0
     assert "Traceback" not in result.stderr + result.stdout

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, shared_file
+from support import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
 
@@ -43,7 +43,7 @@ def test_info_reports_gaps_of_the_noisy_sample() -> None:
 
 def test_missing_input_is_one_line_and_no_output(tmp_path: Path) -> None:
     out = tmp_path / "out.c3d"
-    result = run("preprocess", tmp_path / "nope.c3d", "--out", out)
+    result = run_here("preprocess", tmp_path / "nope.c3d", "--out", out)
     assert_one_line_error(result, "nope.c3d", "no such file")
     assert not out.exists()
 
@@ -52,7 +52,7 @@ def test_corrupt_input_is_one_line_and_no_output(tmp_path: Path) -> None:
     bad = tmp_path / "bad.c3d"
     bad.write_bytes(bytes(range(256)) * 8)
     out = tmp_path / "out.c3d"
-    result = run("preprocess", bad, "--out", out)
+    result = run_here("preprocess", bad, "--out", out)
     assert_one_line_error(result, "bad.c3d")
     assert not out.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.c3d"]
@@ -60,13 +60,13 @@ def test_corrupt_input_is_one_line_and_no_output(tmp_path: Path) -> None:
 
 def test_impossible_cutoff_is_one_line_and_no_output(tmp_path: Path) -> None:
     out = tmp_path / "out.c3d"
-    result = run("preprocess", SAMPLE_DATA / "walking.c3d", "--out", out, "--cutoff", "80")
+    result = run_here("preprocess", SAMPLE_DATA / "walking.c3d", "--out", out, "--cutoff", "80")
     assert_one_line_error(result, "cutoff")
     assert not out.exists()
 
 
 def test_output_must_be_c3d(tmp_path: Path) -> None:
-    result = run("preprocess", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "out.csv")
+    result = run_here("preprocess", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "out.csv")
     assert_one_line_error(result, "out.csv")
 
 
@@ -159,3 +159,22 @@ def test_usage_errors_exit_non_zero(args: tuple[str, ...]) -> None:
     result = run(*args)
     assert result.returncode != 0
     assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("args", [
+    ("angles", "absent.c3d", "--out", "a.csv"),
+    ("uncertainty", SAMPLE_DATA / "walking.c3d", "--out", "u.nc", "--tolerance=-1"),
+    ("calibrate", SAMPLE_DATA / "static.c3d", "--marker-diameter", "500", "--out", "c.toml"),
+    ("simulate", "swing", "--nodes", "0", "--out", "s.nc"),
+    ("angles", "--no-such-option"),
+    ("info", SAMPLE_DATA / "walking.c3d"),
+])  # fmt: skip
+def test_run_here_gives_what_a_subprocess_gives(args, tmp_path, monkeypatch) -> None:
+    """The in-process runner the one-line-error tests use: the same exit code, stdout and
+    stderr as the command in its own process (errors of every kind, and a success)."""
+    from support import run_here
+
+    monkeypatch.chdir(tmp_path)
+    here, there = run_here(*args), run(*args)
+    assert (here.returncode, here.stdout, here.stderr) == (there.returncode, there.stdout, there.stderr)
+    assert not list(tmp_path.iterdir())

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run, shared_file
+from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
 
@@ -71,13 +71,13 @@ def test_implausible_subject_is_one_line(tmp_path: Path) -> None:
     text = (SAMPLE_DATA / "subject.toml").read_text().replace("LLegLength = 900.0", "LLegLength = 0.9")
     (tmp_path / "s.toml").write_text(text)
     out = tmp_path / "a.csv"
-    result = run("angles", SAMPLE_DATA / "walking.c3d", "--subject", tmp_path / "s.toml", "--out", out)
+    result = run_here("angles", SAMPLE_DATA / "walking.c3d", "--subject", tmp_path / "s.toml", "--out", out)
     assert_one_line_error(result, "LLegLength", "mm")
     assert not out.exists()
 
 
 def test_bad_output_suffix_is_refused_before_work(tmp_path: Path) -> None:
-    result = run("angles", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "a.xlsx")
+    result = run_here("angles", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "a.xlsx")
     assert_one_line_error(result, "a.xlsx", ".csv or .parquet")
 
 
@@ -142,14 +142,14 @@ def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("flag", ["--cycles", "--out"])
 def test_table_options_check_suffix(tmp_path: Path, flag: str) -> None:
-    result = run("angles", SAMPLE_DATA / "walking.c3d", flag, tmp_path / "x.txt")
+    result = run_here("angles", SAMPLE_DATA / "walking.c3d", flag, tmp_path / "x.txt")
     assert_one_line_error(result, flag)
 
 
 @pytest.mark.slow
 def test_c3d_suffix_is_checked_before_work_and_applied(tmp_path: Path) -> None:
     walking = SAMPLE_DATA / "walking.c3d"
-    assert_one_line_error(run("angles", walking, "--c3d-out", tmp_path / "m.c3d", "--suffix", "a b"), "--suffix")
+    assert_one_line_error(run_here("angles", walking, "--c3d-out", tmp_path / "m.c3d", "--suffix", "a b"), "--suffix")
     assert not list(tmp_path.iterdir())
     result = run("angles", walking, *SAMPLE_ARGS, "--model", "cgm1.0", "--c3d-out", tmp_path / "m.c3d",
                  "--suffix", "model")  # fmt: skip

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from support import SAMPLE_DATA, assert_one_line_error, run, shared_file
+from support import SAMPLE_DATA, assert_one_line_error, run, run_here, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.subject import read_subject, subject_from_processing, subject_values
@@ -114,12 +114,12 @@ def test_marker_diameter_in_help(command: str) -> None:
 
 # ----------------------------------------------------------------------- bad input
 def test_bad_output_suffix_is_refused_before_work(tmp_path: Path) -> None:
-    result = run("calibrate", tmp_path / "absent.c3d", "--out", tmp_path / "cal.json")
+    result = run_here("calibrate", tmp_path / "absent.c3d", "--out", tmp_path / "cal.json")
     assert_one_line_error(result, "cal.json", ".toml or .vsk")
 
 
 def test_missing_static_file_is_one_line(tmp_path: Path) -> None:
-    result = run("calibrate", tmp_path / "absent.c3d", "--out", tmp_path / "cal.toml")
+    result = run_here("calibrate", tmp_path / "absent.c3d", "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "absent.c3d")
     assert not (tmp_path / "cal.toml").exists()
 
@@ -127,21 +127,21 @@ def test_missing_static_file_is_one_line(tmp_path: Path) -> None:
 def test_static_without_a_heel_marker_is_one_line_and_writes_nothing(tmp_path: Path) -> None:
     trial = read_c3d(STATIC)
     write_c3d(trial.select_markers([m for m in trial.marker_labels if m != "LHEE"]), tmp_path / "s.c3d")
-    result = run("calibrate", tmp_path / "s.c3d", "--subject", SUBJECT, "--out", tmp_path / "cal.toml")
+    result = run_here("calibrate", tmp_path / "s.c3d", "--subject", SUBJECT, "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "s.c3d", "LHEE", "label")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.c3d"]
 
 
 @pytest.mark.parametrize("diameter", ["0", "160", "nan"])
 def test_implausible_marker_diameter_is_one_line(tmp_path: Path, diameter: str) -> None:
-    result = run("calibrate", STATIC, "--marker-diameter", diameter, "--out", tmp_path / "cal.toml")
+    result = run_here("calibrate", STATIC, "--marker-diameter", diameter, "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "marker diameter", "mm")
     assert not (tmp_path / "cal.toml").exists()
 
 
 def test_bad_subject_file_is_one_line(tmp_path: Path) -> None:
     (tmp_path / "s.toml").write_text(SUBJECT.read_text().replace("LKneeWidth = 105.0", "LKneeWidth = 0.105"))
-    result = run("calibrate", STATIC, "--subject", tmp_path / "s.toml", "--out", tmp_path / "cal.vsk")
+    result = run_here("calibrate", STATIC, "--subject", tmp_path / "s.toml", "--out", tmp_path / "cal.vsk")
     assert_one_line_error(result, "s.toml", "LKneeWidth")
     assert not (tmp_path / "cal.vsk").exists()
 
@@ -176,7 +176,7 @@ def test_calibrate_reproduces_nexus_processing_values(tmp_path: Path, session: s
 def test_a_missing_kad_marker_is_one_line(tmp_path: Path) -> None:
     trial = read_c3d(shared_file("pig-options", "PiGKad_Calibration.c3d"))
     write_c3d(trial.select_markers([m for m in trial.marker_labels if m != "RKD2"]), tmp_path / "s.c3d")
-    result = run("calibrate", tmp_path / "s.c3d", "--out", tmp_path / "cal.toml")
+    result = run_here("calibrate", tmp_path / "s.c3d", "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "RKD2 missing")
     assert not (tmp_path / "cal.toml").exists()
 
@@ -234,13 +234,13 @@ def test_cgm23_angles_from_the_calibration_file_equal_angles_with_the_static_tri
 
 def test_cluster_model_without_a_cluster_calibration_is_one_line(tmp_path: Path, cgm24_session) -> None:
     _, walking = cgm24_session
-    result = run("angles", walking, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "a.csv")
+    result = run_here("angles", walking, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "a.csv")
     assert_one_line_error(result, "subject.toml: no cluster calibration for cgm2.3", "--static STATIC.c3d",
                           "fuzzygait calibrate STATIC.c3d --model cgm2.3 --out CAL.toml")  # fmt: skip
     assert not (tmp_path / "a.csv").exists()
 
 
 def test_cluster_calibration_of_a_plug_in_gait_static_is_one_line(tmp_path: Path) -> None:
-    result = run("calibrate", STATIC, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "cal.toml")
+    result = run_here("calibrate", STATIC, "--subject", SUBJECT, "--model", "cgm2.3", "--out", tmp_path / "cal.toml")
     assert_one_line_error(result, "LTHAP", "missing")
     assert not (tmp_path / "cal.toml").exists()

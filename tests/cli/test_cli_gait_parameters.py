@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run, shared_file
+from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.gait.spatiotemporal import NAMES, agreement_tolerance, column_name, nexus_reference
 from fuzzygait.io import read_c3d
@@ -72,7 +72,7 @@ def test_mean_over_cycles(tmp_path: Path) -> None:
 
 def test_every_trial_failing_is_one_line_and_no_output(tmp_path: Path) -> None:
     missing = tmp_path / "missing.csv"
-    result = run("gait-parameters", tmp_path / "nope.c3d", "--out", missing)
+    result = run_here("gait-parameters", tmp_path / "nope.c3d", "--out", missing)
     assert_one_line_error(result, "nope.c3d", "no such file")
     assert not missing.exists()
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from support import SAMPLE_DATA, assert_one_line_error, run
+from support import SAMPLE_DATA, assert_one_line_error, run, run_here
 
 from fuzzygait.gait.normative import build_normative, normalised_cycles, read_normative
 from fuzzygait.workflows.angles import run_angles
@@ -27,7 +27,7 @@ def test_normative_from_a_trial(tmp_path: Path) -> None:
 
 
 def test_normative_errors_are_one_line(tmp_path: Path) -> None:
-    assert_one_line_error(run("normative", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "n.txt"), ".csv")
+    assert_one_line_error(run_here("normative", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "n.txt"), ".csv")
     missing = run("normative", tmp_path / "absent.c3d", "--out", tmp_path / "n.csv")
     assert_one_line_error(missing, "absent.c3d")
     assert not (tmp_path / "n.csv").exists()

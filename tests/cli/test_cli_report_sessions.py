@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 
-from support import SAMPLE_DATA, SHARED_DATA, VICON, assert_one_line_error, needs_shared, run, synthetic_session, trial_window
+from support import SAMPLE_DATA, SHARED_DATA, VICON, assert_one_line_error, needs_shared, run, run_here, synthetic_session, trial_window
 
 
 def test_bad_uncertainty_mode_is_one_line(tmp_path: Path) -> None:
-    result = run("report", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "r", "--uncertainty", "quick")
+    result = run_here("report", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "r", "--uncertainty", "quick")
     assert_one_line_error(result, "--uncertainty 'quick'", "none, fast, full")
     assert not (tmp_path / "r").exists()
 
@@ -68,7 +68,7 @@ def test_pdf_of_trial_and_session_pages(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_unreachable_scheduler_is_one_line_and_leaves_no_folder(tmp_path: Path) -> None:
     out = tmp_path / "r"
-    result = run("report", SAMPLE_DATA / "walking.c3d", "--static", SAMPLE_DATA / "static.c3d", "--out", out,
+    result = run_here("report", SAMPLE_DATA / "walking.c3d", "--static", SAMPLE_DATA / "static.c3d", "--out", out,
                  "--uncertainty", "none", "--scheduler", "tcp://127.0.0.1:1")  # fmt: skip
     assert_one_line_error(result, "cannot reach the Dask scheduler at 'tcp://127.0.0.1:1'")
     assert not out.exists()

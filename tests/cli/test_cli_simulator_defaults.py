@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from support import assert_one_line_error, run
+from support import assert_one_line_error, run, run_here
 
 from fuzzygait.mechanics.presets import COMMAND_DEFAULTS, STANCE, SWING
 from fuzzygait.workflows.fuzzy_dynamics import command_setup
@@ -36,14 +36,14 @@ def test_simulate_prints_the_default_it_takes(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_the_thesis_swing_folds_and_the_error_names_the_fixes(tmp_path: Path) -> None:
-    result = run("simulate", "swing", "--set", "eta=1", "--duration", "0.3", "--out", tmp_path / "s.nc")
+    result = run_here("simulate", "swing", "--set", "eta=1", "--duration", "0.3", "--out", tmp_path / "s.nc")
     assert_one_line_error(result, "folded at t = 0.27", "on the command line: --set eta=100000 or --nodes 40")
     assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.slow
 def test_the_thesis_stance_with_the_variational_scheme_stops_and_the_error_names_the_fixes(tmp_path: Path) -> None:
-    result = run("simulate", "stance", "--scheme", "variational", "--duration", "0.75", "--out", tmp_path / "s.nc")
+    result = run_here("simulate", "stance", "--scheme", "variational", "--duration", "0.75", "--out", tmp_path / "s.nc")
     assert_one_line_error(result, "Newton did not converge at t = 0.",
                           "on the command line: --set eta=100000 or --scheme energy-momentum or --dt 0.0005")
     assert not list(tmp_path.iterdir())

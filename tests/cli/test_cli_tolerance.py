@@ -24,7 +24,7 @@ from fuzzygait.markererror.analysis import relative_envelope_width, undetermined
 from fuzzygait.uncertainty import load_result
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
-from support import SAMPLE_DATA, assert_one_line_error, run, sparse_knee_analysis
+from support import SAMPLE_DATA, assert_one_line_error, run, run_here, sparse_knee_analysis
 
 SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA / "subject.toml")
 
@@ -33,7 +33,7 @@ SAMPLE_ARGS = ("--static", SAMPLE_DATA / "static.c3d", "--subject", SAMPLE_DATA 
 @pytest.mark.parametrize("value", ["-1", "nan", "inf"])
 def test_bad_tolerance_is_one_line(command: str, value: str, tmp_path: Path) -> None:
     out = tmp_path / ("x.nc" if command == "uncertainty" else "r")
-    result = run(command, SAMPLE_DATA / "walking.c3d", "--out", out, f"--tolerance={value}")
+    result = run_here(command, SAMPLE_DATA / "walking.c3d", "--out", out, f"--tolerance={value}")
     assert_one_line_error(result, "--tolerance", "≥ 0")
     assert not list(tmp_path.iterdir())
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
+from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run, run_here
 
 from fuzzygait.io import read_c3d
 from fuzzygait.markererror.result import angle_components, component_hull
@@ -41,10 +41,10 @@ def test_uncertainty_writes_dataset_and_recording(tmp_path: Path) -> None:
 
 def test_uncertainty_bad_arguments_are_one_line(tmp_path: Path) -> None:
     walking = SAMPLE_DATA / "walking.c3d"
-    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.csv"), ".nc or .zarr")
-    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--alphas", "2"), "--alphas")
-    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--sources", "magic"), "magic")
-    assert_one_line_error(run("uncertainty", walking, "--out", tmp_path / "x.nc", "--angles", "LElbow"), "LElbow")
+    assert_one_line_error(run_here("uncertainty", walking, "--out", tmp_path / "x.csv"), ".nc or .zarr")
+    assert_one_line_error(run_here("uncertainty", walking, "--out", tmp_path / "x.nc", "--alphas", "2"), "--alphas")
+    assert_one_line_error(run_here("uncertainty", walking, "--out", tmp_path / "x.nc", "--sources", "magic"), "magic")
+    assert_one_line_error(run_here("uncertainty", walking, "--out", tmp_path / "x.nc", "--angles", "LElbow"), "LElbow")
     assert not list(tmp_path.iterdir())
 
 

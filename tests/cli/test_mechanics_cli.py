@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import assert_one_line_error, run
+from support import assert_one_line_error, run, run_here
 
 xr = pytest.importorskip("xarray")
 
@@ -95,13 +95,13 @@ def test_simulate_writes_plot(short_run) -> None:
 )
 def test_simulate_bad_arguments_are_one_line(tmp_path: Path, args: tuple[str, ...], needle: str) -> None:
     out = tmp_path / "x.nc"
-    assert_one_line_error(run("simulate", *SHORT, *args, "--out", out, "--plot", tmp_path / "e.png"), needle)
+    assert_one_line_error(run_here("simulate", *SHORT, *args, "--out", out, "--plot", tmp_path / "e.png"), needle)
     assert not list(tmp_path.iterdir())
 
 
 def test_simulate_non_convergence_writes_nothing(tmp_path: Path) -> None:
     """A far too large step for the soft blade: Newton fails; one line, no output file."""
-    result = run("simulate", "swing", "--nodes", str(NODES), "--set", "E=1000,eta=1", "--dt", "0.05", "--duration", "0.5",
+    result = run_here("simulate", "swing", "--nodes", str(NODES), "--set", "E=1000,eta=1", "--dt", "0.05", "--duration", "0.5",
                  "--out", tmp_path / "x.nc", "--rrd", tmp_path / "x.rrd")  # fmt: skip
     assert_one_line_error(result, "Newton did not converge", "E=1000")
     assert not list(tmp_path.iterdir())

@@ -13,7 +13,7 @@ import pytest
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.qtm_session import qtm_session_values, qtm_subject_name
 from fuzzygait.io.subject import is_subject_file, read_subject
-from support import SAMPLE_DATA, SHARED_DATA, needs_shared, trial_window
+from support import SAMPLE_DATA, SHARED_DATA, needs_shared, run_here, trial_window
 
 QTM_SESSION = SHARED_DATA / "cgm2" / "qualisys-cgm24-input"
 
@@ -186,7 +186,7 @@ def test_cli_angles_with_session_xml(tmp_path: Path) -> None:
         assert result.returncode == 0, result.stderr
     pd.testing.assert_frame_equal(pd.read_csv(outs[0]), pd.read_csv(outs[1]))
     xml.write_text(session_xml(VISIT | {"Knee_width_left": "102"}), encoding="utf-16")
-    result = run("angles", SAMPLE_DATA / "walking.c3d", "--subject", xml, "--out", tmp_path / "x.csv")
+    result = run_here("angles", SAMPLE_DATA / "walking.c3d", "--subject", xml, "--out", tmp_path / "x.csv")
     assert_one_line_error(result, "session.xml", "Knee_width_left = 102 is not in metres")
     assert not (tmp_path / "x.csv").exists()
 

@@ -10,7 +10,7 @@ import pytest
 
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.uncertainty import load_result
-from support import SAMPLE_DATA, assert_one_line_error, run
+from support import SAMPLE_DATA, assert_one_line_error, run, run_here
 
 SESSION_ARGS = ("--static", SAMPLE_DATA / "cgm24_static.c3d", "--subject", SAMPLE_DATA / "cgm24_subject.toml")
 
@@ -43,11 +43,11 @@ def test_uncertainty_runs_the_model_version(tmp_path: Path, short_walk: Path, mo
 @pytest.mark.slow
 def test_unknown_model_is_one_line_before_work(tmp_path: Path) -> None:
     for command, out in (("uncertainty", tmp_path / "x.nc"), ("report", tmp_path / "rep")):
-        result = run(command, tmp_path / "absent.c3d", "--model", "cgm3", "--out", out)
+        result = run_here(command, tmp_path / "absent.c3d", "--model", "cgm3", "--out", out)
         assert_one_line_error(result, "--model", "cgm3", "cgm2.4")
         assert not out.exists()
 
 
 def test_forefoot_angles_can_be_selected(tmp_path: Path) -> None:
-    result = run("uncertainty", tmp_path / "absent.c3d", "--angles", "LForeFootAngles", "--out", tmp_path / "x.nc")
+    result = run_here("uncertainty", tmp_path / "absent.c3d", "--angles", "LForeFootAngles", "--out", tmp_path / "x.nc")
     assert_one_line_error(result, "absent.c3d")  # the angle name passed; the missing file stops it

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from support import FakeAnalysis, SAMPLE_DATA, assert_one_line_error, run
+from support import SAMPLE_DATA, FakeAnalysis, assert_one_line_error, run, run_here
 
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.markererror.result import fuzzy_angles_dataset
@@ -296,6 +296,6 @@ def test_report_command_exits_1_when_every_trial_fails(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("option", "value"), [("--alphas", "0,1.5"), ("--angles", "LKnee")])
 def test_report_command_rejects_bad_options(tmp_path: Path, option: str, value: str) -> None:
-    result = run("report", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "r", option, value)
+    result = run_here("report", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "r", option, value)
     assert_one_line_error(result, option)
     assert not (tmp_path / "r").exists()

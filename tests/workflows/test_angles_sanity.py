@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run
+from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run, run_here
 
 from fuzzygait.core.errors import C3DError
 from fuzzygait.io import read_c3d, write_c3d
@@ -93,7 +93,7 @@ def test_the_cli_refuses_metres_in_one_line(trials, tmp_path):
     walking, _ = trials
     write_c3d(walking.with_markers(walking.markers / 1000), tmp_path / "metres.c3d")
     out = tmp_path / "a.csv"
-    result = run("angles", tmp_path / "metres.c3d", "--subject", SUBJECT, "--out", out)
+    result = run_here("angles", tmp_path / "metres.c3d", "--subject", SUBJECT, "--out", out)
     assert_one_line_error(result, "metres.c3d: marker distances are about 1000 times too small", "metres")
     assert not out.exists()
 
@@ -104,7 +104,7 @@ def test_the_cli_refuses_absurd_rates_in_one_line(trials, tmp_path):
     out = tmp_path / "a.csv"
     for rate in (1e6, 4e-23):
         write_c3d(replace(walking, rate=rate), tmp_path / "rate.c3d")
-        result = run("angles", tmp_path / "rate.c3d", "--subject", SUBJECT, "--out", out)
+        result = run_here("angles", tmp_path / "rate.c3d", "--subject", SUBJECT, "--out", out)
         assert_one_line_error(result, f"rate.c3d: point rate {rate:g} Hz is implausible")
     assert not out.exists()
 
@@ -127,7 +127,7 @@ def test_the_cli_on_the_real_trial_with_a_spike_and_as_static(tmp_path):
     a, b = pd.read_csv(clean_csv), pd.read_csv(spike_csv)
     angles = [c for c in a.columns if c[-2:] in ("_X", "_Y", "_Z")]
     assert np.nanmax(np.abs(a[angles].to_numpy() - b[angles].to_numpy())) < 1e-3
-    result = run("angles", VICON / "Movement_trial.c3d", "--static", VICON / "Movement_trial.c3d", "--out", clean_csv)
+    result = run_here("angles", VICON / "Movement_trial.c3d", "--static", VICON / "Movement_trial.c3d", "--out", clean_csv)
     assert_one_line_error(result, "Movement_trial.c3d: given as the static trial but it moves (pelvis 1638 mm")
 
 
