@@ -161,13 +161,16 @@ def test_usage_errors_exit_non_zero(args: tuple[str, ...]) -> None:
     assert "Traceback" not in result.stderr
 
 
+SLOW = pytest.mark.slow  # three of the six in the fast selection
+
+
 @pytest.mark.parametrize("args", [
     ("angles", "absent.c3d", "--out", "a.csv"),
-    ("uncertainty", SAMPLE_DATA / "walking.c3d", "--out", "u.nc", "--tolerance=-1"),
-    ("calibrate", SAMPLE_DATA / "static.c3d", "--marker-diameter", "500", "--out", "c.toml"),
+    pytest.param(("uncertainty", SAMPLE_DATA / "walking.c3d", "--out", "u.nc", "--tolerance=-1"), marks=SLOW),
+    pytest.param(("calibrate", SAMPLE_DATA / "static.c3d", "--marker-diameter", "500", "--out", "c.toml"), marks=SLOW),
     ("simulate", "swing", "--nodes", "0", "--out", "s.nc"),
     ("angles", "--no-such-option"),
-    ("info", SAMPLE_DATA / "walking.c3d"),
+    pytest.param(("info", SAMPLE_DATA / "walking.c3d"), marks=SLOW),
 ])  # fmt: skip
 def test_run_here_gives_what_a_subprocess_gives(args, tmp_path, monkeypatch) -> None:
     """The in-process runner the one-line-error tests use: the same exit code, stdout and

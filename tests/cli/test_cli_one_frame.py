@@ -37,6 +37,7 @@ def test_time_limits_widen_a_single_instant() -> None:
     assert time_limits(np.array([0.0, 0.01, 3.0])) == (0.0, 3.0)
 
 
+@pytest.mark.slow  # the whole command end to end (~10 s)
 def test_uncertainty_of_one_frame(tmp_path: Path) -> None:
     result = run("uncertainty", one_frame(tmp_path), "--alphas", "0", "--angles", "LKneeAngles",
                  "--out", tmp_path / "u.nc")  # fmt: skip

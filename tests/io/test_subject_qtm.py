@@ -161,6 +161,7 @@ def test_shared_qtm_session_angles_equal_the_toml_route(tmp_path: Path) -> None:
         np.testing.assert_array_equal(runs[0].result.angles[name], runs[1].result.angles[name], err_msg=name)
 
 
+@pytest.mark.slow  # the angles command end to end on the real session
 def test_cli_angles_with_session_xml(tmp_path: Path) -> None:
     """``angles --subject session.xml`` as a user runs it: the synthetic trial with its
     subject's values in metres gives the angles of its TOML subject file; the same file

@@ -185,6 +185,7 @@ def test_cgm24_hull_contains_a_monte_carlo_sample(runs: dict[str, AnglesRun], na
 STRIDE_FRAMES = np.arange(100, 212, 14)
 
 
+@pytest.mark.slow  # a stride of both sides' flexion at four α-levels (~9 s)
 def test_cgm24_flexion_is_determined_at_every_alpha(runs: dict[str, AnglesRun]) -> None:
     """Issue 15: on the CGM 2.4 set with Table 3.1's radii, hip, knee and ankle flexion of
     both sides are determined at every α-level over a stride, and the α = 0 bands are

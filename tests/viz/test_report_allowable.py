@@ -42,6 +42,7 @@ def _text(path: Path) -> str:
     return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", path.read_text(encoding="utf-8"))).split())
 
 
+@pytest.mark.slow  # writes the trial's report end to end (~9 s)
 def test_trial_page_leads_with_the_flexion_sentence_and_the_table(report: Path,
                                                                   analysis: MarkerErrorAnalysis) -> None:  # fmt: skip
     table = allowable_table(analysis.fuzzy)
