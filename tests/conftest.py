@@ -69,22 +69,3 @@ def cluster() -> Iterator[LocalCluster]:
         dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
     ) as c:  # fmt: skip
         yield c
-
-
-# --------------------------------------------------------------------------- scheduling
-#: The longest test modules (measured with ``--durations``, longest first, 2026-12-04).
-#: They are collected first, so that the two processes of ``-n 2 --dist loadfile`` take
-#: them at the start and end together, instead of one running a long module alone at the
-#: end while the other idles.  Any other order of the rest is kept.
-LONG_FIRST = (
-    "workflows/test_sessions.py", "cli/test_cli_report_sessions.py", "cli/test_cli_interrupt.py",
-    "cli/test_cli_calibrate.py", "cli/test_cli_frv_sim_killed.py", "uncertainty/test_frv_study_crash.py",
-    "mechanics/test_mechanics_native.py", "test_notebooks.py", "cli/test_cli_angles.py",
-    "uncertainty/test_execution.py", "viz/test_report.py", "cli/test_readme_simulator_commands.py",
-)  # fmt: skip
-TESTS = os.path.dirname(os.path.abspath(__file__))
-
-
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    rank = {name: k for k, name in enumerate(LONG_FIRST)}
-    items.sort(key=lambda item: rank.get(os.path.relpath(str(item.path), TESTS).replace(os.sep, "/"), len(rank)))
