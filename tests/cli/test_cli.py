@@ -175,8 +175,6 @@ SLOW = pytest.mark.slow  # three of the six in the fast selection
 def test_run_here_gives_what_a_subprocess_gives(args, tmp_path, monkeypatch) -> None:
     """The in-process runner the one-line-error tests use: the same exit code, stdout and
     stderr as the command in its own process (errors of every kind, and a success)."""
-    from support import run_here
-
     monkeypatch.chdir(tmp_path)
     here, there = run_here(*args), run(*args)
     assert (here.returncode, here.stdout, here.stderr) == (there.returncode, there.stdout, there.stderr)

@@ -1,7 +1,8 @@
 """Fixed layout of the report's subplot grids (joints x planes).
 
 ``Figure.tight_layout`` measures every tick label and axis title of the grid, which costs
-as much as drawing the figure once more: about a quarter of a report page's time.  The
+as much as drawing the figure once more (without it an angles-only report takes half the
+time: ``benchmarks/report_figures.py``).  The
 report grids have the same labels on every page, so their margins and gaps are fixed here
 in inches instead — the values ``tight_layout`` gave on the report figures (the widest of
 the sample and Vicon trials, rounded up), so the pages look as they did.
