@@ -1,4 +1,4 @@
-"""The ``fuzzygait`` command, run as a user runs it (a subprocess)."""
+"""The ``fuzzygait`` command, run as a user runs it (a subprocess; the one-line-error checks in this process, `support.run_here`)."""
 
 from __future__ import annotations
 
