@@ -1,4 +1,5 @@
-"""The ``fuzzygait`` command, run as a user runs it (a subprocess; the one-line-error checks in this process, `support.run_here`)."""
+"""The ``fuzzygait`` command, run as a user runs it (a subprocess; the one-line-error
+checks in this process, ``support.run_here``)."""
 
 from __future__ import annotations
 
