@@ -24,7 +24,12 @@ from fuzzygait.kinematics import vectors
 from fuzzygait.kinematics.angles import capped_arcsin
 from fuzzygait.kinematics.rigid import polar_rotation
 from fuzzygait.kinematics.versions import MODEL_VERSIONS
-from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
+from fuzzygait.markererror.angle_model import (
+    AngleComponentsModel,
+    JointAngleModel,
+    SphericalDeviationModel,
+    fixed_subject,
+)
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.gfa.batched import BatchCounts, BatchedObjective
@@ -221,6 +226,34 @@ def test_one_objective_call_serves_both_bounds(cgm24_runs: dict[str, AnglesRun],
     np.testing.assert_allclose(values, np.concatenate([-truth, truth]), rtol=0, atol=1e-12)
     np.testing.assert_allclose(gradients, np.concatenate([-truth_gradients, truth_gradients]), rtol=0,
                                atol=1e-12 if exact else 1e-4)  # fmt: skip
+
+
+@pytest.mark.parametrize("name, model", [("LKneeAngles", "cgm2.4"), ("LAnkleAngles", "cgm1.0")])
+def test_the_components_together_are_each_component_alone(cgm24_runs: dict[str, AnglesRun], name: str,
+                                                          model: str) -> None:  # fmt: skip
+    """:class:`AngleComponentsModel`: node ``b · n_frames + j`` gives, bit for bit, the
+    value and exact gradient of component ``axes[b]`` alone at frame ``j`` (on the branch
+    through its reference), rows of every component mixed in one call; and each block's
+    gradient still matches central differences."""
+    run = cgm24_runs[model]
+    alone = [model_of(run, name, axis) for axis in (2, 0, 1)]
+    references = np.stack([run.result.angles[name][FRAMES, axis] + 170.0 for axis in (2, 0, 1)])
+    for single, reference in zip(alone, references, strict=True):
+        single.reference = reference  # a reference far from the angle: the branch matters
+    together = AngleComponentsModel(alone[0], (2, 0, 1), references)
+    assert together.blocks == 3 and together.times.size == 3 * FRAMES.size
+    n = FRAMES.size
+    P = np.concatenate([deviations(alone[0], seed=s) for s in range(3)])
+    nodes = np.random.default_rng(0).permutation(3 * n)
+    values, gradients = together.evaluate_nodes_gradients(P, nodes)
+    for b, single in enumerate(alone):
+        rows = np.flatnonzero(nodes // n == b)
+        value, gradient = single.evaluate_nodes_gradients(P[rows], nodes[rows] % n)
+        np.testing.assert_array_equal(values[rows], value)
+        np.testing.assert_array_equal(gradients[rows], gradient)
+    assert_gradients(together, P)
+    with pytest.raises(ParameterError, match=r"references must be \(components, frames\) = \(2, 3\)"):
+        AngleComponentsModel(alone[0], (0, 1), references)
 
 
 def test_an_unknown_gradient_source_is_refused() -> None:

@@ -109,3 +109,71 @@ def test_following_a_non_convex_model_stays_close_to_dense_sampling() -> None:
 def test_follow_must_be_a_whole_number() -> None:
     with pytest.raises(ParameterError, match="follow"):
         BatchedDirect(follow=-1)
+
+
+class BlocksModel(LinearBallModel):
+    """Two independent outputs of the same parameters one after the other (``blocks =
+    2``): the non-convex :class:`TwoHillsModel` on a trial with a gap (frames 60-79 left
+    out), then :class:`LinearBallModel` scaled by 50 (so one block's stopping tolerance is
+    not the other's), counting the model calls."""
+
+    blocks = 2
+    kept = np.setdiff1d(np.arange(TIMES.size), np.arange(60, 80))
+    times = np.tile(TIMES[kept], 2)
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        self.calls += 1
+        block, frame = np.divmod(np.asarray(nodes), self.kept.size)
+        hills = TwoHillsModel.evaluate_nodes(self, P, self.kept[frame])  # type: ignore[arg-type]
+        linear = 50.0 * LinearBallModel.evaluate_nodes(self, P, self.kept[frame])  # type: ignore[arg-type]
+        return np.where(block == 0, hills, linear)
+
+
+class OneBlock(LinearBallModel):
+    """One block of :class:`BlocksModel` alone, on the same frames."""
+
+    def __init__(self, block: int) -> None:
+        self.block, self.both, self.times, self.calls = block, BlocksModel(), TIMES[BlocksModel.kept], 0
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        self.calls += 1
+        return self.both.evaluate_nodes(P, np.asarray(nodes) + self.block * BlocksModel.kept.size)
+
+
+def test_blocks_are_optimised_as_they_would_be_alone_in_shared_calls() -> None:
+    """A model of several independent outputs (``blocks``) gets, per block, bit for bit
+    the hull and extremisers of a run of that block alone — its own followed runs (the
+    gap), neighbours, stopping tolerance and seeded random starts — in fewer model calls
+    than the runs alone together."""
+    strategy = BatchedDirect(starts=4, stride=8, follow=5, seed=7)
+    model = BlocksModel()
+    stacked = graph_follower(model, balls(), (0.0, 0.5), strategy=strategy)
+    n = BlocksModel.kept.size
+    calls_alone = 0
+    for block in range(2):
+        single = OneBlock(block)
+        alone = graph_follower(single, balls(), (0.0, 0.5), strategy=strategy)
+        calls_alone += single.calls
+        np.testing.assert_array_equal(stacked.hull.to_numpy()[..., block * n:(block + 1) * n], alone.hull.to_numpy())
+        np.testing.assert_array_equal(stacked.extremiser.to_numpy()[:, :, block * n:(block + 1) * n],
+                                      alone.extremiser.to_numpy())  # fmt: skip
+    assert model.calls < 0.75 * calls_alone
+
+
+def test_blocks_must_divide_the_nodes() -> None:
+    class Uneven(BlocksModel):
+        blocks = 7  # 2 x 180 nodes
+
+    with pytest.raises(ParameterError, match="360 time nodes cannot have 7 equal blocks"):
+        graph_follower(Uneven(), balls(), (0.0,), strategy=BatchedDirect())

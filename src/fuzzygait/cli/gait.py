@@ -321,7 +321,7 @@ def uncertainty(
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
-    workers: Annotated[int, typer.Option(help="Processes for the angle components.")] = 2,
+    workers: Annotated[int, typer.Option(help="Processes for the angles.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     model: ModelOption = "auto",
 ) -> None:

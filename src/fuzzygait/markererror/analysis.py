@@ -51,6 +51,7 @@ from fuzzygait.kinematics import ALL_ANGLE_NAMES, CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.angle_model import (
     AXES,
+    AngleComponentsModel,
     JointAngleModel,
     SphericalDeviationModel,
     fixed_subject,
@@ -90,7 +91,7 @@ class FuzzyAngleOptions:
             followed from their neighbours' optima (the Graph Follower's warm starts,
             :class:`~fuzzygait.uncertainty.BatchedDirect`) with ``follow`` iterations.
         follow: optimiser iterations at the followed frames.
-        workers: processes for the angle components (1: in this process), when no
+        workers: processes for the angles (1: in this process), when no
             :class:`~fuzzygait.uncertainty.execution.Evaluator` is given.
         seed: seed of the random starting points.
         gradients: ``"auto"``: the optimiser takes the exact gradients of the angle with
@@ -152,11 +153,29 @@ class ComponentTask(NamedTuple):
 def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray, dict[str, int]]:
     """Run one angle component's task: ``(component name, hull (alpha, bound, n_valid) in
     degrees, deviation norms (alpha, bound, n_valid, n_markers) in mm, work counts)``."""
-    markers, radii, options = args.markers, args.radii, args.options
-    model = args.angle_model()
+    return run_angle_task([args])[0]
+
+
+def run_angle_task(tasks: Sequence[ComponentTask]) -> list[tuple[str, np.ndarray, np.ndarray, dict[str, int]]]:
+    """Run the tasks of components of one angle (the same frames, markers, radii and
+    options) in one α-level optimisation of an :class:`AngleComponentsModel`: every model
+    call serves all components (one pass of the kinematic model gives the three), and
+    each component is optimised as it would be alone, with the same seed.  Per task, as
+    :func:`run_component_task`.  The work counts of the shared optimisation are the
+    first task's (the others' are zero), so they add up over the tasks."""
+    first = tasks[0]
+    markers, radii, options = first.markers, first.radii, first.options
+    if any(t.name != first.name or t.markers != markers or not np.array_equal(t.frames, first.frames)
+           for t in tasks[1:]):  # fmt: skip
+        raise ParameterError(f"the components optimised together must be of one angle; got "
+                             f"{', '.join(f'{t.name}_{AXES[t.axis]}' for t in tasks)}")  # fmt: skip
+    model = first.angle_model()
+    node_model: JointAngleModel | AngleComponentsModel = model
+    if len(tasks) > 1:
+        node_model = AngleComponentsModel(model, tuple(t.axis for t in tasks), np.stack([t.reference for t in tasks]))
     if options.method == "cartesian":
         params: FuzzyBalls | FuzzyVector = FuzzyBalls(np.zeros((len(markers), 3)), radii, tuple(markers))
-        fuzzy_model: JointAngleModel | SphericalDeviationModel = model
+        fuzzy_model: JointAngleModel | AngleComponentsModel | SphericalDeviationModel = node_model
     else:
         numbers = []
         for label, radius in zip(markers, radii):
@@ -165,19 +184,41 @@ def run_component_task(args: ComponentTask) -> tuple[str, np.ndarray, np.ndarray
                 FuzzyNumber(np.array([0.0, 1.0]), np.array([0.0, 0.0]), np.array([np.pi, np.pi]), f"{label}_theta"),
                 FuzzyNumber(np.array([0.0, 1.0]), np.array([-np.pi, -np.pi]), np.array([np.pi, np.pi]), f"{label}_phi"),
             ]
-        params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(model)
+        params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(node_model)
     strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
                              stride=options.stride, follow=options.follow, gradients=options.gradients)  # fmt: skip
     result = graph_follower(fuzzy_model, params, options.alphas, strategy=strategy)
-    extremiser = result["extremiser"].to_numpy().reshape(*result["hull"].shape, len(markers), 3)
+    hull = result["hull"].to_numpy()  # (alpha, bound, components x frames)
+    extremiser = result["extremiser"].to_numpy().reshape(*hull.shape, len(markers), 3)
     if options.method == "spherical":
         norms = np.abs(extremiser[..., 0])
     else:
         norms = np.linalg.norm(extremiser, axis=-1)
-    # a cluster marker missing at a frame (the pose from the others) has no deviation there
-    norms = np.where(model.seen(), norms, np.nan)
+    n_frames = first.frames.size
+    seen = model.seen()  # a cluster marker missing at a frame (the pose from the others) has no deviation there
     counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations", "node_gradients")}
-    return f"{args.name}_{AXES[args.axis]}", result["hull"].to_numpy(), norms, counts
+    outputs = []
+    for b, task in enumerate(tasks):
+        block = slice(b * n_frames, (b + 1) * n_frames)
+        outputs.append((f"{task.name}_{AXES[task.axis]}", hull[..., block], np.where(seen, norms[:, :, block], np.nan),
+                        counts if b == 0 else dict.fromkeys(counts, 0)))  # fmt: skip
+    return outputs
+
+
+def angle_groups(tasks: Sequence[ComponentTask]) -> list[list[int]]:
+    """Indices of ``tasks`` grouped by angle (the components :func:`run_angle_task` runs
+    together), the groups in descending order of their expected cost (components ×
+    frames × markers), so a pool starts the longest first and its processes finish
+    together."""
+    groups: dict[str, list[int]] = {}
+    for i, task in enumerate(tasks):
+        groups.setdefault(task.name, []).append(i)
+
+    def cost(group: list[int]) -> int:
+        task = tasks[group[0]]
+        return len(group) * task.frames.size * len(task.markers)
+
+    return sorted(groups.values(), key=cost, reverse=True)
 
 
 def fuzzy_joint_angles(
@@ -205,7 +246,8 @@ def fuzzy_joint_angles(
         angles: angle names (all three components) or single components
             (``"LKneeAngles_X"``) (default: every angle ``result`` holds, the CGM 2.4
             forefoot's included).
-        progress: called as ``progress(done, total)`` per angle component.
+        progress: called as ``progress(done, total)`` per angle (its components are
+            optimised together, :func:`run_angle_task`).
         evaluator: where the components are computed (default: serial, or a local pool
             of ``options.workers`` processes); the hulls are the same either way.
         clusters: the static cluster calibration ``result`` was computed with (cluster
@@ -225,12 +267,17 @@ def fuzzy_joint_angles(
     options = FuzzyAngleOptions(**{**options.__dict__, "alphas": tuple(alphas)})
     tasks, markers_all = component_tasks(trial, subject, result, options, names, clusters)
 
+    groups = angle_groups(tasks)
+    jobs = [[tasks[i] for i in group] for group in groups]
     start = time.perf_counter()
     if evaluator is None:
         with Evaluator(workers=max(1, int(options.workers))) as own:
-            outputs = own.map(run_component_task, tasks, progress)
+            grouped = own.map(run_angle_task, jobs, progress)
     else:
-        outputs = evaluator.map(run_component_task, tasks, progress)
+        grouped = evaluator.map(run_angle_task, jobs, progress)
+    by_task = {i: output for group, results in zip(groups, grouped, strict=True)
+               for i, output in zip(group, results, strict=True)}  # fmt: skip
+    outputs = [by_task[i] for i in range(len(tasks))]
     fuzzy = _assemble(trial, tasks, outputs, markers_all, alphas, options, sources, time.perf_counter() - start)
     fuzzy.attrs["model"] = result.model
     return fuzzy

@@ -209,11 +209,20 @@ class JointAngleModel:
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """Angle component at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
         nodes = np.asarray(nodes, dtype=int)
+        reference = None if self.reference is None else np.asarray(self.reference, dtype=float)[nodes]
+        return self.component_values(P, nodes, self.axis, reference)
+
+    def component_values(self, P: np.ndarray, nodes: np.ndarray, axes: int | np.ndarray,
+                         reference: np.ndarray | None) -> np.ndarray:  # fmt: skip
+        """Component ``axes`` (one for all rows, or ``(k,)`` per row) of the angle (degrees)
+        at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p); with ``reference``
+        ``(k,)`` (degrees) on the continuous branch through it.  One pass of the kinematic
+        model serves every row, whichever component it asks for."""
         positions = self._base[nodes] + floats(P).reshape(len(nodes), -1, 3)
-        angle = self.angles_of(positions, self._fixed[nodes])[:, self.axis]
-        if self.reference is None:
+        angles = self.angles_of(positions, self._fixed[nodes])
+        angle = angles[:, axes] if np.ndim(axes) == 0 else angles[np.arange(len(nodes)), axes]
+        if reference is None:
             return angle
-        reference = np.asarray(self.reference, dtype=float)[nodes]
         return reference + wrap_degrees(angle - reference)
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -227,6 +236,77 @@ class JointAngleModel:
         whole-trajectory sensitivities (the batched optimiser takes the per-node exact ones
         of :meth:`evaluate_nodes_gradients`, other strategies finite differences)."""
         nodes = np.arange(self.frames.size)
+        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+@dataclass
+class AngleComponentsModel:
+    """Several components of one angle as one model of the same marker deviations, so the
+    α-level optimiser serves them in the same calls (one pass of the kinematic model
+    gives all three components of a row).
+
+    Node ``b · n_frames + j`` is component ``axes[b]`` at frame ``angle.frames[j]``, on
+    the continuous branch through ``references[b, j]``; :attr:`times` (s) are the frames'
+    times once per component.  The components are :attr:`blocks` independent outputs:
+    the batched Graph Follower optimises each exactly as it would alone
+    (:func:`~fuzzygait.uncertainty.gfa.batched.run_batched`).  The values and gradients
+    of a node are those of :class:`JointAngleModel` for that component.
+
+    Attributes:
+        angle: the angle's model (its ``axis`` and ``reference`` are not used).
+        axes: the components, 0, 1, 2 for X, Y, Z.
+        references: ``(len(axes), n_frames)`` the measured components (degrees).
+    """
+
+    angle: JointAngleModel
+    axes: tuple[int, ...]
+    references: np.ndarray
+
+    capabilities = frozenset({NODES, NODE_GRADIENTS})
+
+    def __post_init__(self) -> None:
+        self.axes = tuple(int(a) for a in self.axes)
+        self.references = np.asarray(self.references, dtype=float)
+        n_frames = self.angle.frames.size
+        if self.references.shape != (len(self.axes), n_frames):
+            raise ParameterError(f"references must be (components, frames) = ({len(self.axes)}, {n_frames}); "
+                                 f"got {self.references.shape}")  # fmt: skip
+        #: The frames' times (s), once per component.
+        self.times = np.tile(np.asarray(self.angle.times, dtype=float), len(self.axes))
+        #: Sampling period of the trial, s.
+        self.time_step = self.angle.time_step
+        #: Independent outputs, one per component (:func:`~fuzzygait.uncertainty.gfa.batched.run_batched`).
+        self.blocks = len(self.axes)
+
+    @property
+    def markers(self) -> list[str]:
+        return self.angle.markers
+
+    @property
+    def n_parameters(self) -> int:
+        return self.angle.n_parameters
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return self.angle.parameter_names
+
+    @property
+    def output(self) -> Output:
+        return Output(f"{self.angle.name}_{''.join(AXES[a] for a in self.axes)}", "deg")
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """The components (degrees) at nodes ``nodes`` (k,) for deviations ``P`` (k, n_p)."""
+        block, frame = np.divmod(np.asarray(nodes, dtype=int), self.angle.frames.size)
+        axes = np.asarray(self.axes, dtype=int)[block]
+        return self.angle.component_values(P, frame, axes, self.references[block, frame])
+
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Values and exact gradients (degrees/mm) per row (:func:`row_gradients`)."""
+        return row_gradients(self.evaluate_nodes, P, nodes)
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
+        nodes = np.arange(self.times.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
 
 
@@ -334,7 +414,7 @@ class SphericalDeviationModel:
     """The same model with each marker's deviation in spherical coordinates (thesis
     §3.7.2: the α-level sets become boxes, no norm constraint)."""
 
-    cartesian: JointAngleModel
+    cartesian: JointAngleModel | AngleComponentsModel
 
     capabilities = frozenset({NODES, NODE_GRADIENTS})
 
@@ -345,6 +425,11 @@ class SphericalDeviationModel:
     @property
     def time_step(self) -> float:
         return self.cartesian.time_step
+
+    @property
+    def blocks(self) -> int:
+        """Independent outputs (the components of :class:`AngleComponentsModel`)."""
+        return int(getattr(self.cartesian, "blocks", 1))
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

@@ -84,7 +84,7 @@ class MarkerErrorSettings:
         alphas: α-levels (1, the measured angle, is added).
         angles: angle names to analyse (None: every computed angle).
         method: ``"cartesian"`` or ``"spherical"`` marker deviations.
-        workers: processes for the angle components (None: up to 2).
+        workers: processes for the angles (None: up to 2).
         tolerance: ± degrees of the allowable-marker-error refinement
             (:func:`~fuzzygait.markererror.allowable.allowable_errors`; None: none).
         allowable_angles: angle names or components to refine (None: every analysed one).
@@ -144,8 +144,8 @@ def analyse_run(
 ) -> MarkerErrorAnalysis:
     """The fuzzy marker-error analysis of an already computed joint-angle run.
 
-    ``progress(done, total)`` is called per angle component of the first stage; ``stages``
-    sees the whole run: ``"fuzzy angles"`` (per angle component), ``"allowable marker
+    ``progress(done, total)`` is called per angle of the first stage; ``stages``
+    sees the whole run: ``"fuzzy angles"`` (per angle), ``"allowable marker
     error"`` (per refinement run, its total an estimate that shrinks as the searches
     converge) and ``"per-source bands"`` (per source × flexion component).  The
     marker-error model is the run's model version (a cluster model with the run's static

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.schema import BOUNDS, SENSES
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
@@ -99,7 +100,7 @@ def maximise(
     nodes: np.ndarray,
     starts: list[np.ndarray],
     iterations: int,
-    tolerance: float,
+    tolerance: float | np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Best point and value per node over all starting points.
 
@@ -109,7 +110,8 @@ def maximise(
         nodes: ``(k,)`` node indices.
         starts: list of ``(k, n_p)`` starting points (projected onto the domain).
         iterations: Frank–Wolfe iterations at most.
-        tolerance: a node stops once its improvement falls below this.
+        tolerance: a node stops once its improvement falls below this (one for all, or
+            ``(k,)`` per node).
 
     Returns:
         ``(points (k, n_p), values (k,))`` in the objective's sense.
@@ -117,6 +119,7 @@ def maximise(
     k = nodes.size
     P = np.concatenate([domain.project(s) for s in starts])  # (S k, n_p)
     rows = np.tile(nodes, len(starts))
+    stop = np.tile(np.broadcast_to(np.asarray(tolerance, dtype=float), (k,)), len(starts))
     value = np.full(P.shape[0], -np.inf)
     reach = np.ones(P.shape[0])  # per-point step scale: shrinks after failures, grows after full steps
     active = np.ones(P.shape[0], dtype=bool)
@@ -144,26 +147,32 @@ def maximise(
         full_step = better & (best % STEP_FRACTIONS.size == 0)
         reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
-        active[idx[(better & (gain <= tolerance)) | (reach[idx] < MIN_REACH)]] = False
+        active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH)]] = False
     per_start = value.reshape(len(starts), k)
     pick = np.argmax(per_start, axis=0)
     points = P.reshape(len(starts), k, -1)[pick, np.arange(k)]
     return points, per_start[pick, np.arange(k)]
 
 
-def neighbour_pass(
-    objective: BatchedObjective, nodes: np.ndarray, points: np.ndarray, values: np.ndarray, window: int
-) -> tuple[np.ndarray, np.ndarray]:
+def neighbour_pass(objective: BatchedObjective, curves: list[np.ndarray], points: np.ndarray, values: np.ndarray,
+                   window: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Evaluate each node's optimum at up to ``window`` neighbouring nodes on either side
-    and keep, per node, the best value found (library post-processing)."""
-    k = nodes.size
+    within its curve and keep, per node, the best value found (library post-processing).
+
+    ``curves``: the objective's nodes of each curve (one bound of one output block) in
+    time order, disjoint; ``points``/``values`` are indexed by those nodes.  Every curve
+    is served by the same call per neighbour shift."""
     points, values = points.copy(), values.copy()
     for shift in [s for w in range(1, window + 1) for s in (w, -w)]:
-        source = np.arange(k) - shift
-        ok = (source >= 0) & (source < k)
-        target = np.flatnonzero(ok)
-        candidate = points[source[ok]]
-        v = objective.values(candidate, nodes[target])
+        sources, targets = [], []
+        for curve in curves:
+            source = np.arange(curve.size) - shift
+            ok = (source >= 0) & (source < curve.size)
+            sources.append(curve[source[ok]])
+            targets.append(curve[ok])
+        source_nodes, target = np.concatenate(sources), np.concatenate(targets)
+        candidate = points[source_nodes]
+        v = objective.values(candidate, target)
         better = v > values[target]
         points[target[better]] = candidate[better]
         values[target[better]] = v[better]
@@ -214,7 +223,7 @@ def followed_nodes(times: np.ndarray, stride: int, time_step: float | None = Non
 
 def follow_nodes(objective: BatchedObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
                  points: np.ndarray, others: np.ndarray, extra: list[np.ndarray], iterations: int,
-                 tolerance: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                 tolerance: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Optima at the nodes ``others`` between the optimisation nodes ``nodes`` (optima
     ``points``): each starts from the best of its two bracketing optima and the
     candidates ``extra`` (``(len(others), n_p)`` each, e.g. the higher α-level's optimum
@@ -234,19 +243,31 @@ def follow_nodes(objective: BatchedObjective, domain: BoxDomain | BallsDomain, n
 def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
                 strategy: BatchedDirect, progress: Progress | None) -> dict[str, object]:  # fmt: skip
     """The :class:`BatchedDirect` strategy: hulls ``(alpha, bound, time)`` (before the
-    nesting repair), extremisers, the deterministic trajectory and the counts."""
+    nesting repair), extremisers, the deterministic trajectory and the counts.
+
+    A model whose nodes are ``blocks`` independent outputs of the same parameters, one
+    after the other (attribute ``blocks``, default 1: e.g. the components of one joint
+    angle) has each block optimised exactly as it would be alone — its own runs of
+    followed nodes, neighbours, stopping tolerance and seeded random starts — while every
+    model call serves all blocks."""
     deterministic = model.trajectory(params.deterministic)
-    n_time, rng = model.n_time, np.random.default_rng(strategy.seed)
-    nodes = followed_nodes(np.asarray(model.model.times, dtype=float), strategy.stride,
-                           getattr(model.model, "time_step", None))  # fmt: skip
+    n_time = model.n_time
+    blocks = int(getattr(model.model, "blocks", 1))
+    n_block = n_time // blocks
+    if blocks < 1 or n_block * blocks != n_time:
+        raise ParameterError(f"a model of {n_time} time nodes cannot have {blocks} equal blocks")
+    times = np.asarray(model.model.times, dtype=float)
+    time_step = getattr(model.model, "time_step", None)
+    spans = [slice(i * n_block, (i + 1) * n_block) for i in range(blocks)]
+    nodes = np.concatenate([followed_nodes(times[span], strategy.stride, time_step) + span.start for span in spans])
     others = np.setdiff1d(np.arange(n_time), nodes)
-    everywhere = np.arange(n_time)
     counts = BatchCounts()
     exact = strategy.gradients == "auto" and model.has_node_gradients
     hull = np.empty((levels.size, 2, n_time))
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
-    tolerance = 1e-7 * max(float(np.max(np.abs(deterministic))), 1.0)
+    tolerance = np.concatenate([np.full(n_block, 1e-7 * max(float(np.max(np.abs(deterministic[span]))), 1.0))
+                                for span in spans])  # fmt: skip
     previous_domain = params.domain(1.0)
     below_one = np.arange(levels.size - 1)[::-1]
     senses = np.array([SENSES[bound] for bound in BOUNDS])
@@ -254,6 +275,8 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     both = senses.size
     # bound nodes (BatchedObjective): both bounds' optimisations in the same calls
     nodes_b, others_b = (np.concatenate([n + b * n_time for b in range(both)]) for n in (nodes, others))
+    block_of = (nodes_b % n_time) // n_block  # each block's nodes in the order of a run of it alone
+    rngs = [np.random.default_rng(strategy.seed) for _ in range(blocks)]
     previous: np.ndarray | None = None  # the higher level's optima, every bound node
     for step, a in enumerate(below_one):
         domain = params.domain(float(levels[a]))
@@ -261,20 +284,24 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
         if previous is not None:  # the higher level's optimum, as it is and scaled out
             higher = [previous, domain.rescale_from(previous_domain, previous)]  # type: ignore[arg-type]
         first = [np.tile(params.deterministic, (nodes_b.size, 1))] + [h[nodes_b] for h in higher]
-        extra = screened_starts(objective, domain, nodes_b, rng, max(0, strategy.starts - len(first)),
-                                strategy.screen)  # fmt: skip
+        n_extra = max(0, strategy.starts - len(first))
+        extra = [np.empty((nodes_b.size, params.dim)) for _ in range(n_extra)]
+        for i, rng in enumerate(rngs):  # each block's random starts as if it ran alone
+            mine = block_of == i
+            for slot, start in zip(extra, screened_starts(objective, domain, nodes_b[mine], rng, n_extra,
+                                                          strategy.screen), strict=True):  # fmt: skip
+                slot[mine] = start
         points = np.empty((both * n_time, params.dim))
         values = np.empty(both * n_time)
         points[nodes_b], values[nodes_b] = maximise(objective, domain, nodes_b, first + extra, strategy.iterations,
-                                                    tolerance)  # fmt: skip
+                                                    tolerance[nodes_b % n_time])  # fmt: skip
         if others.size:  # nodes between optimisation nodes: started from the bracketing optima (same bound)
             points[others_b], values[others_b] = follow_nodes(objective, domain, nodes_b, points[nodes_b], others_b,
                                                               [h[others_b] for h in higher], strategy.follow,
-                                                              tolerance)  # fmt: skip
-        for b in range(both):  # neighbours within each bound's curve
-            span = slice(b * n_time, (b + 1) * n_time)
-            points[span], values[span] = neighbour_pass(objective, everywhere + b * n_time, points[span],
-                                                        values[span], strategy.window)  # fmt: skip
+                                                              tolerance[others_b % n_time])  # fmt: skip
+        # neighbours within each bound's curve of each block
+        curves = [np.arange(span.start, span.stop) + b * n_time for b in range(both) for span in spans]
+        points, values = neighbour_pass(objective, curves, points, values, strategy.window)
         previous = points
         hull[a] = senses[:, None] * values.reshape(both, n_time)
         extremiser[a] = points.reshape(both, n_time, params.dim)
