@@ -459,11 +459,13 @@ def test_undetermined_marks_bounds_more_than_a_quarter_turn_away() -> None:
 def test_single_components_are_analysed_alone_with_the_same_hull(angles_run: AnglesRun, sparse_trial: Trial) -> None:
     """``angles=["LKneeAngles_X", "RHipAngles_X"]`` analyses those two components only
     (the report's ``--uncertainty fast``), each with the hull the whole angle's run gives
-    it (the same task, the same seed)."""
+    it: the same optimisation with the same seed, the whole angle's components sharing
+    the model calls (:func:`~fuzzygait.markererror.analysis.run_angle_task`), so equal up
+    to the rounding of batched array operations (measured: bit-identical)."""
     options = FuzzyAngleOptions(alphas=(0.0, 0.5))
     alone = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options,
                                ["LKneeAngles_X", "RHipAngles_X"])  # fmt: skip
     assert list(alone["component"].values) == ["LKneeAngles_X", "RHipAngles_X"]
     whole = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options, ["LKneeAngles"])
-    np.testing.assert_array_equal(component_hull(alone, "LKneeAngles_X").to_numpy(),
-                                  component_hull(whole, "LKneeAngles_X").to_numpy())  # fmt: skip
+    np.testing.assert_allclose(component_hull(alone, "LKneeAngles_X").to_numpy(),
+                               component_hull(whole, "LKneeAngles_X").to_numpy(), rtol=0, atol=1e-9)  # fmt: skip

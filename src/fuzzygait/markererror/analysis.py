@@ -160,7 +160,9 @@ def run_angle_task(tasks: Sequence[ComponentTask]) -> list[tuple[str, np.ndarray
     """Run the tasks of components of one angle (the same frames, markers, radii and
     options) in one α-level optimisation of an :class:`AngleComponentsModel`: every model
     call serves all components (one pass of the kinematic model gives the three), and
-    each component is optimised as it would be alone, with the same seed.  Per task, as
+    each component is optimised as it would be alone, with the same seed: the same hull
+    up to the rounding of batched array operations (measured on both sample trials: the
+    hulls bit-identical, the extremisers within 4e-15 mm).  Per task, as
     :func:`run_component_task`.  The work counts of the shared optimisation are the
     first task's (the others' are zero), so they add up over the tasks."""
     first = tasks[0]

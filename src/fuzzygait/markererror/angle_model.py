@@ -248,7 +248,7 @@ class AngleComponentsModel:
     Node ``b · n_frames + j`` is component ``axes[b]`` at frame ``angle.frames[j]``, on
     the continuous branch through ``references[b, j]``; :attr:`times` (s) are the frames'
     times once per component.  The components are :attr:`blocks` independent outputs:
-    the batched Graph Follower optimises each exactly as it would alone
+    the batched Graph Follower optimises each as it would alone
     (:func:`~fuzzygait.uncertainty.gfa.batched.run_batched`).  The values and gradients
     of a node are those of :class:`JointAngleModel` for that component.
 

@@ -247,9 +247,10 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
 
     A model whose nodes are ``blocks`` independent outputs of the same parameters, one
     after the other (attribute ``blocks``, default 1: e.g. the components of one joint
-    angle) has each block optimised exactly as it would be alone — its own runs of
-    followed nodes, neighbours, stopping tolerance and seeded random starts — while every
-    model call serves all blocks."""
+    angle) has each block optimised as it would be alone — its own runs of followed
+    nodes, neighbours, stopping tolerance and seeded random starts, so the same result
+    up to the rounding of the model's batched array operations — while every model call
+    serves all blocks."""
     deterministic = model.trajectory(params.deterministic)
     n_time = model.n_time
     blocks = int(getattr(model.model, "blocks", 1))
