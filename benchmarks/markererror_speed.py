@@ -2,11 +2,13 @@
 against Monte Carlo sampling given the same wall time (thesis §5.5, Fig. 5.11, Table 5.2).
 
 Run:  OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/markererror_speed.py [--joints] [--model auto]
-          [--trial walking|cgm24] [--starts N] [--compare-gradients | --compare-starts N]
+          [--trial walking|cgm24] [--starts N] [--compare-gradients | --compare-starts N | --compare-grouping]
 
 ``--compare-gradients`` first runs the same analysis with forward-difference gradients
-(``gradients="differences"``), ``--compare-starts N`` with N multistart points, in the
-same process, and prints the wall ratio and how the bands differ; ``--trial cgm24`` runs
+(``gradients="differences"``), ``--compare-starts N`` with N multistart points,
+``--compare-grouping`` one angle component per task (``run_component_task``, instead of
+an angle's components in shared calls), in the same process, and prints the wall ratio
+and how the bands differ; ``--trial cgm24`` runs
 on the synthetic CGM 2.4 session instead.
 
 1. Graph Follower (``BatchedDirect`` strategy, Cartesian deviations, Table 3.1 radii with all
@@ -48,11 +50,13 @@ from fuzzygait.markererror.analysis import (  # noqa: E402
     component_tasks,
     fuzzy_joint_angles,
     relative_envelope_width,
+    run_component_task,
     undetermined_levels,
 )
 from fuzzygait.markererror.angle_model import AXES  # noqa: E402
 from fuzzygait.markererror.comparison import monte_carlo_timed  # noqa: E402
 from fuzzygait.markererror.result import component_hull, component_undetermined  # noqa: E402
+from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 from fuzzygait.workflows.angles import run_angles  # noqa: E402
 
 DATA = ROOT / "sample_data"
@@ -105,6 +109,29 @@ def _compare_runs(baseline, fuzzy, components: list[str], label: str, baseline_w
           f"baseline width there {largest[2]:.3f} deg)")  # fmt: skip
 
 
+def _compare_grouping(fuzzy, tasks: list[ComponentTask], separate: list, separate_wall: float,
+                      wall: float) -> None:  # noqa: ANN001
+    """One component per task against the components of an angle in shared calls (the
+    raw hulls: where the dataset closes a middle Cardan band at ±90° near gimbal lock,
+    ``gimbal_undetermined``, the capped values are left out)."""
+    same, largest, deviation, capped = 0, 0.0, 0.0, 0
+    for task, (column, hull, norms, _) in zip(tasks, separate, strict=True):
+        grouped = component_hull(fuzzy, column).to_numpy()[:, :, task.frames]
+        cap = np.abs(grouped) == 90.0
+        capped += int(cap.sum())
+        grouped, hull = np.where(cap, np.nan, grouped), np.where(cap, np.nan, hull)
+        same += int(np.array_equal(grouped, hull, equal_nan=True))
+        largest = max(largest, float(np.nanmax(np.abs(grouped - hull))))
+        stored = fuzzy["deviation"].sel(component=column, marker=task.markers).to_numpy()[:, :, task.frames]
+        deviation = max(deviation, float(np.nanmax(np.abs(stored - norms))))
+    print()
+    print("## Against one component per task (same process, same pool size)")
+    print(f"one component per task: wall {separate_wall:.1f} s; an angle's components in shared calls: wall "
+          f"{wall:.1f} s; ratio {wall / separate_wall:.2f}; hulls bit-identical for {same} of {len(tasks)} components "
+          f"(largest difference {largest:.1e} deg; {capped} values capped at ±90° left out), deviation norms "
+          f"within {deviation:.1e} mm")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--joints", action="store_true", help="hip/knee/ankle only (18 components)")
@@ -117,6 +144,10 @@ def main() -> None:
                              "how the hulls differ")  # fmt: skip
     parser.add_argument("--compare-starts", type=int, default=0, metavar="N",
                         help="first run with N multistart points instead (exact gradients): wall ratio and hulls")
+    parser.add_argument("--compare-grouping", action="store_true",
+                        help="first run one angle component per task (run_component_task, as before the components "
+                             "of an angle shared the calls) on the same pool: wall ratio, and whether the hulls are "
+                             "the same")  # fmt: skip
     args = parser.parse_args()
     print(f"command: OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']} .venv/bin/python "
           f"benchmarks/markererror_speed.py {' '.join(sys.argv[1:])}  ({os.cpu_count()} cores, Python "
@@ -138,9 +169,18 @@ def main() -> None:
         baseline = fuzzy_joint_angles(trial, run.subject, result, dataclasses.replace(options, **changes), angles,
                                       clusters=run.clusters)  # fmt: skip
         baseline_wall = time.perf_counter() - start
+    separate = None
+    if args.compare_grouping:
+        tasks, _ = component_tasks(trial, run.subject, result, options, angles, run.clusters)
+        start = time.perf_counter()
+        with Evaluator(workers=WORKERS) as evaluator:
+            separate = evaluator.map(run_component_task, tasks)
+        baseline_wall = time.perf_counter() - start
     start = time.perf_counter()
     fuzzy = fuzzy_joint_angles(trial, run.subject, result, options, angles, clusters=run.clusters)
     wall = time.perf_counter() - start
+    if separate is not None:
+        _compare_grouping(fuzzy, tasks, separate, baseline_wall, wall)
     if baseline is not None:
         _compare_runs(baseline, fuzzy, components, label, baseline_wall, wall)
     print()
