@@ -136,15 +136,13 @@ class BlocksModel(LinearBallModel):
         return np.where(block == 0, hills, linear)
 
 
-class OneBlock(LinearBallModel):
+class OneBlock(BlocksModel):
     """One block of :class:`BlocksModel` alone, on the same frames."""
+
+    blocks = 1
 
     def __init__(self, block: int) -> None:
         self.block, self.both, self.times, self.calls = block, BlocksModel(), TIMES[BlocksModel.kept], 0
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
 
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         self.calls += 1

@@ -254,9 +254,9 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     deterministic = model.trajectory(params.deterministic)
     n_time = model.n_time
     blocks = int(getattr(model.model, "blocks", 1))
-    n_block = n_time // blocks
-    if blocks < 1 or n_block * blocks != n_time:
+    if blocks < 1 or n_time % blocks:
         raise ParameterError(f"a model of {n_time} time nodes cannot have {blocks} equal blocks")
+    n_block = n_time // blocks
     times = np.asarray(model.model.times, dtype=float)
     time_step = getattr(model.model, "time_step", None)
     spans = [slice(i * n_block, (i + 1) * n_block) for i in range(blocks)]

@@ -115,6 +115,11 @@ GRADIENT_SOURCES = ("auto", "differences")
 class BatchedDirect:
     """All optimisation nodes solved side by side (needs the ``"nodes"`` capability).
 
+    A model may declare ``blocks`` (int): its time nodes are that many independent
+    outputs of the same parameters, one after the other (e.g. the three components of a
+    joint angle); each is then optimised as it would be alone, in shared calls
+    (:func:`~fuzzygait.uncertainty.gfa.batched.run_batched`).
+
     Attributes:
         stride: optimise at every ``stride``-th time node (and the last) with the full
             multistart; the nodes in between start from the best of the two bracketing
