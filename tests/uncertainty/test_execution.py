@@ -84,28 +84,6 @@ def test_map_reports_progress_as_items_finish(evaluators) -> None:
         assert calls == [(i, len(items)) for i in range(1, len(items) + 1)], name
 
 
-def test_map_starts_the_most_expensive_first_and_keeps_input_order(evaluators) -> None:
-    """With ``costs`` the items start in descending cost (serially: called in that
-    order); the results, the progress count and a failing item's index are as without."""
-    items, costs = [3, -1, 4, -1, 5, -9], [1.0, 5.0, 2.0, 0.5, 9.0, 3.0]
-    started: list[int] = []
-
-    def record(x: int) -> int:
-        started.append(x)
-        return abs(x)
-
-    assert Evaluator().map(record, items, costs=costs) == [abs(i) for i in items]
-    assert started == [5, -1, -9, 4, 3, -1]
-    for name, evaluator in evaluators.items():
-        calls: list[tuple[int, int]] = []
-        assert evaluator.map(abs, items, lambda d, t: calls.append((d, t)), costs) == [abs(i) for i in items], name
-        assert calls == [(i, len(items)) for i in range(1, len(items) + 1)], name
-        with pytest.raises(ParallelEvaluationError, match=r"item 2 failed: ValueError"):
-            evaluator.map(_reject_zero, [3, 1, 0, 2, 0], costs=[1, 1, 1, 1, 9])
-    with pytest.raises(ParameterError, match=r"costs must give one value per item \(6\); got 2"):
-        Evaluator().map(abs, items, costs=[1.0, 2.0])
-
-
 def _reject_zero(x: int) -> int:
     if x == 0:
         raise ValueError("zero is not allowed here")

@@ -50,7 +50,6 @@ from fuzzygait.markererror.analysis import (
     ComponentTask,
     FuzzyAngleOptions,
     component_tasks,
-    expected_cost,
     fuzzy_joint_angles,
     run_component_task,
 )
@@ -197,7 +196,7 @@ def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator
     deg, deviation norms (2, bound, n_valid, n_markers) mm, counts; ``progress(done, n)``
     as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it."""
     runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
-    return evaluator.map(run_component_task, runs, progress, [expected_cost([run]) for run in runs])
+    return evaluator.map(run_component_task, runs, progress)
 
 
 # ---------------------------------------------------------------------------- dataset

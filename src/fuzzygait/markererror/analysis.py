@@ -209,18 +209,18 @@ def run_angle_task(tasks: Sequence[ComponentTask]) -> list[tuple[str, np.ndarray
 
 def angle_groups(tasks: Sequence[ComponentTask]) -> list[list[int]]:
     """Indices of ``tasks`` grouped by angle (the components :func:`run_angle_task` runs
-    together), in first-use order."""
+    together), the groups in descending order of their expected cost (components ×
+    frames × markers), so a pool starts the longest first and its processes finish
+    together."""
     groups: dict[str, list[int]] = {}
     for i, task in enumerate(tasks):
         groups.setdefault(task.name, []).append(i)
-    return list(groups.values())
 
+    def cost(group: list[int]) -> int:
+        task = tasks[group[0]]
+        return len(group) * task.frames.size * len(task.markers)
 
-def expected_cost(tasks: Sequence[ComponentTask]) -> float:
-    """The relative cost of optimising ``tasks`` together (components × frames ×
-    markers), for :meth:`~fuzzygait.uncertainty.execution.Evaluator.map`'s ``costs``:
-    the longest start first."""
-    return float(len(tasks) * tasks[0].frames.size * len(tasks[0].markers)) if tasks else 0.0
+    return sorted(groups.values(), key=cost, reverse=True)
 
 
 def fuzzy_joint_angles(
@@ -272,12 +272,11 @@ def fuzzy_joint_angles(
     groups = angle_groups(tasks)
     jobs = [[tasks[i] for i in group] for group in groups]
     start = time.perf_counter()
-    costs = [expected_cost(job) for job in jobs]
     if evaluator is None:
         with Evaluator(workers=max(1, int(options.workers))) as own:
-            grouped = own.map(run_angle_task, jobs, progress, costs)
+            grouped = own.map(run_angle_task, jobs, progress)
     else:
-        grouped = evaluator.map(run_angle_task, jobs, progress, costs)
+        grouped = evaluator.map(run_angle_task, jobs, progress)
     by_task = {i: output for group, results in zip(groups, grouped, strict=True)
                for i, output in zip(group, results, strict=True)}  # fmt: skip
     outputs = [by_task[i] for i in range(len(tasks))]

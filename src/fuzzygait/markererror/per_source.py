@@ -53,7 +53,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
-from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, expected_cost, run_component_task
+from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task
 from fuzzygait.markererror.angle_model import undetermined
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
 from fuzzygait.markererror.sources import SOURCE_TITLES, SOURCES, parse_sources
@@ -316,7 +316,7 @@ def per_source_bands(
                 if progress is not None:
                     progress(offset + k, total)
 
-            outputs = runner.map(run_component_task, run, step, [expected_cost([task]) for task in run])
+            outputs = runner.map(run_component_task, run, step)
             done += len(run)
             hulls[source] = {}
             for task, (column, values, _norms, work) in zip(run, outputs, strict=True):

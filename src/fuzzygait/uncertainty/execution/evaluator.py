@@ -375,27 +375,19 @@ class Evaluator:
                 future.release()
 
     def map(self, function: Callable[[T], R], items: Sequence[T],
-            progress: Callable[[int, int], None] | None = None,
-            costs: Sequence[float] | None = None) -> list[R]:  # fmt: skip
+            progress: Callable[[int, int], None] | None = None) -> list[R]:  # fmt: skip
         """``[function(item) for item in items]`` in input order; ``function`` and the items
         must be picklable for a pool. A failing item is one
-        :class:`ParallelEvaluationError` naming its index.  ``costs``: the expected cost of
-        each item (any unit); the items then start the most expensive first, so a pool's
-        processes finish together (the results are the same and in input order)."""
-        order = list(range(len(items)))
-        if costs is not None:
-            if len(costs) != len(items):
-                raise ParameterError(f"costs must give one value per item ({len(items)}); got {len(costs)}")
-            order.sort(key=lambda i: -float(costs[i]))
+        :class:`ParallelEvaluationError` naming its index."""
         if self.serial:
             statuses = []
-            for done, i in enumerate(order, start=1):
-                statuses.append(map_task(function, i, items[i]))
+            for i, item in enumerate(items):
+                statuses.append(map_task(function, i, item))
                 if progress is not None:
-                    progress(done, len(items))
+                    progress(i + 1, len(items))
         else:
-            statuses = self.submit_all(map_task, [(function, i, items[i]) for i in order], "map", progress)
-        statuses.sort(key=lambda status: int(status["index"]))
+            statuses = self.submit_all(map_task, [(function, i, item) for i, item in enumerate(items)], "map",
+                                       progress)  # fmt: skip
         failed = [s for s in statuses if "error" in s]
         if failed:
             first = failed[0]
