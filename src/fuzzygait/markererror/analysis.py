@@ -209,18 +209,11 @@ def run_angle_task(tasks: Sequence[ComponentTask]) -> list[tuple[str, np.ndarray
 
 def angle_groups(tasks: Sequence[ComponentTask]) -> list[list[int]]:
     """Indices of ``tasks`` grouped by angle (the components :func:`run_angle_task` runs
-    together), the groups in descending order of their expected cost (components ×
-    frames × markers), so a pool starts the longest first and its processes finish
-    together."""
+    together), in first-use order."""
     groups: dict[str, list[int]] = {}
     for i, task in enumerate(tasks):
         groups.setdefault(task.name, []).append(i)
-
-    def cost(group: list[int]) -> int:
-        task = tasks[group[0]]
-        return len(group) * task.frames.size * len(task.markers)
-
-    return sorted(groups.values(), key=cost, reverse=True)
+    return list(groups.values())
 
 
 def fuzzy_joint_angles(
