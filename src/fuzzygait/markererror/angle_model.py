@@ -6,7 +6,8 @@ the markers the angle depends on; the output at frame ``j`` is the angle compone
 (degrees) computed from ``r_i(t_j) + p_i`` (Eq. 3.1). The same deviation applies at every
 frame of a trajectory (so one evaluation is a whole angle curve), and
 :meth:`JointAngleModel.evaluate_nodes` evaluates any number of (deviation, frame) pairs
-in one vectorised pass of the model.
+in one vectorised pass of the model; :class:`AngleComponentsModel` stacks the components
+of one angle so that pass serves all of them.
 
 Model versions (:mod:`fuzzygait.kinematics.versions`): the angle is computed by the chain
 of the version that computed the measured angles — Plug-in Gait's (``cgm1.0``), its
