@@ -218,3 +218,89 @@ def test_degenerate_content_gives_one_line_and_no_warning(walking):
     for n in (0, 1):
         short = replace(walking, markers=walking.markers[:n], outputs={}, events=[])
         assert sanity.check_trial(short, static=True) is short
+
+
+# --------------------------------------------------------------------------- static vs walking
+_SESSIONS = (  # (static, walking): the reference sessions whose foot markers stayed put
+    (STATIC, WALKING),
+    (SAMPLE_DATA / "cgm24_static.c3d", SAMPLE_DATA / "cgm24_walking.c3d"),
+    (SHARED_DATA / "vicon" / "Static_trial.c3d", SHARED_DATA / "vicon" / "Movement_trial.c3d"),
+    (SHARED_DATA / "pig-options" / "PiGKad_Calibration.c3d", SHARED_DATA / "pig-options" / "PiGKad_Motion.c3d"),
+    (SHARED_DATA / "pig-options" / "PiGKadMed_Calibration.c3d", SHARED_DATA / "pig-options" / "PiGKadMed_Motion.c3d"),
+    (SHARED_DATA / "pig-options" / "PiG_Calibration-FlatFoot-Full.c3d",
+     SHARED_DATA / "pig-options" / "PiG_Motion-FlatFoot-Full.c3d"),
+)
+
+
+@pytest.mark.parametrize("static, walking_path", _SESSIONS, ids=lambda p: p.stem)
+def test_no_foot_marker_moved_in_the_good_sessions(static, walking_path):
+    if not walking_path.is_file():
+        pytest.skip(f"reference data {walking_path} is absent (it sits beside the clone in CI)")
+    assert sanity.moved_foot_markers(read_c3d(static), read_c3d(walking_path)) == []
+
+
+def _moved(trial, label: str, shift: np.ndarray):
+    markers = trial.markers.copy()
+    markers[:, trial.marker_labels.index(label), :] += shift
+    return replace(trial, markers=markers)
+
+
+def _foot_axis(trial, side: str) -> np.ndarray:
+    """Unit vector HEE -> TOE of ``side`` per frame, (n, 3)."""
+    axis = trial.marker(side + "TOE") - trial.marker(side + "HEE")
+    return axis / np.linalg.norm(axis, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("distance, noted", [(30.0, True), (-25.0, True), (12.0, False)])
+def test_a_toe_marker_moved_along_the_foot_is_noted_on_its_side(walking, distance, noted):
+    """LTOE moved along the foot in the walking trial (as if re-placed after the static
+    trial): beyond 15 mm and 10 % one note, naming the left side, the pair, both
+    distances (the synthetic foot: HEE-TOE 190 mm) and what to do; 12 mm is within
+    the rule (a real session's static/walking difference is at most 7 mm)."""
+    static = read_c3d(STATIC)
+    moved = _moved(walking, "LTOE", distance * _foot_axis(walking, "L"))
+    notes = sanity.moved_foot_markers(static, moved)
+    if not noted:
+        assert notes == []
+        return
+    assert len(notes) == 1
+    (note,) = notes
+    assert note.startswith("left foot markers sit elsewhere than in the static trial static.c3d")
+    assert f"LHEE-LTOE {190 + distance:.0f} mm, static 190 mm" in note
+    assert "RHEE" not in note and "calibrate on a static trial" in note
+
+
+def test_a_moved_forefoot_marker_of_the_cgm24_set_is_noted():
+    """RVMH moved 25 mm towards RFMH on the synthetic CGM 2.4 session (FMH-VMH 75 mm
+    there): the right side's FMH-VMH pair is named with both distances, the unchanged
+    HEE-TOE is not, and the left side is silent."""
+    static = read_c3d(SAMPLE_DATA / "cgm24_static.c3d")
+    walking = read_c3d(SAMPLE_DATA / "cgm24_walking.c3d")
+    fmh_to_vmh = walking.marker("RVMH") - walking.marker("RFMH")
+    fmh_to_vmh /= np.linalg.norm(fmh_to_vmh, axis=1, keepdims=True)
+    (note,) = sanity.moved_foot_markers(static, _moved(walking, "RVMH", -25.0 * fmh_to_vmh))
+    assert note.startswith("right foot markers")
+    assert "RFMH-RVMH 50 mm, static 75 mm" in note and "RHEE-RTOE" not in note
+
+
+def test_a_trial_without_foot_markers_gives_no_note(walking):
+    static = read_c3d(STATIC)
+    keep = [i for i, label in enumerate(walking.marker_labels) if not label.endswith(("HEE", "TOE"))]
+    bare = replace(walking, markers=walking.markers[:, keep, :], marker_labels=[walking.marker_labels[i] for i in keep])
+    assert sanity.moved_foot_markers(static, bare) == []
+
+
+@needs_shared
+def test_the_qualisys_sessions_foot_markers_moved_between_its_trials():
+    """The shared CGM 2.4 session: its TOE (and forefoot) markers sit 21-68 mm from where
+    the static trial has them on both feet (the cause of its undetermined ankle bands);
+    the angle workflow says so in its notes."""
+    from fuzzygait.workflows.angles import run_angles
+
+    folder = SHARED_DATA / "cgm2" / "qualisys-cgm24-input"
+    run = run_angles(folder / "Gait - CGM2 1.c3d", static=folder / "Static - CGM2 1.c3d",
+                     subject_file=folder / "session.xml", model="auto")  # fmt: skip
+    moved = [note for note in run.notes if "foot markers sit elsewhere" in note]
+    assert [note.split()[0] for note in moved] == ["left", "right"]
+    assert "LHEE-LTOE 96 mm, static 123 mm" in moved[0]
+    assert "RTOE-RVMH 137 mm, static 69 mm" in moved[1]

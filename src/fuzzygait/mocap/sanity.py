@@ -21,6 +21,9 @@ array (about a millisecond per trial).
   the session discovery's ``motion`` rule uses (:func:`pelvis_range`); a walking trial
   that does not move has no gait events (:mod:`fuzzygait.gait.events`), a static trial
   that moves is refused (:func:`check_static`).
+* :func:`moved_foot_markers`: a foot marker that sits elsewhere on the foot in the
+  walking trial than in its static trial (moved or relabelled between the two), whose
+  static offsets then do not fit the walking trial's foot (a note each).
 """
 
 from __future__ import annotations
@@ -326,6 +329,60 @@ def check_static(trial: Trial) -> None:
         raise C3DError(f"{trial.name}: given as the static trial but it moves ({_ranges_text(moving)} over the "
                        f"trial; a standing trial stays within {STATIC_MAX_TRAVEL:g} mm): give the standing "
                        "calibration trial as the static trial")  # fmt: skip
+
+
+# --------------------------------------------------------------------------- static vs walking
+#: Marker pairs fixed on the foot (a shoe, or the mid- and forefoot's stiff rays): their
+#: distance in a walking trial is that of its static trial unless a marker moved between
+#: the two.  Measured static/walking medians on the reference sessions: HEE-TOE within
+#: 1-7 mm on every Plug-in Gait session (Movement_trial 243/236 mm, the pig-options
+#: sessions 161/160 ... 195/192 mm); the CGM 2.4 set's TOE-FMH, TOE-VMH and FMH-VMH
+#: within 0.1 mm on the synthetic session.
+FOOT_PAIRS: tuple[tuple[str, str], ...] = (("HEE", "TOE"), ("TOE", "FMH"), ("TOE", "VMH"), ("FMH", "VMH"))
+#: A foot pair whose walking-trial median differs from the static trial's by more than
+#: this (mm) *and* by more than :data:`MOVED_MARKER_FRACTION` of it is reported.
+MOVED_MARKER_MM = 15.0
+#: Relative part of the moved-marker rule (a long foot's 7 mm is 3 %).
+MOVED_MARKER_FRACTION = 0.10
+
+
+def _median_distance(trial: Trial, a: str, b: str) -> float | None:
+    """Median over the frames of the distance (mm) between markers ``a`` and ``b``."""
+    if not (trial.has_marker(a) and trial.has_marker(b)):
+        return None
+    with np.errstate(invalid="ignore", over="ignore"):
+        distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
+    distance = distance[np.isfinite(distance)]
+    return float(np.median(distance)) if distance.size else None
+
+
+def moved_foot_markers(static: Trial, walking: Trial) -> list[str]:
+    """Notes, one per side, on foot marker pairs (:data:`FOOT_PAIRS`) whose distance
+    differs between ``static`` and ``walking`` by more than :data:`MOVED_MARKER_MM` mm and
+    :data:`MOVED_MARKER_FRACTION` of the static distance (medians over the frames).
+
+    Such a marker was moved or relabelled between the trials: the static foot offsets
+    (StaticPlantFlex, StaticRotOff; a cluster model's foot calibration) describe another
+    marker layout, and the ankle and foot angles of ``walking`` are off by the angle the
+    marker moved through.  An empty list when nothing moved or no pair is in both.
+    """
+    notes = []
+    for side in "LR":
+        changes = []
+        for a, b in FOOT_PAIRS:
+            name_a, name_b = side + a, side + b
+            before, now = _median_distance(static, name_a, name_b), _median_distance(walking, name_a, name_b)
+            if before is None or now is None:
+                continue
+            change = now - before
+            if abs(change) > MOVED_MARKER_MM and abs(change) > MOVED_MARKER_FRACTION * before:
+                changes.append(f"{name_a}-{name_b} {now:.0f} mm, static {before:.0f} mm")
+        if changes:
+            notes.append(f"{'left' if side == 'L' else 'right'} foot markers sit elsewhere than in the static trial "
+                         f"{static.name} ({'; '.join(changes)}): moved or relabelled between the trials, so the "
+                         "static foot calibration does not fit this trial and its ankle and foot angles are "
+                         "unreliable; calibrate on a static trial with the walking trial's foot markers")  # fmt: skip
+    return notes
 
 
 # --------------------------------------------------------------------------- all
