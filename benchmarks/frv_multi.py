@@ -6,7 +6,8 @@ with sensitivities, so α = 1 is the Hermite interpolant at each sample's own pe
 
 Reports: occurring boxes against the possible ones (the product over the parameters of
 Eq. 2.32's interval counts), forward simulations (grid points inside an occurring box and
-the peaks' Hermite cells), wall time and the part of it spent simulating; the cost of
+the peaks' Hermite cells on the α = 1 lattice, chosen by the study unless
+``--peak-refine`` gives it), wall time and the part of it spent simulating; the cost of
 adding N_s more samples as a fraction of the first run; the α = 1 output distribution
 against a Monte Carlo of the deterministic model at a random subset of the same
 (ungrouped) peak samples (two-sample KS test at five times); and whether a smaller
@@ -15,7 +16,7 @@ study is bit-identical on 1 and 2 workers.
 Usage::
 
     python benchmarks/frv_multi.py [--samples 10000] [--disc 30] [--duration 1] [--mc 400]
-        [--workers 2] [--store results/frv_multi.zarr]
+        [--workers 2] [--store results/frv_multi.zarr] [--peak-refine auto]
 """
 
 from __future__ import annotations
@@ -69,7 +70,7 @@ class Timed:
             self.rows += len(P)
 
 
-def study(model, recipe, specs, n, disc, workers, store, timed=None):
+def study(model, recipe, specs, n, disc, workers, store, timed=None, peak_refine=None):
     with Evaluator(workers=workers) as pool:
         evaluator = pool.batch(recipe, sensitivities=True)  # Hermite refinement (α = 1 at the raw peak)
         if timed is not None:
@@ -77,7 +78,7 @@ def study(model, recipe, specs, n, disc, workers, store, timed=None):
             evaluator = timed
         start = time.perf_counter()
         result = FRVMultiStudy.create(model, specs, n, n_disc=disc, seed=0, store=store, evaluator=evaluator,
-                                      overwrite=True)  # fmt: skip
+                                      overwrite=True, peak_refine=peak_refine)  # fmt: skip
         return result, time.perf_counter() - start
 
 
@@ -91,8 +92,13 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--check-samples", type=int, default=500, help="samples of the 1-vs-2-worker study")
     parser.add_argument("--check-disc", type=int, default=8)
+    parser.add_argument("--check-duration", type=float, default=0.3, help="simulated time of that study (s)")
     parser.add_argument("--store", type=Path, default=Path("results/frv_multi.zarr"))
+    parser.add_argument("--peak-refine", default="auto",
+                        help="the α = 1 lattice: auto (chosen by the study) or factors, e.g. 1 (the grid) or 2,1")
     args = parser.parse_args()
+    peak_refine = None if args.peak_refine == "auto" else [int(v) for v in args.peak_refine.split(",")]
+    peak_refine = peak_refine[0] if peak_refine is not None and len(peak_refine) == 1 else peak_refine
     print(f"load average at start: {os.getloadavg()[0]:.2f}")
     model, recipe, specs = build(args.duration)
     disc = [int(n) for n in args.disc.split(",")]
@@ -100,7 +106,8 @@ def main() -> None:
     args.store.parent.mkdir(parents=True, exist_ok=True)
 
     first_timer = Timed(None)
-    first, first_wall = study(model, recipe, specs, args.samples, disc, args.workers, args.store, first_timer)
+    first, first_wall = study(model, recipe, specs, args.samples, disc, args.workers, args.store, first_timer,
+                              peak_refine)  # fmt: skip
     counts = dict(first.counts)
     print(f"\nFRV-GFA, stance, E and rho independent FRVs about {MODULUS:g} Pa / {specs[1].deterministic:g} kg/m³, "
           f"{args.samples} samples, N_p-disc = {args.disc} (E,rho), {len(ALPHAS)} α-levels, {args.duration:g} s at "
@@ -108,6 +115,9 @@ def main() -> None:
     for key in ("occurring_intervals", "possible_intervals", "possible_intervals_per_parameter",
                 "forward_simulations", "interval_optimisations", "worst_case_optimisations"):  # fmt: skip
         print(f"   {key}: {counts.get(key)}")
+    checks = "; ".join(f"{c['parameter']} x{c['factor']}: {100 * c['error']:.2f} %"
+                       for c in counts.get("peak_checks", []))  # fmt: skip
+    print(f"   α = 1 lattice (factors E, rho): {first.peak_refine} ({args.peak_refine}); checks: {checks}")
     print(f"   wall time: {first_wall:.1f} s, of which forward simulations {first_timer.seconds:.1f} s "
           f"({first_timer.rows} rows, with sensitivities)")  # fmt: skip
 
@@ -147,13 +157,15 @@ def main() -> None:
 
     folder = Path(tempfile.mkdtemp())
     try:
-        runs = [study(model, recipe, specs, args.check_samples, args.check_disc, w, folder / f"w{w}.zarr")
+        check_model, check_recipe, _ = build(args.check_duration)
+        runs = [study(check_model, check_recipe, specs, args.check_samples, args.check_disc, w, folder / f"w{w}.zarr")
                 for w in (1, 2)]  # fmt: skip
         same = all(
             np.array_equal(runs[0][0].hulls()[name].values, runs[1][0].hulls()[name].values, equal_nan=True)
             for name in runs[0][0].hulls().data_vars
         )
-        print(f"\n{args.check_samples} samples, N_p-disc = {args.check_disc}: 1 worker {runs[0][1]:.1f} s, "
+        print(f"\n{args.check_samples} samples, N_p-disc = {args.check_disc}, {args.check_duration:g} s, α = 1 lattice "
+              f"{runs[0][0].peak_refine} / {runs[1][0].peak_refine}: 1 worker {runs[0][1]:.1f} s, "
               f"2 workers {runs[1][1]:.1f} s; hulls bit-identical: {same}")  # fmt: skip
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -195,3 +195,17 @@ def test_a_disc_that_does_not_fit_the_parameters_is_refused(tmp_path: Path, disc
     assert result.exit_code == 1 and "--disc must be one whole number of at least 2, or one per --frv parameter " \
         "(E,rho)" in result.stderr, result.output
     assert not (tmp_path / "new.zarr").exists()
+
+
+def test_the_summary_names_an_alpha_one_lattice_finer_than_the_grid() -> None:
+    """frv-sim's summary line says along which parameters α = 1 was interpolated on a
+    lattice finer than the grouping grid (the study's ``counts["peak_refine"]``), and
+    nothing where it is the grid's."""
+    from fuzzygait.cli.simulate import _frv_summary
+
+    counts = {"samples": 100, "occurring_intervals": 7, "possible_intervals": 100, "forward_simulations": 40,
+              "possible_intervals_per_parameter": [10, 10], "interval_optimisations": 12, "wall_time": 1.0}  # fmt: skip
+    finer = _frv_summary("stance", {**counts, "peak_refine": {"E": 2, "rho": 1}})
+    assert "forward simulations 40; α = 1 on E bins / 2; interval optimisations" in finer and "rho bins" not in finer
+    assert "α = 1" not in _frv_summary("stance", {**counts, "peak_refine": {"E": 1, "rho": 1}})
+    assert "α = 1" not in _frv_summary("stance", counts)

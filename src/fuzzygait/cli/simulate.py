@@ -246,10 +246,12 @@ def _frv_summary(scenario: str, counts: Mapping[str, Any]) -> str:
     per = counts.get("possible_intervals_per_parameter")
     kind = "intervals" if per is None else "boxes"
     product = "" if per is None else " (" + " × ".join(str(n) for n in per) + ")"
+    finer = {name: factor for name, factor in (counts.get("peak_refine") or {}).items() if factor > 1}
+    lattice = "".join(f"; α = 1 on {name} bins / {factor}" for name, factor in finer.items())
     return (
         f"{scenario}: {counts.get('samples')} samples; occurring {kind} {counts.get('occurring_intervals')} of "
         f"{counts.get('possible_intervals')}{product} possible; "
-        f"forward simulations {counts.get('forward_simulations')}; "
+        f"forward simulations {counts.get('forward_simulations')}{lattice}; "
         f"interval optimisations {counts.get('interval_optimisations')}; wall time {counts.get('wall_time', 0):.1f} s"
     )
 

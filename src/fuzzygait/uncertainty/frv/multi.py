@@ -20,18 +20,29 @@ as for one parameter.
 ``refine=False``). When the evaluator returns sensitivities (``refine``), α = 1 is the
 model at the sample's *own* peak by cubic Hermite interpolation in every parameter
 (:func:`~fuzzygait.uncertainty.frv.hulls.hermite_values`, from the values and gradients
-at the ``2^D`` grid points around the peak, which the library then also holds), and the
-box hulls take the Hermite extrema along every grid line inside the box too
+at the ``2^D`` lattice points around the peak, which the library then also holds), and
+the box hulls take the Hermite extrema along every grid line inside the box too
 (:func:`~fuzzygait.uncertainty.frv.hulls.hermite_box_extrema`). The grouped peak alone
 misses where the output changes quickly within a bin (the stance blade's energy changes
 by up to 50 % within 4 % of E, its vibration phase turning over), and the α = 1 outputs
 would then not follow the peak distribution.
 
+The α = 1 lattice (:mod:`fuzzygait.uncertainty.frv.peaks`) is the grouping grid, or
+finer along a parameter where the grid cannot follow the model: ``peak_refine`` gives
+the factors, or (default) they are chosen on the first batch -- per parameter, the
+interpolant is checked against simulations at :data:`PEAK_CHECKS` test peaks (each
+moved onto its cell's lower corner in the other parameters) and the lattice halved
+until the median error is at most ``peak_tolerance`` of the output's spread (the checks are recorded in
+``counts["peak_checks"]``, the factors chosen in ``counts["peak_refine"]``). The boxes,
+their keys and hulls stay on the grouping grid.
+
 The store is the one-parameter layout of :mod:`fuzzygait.uncertainty.frv.store` (same
 commit protocol) with a parameter axis: root ``spec``, ``grid`` and ``n_disc`` are
 lists (one entry per parameter); ``library``: ``value (bin, time)`` at ``point (bin,
-parameter)`` grid bins, ``centre (bin, parameter)``, with ``refine`` also ``slope (bin,
-time, parameter)`` = ∂value/∂p; ``intervals`` (the box dictionary):
+parameter)`` grid bins plus ``offset (bin, parameter)`` in eighths of a bin (α = 1
+lattice points between the grid's; absent in older stores), ``centre (bin,
+parameter)``, with ``refine`` also ``slope (bin, time, parameter)`` = ∂value/∂p; root
+``peak_refine`` and ``peak_tolerance``; ``intervals`` (the box dictionary):
 ``left``, ``right (interval, parameter)``, ``lower``, ``upper (interval, time)``;
 ``samples``: ``hull (sample, alpha, bound, time)`` as for one parameter, ``cut`` and
 ``bin (sample, parameter, alpha, bound)``.
@@ -39,7 +50,7 @@ time, parameter)`` = ∂value/∂p; ``intervals`` (the box dictionary):
 
 from __future__ import annotations
 
-import itertools
+import math
 import os
 import time
 from collections.abc import Mapping, Sequence
@@ -54,7 +65,8 @@ from fuzzygait.core.schema import BOUNDS
 from fuzzygait.io.atomic import tidy_beside
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
-from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_box_extrema, hermite_cells, hermite_values
+from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_box_extrema, hermite_values
+from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys, interpolation_error, key_centres
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
 from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.frv.store import check, commit, open_group, read_meta
@@ -63,6 +75,13 @@ from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
 
 __all__ = ["FRVMultiStudy", "is_multi_store", "open_study"]
+
+#: Default largest α = 1 interpolation error, as a fraction of the output's spread.
+PEAK_TOLERANCE = 0.01
+#: Test peaks per parameter and lattice level when the α = 1 lattice is chosen.
+PEAK_CHECKS = 16
+#: The α = 1 lattice refinement factors a parameter can have (divisors of RESOLUTION).
+PEAK_FACTORS = (1, 2, 4, 8)
 
 
 def is_multi_store(meta: Mapping[str, Any]) -> bool:
@@ -106,8 +125,15 @@ class FRVMultiStudy(StudyState):
         self.refine: bool | None = meta["refine"]
         self._read_common_meta(path, model, meta, evaluator)
         n_params = len(specs)
-        # library rows in order of computation, and the row of each grid point
+        # α = 1 lattice factors: None until chosen; older stores have the grid's
+        factors = meta.get("peak_refine", [1] * n_params)
+        self.peak_refine: list[int] | None = None if factors is None else [int(f) for f in factors]
+        self.peak_tolerance = float(meta.get("peak_tolerance", PEAK_TOLERANCE))
+        self._offsets = "peak_refine" in meta  # the library stores lattice offsets
+        # library rows in order of computation, the row of each grid point and of each
+        # lattice key (grid points included, key = RESOLUTION · bin)
         self._points: dict[tuple[int, ...], int] = {}
+        self._keys: dict[tuple[int, ...], int] = {}
         self._lib_values = np.empty((0, self.nodes.size))
         self._lib_slopes = np.empty((0, self.nodes.size, n_params))
         # box dictionary: key (l_1, r_1, …, l_D, r_D) -> row
@@ -131,7 +157,9 @@ class FRVMultiStudy(StudyState):
                n_disc: int | Sequence[int] = 30, seed: int = 0, store: str | os.PathLike[str] | None = None,
                evaluator: BatchFunction | None = None, time_stride: int = 1, chunk: int = 256,
                overwrite: bool = False, options: Mapping[str, Any] | None = None,
-               grids: Sequence[Grid] | None = None, refine: bool | None = None) -> FRVMultiStudy:  # fmt: skip
+               grids: Sequence[Grid] | None = None, refine: bool | None = None,
+               peak_refine: int | Sequence[int] | None = None,
+               peak_tolerance: float = PEAK_TOLERANCE) -> FRVMultiStudy:  # fmt: skip
         """Run the FRV-GFA of several FRV parameters for ``n_samples`` samples into a new
         store (built beside it and moved into place when complete, as for one parameter).
 
@@ -153,6 +181,11 @@ class FRVMultiStudy(StudyState):
                 batch's ranges, e.g. another study's, to compare two studies bin by bin.
             refine: Hermite refinement with the sensitivities (α = 1 at the sample's own
                 peak, box hulls along grid lines); default: when the evaluator returns them.
+            peak_refine: the α = 1 lattice per parameter (one factor for all or one
+                each, from :data:`PEAK_FACTORS`: 1 = the grouping grid, 2 = half its
+                spacing, ...); None: chosen on the first batch (module docstring).
+            peak_tolerance: the largest α = 1 interpolation error, as a fraction of the
+                output's spread, when the lattice is chosen (default 1 %).
         """
         t0 = time.perf_counter()
         spec_tuple = check_specs(specs)
@@ -164,6 +197,10 @@ class FRVMultiStudy(StudyState):
         if len(discs) != n_params:
             raise ParameterError(f"n_disc: give one number or one per parameter ({n_params}); got {discs}")
         discs = [_whole(n, "n_disc", 2) for n in discs]
+        factors = None if peak_refine is None else _peak_factors(peak_refine, n_params)
+        if not (math.isfinite(peak_tolerance) and 0.0 < peak_tolerance < 1.0):
+            raise ParameterError(f"peak_tolerance must lie between 0 and 1 (a fraction of the output's spread); "
+                                 f"got {peak_tolerance}")  # fmt: skip
         if store is None:
             raise ParameterError("store: give the path of the zarr directory to create")
         path = Path(store)
@@ -181,7 +218,8 @@ class FRVMultiStudy(StudyState):
                 raise ParameterError(f"grids: give one Grid per parameter ({n_params})")
             discs = [g.n_points for g in grid_list]
         meta: dict[str, Any] = {"seed": seed, "grid": [g.to_dict() for g in grid_list], "n_disc": discs,
-                "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
+                "time_stride": time_stride, "refine": refine, "peak_refine": factors,
+                "peak_tolerance": float(peak_tolerance), "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
         record = {"spec": [s.to_dict() for s in spec_tuple], **meta}
@@ -206,7 +244,11 @@ class FRVMultiStudy(StudyState):
             if "slope" in lib:
                 study._lib_slopes = lib["slope"].to_numpy()
             points = lib["point"].to_numpy()
-            study._points = {tuple(p): i for i, p in enumerate(points.tolist())}
+            offsets = lib["offset"].to_numpy() if "offset" in lib else np.zeros_like(points)
+            keys = points * RESOLUTION + offsets
+            study._keys = {tuple(k): i for i, k in enumerate(keys.tolist())}
+            study._points = {tuple(p): i for i, (p, o) in enumerate(zip(points.tolist(), offsets.tolist()))
+                             if not any(o)}  # fmt: skip
         if study.interval_rows:
             table = study.boxes()
             pairs = np.stack([table["left"].to_numpy(), table["right"].to_numpy()], axis=2)
@@ -253,6 +295,7 @@ class FRVMultiStudy(StudyState):
         self.counts["time_nodes"] = int(self.nodes.size)
         self.counts["worst_case_optimisations"] = 2 * int(self.nodes.size) * possible  # Eq. 2.33, product form
         commit(self.path, {"grid": [g.to_dict() for g in self.grids], "refine": self.refine,
+                           **({"peak_refine": self.peak_refine} if self._offsets else {}),
                            "n_samples": self.n_samples, "library_rows": self.library_rows,
                            "interval_rows": self.interval_rows, "counts": self.counts})  # fmt: skip
 
@@ -263,21 +306,22 @@ class FRVMultiStudy(StudyState):
         groups the samples again and appends their hulls."""
         stop, width = start + n, 2 * self._n_params
         found = np.empty((0, width), dtype=np.int64)
-        corners = np.empty((0, self._n_params), dtype=np.int64)
         for a, b in _blocks(start, stop, self.chunk):  # pass 2
             cuts = generate_box_samples(self.specs, b - a, self.seed, a)
             rows = box_rows(_group_boxes(cuts, self.grids))
             found = np.unique(np.concatenate([found, rows.reshape(-1, width)]), axis=0)
-            if self.refine is not False:
-                cells = self._cell_corners(cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
-                corners = np.unique(np.concatenate([corners, cells]), axis=0)
+        corners = self._peak_corners(start, stop) if self.refine is not False else None
         new = np.array([k for k in found.tolist() if tuple(k) not in self._boxes], dtype=np.int64).reshape(-1, width)
-        points = _box_points(new)
-        if self.refine:
-            points = np.unique(np.concatenate([points, corners]), axis=0)
-        simulations = self._extend_library(points)
-        if self.refine:  # decided by the first evaluator call when not given
+        keys = _box_points(new) * RESOLUTION
+        if self.refine and corners is not None:
+            keys = np.unique(np.concatenate([keys, corners]), axis=0)
+        simulations = self._extend_library(keys)
+        if self.refine and corners is not None:  # decided by the first evaluator call when not given
             simulations += self._extend_library(corners)
+        if self.refine and self.peak_refine is None:  # choose the α = 1 lattice, then fill it
+            simulations += self._choose_peak_refine(start, stop)
+            if any(f > 1 for f in self._factors()):
+                simulations += self._extend_library(self._peak_corners(start, stop))
         self._add_boxes(new)
         repaired, n_alpha = 0, len(self.alphas)
         chunks = {"chunks": (self.chunk, self._n_params, n_alpha, 2)}
@@ -301,24 +345,68 @@ class FRVMultiStudy(StudyState):
                            last_new_intervals=int(new.shape[0]), last_wall_time=elapsed)  # fmt: skip
         self._write_meta()
 
-    def _cell_corners(self, peaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The Hermite cell of each raw peak ``(n, n_params)``: its ``2^D`` corner grid
-        points ``(n, 2^D, n_params)`` (:func:`hermite_values`' order) and positions ``t``."""
-        origins, spacings, first, last = (np.array([getattr(g, k) for g in self.grids])
-                                          for k in ("origin", "spacing", "first_bin", "last_bin"))  # fmt: skip
-        k, t = hermite_cells(origins, spacings, first, last, peaks)
-        bits = np.array(list(itertools.product((0, 1), repeat=self._n_params)), dtype=np.int64)
-        step = (last > first).astype(np.int64)  # a single-bin parameter has no upper corner
-        return k[:, None, :] + bits[None] * step, t
+    def _factors(self) -> list[int]:
+        """The α = 1 lattice factors in use (the grid's until chosen)."""
+        return self.peak_refine if self.peak_refine is not None else [1] * self._n_params
 
-    def _extend_library(self, points: np.ndarray) -> int:
-        """Simulate the grid ``points (k, n_params)`` not yet in the library, in the given
-        order (one evaluator call); returns their number."""
-        missing = np.array([p for p in points.tolist() if tuple(p) not in self._points], dtype=np.int64)
+    def _peak_corners(self, start: int, stop: int) -> np.ndarray:
+        """Lattice keys ``(k, n_params)`` of the Hermite cell corners of the raw peaks of
+        samples ``start … stop−1`` on the α = 1 lattice in use."""
+        corners = np.empty((0, self._n_params), dtype=np.int64)
+        for a, b in _blocks(start, stop, self.chunk):
+            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
+            cells = cell_keys(self.grids, self._factors(), cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
+            corners = np.unique(np.concatenate([corners, cells]), axis=0)
+        return corners
+
+    def _choose_peak_refine(self, start: int, stop: int) -> int:
+        """Choose the α = 1 lattice on samples ``start … stop−1`` (module docstring).
+
+        Per parameter ``d`` in turn, :data:`PEAK_CHECKS` test peaks are moved onto their
+        lattice cell's lower corner in every other parameter (so only ``d`` is
+        interpolated) and simulated; ``d``'s spacing is halved while the interpolant at
+        those points misses the model by more than ``peak_tolerance`` of the output's
+        spread (:func:`~fuzzygait.uncertainty.frv.peaks.interpolation_error`). Returns
+        the simulations it ran (the test points' and the new lattice points')."""
+        pick = np.unique(np.linspace(start, stop - 1, min(PEAK_CHECKS, stop - start)).round().astype(np.int64))
+        peaks = np.concatenate([generate_box_samples(self.specs, 1, self.seed, int(i))[:, :, -1, 0] for i in pick])
+        grid_rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
+        factors, checks, simulations, tested = [1] * self._n_params, [], 0, 0
+        for d, grid in enumerate(self.grids):
+            if grid.n_bins < 2:
+                continue
+            corners = cell_keys(self.grids, factors, peaks)[0]
+            tests = key_centres(self.grids, corners[:, 0])
+            tests[:, d] = peaks[:, d]  # the peak along d, the cell's lower corner in the others
+            exact, _ = _run_evaluator(self.evaluator, tests, self.n_time)
+            tested += len(tests)
+            while True:
+                corners, t = cell_keys(self.grids, factors, peaks)
+                simulations += self._extend_library(corners.reshape(-1, self._n_params))
+                t_along = np.zeros_like(t)
+                t_along[:, d] = t[:, d]
+                predicted = self._hermite(corners, t_along, factors)
+                error = interpolation_error(predicted, exact[:, self.nodes], self._lib_values[grid_rows])
+                checks.append({"parameter": self.specs[d].name, "factor": factors[d], "error": error})
+                if error <= self.peak_tolerance or factors[d] == PEAK_FACTORS[-1]:
+                    break
+                factors[d] *= 2
+        self.peak_refine = factors
+        self.counts["peak_checks"] = checks
+        self.counts["peak_refine"] = {spec.name: factor for spec, factor in zip(self.specs, factors, strict=True)}
+        self.counts["forward_simulations"] += tested  # the library's are counted as they are added
+        self._write_meta()
+        return simulations + tested
+
+    def _extend_library(self, keys: np.ndarray) -> int:
+        """Simulate the lattice ``keys (k, n_params)`` (units of a bin / RESOLUTION) not
+        yet in the library, in the given order (one evaluator call); returns their number."""
+        missing = np.array([p for p in keys.tolist() if tuple(p) not in self._keys], dtype=np.int64)
         missing = missing.reshape(-1, self._n_params)
         if not missing.shape[0]:
             return 0
-        centres = np.stack([g.centres(missing[:, d]) for d, g in enumerate(self.grids)], axis=1)
+        centres = key_centres(self.grids, missing)
+        points, offsets = missing // RESOLUTION, missing % RESOLUTION
         F, J = _run_evaluator(self.evaluator, centres, self.n_time)
         if self.refine is None:
             self.refine = J is not None
@@ -327,15 +415,21 @@ class FRVMultiStudy(StudyState):
         values = F[:, self.nodes]
         names = [s.name for s in self.specs]
         ds = xr.Dataset({"value": (("bin", "time"), values)},
-                        coords={"point": (("bin", "parameter"), missing), "centre": (("bin", "parameter"), centres),
+                        coords={"point": (("bin", "parameter"), points), "centre": (("bin", "parameter"), centres),
                                 "time": self.times, "parameter": names})  # fmt: skip
+        if self._offsets:
+            ds = ds.assign_coords(offset=(("bin", "parameter"), offsets))
+        elif np.any(offsets):
+            raise FuzzyGaitError("internal: a store without lattice offsets cannot hold α = 1 lattice points")
         if self.refine and J is not None:
             slopes = J[:, self.nodes]
             ds["slope"] = (("bin", "time", "parameter"), slopes)
             self._lib_slopes = np.concatenate([self._lib_slopes, slopes])
         _append(self.path, "library", ds, "bin")
         first = self._lib_values.shape[0]
-        self._points.update({tuple(p): first + i for i, p in enumerate(missing.tolist())})
+        self._keys.update({tuple(k): first + i for i, k in enumerate(missing.tolist())})
+        on_grid = ~np.any(offsets, axis=1)
+        self._points.update({tuple(p): first + i for i, p in enumerate(points.tolist()) if on_grid[i]})
         self._lib_values = np.concatenate([self._lib_values, values])
         self.library_rows += int(missing.shape[0])
         self.counts["forward_simulations"] += int(missing.shape[0])
@@ -378,12 +472,19 @@ class FRVMultiStudy(StudyState):
         self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
         self._write_meta()
 
-    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
-        """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library."""
-        corners, t = self._cell_corners(peaks)
-        rows = np.array([self._points[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
+    def _peak_values(self, peaks: np.ndarray, factors: Sequence[int] | None = None) -> np.ndarray:
+        """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library
+        on the α = 1 lattice (``factors``; default the study's)."""
+        factors = self._factors() if factors is None else factors
+        corners, t = cell_keys(self.grids, factors, peaks)
+        return self._hermite(corners, t, factors)
+
+    def _hermite(self, corners: np.ndarray, t: np.ndarray, factors: Sequence[int]) -> np.ndarray:
+        """The Hermite interpolant on the lattice of ``factors`` in cells of corner keys
+        ``(n, 2^D, n_params)`` at positions ``t (n, n_params)``."""
+        rows = np.array([self._keys[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
                         dtype=np.int64).reshape(corners.shape[:2])  # fmt: skip
-        spacings = np.array([g.spacing for g in self.grids])
+        spacings = np.array([g.spacing for g in self.grids]) / np.asarray(factors)
         return hermite_values(self._lib_values[rows], self._lib_slopes[rows], spacings, t)
 
     def _assemble(self, bins: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, int]:
@@ -404,6 +505,15 @@ class FRVMultiStudy(StudyState):
             hull[:, -1, :] = self._lib_values[grouped][:, None, :]
         repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
         return repaired, int(np.count_nonzero(repaired != hull))
+
+
+def _peak_factors(peak_refine: int | Sequence[int], n_params: int) -> list[int]:
+    """``peak_refine`` as one factor per parameter, each one of :data:`PEAK_FACTORS`."""
+    factors = [peak_refine] * n_params if isinstance(peak_refine, (int, np.integer)) else list(peak_refine)
+    if len(factors) != n_params or not all(isinstance(f, (int, np.integer)) and f in PEAK_FACTORS for f in factors):
+        raise ParameterError(f"peak_refine: give one factor or one per parameter ({n_params}), each of "
+                             f"{', '.join(map(str, PEAK_FACTORS))}; got {peak_refine}")  # fmt: skip
+    return [int(f) for f in factors]
 
 
 def _box_points(boxes: np.ndarray) -> np.ndarray:
