@@ -58,7 +58,10 @@ def test_two_frvs_one_and_two_workers_bit_identical_and_the_command(tmp_path, cl
     assert isinstance(serial, FRVMultiStudy) and serial.counts["possible_intervals"] == 6 * 6
     a, b = serial.hulls()["hull"].values, parallel.hulls()["hull"].values
     assert a.shape == (40, 3, 2, a.shape[-1]) and np.isfinite(a).all() and np.array_equal(a, b)
-    assert 0 < serial.counts["forward_simulations"] == parallel.counts["forward_simulations"] <= 9
+    assert 0 < serial.counts["forward_simulations"] == parallel.counts["forward_simulations"]
+    assert serial.peak_refine == parallel.peak_refine and serial.counts["peak_checks"] == parallel.counts["peak_checks"]
+    on_grid = (serial.library()["offset"].values == 0).all(axis=1)  # the rest: the α = 1 lattice between them
+    assert 0 < int(on_grid.sum()) <= 9  # at most the 3 × 3 grid points
     store = tmp_path / "study.zarr"
     args = ("frv-sim", "stance", "--frv", "E,rho", "--samples", "30", "--disc", "4", "--duration", "0.02",
             "--nodes", "6", "--set", f"E={MODULUS}", "--workers", "1", "--out", store)  # fmt: skip
