@@ -205,3 +205,32 @@ def test_subject_row_names_the_subject_or_where_its_parameters_came_from() -> No
     assert _subject_text(run("", "Movement_trial.c3d PROCESSING group")) == "not named in the C3D file"
     assert _subject_text(run("", "")) == "not named in the C3D file"
     assert _subject_text(run("<b>", "")) == "&lt;b&gt;"
+
+
+def test_moved_foot_markers_lead_the_first_screen(content_dir: Path, tmp_path: Path) -> None:
+    """A walking trial whose LTOE sits 30 mm further along the foot than in its static
+    trial: the page's key box says first that the left foot markers moved and the ankle
+    and foot angles are unreliable, linking to the data quality notes that give the
+    distances; the sample's own page says nothing of it."""
+    from dataclasses import replace
+
+    from fuzzygait.io import read_c3d
+
+    walking = read_c3d(SAMPLE_DATA / "walking_noisy.c3d")
+    markers = walking.markers.copy()
+    toe, heel = walking.marker_labels.index("LTOE"), walking.marker_labels.index("LHEE")
+    axis = markers[:, toe] - markers[:, heel]
+    markers[:, toe] += 30.0 * axis / np.linalg.norm(axis, axis=1, keepdims=True)
+    run = run_angles(replace(walking, markers=markers), static=SAMPLE_DATA / "static.c3d",
+                     subject_file=SAMPLE_DATA / "subject.toml")  # fmt: skip
+    out = tmp_path / "moved"
+    with ReportWriter(out, strict=True) as writer:
+        writer.add(ReportItem(SAMPLE_DATA / "walking_noisy.c3d", FakeAnalysis(run, None, pd.DataFrame(), [])))
+        writer.finish()
+    html = _text(out / "walking_noisy.html")
+    key = html.split("How to read this page")[0]
+    assert ("<b>Foot markers moved</b> between the static trial and this one (left): the static foot calibration "
+            "does not fit, so the ankle and foot angles are unreliable") in key  # fmt: skip
+    assert "left foot markers sit elsewhere than in the static trial static.c3d (LHEE-LTOE 220 mm, static 190 mm)" \
+        in html
+    assert "Foot markers moved" not in _text(content_dir / "walking_noisy.html")

@@ -344,6 +344,8 @@ FOOT_PAIRS: tuple[tuple[str, str], ...] = (("HEE", "TOE"), ("TOE", "FMH"), ("TOE
 MOVED_MARKER_MM = 15.0
 #: Relative part of the moved-marker rule (a long foot's 7 mm is 3 %).
 MOVED_MARKER_FRACTION = 0.10
+#: The words a moved-foot-marker note starts with after its side ("left"/"right").
+MOVED_FOOT_NOTE = "foot markers sit elsewhere than in the static trial"
 
 
 def _median_distance(trial: Trial, a: str, b: str) -> float | None:
@@ -378,7 +380,7 @@ def moved_foot_markers(static: Trial, walking: Trial) -> list[str]:
             if abs(change) > MOVED_MARKER_MM and abs(change) > MOVED_MARKER_FRACTION * before:
                 changes.append(f"{name_a}-{name_b} {now:.0f} mm, static {before:.0f} mm")
         if changes:
-            notes.append(f"{'left' if side == 'L' else 'right'} foot markers sit elsewhere than in the static trial "
+            notes.append(f"{'left' if side == 'L' else 'right'} {MOVED_FOOT_NOTE} "
                          f"{static.name} ({'; '.join(changes)}): moved or relabelled between the trials, so the "
                          "static foot calibration does not fit this trial and its ankle and foot angles are "
                          "unreliable; calibrate on a static trial with the walking trial's foot markers")  # fmt: skip
