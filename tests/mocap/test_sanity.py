@@ -268,6 +268,7 @@ def test_a_toe_marker_moved_along_the_foot_is_noted_on_its_side(walking, distanc
     assert note.startswith("left foot markers sit elsewhere than in the static trial static.c3d")
     assert f"LHEE-LTOE {190 + distance:.0f} mm, static 190 mm" in note
     assert "RHEE" not in note and "calibrate on a static trial" in note
+    assert sanity.moved_foot_sides(["left side done", note, "gap filling: 0 of 0 gaps filled"]) == ["left"]
 
 
 def test_a_moved_forefoot_marker_of_the_cgm24_set_is_noted():
@@ -302,5 +303,6 @@ def test_the_qualisys_sessions_foot_markers_moved_between_its_trials():
                      subject_file=folder / "session.xml", model="auto")  # fmt: skip
     moved = [note for note in run.notes if "foot markers sit elsewhere" in note]
     assert [note.split()[0] for note in moved] == ["left", "right"]
+    assert sanity.moved_foot_sides(run.notes) == ["left", "right"]
     assert "LHEE-LTOE 96 mm, static 123 mm" in moved[0]
     assert "RTOE-RVMH 137 mm, static 69 mm" in moved[1]

@@ -387,6 +387,12 @@ def moved_foot_markers(static: Trial, walking: Trial) -> list[str]:
     return notes
 
 
+def moved_foot_sides(notes: Sequence[str]) -> list[str]:
+    """The sides (``"left"``, ``"right"``) that :func:`moved_foot_markers` notes among
+    ``notes`` name, in order."""
+    return [note.split(" ", 1)[0] for note in notes if note.split(" ", 1)[-1].startswith(MOVED_FOOT_NOTE)]
+
+
 # --------------------------------------------------------------------------- all
 def check_trial(trial: Trial, *, static: bool = False) -> Trial:
     """The checks of this module a trial goes through before a model sees it, in order:

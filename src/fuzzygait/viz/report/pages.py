@@ -16,7 +16,7 @@ from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, componen
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.mocap.sanity import MOVED_FOOT_NOTE
+from fuzzygait.mocap.sanity import moved_foot_sides
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
     FLEXION,
@@ -377,7 +377,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     if fuzzy is not None and _sources_text(fuzzy):
         facts.append(("Error sources", _esc(_sources_text(fuzzy))))
     key = headline_lines(entry.headline)
-    moved = [n.split()[0] for n in run.notes if n.split(" ", 1)[-1].startswith(MOVED_FOOT_NOTE)]
+    moved = moved_foot_sides(run.notes)
     if moved:
         key.insert(0, f"<b>Foot markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
                       "static foot calibration does not fit, so the ankle and foot angles are unreliable "
