@@ -23,7 +23,10 @@ array (about a millisecond per trial).
   that moves is refused (:func:`check_static`).
 * :func:`moved_foot_markers`: a foot marker that sits elsewhere on the foot in the
   walking trial than in its static trial (moved or relabelled between the two), whose
-  static offsets then do not fit the walking trial's foot (a note each).
+  static offsets then do not fit the walking trial's foot (a note per foot; a check of a
+  static/walking pair, run by the angle workflow).  Of the reference sessions it fires on
+  the shared Qualisys CGM 2.4 session only, whose TOE and forefoot markers sit 21-68 mm
+  from their static places on both feet.
 """
 
 from __future__ import annotations
