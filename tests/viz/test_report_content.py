@@ -231,6 +231,7 @@ def test_moved_foot_markers_lead_the_first_screen(content_dir: Path, tmp_path: P
     key = html.split("How to read this page")[0]
     assert ("<b>Foot markers moved</b> between the static trial and this one (left): the static foot calibration "
             "does not fit, so the ankle and foot angles are unreliable") in key  # fmt: skip
+    assert key.index("Foot markers moved") < key.index("Gaps in the model's markers")  # the box's first line
     assert "left foot markers sit elsewhere than in the static trial static.c3d (LHEE-LTOE 220 mm, static 190 mm)" \
         in html
     assert "Foot markers moved" not in _text(content_dir / "walking_noisy.html")

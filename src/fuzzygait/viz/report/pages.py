@@ -377,14 +377,14 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     if fuzzy is not None and _sources_text(fuzzy):
         facts.append(("Error sources", _esc(_sources_text(fuzzy))))
     key = headline_lines(entry.headline)
-    moved = moved_foot_sides(run.notes)
-    if moved:
-        key.insert(0, f"<b>Foot markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
-                      "static foot calibration does not fit, so the ankle and foot angles are unreliable "
-                      "(<a href=\"#quality\">Data quality</a>).")  # fmt: skip
     if entry.gps is not None:
         gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
         key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
+    moved = moved_foot_sides(run.notes)
+    if moved:  # first: it says how far to trust every foot number below
+        key.insert(0, f"<b>Foot markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
+                      "static foot calibration does not fit, so the ankle and foot angles are unreliable "
+                      "(<a href=\"#quality\">Data quality</a>).")  # fmt: skip
     gaps = clinical.model_gaps(run.gaps)
     filled = sum(g.filled for g in gaps)
     key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
