@@ -472,12 +472,11 @@ class FRVMultiStudy(StudyState):
         self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
         self._write_meta()
 
-    def _peak_values(self, peaks: np.ndarray, factors: Sequence[int] | None = None) -> np.ndarray:
+    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
         """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library
-        on the α = 1 lattice (``factors``; default the study's)."""
-        factors = self._factors() if factors is None else factors
-        corners, t = cell_keys(self.grids, factors, peaks)
-        return self._hermite(corners, t, factors)
+        on the study's α = 1 lattice."""
+        corners, t = cell_keys(self.grids, self._factors(), peaks)
+        return self._hermite(corners, t, self._factors())
 
     def _hermite(self, corners: np.ndarray, t: np.ndarray, factors: Sequence[int]) -> np.ndarray:
         """The Hermite interpolant on the lattice of ``factors`` in cells of corner keys
