@@ -207,10 +207,10 @@ def test_subject_row_names_the_subject_or_where_its_parameters_came_from() -> No
     assert _subject_text(run("<b>", "")) == "&lt;b&gt;"
 
 
-def test_moved_foot_markers_lead_the_first_screen(content_dir: Path, tmp_path: Path) -> None:
+def test_moved_markers_lead_the_first_screen(content_dir: Path, tmp_path: Path) -> None:
     """A walking trial whose LTOE sits 30 mm further along the foot than in its static
-    trial: the page's key box says first that the left foot markers moved and the ankle
-    and foot angles are unreliable, linking to the data quality notes that give the
+    trial: the page's key box says first that markers of the left foot moved and the
+    ankle and foot angles are unreliable, linking to the data quality notes that give the
     distances; the sample's own page says nothing of it."""
     from dataclasses import replace
 
@@ -229,9 +229,9 @@ def test_moved_foot_markers_lead_the_first_screen(content_dir: Path, tmp_path: P
         writer.finish()
     html = _text(out / "walking_noisy.html")
     key = html.split("How to read this page")[0]
-    assert ("<b>Foot markers moved</b> between the static trial and this one (left): the static foot calibration "
-            "does not fit, so the ankle and foot angles are unreliable") in key  # fmt: skip
-    assert key.index("Foot markers moved") < key.index("Gaps in the model's markers")  # the box's first line
+    assert ("<b>Markers moved</b> between the static trial and this one (left foot): the static calibration "
+            "does not fit them, so the ankle and foot angles are unreliable") in key  # fmt: skip
+    assert key.index("Markers moved") < key.index("Gaps in the model's markers")  # the box's first line
     assert "left foot markers sit elsewhere than in the static trial static.c3d (LHEE-LTOE 220 mm, static 190 mm)" \
         in html
-    assert "Foot markers moved" not in _text(content_dir / "walking_noisy.html")
+    assert "Markers moved" not in _text(content_dir / "walking_noisy.html")

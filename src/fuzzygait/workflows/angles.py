@@ -40,7 +40,7 @@ from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
-from fuzzygait.mocap.sanity import check_trial, missing_throughout, moved_foot_markers
+from fuzzygait.mocap.sanity import check_trial, missing_throughout, moved_markers
 
 AXES = ("X", "Y", "Z")
 #: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
@@ -312,7 +312,7 @@ def run_angles(
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
         notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]
-        notes += moved_foot_markers(static_trial, trial)
+        notes += moved_markers(static_trial, trial)
     else:
         if model_version(model).clusters:
             clusters = stored_clusters(stored, subject_file, model)

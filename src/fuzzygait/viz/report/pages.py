@@ -16,7 +16,7 @@ from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, componen
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.mocap.sanity import moved_foot_sides
+from fuzzygait.mocap.sanity import moved_angles, moved_segments
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
     FLEXION,
@@ -380,10 +380,10 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     if entry.gps is not None:
         gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
         key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
-    moved = moved_foot_sides(run.notes)
-    if moved:  # first: it says how far to trust every foot number below
-        key.insert(0, f"<b>Foot markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
-                      "static foot calibration does not fit, so the ankle and foot angles are unreliable "
+    moved = moved_segments(run.notes)
+    if moved:  # first: it says how far to trust the numbers below
+        key.insert(0, f"<b>Markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
+                      f"static calibration does not fit them, so the {moved_angles(moved)} are unreliable "
                       "(<a href=\"#quality\">Data quality</a>).")  # fmt: skip
     gaps = clinical.model_gaps(run.gaps)
     filled = sum(g.filled for g in gaps)
