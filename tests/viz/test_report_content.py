@@ -235,3 +235,7 @@ def test_moved_markers_lead_the_first_screen(content_dir: Path, tmp_path: Path) 
     assert "left foot markers sit elsewhere than in the static trial static.c3d (LHEE-LTOE 220 mm, static 190 mm)" \
         in html
     assert "Markers moved" not in _text(content_dir / "walking_noisy.html")
+    index = _text(out / "index.html")  # the batch's index flags the trial in its row
+    assert ("warning: markers moved since the static trial (left foot): the ankle and foot angles are unreliable"
+            in index)  # fmt: skip
+    assert "markers moved" not in _text(content_dir / "index.html")

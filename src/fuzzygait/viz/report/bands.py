@@ -20,6 +20,7 @@ from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, perc
 from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.analysis import undetermined_levels
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
+from fuzzygait.mocap.sanity import moved_angles, moved_segments
 from fuzzygait.viz.layout import ANGLE_ROWS, SIDE_STYLE
 
 if TYPE_CHECKING:
@@ -450,11 +451,21 @@ class TrialEntry:
     headline: Headline = field(default_factory=Headline)
     allowable: AllowableSummary | None = None
     gps: float | None = None  # overall Gait Profile Score (deg), with normative data
+    moved: tuple[str, ...] = ()  # segments whose markers moved since the static trial
 
     @property
     def ok(self) -> bool:
         """Whether the trial has a page (no error)."""
         return self.error is None
+
+    @property
+    def data_warnings(self) -> list[str]:
+        """Warnings about the trial's data for the index and session pages: the segments
+        whose markers moved since the static trial (:func:`~fuzzygait.mocap.sanity.moved_markers`)."""
+        if not self.moved:
+            return []
+        return [f"markers moved since the static trial ({', '.join(self.moved)}): the {moved_angles(self.moved)} "
+                "are unreliable (the trial page's data quality notes say which markers)"]  # fmt: skip
 
     @property
     def max_delta_phi(self) -> Summary | None:
@@ -488,4 +499,5 @@ class TrialEntry:
             headline=headline(table),
             allowable=allowable,
             gps=gps,
+            moved=tuple(moved_segments(run.notes)),
         )

@@ -95,6 +95,7 @@ table.kv th { background: #f7f7f7; font-weight: 600; white-space: nowrap; }
 tr.failed-row td { background: #fff4f3; }
 code, .mono { font-family: ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; font-size: .88em; }
 span.error { display: inline-block; max-width: 24rem; overflow-wrap: anywhere; color: #7a1c16; font-size: .85em; }
+span.warning { display: inline-block; max-width: 24rem; overflow-wrap: anywhere; color: #8a4b00; font-size: .85em; }
 figure { margin: .6rem 0 1rem; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e2e2e2; }
 figcaption { font-size: .9rem; color: #444; margin-top: .3rem; }
@@ -501,6 +502,7 @@ def index_page(entries: Sequence[TrialEntry], alphas: Sequence[float]) -> str:
             gaps = f"{e.gaps_filled} filled" + (f", {e.gaps_left} open" if e.gaps_left else "")
             detail = (f"<a class=\"nowrap\" href=\"{quote(e.page or '')}\">report page</a><br>"
                       f"<span class=\"small nowrap\">gaps: {_esc(gaps)}</span>")  # fmt: skip
+            detail += "".join(f'<br><span class="warning">warning: {_esc(w)}</span>' for w in e.data_warnings)
             gps = [(_fmt(e.gps, 1) + ("°" if e.gps is not None else ""), True)] if with_gps else []
             rows.append([(str(i), True), (name, False), (status, False), (frames, True),
                          (cycles, True), *gps, (index_cell(e.allowable), True), (dphi, True), (undet, True),
