@@ -40,12 +40,7 @@ from _sessions import SESSION, sparse_run  # noqa: E402
 from fuzzygait.core.trial import Trial  # noqa: E402
 from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.kinematics.rigid import fit_rigid  # noqa: E402
-from fuzzygait.markererror.analysis import (  # noqa: E402
-    FuzzyAngleOptions,
-    fuzzy_joint_angles,
-    relative_envelope_width,
-    undetermined_levels,
-)
+from fuzzygait.markererror import analysis as marker_error  # noqa: E402
 from fuzzygait.mocap.sanity import SEGMENT_MARKERS, moved_markers  # noqa: E402
 from fuzzygait.workflows.angles import AnglesRun, run_angles  # noqa: E402
 
@@ -102,11 +97,11 @@ def bands(label: str, run: AnglesRun, workers: int) -> None:
     sparse = sparse_run(run, frames)
     names = [f"{s}{j}Angles" for s in "LR" for j in ("Hip", "Knee", "Ankle")]
     start = time.perf_counter()
-    fuzzy = fuzzy_joint_angles(sparse.trial, sparse.subject, sparse.result,
-                               FuzzyAngleOptions(alphas=ALPHAS, workers=workers), names,
-                               clusters=sparse.clusters)  # fmt: skip
+    options = marker_error.FuzzyAngleOptions(alphas=ALPHAS, workers=workers)
+    fuzzy = marker_error.fuzzy_joint_angles(sparse.trial, sparse.subject, sparse.result, options, names,
+                                            clusters=sparse.clusters)  # fmt: skip
     seconds = time.perf_counter() - start
-    delta, undetermined = relative_envelope_width(fuzzy), undetermined_levels(fuzzy)
+    delta, undetermined = marker_error.relative_envelope_width(fuzzy), marker_error.undetermined_levels(fuzzy)
     print(f"  {label} ({frames.size} frames, {seconds:.0f} s): flexion ΔΦ % at α = 0.75 / 0.5 / 0.25 / 0, "
           "'u' = undetermined somewhere at that level (determined frames' value; "
           "'–': no frame determined)")  # fmt: skip

@@ -277,16 +277,23 @@ def test_a_toe_marker_moved_along_the_foot_is_noted_on_its_side(walking, distanc
     assert sanity.moved_segments(["left side done", note, "gap filling: 0 of 0 gaps filled"]) == ["left foot"]
 
 
+def _cgm24_moved(label: str, mm: float, direction: tuple[str, str]):
+    """The synthetic CGM 2.4 static trial, and its walking trial with ``label`` moved
+    ``mm`` along the unit vector from marker ``direction[0]`` to ``direction[1]`` (per
+    frame)."""
+    static = read_c3d(SAMPLE_DATA / "cgm24_static.c3d")
+    walking = read_c3d(SAMPLE_DATA / "cgm24_walking.c3d")
+    along = walking.marker(direction[1]) - walking.marker(direction[0])
+    along /= np.linalg.norm(along, axis=1, keepdims=True)
+    return static, _moved(walking, label, mm * along)
+
+
 def test_a_moved_forefoot_marker_of_the_cgm24_set_is_named():
     """RVMH moved 40 mm towards the heel on the synthetic CGM 2.4 session: the right
     foot's note names RVMH as the marker every changed pair contains (RHEE-RVMH 191 mm
     there, now 40 mm shorter, less 1 mm for the heel's off-axis offset); the left side
     is silent."""
-    static = read_c3d(SAMPLE_DATA / "cgm24_static.c3d")
-    walking = read_c3d(SAMPLE_DATA / "cgm24_walking.c3d")
-    to_heel = walking.marker("RHEE") - walking.marker("RVMH")
-    to_heel /= np.linalg.norm(to_heel, axis=1, keepdims=True)
-    (note,) = sanity.moved_markers(static, _moved(walking, "RVMH", 40.0 * to_heel))
+    (note,) = sanity.moved_markers(*_cgm24_moved("RVMH", 40.0, ("RVMH", "RHEE")))
     assert note.startswith("right foot markers")
     assert "RHEE-RVMH 152 mm, static 191 mm" in note
     assert "; RVMH moved):" in note and "sits where" not in note
@@ -326,11 +333,7 @@ def test_a_moved_cluster_marker_names_its_segment_and_angles():
     """LTHAD moved 60 mm along the thigh in the synthetic CGM 2.4 walking trial: one
     note, on the left thigh, saying its hip and knee angles are unreliable; the
     report's words for it."""
-    static = read_c3d(SAMPLE_DATA / "cgm24_static.c3d")
-    walking = read_c3d(SAMPLE_DATA / "cgm24_walking.c3d")
-    along = walking.marker("LTHAP") - walking.marker("LKNE")
-    along /= np.linalg.norm(along, axis=1, keepdims=True)
-    (note,) = sanity.moved_markers(static, _moved(walking, "LTHAD", 60.0 * along))
+    (note,) = sanity.moved_markers(*_cgm24_moved("LTHAD", 60.0, ("LKNE", "LTHAP")))
     assert note.startswith("left thigh markers sit elsewhere than in the static trial cgm24_static.c3d (")
     assert "the left hip and knee angles are unreliable" in note
     segments = sanity.moved_segments([note, "pelvis markers sit elsewhere than in the static trial s.c3d (x)"])
