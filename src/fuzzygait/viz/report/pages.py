@@ -16,7 +16,7 @@ from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, componen
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.mocap.sanity import moved_angles, moved_segments
+from fuzzygait.mocap.sanity import moved_angles
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
     FLEXION,
@@ -381,7 +381,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     if entry.gps is not None:
         gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
         key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
-    moved = moved_segments(run.notes)
+    moved = entry.moved
     if moved:  # first: it says how far to trust the numbers below
         key.insert(0, f"<b>Markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
                       f"static calibration does not fit them, so the {moved_angles(moved)} are unreliable "
