@@ -112,16 +112,23 @@ def check_rate(trial: Trial) -> None:
 
 
 # --------------------------------------------------------------------------- units
+def _median_distance(trial: Trial, a: str, b: str) -> float | None:
+    """Median over the frames of the distance (mm) between markers ``a`` and ``b``."""
+    if not (trial.has_marker(a) and trial.has_marker(b)):
+        return None
+    with np.errstate(invalid="ignore", over="ignore"):  # inf - inf: not finite, dropped
+        distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
+    distance = distance[np.isfinite(distance)]
+    return float(np.median(distance)) if distance.size else None
+
+
 def segment_lengths(trial: Trial) -> dict[str, float]:
     """Median length (mm) over the frames of each :data:`SEGMENTS` pair present."""
     lengths = {}
     for a, b, _ in SEGMENTS:
-        if trial.has_marker(a) and trial.has_marker(b):
-            with np.errstate(invalid="ignore", over="ignore"):  # inf - inf: not finite, dropped
-                distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
-            distance = distance[np.isfinite(distance)]
-            if distance.size:
-                lengths[f"{a}-{b}"] = float(np.median(distance))
+        length = _median_distance(trial, a, b)
+        if length is not None:
+            lengths[f"{a}-{b}"] = length
     return lengths
 
 
@@ -372,16 +379,6 @@ SAME_PLACE_MM = 5.0
 MOVED_NOTE = "markers sit elsewhere than in the static trial"
 #: At most this many changed pairs are listed in a note (the largest changes first).
 MAX_PAIRS_SHOWN = 4
-
-
-def _median_distance(trial: Trial, a: str, b: str) -> float | None:
-    """Median over the frames of the distance (mm) between markers ``a`` and ``b``."""
-    if not (trial.has_marker(a) and trial.has_marker(b)):
-        return None
-    with np.errstate(invalid="ignore", over="ignore"):
-        distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
-    distance = distance[np.isfinite(distance)]
-    return float(np.median(distance)) if distance.size else None
 
 
 def _visible(trial: Trial, marker: str) -> bool:
