@@ -122,6 +122,10 @@ class SubjectParameters:
         flat_foot: the subject file's own foot-flat setting for the static calibration
             (a QTM session.xml's "foot normalised to static trial"); None: the file has
             none. A command's ``--flat-foot`` / ``--no-flat-foot`` overrides it.
+        marker_diameter_stated: the source states ``MarkerDiameter`` (False: the
+            default :data:`DEFAULT_MARKER_DIAMETER` stands in for it, and the angle
+            pipeline recovers it from the trial's own model outputs where it can,
+            :mod:`fuzzygait.kinematics.marker_size`).
     """
 
     left: SideParameters
@@ -132,6 +136,7 @@ class SubjectParameters:
     inter_asis_distance: float | None = None
     source: str = field(default="", compare=False)
     flat_foot: bool | None = field(default=None, compare=False)
+    marker_diameter_stated: bool = field(default=False, compare=False)
 
     @property
     def marker_radius(self) -> float:
@@ -237,6 +242,7 @@ def subject_from_processing(values: Mapping[str, float], source: str = "") -> Su
         marker_diameter=float(values.get("MarkerDiameter", DEFAULT_MARKER_DIAMETER)),
         inter_asis_distance=float(inter_asis) if inter_asis else None,
         source=source,
+        marker_diameter_stated="MarkerDiameter" in values,
     ).validate()
 
 
