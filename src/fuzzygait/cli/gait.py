@@ -178,8 +178,12 @@ def calibrate(
                                     preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot,
                                     model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     calibration = written.calibration
+    for warning in written.warnings:
+        err.print(f"fuzzygait: warning: {warning}", markup=False)
     out.print(f"model {written.model} ({written.why})", markup=False)
     out.print(calibration.describe(), markup=False)
+    for note in written.notes:
+        out.print(f"  note: {note}", markup=False)
     for note in calibration.notes:  # the content checks' notes on the static trial
         out.print(f"  note: {note}", markup=False)
     _print_calibrated(calibration.subject)
@@ -276,7 +280,10 @@ def angles(
 
 
 def _print_run_summary(run: AnglesRun) -> None:
-    """One line on the trial and the angles computed, then the run's notes."""
+    """One line on the trial and the angles computed, then the run's notes; its warnings
+    on stderr first."""
+    for warning in run.warnings:
+        err.print(f"fuzzygait: warning: {warning}", markup=False)
     trial = run.trial
     computed = [name for name in run.result.angles if name not in run.result.unavailable]
     counts = {side: sum(1 for e in run.events if e.context == ctx and e.label == "Foot Strike")

@@ -8,7 +8,6 @@ version (:class:`AngleOutputs`).
 
 from __future__ import annotations
 
-import math
 import os
 import re
 from dataclasses import dataclass, field, replace
@@ -23,7 +22,7 @@ from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.calibration_table import sidecar_path
-from fuzzygait.io.subject import SubjectParameters, read_subject, subject_from_processing
+from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics import (
     ALL_ANGLE_NAMES,
@@ -41,12 +40,17 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
 from fuzzygait.mocap.sanity import check_trial, missing_throughout, moved_markers
+from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
+    MARKER_DIAMETER_RANGE,
+    for_static_calibration,
+    inter_asis_notes,
+    resolve_subject,
+    settle_marker_diameter,
+)
 
 AXES = ("X", "Y", "Z")
 #: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
 MAX_LABEL = 32
-#: Marker diameters (mm) taken as plausible (the subject parameters' check).
-MARKER_DIAMETER_RANGE = (1.0, 40.0)
 
 
 @dataclass(frozen=True)
@@ -110,6 +114,9 @@ class AnglesRun:
         events: gait events used for the cycles.
         event_source: ``"file"`` or how they were detected.
         notes: data-quality notes for reports.
+        warnings: what the user must know before trusting the angles (a stated marker
+            diameter that contradicts the file's own outputs, ...); shown on report pages
+            and printed by the commands.
         clusters: the static cluster calibration of a cluster model (cgm2.3, cgm2.4; the
             marker-error analysis holds it fixed), else None.
     """
@@ -123,6 +130,7 @@ class AnglesRun:
     event_source: str
     notes: list[str] = field(default_factory=list)
     clusters: ClusterCalibration | None = None
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def model(self) -> str:
@@ -160,30 +168,6 @@ class AnglesRun:
         table = mean_sd_table(self.cycle_table())
         table.attrs["model"] = self.model
         return table
-
-
-def resolve_subject(
-    trial: Trial, subject_file: str | os.PathLike[str] | None, marker_diameter: float | None = None
-) -> SubjectParameters:
-    """Subject parameters from ``subject_file`` or else the trial's PROCESSING group, with
-    ``marker_diameter`` (mm) in place of theirs when given (Nexus keeps the marker size in
-    the pipeline, not in the C3D; the default is the subject file's, else 14 mm)."""
-    if subject_file is not None:
-        subject = read_subject(subject_file)
-    elif not trial.parameters:
-        raise FuzzyGaitError(
-            f"{trial.name}: no subject parameters in the file (no PROCESSING group); "
-            "give a subject file with --subject SUBJECT.toml or .vsk"
-        )
-    else:
-        subject = subject_from_processing(trial.parameters, source=f"{trial.name} PROCESSING group")
-    if marker_diameter is None:
-        return subject
-    low, high = MARKER_DIAMETER_RANGE
-    if not (math.isfinite(marker_diameter) and low <= marker_diameter <= high):
-        raise FuzzyGaitError(f"marker diameter {marker_diameter:g} mm is implausible: give it in mm "
-                             f"({low:g} to {high:g}, e.g. --marker-diameter 14)")  # fmt: skip
-    return replace(subject, marker_diameter=float(marker_diameter))
 
 
 @dataclass(frozen=True)
@@ -293,22 +277,22 @@ def run_angles(
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
     trial, gaps = preprocessing.apply(check_trial(raw))
-    subject = resolve_subject(raw, subject_file, marker_diameter)
-    notes = list(trial.notes)
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
+    diameter = settle_marker_diameter(resolve_subject(raw, subject_file), marker_diameter, (raw, static_trial))
+    subject = diameter.subject
+    notes = list(trial.notes)
+    warnings = [diameter.warning] if diameter.warning else []
     stored = StoredCalibration()
     if static_trial is None and subject_file is not None:
         stored = read_stored_calibration(subject_file)
     model, why = choose_model(model, raw, static_trial, stored)
-    notes.append(f"model {model} ({why})")
+    notes += [f"model {model} ({why})", diameter.note]
     clusters = None
     if static_trial is not None:
-        calibration = calibrate_static(static_trial, subject, preprocessing=preprocessing, flat_foot=flat_foot,
+        to_calibrate = for_static_calibration(subject, subject_file)
+        calibration = calibrate_static(static_trial, to_calibrate, preprocessing=preprocessing, flat_foot=flat_foot,
                                        model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
-        if subject.inter_asis_distance is None and calibration.subject.inter_asis_distance is not None:
-            notes.append(f"InterAsisDistance measured on the static trial {calibration.static}: "
-                         f"{calibration.subject.inter_asis_distance:.2f} mm ({subject.source or 'the subject'} "
-                         "gives none, or 0: Plug-in Gait's 'compute it from the ASIS markers')")  # fmt: skip
+        notes += inter_asis_notes(subject, to_calibrate, calibration.subject, calibration.static)
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
         notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]
@@ -328,7 +312,7 @@ def run_angles(
     events, source = trial_gait_events(trial)
     if source != "file":
         notes.append(f"gait events {source}")
-    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters)
+    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings)
 
 
 def mark_empty_angles(result: CGMResult, raw: Trial) -> None:

@@ -28,7 +28,12 @@ from fuzzygait.workflows.angles import (
     Preprocessing,
     StaticCalibration,
     calibrate_static,
+)
+from fuzzygait.workflows.subject_resolution import (
+    for_static_calibration,
+    inter_asis_notes,
     resolve_subject,
+    settle_marker_diameter,
 )
 
 #: Subject file types ``calibrate`` writes.
@@ -73,14 +78,18 @@ def _implemented(name: str) -> bool:
 
 @dataclass(frozen=True)
 class CalibrationFile:
-    """What :func:`calibrate_to_file` did: the calibration, its model and why, and the
-    files written (and a stale sidecar removed, if any)."""
+    """What :func:`calibrate_to_file` did: the calibration, its model and why, the
+    files written (and a stale sidecar removed, if any), the notes on the subject
+    parameters (marker diameter, inter-ASIS distance) and warnings (a stated marker
+    diameter that contradicts the static trial's own outputs)."""
 
     calibration: StaticCalibration
     model: str
     why: str
     files: list[Path] = field(default_factory=list)
     removed: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 def calibrate_to_file(
@@ -123,10 +132,12 @@ def calibrate_to_file(
     out_file = Path(out_file)
     check_subject_path(out_file, "--out")
     trial = static if isinstance(static, Trial) else read_c3d(static)
-    subject = resolve_subject(trial, subject_file, marker_diameter)
+    diameter = settle_marker_diameter(resolve_subject(trial, subject_file), marker_diameter, (trial,))
+    to_calibrate = for_static_calibration(diameter.subject, subject_file)
     name, why = calibration_model(trial, model)
-    calibration = calibrate_static(trial, subject, preprocessing=preprocessing, flat_foot=flat_foot, model=name,
+    calibration = calibrate_static(trial, to_calibrate, preprocessing=preprocessing, flat_foot=flat_foot, model=name,
                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+    notes = [diameter.note, *inter_asis_notes(diameter.subject, to_calibrate, calibration.subject, trial.name)]
     source = Path(subject_file).name if subject_file is not None else f"{trial.name} PROCESSING group"
     static_name = Path(trial.name).name
     title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
@@ -161,4 +172,5 @@ def calibrate_to_file(
         metadata.update(clusters)
     files.insert(0, write_subject(calibration.subject, out_file, comments=comments, metadata=metadata,
                                   vsk_template=template))  # fmt: skip
-    return CalibrationFile(calibration, name, why, files, removed)
+    warnings = [diameter.warning] if diameter.warning else []
+    return CalibrationFile(calibration, name, why, files, removed, notes, warnings)

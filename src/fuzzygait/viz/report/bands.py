@@ -58,6 +58,8 @@ class ReportRun(Protocol):
     def event_source(self) -> str: ...
     @property
     def notes(self) -> list[str]: ...
+    @property
+    def warnings(self) -> list[str]: ...
 
 
 class TrialAnalysis(Protocol):
@@ -452,6 +454,7 @@ class TrialEntry:
     allowable: AllowableSummary | None = None
     gps: float | None = None  # overall Gait Profile Score (deg), with normative data
     moved: tuple[str, ...] = ()  # segments whose markers moved since the static trial
+    run_warnings: tuple[str, ...] = ()  # the angle run's warnings (a contradicted marker diameter, ...)
 
     @property
     def ok(self) -> bool:
@@ -461,11 +464,13 @@ class TrialEntry:
     @property
     def data_warnings(self) -> list[str]:
         """Warnings about the trial's data for the index and session pages: the segments
-        whose markers moved since the static trial (:func:`~fuzzygait.mocap.sanity.moved_markers`)."""
+        whose markers moved since the static trial (:func:`~fuzzygait.mocap.sanity.moved_markers`),
+        then the angle run's own warnings (``AnglesRun.warnings``)."""
         if not self.moved:
-            return []
-        return [f"markers moved since the static trial ({', '.join(self.moved)}): the {moved_angles(self.moved)} "
-                "are unreliable (the trial page's data quality notes say which markers)"]  # fmt: skip
+            return list(self.run_warnings)
+        moved = (f"markers moved since the static trial ({', '.join(self.moved)}): the {moved_angles(self.moved)} "
+                 "are unreliable (the trial page's data quality notes say which markers)")  # fmt: skip
+        return [moved, *self.run_warnings]
 
     @property
     def max_delta_phi(self) -> Summary | None:
@@ -500,4 +505,5 @@ class TrialEntry:
             allowable=allowable,
             gps=gps,
             moved=tuple(moved_segments(run.notes)),
+            run_warnings=tuple(run.warnings),
         )

@@ -199,7 +199,7 @@ class ReportWriter:
         entry = TrialEntry.of(source, f"{name}.html", data, table, allowable, clinical.model_gaps(analysis.run.gaps),
                               gps)  # fmt: skip
         page = trial_page(analysis, data, entry, table, files, source, clinical=clinical,
-                          session=item.session, warnings=item.warnings)  # fmt: skip
+                          session=item.session, warnings=[*item.warnings, *analysis.run.warnings])  # fmt: skip
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
 
