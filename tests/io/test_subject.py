@@ -94,7 +94,7 @@ def test_bad_files(tmp_path: Path) -> None:
     vsk.write_text("<KinematicModel><Parameters>")
     with pytest.raises(ParameterError, match="not a valid Vicon"):
         read_subject(vsk)
-    with pytest.raises(ParameterError, match="use .toml, .vsk, a pyCGM2 .mp or a QTM session.xml"):
+    with pytest.raises(ParameterError, match="use .toml, .vsk, a Vicon Nexus or pyCGM2 .mp or a QTM session.xml"):
         read_subject(tmp_path / "s.json")
 
 

@@ -94,7 +94,7 @@ def test_other_xml_and_broken_xml_are_refused(tmp_path: Path) -> None:
         qtm_session_values(empty)
     with pytest.raises(ParameterError, match="no such subject file"):
         read_subject(tmp_path / "absent" / "session.xml")
-    with pytest.raises(ParameterError, match="use .toml, .vsk, a pyCGM2 .mp or a QTM session.xml"):
+    with pytest.raises(ParameterError, match="use .toml, .vsk, a Vicon Nexus or pyCGM2 .mp or a QTM session.xml"):
         read_subject(tmp_path / "s.json")
 
 

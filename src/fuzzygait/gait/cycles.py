@@ -38,7 +38,7 @@ from scipy.interpolate import CubicSpline
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Event, Trial
-from fuzzygait.gait.events import FOOT_OFF, FOOT_STRIKE, SIDE_CONTEXTS
+from fuzzygait.gait.events import SIDE_CONTEXTS, GaitEvent, GaitEventKind, gait_events
 
 #: Extra visible samples used on either side of a cycle by the interpolating spline.
 SPLINE_MARGIN = 3
@@ -129,21 +129,23 @@ class GaitCycle:
 
 
 def _event_indices(
-    trial: Trial, events: Sequence[Event], label: str, context: str
+    trial: Trial, events: Sequence[GaitEvent], kind: GaitEventKind, side: str
 ) -> list[float]:
-    """Sorted fractional sample indices of the events ``label`` of ``context``."""
-    chosen = (e for e in events if e.label == label and e.context == context)
-    return sorted(trial.event_index(e) for e in chosen)
+    """Sorted fractional sample indices of the events of ``kind`` of ``side``."""
+    return sorted(trial.event_index(g.event) for g in events if g.kind is kind and g.side == side)
 
 
-def gait_cycles(trial: Trial, events: Sequence[Event], side: str) -> list[GaitCycle]:
+def gait_cycles(trial: Trial, events: Sequence[Event | GaitEvent], side: str) -> list[GaitCycle]:
     """The gait cycles of one side: one per pair of consecutive Foot Strikes.
 
     Args:
         trial: gives the rate and the sample index of each event time.
         events: e.g. ``trial.events`` or the first element of
-            :func:`fuzzygait.gait.events.trial_gait_events`; only ``"Foot Strike"`` /
-            ``"Foot Off"`` events of the side's context (``"Left"``/``"Right"``) are used.
+            :func:`fuzzygait.gait.events.trial_gait_events`; their labels are read
+            once (:func:`fuzzygait.gait.events.gait_events`: Nexus' ``Foot Strike`` /
+            ``Foot Off`` with context ``Left``/``Right``, lower case, Visual3D's ``LHS``
+            ...), or typed values of it, used as they are; only the side's foot strikes
+            and foot offs are used.
         side: ``"L"``/``"Left"`` or ``"R"``/``"Right"``.
 
     Returns:
@@ -154,9 +156,9 @@ def gait_cycles(trial: Trial, events: Sequence[Event], side: str) -> list[GaitCy
         ParameterError: for an unknown side.
     """
     code = side_code(side)
-    context = SIDE_CONTEXTS[code]
-    strikes = _event_indices(trial, events, FOOT_STRIKE, context)
-    offs = np.asarray(_event_indices(trial, events, FOOT_OFF, context))
+    typed = gait_events(events)
+    strikes = _event_indices(trial, typed, GaitEventKind.FOOT_STRIKE, code)
+    offs = np.asarray(_event_indices(trial, typed, GaitEventKind.FOOT_OFF, code))
     cycles: list[GaitCycle] = []
     for start, end in zip(strikes[:-1], strikes[1:], strict=True):
         if end <= start:
@@ -289,7 +291,7 @@ SUMMARY_COLUMNS = ["angle", "percent", "mean", "sd", "n_cycles"]
 def normalised_angle_table(
     angles: Mapping[str, np.ndarray],
     trial: Trial,
-    events: Sequence[Event],
+    events: Sequence[Event | GaitEvent],
     n_points: int = 101,
 ) -> pd.DataFrame:
     """Time-normalised cycles of model outputs, as a long ("tidy") table.
@@ -312,6 +314,7 @@ def normalised_angle_table(
             axis is not the trial's frames.
     """
     percent = percent_points(n_points)
+    typed = gait_events(events)  # the labels read once for both sides
     cycles_by_side: dict[str, list[GaitCycle]] = {}
     parts = []
     for name, values in angles.items():
@@ -324,7 +327,7 @@ def normalised_angle_table(
             )
         side = name[0]
         if side not in cycles_by_side:
-            cycles_by_side[side] = gait_cycles(trial, events, side)
+            cycles_by_side[side] = gait_cycles(trial, typed, side)
         cycles = cycles_by_side[side]
         normalised = normalise_cycles(values, cycles, n_points).reshape(
             len(cycles), percent.size, int(np.prod(values.shape[1:], dtype=int))

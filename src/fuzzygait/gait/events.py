@@ -1,5 +1,57 @@
 """Gait events: the file's Foot Strike / Foot Off events, or detected ones.
 
+Labels read from a file
+-----------------------
+Each of a file's events is read **once**, at the edge (:func:`gait_events`), into a
+typed :class:`GaitEvent` (:class:`GaitEventKind` and side ``"L"``/``"R"``); the cycles
+and the spatio-temporal parameters use those values, never the label text.  A label is
+matched ignoring case, whitespace, ``_`` and ``-`` (``foot strike``, ``FOOT_STRIKE``,
+``Foot-Off`` ...).  The spellings recognised, and where each was seen:
+
+=================================  ===================  ==================================
+label (context)                    read as              source
+=================================  ===================  ==================================
+``Foot Strike`` / ``Foot Off``     strike / off, side   Vicon Nexus: ``EVENT:LABELS`` of
+(``Left`` / ``Right``)             from the context     ``PiG_Motion-FlatFoot-Full.c3d``
+                                                        (Nexus 1.4) and ``gait-pig.c3d``
+                                                        (c3d.org sample 03, Vicon
+                                                        Workstation era: it too is spelled
+                                                        ``Foot Strike``, title case); the
+                                                        same in QTM sessions processed by
+                                                        pyCGM2 (``Gait - CGM2 3 (pyCGM2
+                                                        CGM2.3 output).c3d``; repository
+                                                        qualisys/cgm2-web-report-uploader,
+                                                        ``TestFiles/*/processed/*.c3d``)
+``foot strike`` / ``foot off``     the same             Vicon Workstation in lower case
+                                                        (issue 36; no public file with
+                                                        this spelling was found -- the
+                                                        case-blind match covers it)
+``Left Foot Strike``,              strike / off, side   Qualisys' gait report tool names
+``Left Foot Off``,                 from the label       QTM's events so (qualisys/cgm2-
+``Right Foot Strike``,                                  web-report-uploader,
+``Right Foot Off``                                      ``qtmWebGaitReport/signalMapping.py``
+                                                        ``eventNameMap``)
+``LHS`` / ``RHS`` (heel strike),   strike / off, side   Visual3D's gait-event acronyms
+``LTO`` / ``RTO`` (toe off)        from the label       (HAS-Motion wiki, Visual3D
+                                                        tutorial "Gait Events", "Gait
+                                                        Event Acronyms"); Qualisys' tool
+                                                        maps QTM's events to them too
+``LON`` / ``RON`` (foot on a       strike / off, side   the same Visual3D page: contact
+force plate), ``LOFF`` / ``ROFF``  from the label;      with a force platform; "all RON
+                                   plate events         events are also RHS events"
+=================================  ===================  ==================================
+
+The side comes from the label when the label carries it (``LHS``, ``Left Foot
+Strike``), else from the context (``Left``/``Right``, any case).  A context naming the
+other side than the label contradicts it: the event is not used.  QTM may export a C3D
+without ``EVENT:CONTEXTS`` (issue 18 of u0078867/ulema-ul-analyzer); the C3D reader then
+gives ``General`` and only a label carrying the side is a gait event.  Force-plate
+events (``LON``, ``LOFF``, ...) are used only for a side and kind the file has no other
+event of (they duplicate the heel strikes / toe offs Visual3D writes with them).  Any
+other label -- ``Event``, ``Left-FP``/``Right-FP`` (pyCGM2's force-plate assignment,
+context ``General``), ``Foot Strike`` with context ``General`` -- is not a gait event.
+Events of the same kind, side and time are kept once.
+
 Detection (coordinate-based, Zeni et al. 2008)
 ----------------------------------------------
 Zeni JA, Richards JG, Higginson JS (2008), "Two simple methods for determining gait
@@ -61,9 +113,11 @@ Measured accuracy (detected - reference, frames; ``tests/test_events.py``):
 
 from __future__ import annotations
 
+import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 from scipy.signal import find_peaks
@@ -81,9 +135,19 @@ SOURCE_DETECTED = "detected from heel/toe markers (Zeni 2008)"
 #: Start of the source string of :func:`trial_gait_events` for a motionless trial.
 SOURCE_MOTIONLESS = "none detected"
 
-#: Event labels and contexts, exactly as Vicon Nexus writes them.
-FOOT_STRIKE = "Foot Strike"
-FOOT_OFF = "Foot Off"
+
+
+class GaitEventKind(Enum):
+    """What a gait event marks; the value is Vicon Nexus' label of it."""
+
+    FOOT_STRIKE = "Foot Strike"
+    FOOT_OFF = "Foot Off"
+
+
+#: Event labels and contexts, exactly as Vicon Nexus writes them (and as fuzzygait
+#: writes its events).
+FOOT_STRIKE = GaitEventKind.FOOT_STRIKE.value
+FOOT_OFF = GaitEventKind.FOOT_OFF.value
 GAIT_LABELS = (FOOT_STRIKE, FOOT_OFF)
 SIDE_CONTEXTS = {"L": "Left", "R": "Right"}
 
@@ -105,11 +169,135 @@ PELVIS_MARKER_SETS: tuple[tuple[str, ...], ...] = (
 )
 
 
+# ---------------------------------------------------------------------- file labels
+@dataclass(frozen=True)
+class GaitLabel:
+    """An event label (and context) read as a gait event (module docstring).
+
+    Attributes:
+        kind: foot strike or foot off.
+        side: ``"L"`` or ``"R"``.
+        plate: Visual3D's force-platform spelling (``LON``, ``LOFF``, ``RON``, ``ROFF``).
+    """
+
+    kind: GaitEventKind
+    side: str
+    plate: bool = False
+
+
+@dataclass(frozen=True)
+class GaitEvent:
+    """One gait event, its label read once (:func:`gait_events`).
+
+    Attributes:
+        kind: foot strike or foot off.
+        side: ``"L"`` or ``"R"``.
+        time: s on the C3D clock (as :attr:`Event.time`).
+        event: the event as the file (or the detector) holds it.
+        plate: from a Visual3D force-platform label (``LON`` ...).
+    """
+
+    kind: GaitEventKind
+    side: str
+    time: float
+    event: Event
+    plate: bool = False
+
+    def as_event(self) -> Event:
+        """The event spelled as Vicon Nexus writes it (``Foot Strike``/``Foot Off``,
+        context ``Left``/``Right``; time, subject and description kept): the file's own
+        :class:`Event` when it is spelled so already."""
+        label, context = self.kind.value, SIDE_CONTEXTS[self.side]
+        if (self.event.label, self.event.context) == (label, context):
+            return self.event
+        return Event(label, context, self.event.time, self.event.subject, self.event.description)
+
+
+#: Separators ignored in labels and contexts.
+_SEPARATORS = re.compile(r"[\s_\-]+")
+#: Labels without a side (the context gives it), compared without separators or case.
+_KIND_KEYS = {"footstrike": GaitEventKind.FOOT_STRIKE, "footoff": GaitEventKind.FOOT_OFF}
+#: Side words of contexts and of labels such as ``Left Foot Strike``.
+_SIDE_KEYS = {"left": "L", "right": "R"}
+#: Visual3D's acronyms: heel strike / toe off, force-platform on / off.
+_CODES = {
+    f"{side.lower()}{code}": GaitLabel(kind, side, plate)
+    for side in SIDE_CONTEXTS
+    for code, kind, plate in (
+        ("hs", GaitEventKind.FOOT_STRIKE, False),
+        ("to", GaitEventKind.FOOT_OFF, False),
+        ("on", GaitEventKind.FOOT_STRIKE, True),
+        ("off", GaitEventKind.FOOT_OFF, True),
+    )
+}
+
+
+def _key(text: str) -> str:
+    """``text`` lower case without whitespace, ``_`` or ``-``."""
+    return _SEPARATORS.sub("", text).lower()
+
+
+def gait_label(label: str, context: str = "") -> GaitLabel | None:
+    """Read an event's label and context as a gait event (module docstring).
+
+    Args:
+        label: e.g. ``"Foot Strike"``, ``"foot off"``, ``"Left Foot Strike"``, ``"LHS"``.
+        context: ``"Left"``/``"Right"`` (any case) or anything else (``"General"``, ``""``).
+
+    Returns:
+        The kind and side, or None: not a gait label, no side in label or context, or a
+        context naming the other side than the label.
+    """
+    key, context_side = _key(label), _SIDE_KEYS.get(_key(context))
+    found = _CODES.get(key)
+    if found is None:
+        sided = [(side, key[len(word):]) for word, side in _SIDE_KEYS.items() if key.startswith(word)]
+        if sided and sided[0][1] in _KIND_KEYS:
+            found = GaitLabel(_KIND_KEYS[sided[0][1]], sided[0][0])
+        elif key in _KIND_KEYS and context_side is not None:
+            found = GaitLabel(_KIND_KEYS[key], context_side)
+    if found is None or (context_side is not None and context_side != found.side):
+        return None
+    return found
+
+
+def gait_events(events: Iterable[Event | GaitEvent]) -> list[GaitEvent]:
+    """The gait events among ``events``, each label read once (module docstring).
+
+    Args:
+        events: a file's events (any spelling), or values of this function (kept as
+            they are, so that a caller may pass either).
+
+    Returns:
+        In the order given: one :class:`GaitEvent` per gait event; other labels left
+        out; force-plate events (``LON`` ...) only for a side and kind without other
+        events; an event of the same kind, side and time as an earlier one left out.
+    """
+    parsed: list[GaitEvent] = []
+    for event in events:
+        if isinstance(event, GaitEvent):
+            parsed.append(event)
+            continue
+        label = gait_label(event.label, event.context)
+        if label is not None:
+            parsed.append(GaitEvent(label.kind, label.side, event.time, event, label.plate))
+    unplated = {(g.kind, g.side) for g in parsed if not g.plate}
+    seen: set[tuple[GaitEventKind, str, float]] = set()
+    out = []
+    for item in parsed:
+        identity = (item.kind, item.side, item.time)
+        if identity in seen or (item.plate and (item.kind, item.side) in unplated):
+            continue
+        seen.add(identity)
+        out.append(item)
+    return out
+
+
 @dataclass(frozen=True)
 class _FootSignal:
     """One relative-position signal to search for maxima: which event and side."""
 
-    label: str
+    kind: GaitEventKind
     side: str
     values: np.ndarray  # (n_frames,) mm, forward position relative to the pelvis
     description: str
@@ -173,7 +361,7 @@ def _forward_axis(trial: Trial, centre: np.ndarray) -> np.ndarray:
 def _foot_signals(trial: Trial) -> list[_FootSignal]:
     """The signals to search for Foot Strike maxima and Foot Off minima (negated)."""
     missing: list[str] = []
-    pending: list[tuple[str, str, str, float, str]] = []  # label, side, marker, sign, text
+    pending: list[tuple[GaitEventKind, str, str, float, str]] = []  # kind, side, marker, sign, text
     for side, context in SIDE_CONTEXTS.items():
         heel, toe = f"{side}HEE", f"{side}TOE"
         has_heel, has_toe = _visible(trial, heel), _visible(trial, toe)
@@ -184,9 +372,9 @@ def _foot_signals(trial: Trial) -> list[_FootSignal]:
             strike = (heel, f"maximum of {heel}")
         else:
             strike = (toe, f"maximum of {toe} (no visible {heel}; toe instead of heel)")
-        pending.append((FOOT_STRIKE, side, strike[0], 1.0, strike[1]))
+        pending.append((GaitEventKind.FOOT_STRIKE, side, strike[0], 1.0, strike[1]))
         if has_toe:
-            pending.append((FOOT_OFF, side, toe, -1.0, f"minimum of {toe}"))
+            pending.append((GaitEventKind.FOOT_OFF, side, toe, -1.0, f"minimum of {toe}"))
     if missing:
         raise MarkerError(
             f"{trial.name}: no Foot Strike/Foot Off events in the file and none can be "
@@ -197,7 +385,7 @@ def _foot_signals(trial: Trial) -> list[_FootSignal]:
     forward = _forward_axis(trial, centre)
     cutoff = min(SMOOTHING_CUTOFF_HZ, 0.4 * trial.rate)  # stay below Nyquist at low rates
     signals = []
-    for label, side, marker, sign, text in pending:
+    for kind, side, marker, sign, text in pending:
         relative = (trial.marker(marker) - centre) @ forward
         with warnings.catch_warnings():
             # runs too short to filter are too short to hold a stride's peak anyway
@@ -207,7 +395,7 @@ def _foot_signals(trial: Trial) -> list[_FootSignal]:
             f"detected (Zeni et al. 2008): {text} forward of the pelvis centre, "
             f"{cutoff:g} Hz low-pass, parabolic sub-frame peak"
         )
-        signals.append(_FootSignal(label, side, sign * smooth, description))
+        signals.append(_FootSignal(kind, side, sign * smooth, description))
     return signals
 
 
@@ -285,6 +473,11 @@ def detect_gait_events(trial: Trial) -> list[Event]:
         MarkerError: naming the markers, when a foot has neither heel nor toe marker,
             no pelvis marker is visible, or the walking direction cannot be found.
     """
+    return [g.event for g in _detected(trial)]
+
+
+def _detected(trial: Trial) -> list[GaitEvent]:
+    """:func:`detect_gait_events` as typed values, sorted by time."""
     if motionless(trial) is not None:
         return []
     signals = _foot_signals(_without_spikes(trial))
@@ -294,22 +487,28 @@ def detect_gait_events(trial: Trial) -> list[Event]:
     for sig in signals:
         for index in _peak_indices(sig.values, distance):
             sample = _parabolic_vertex(sig.values, int(index))
-            events.append(
-                Event(
-                    label=sig.label,
-                    context=SIDE_CONTEXTS[sig.side],
-                    time=(trial.first_frame + sample - 1.0) / trial.rate,
-                    subject=trial.subject,
-                    description=sig.description,
-                )
-            )
-    return sorted(events, key=lambda e: (e.time, e.context, e.label))
+            time = (trial.first_frame + sample - 1.0) / trial.rate
+            event = Event(sig.kind.value, SIDE_CONTEXTS[sig.side], time, trial.subject, sig.description)
+            events.append(GaitEvent(sig.kind, sig.side, time, event))
+    return sorted(events, key=lambda g: (g.time, g.event.context, g.event.label))
 
 
 def file_gait_events(trial: Trial) -> list[Event]:
-    """The trial's own Foot Strike / Foot Off events of the Left and Right feet."""
-    contexts = SIDE_CONTEXTS.values()
-    return [e for e in trial.events if e.label in GAIT_LABELS and e.context in contexts]
+    """The trial's own foot strikes and foot offs of the left and right feet, in any
+    spelling of the module docstring, spelled as Vicon Nexus writes them
+    (:meth:`GaitEvent.as_event`; a Nexus file's events are returned as they are)."""
+    return [g.as_event() for g in gait_events(trial.events)]
+
+
+def trial_gait_events_typed(trial: Trial) -> tuple[list[GaitEvent], str]:
+    """:func:`trial_gait_events` as typed values (the file's labels read once)."""
+    events = gait_events(trial.events)
+    if events:
+        return events, SOURCE_FILE
+    still = motionless(trial)
+    if still is not None:
+        return [], f"{SOURCE_MOTIONLESS}: {still}"
+    return _detected(trial), SOURCE_DETECTED
 
 
 def trial_gait_events(trial: Trial) -> tuple[list[Event], str]:
@@ -317,20 +516,18 @@ def trial_gait_events(trial: Trial) -> tuple[list[Event], str]:
 
     Returns:
         ``(events, source)``: ``source`` is :data:`SOURCE_FILE` (``"file"``) when the
-        trial carries any Left/Right ``Foot Strike``/``Foot Off`` event (then only those
-        are returned), else :data:`SOURCE_DETECTED` (``"detected from heel/toe markers
-        (Zeni 2008)"``) with the events of :func:`detect_gait_events` -- report it;
-        for a motionless trial no events and ``"none detected: the trial is motionless
-        (...)"`` (:data:`SOURCE_MOTIONLESS`; its peaks would be noise).
+        trial carries any left/right foot strike or foot off in a spelling of the module
+        docstring (``Foot Strike``, ``foot off``, ``LHS``, ``Right Foot Off`` ...; then
+        only those are returned, spelled as Vicon Nexus writes them:
+        :func:`file_gait_events`), else :data:`SOURCE_DETECTED` (``"detected from
+        heel/toe markers (Zeni 2008)"``) with the events of :func:`detect_gait_events`
+        -- report it; for a motionless trial no events and ``"none detected: the trial
+        is motionless (...)"`` (:data:`SOURCE_MOTIONLESS`; its peaks would be noise).
+        Times in s on the C3D clock.
 
     Raises:
         MarkerError: the file has no events and the markers needed for detection are
             missing (the message names them).
     """
-    events = file_gait_events(trial)
-    if events:
-        return events, SOURCE_FILE
-    still = motionless(trial)
-    if still is not None:
-        return [], f"{SOURCE_MOTIONLESS}: {still}"
-    return detect_gait_events(trial), SOURCE_DETECTED
+    events, source = trial_gait_events_typed(trial)
+    return [g.as_event() for g in events], source

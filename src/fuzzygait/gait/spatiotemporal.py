@@ -66,7 +66,13 @@ import pandas as pd
 from fuzzygait.core.errors import EventError, ParameterError
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.gait.cycles import gait_cycles, side_code
-from fuzzygait.gait.events import FOOT_OFF, FOOT_STRIKE, SIDE_CONTEXTS, trial_gait_events
+from fuzzygait.gait.events import (
+    SIDE_CONTEXTS,
+    GaitEvent,
+    GaitEventKind,
+    gait_events,
+    trial_gait_events_typed,
+)
 
 #: The parameters in Nexus' order, with the unit Nexus writes.
 PARAMETERS: tuple[tuple[str, str], ...] = (
@@ -181,9 +187,9 @@ class TrialParameters:
     notes: list[str] = field(default_factory=list)
 
 
-def _times(events: Sequence[Event], label: str, side: str) -> np.ndarray:
-    context = SIDE_CONTEXTS[side]
-    return np.sort([e.time for e in events if e.label == label and e.context == context])
+def _times(events: Sequence[GaitEvent], kind: GaitEventKind, side: str) -> np.ndarray:
+    """Sorted times (s) of the events of ``kind`` of ``side`` (``"L"``/``"R"``)."""
+    return np.sort([g.time for g in events if g.kind is kind and g.side == side])
 
 
 def _first_inside(times: np.ndarray, low: float, high: float) -> float:
@@ -202,12 +208,13 @@ def _position(trial: Trial, label: str, time: float) -> np.ndarray:
     return np.asarray(trial.marker(label)[index], dtype=float)
 
 
-def _one_cycle(trial: Trial, events: Sequence[Event], side: str, index: int, start: float,
+def _one_cycle(trial: Trial, events: Sequence[GaitEvent], side: str, index: int, start: float,
                end: float, foot_marker: str) -> CycleParameters:  # fmt: skip
     other = _OPPOSITE[side]
-    contact = _first_inside(_times(events, FOOT_STRIKE, other), start, end)
-    opposite_off = _first_inside(_times(events, FOOT_OFF, other), start, contact if np.isfinite(contact) else end)
-    foot_off = _first_inside(_times(events, FOOT_OFF, side), start, end)
+    strike, off = GaitEventKind.FOOT_STRIKE, GaitEventKind.FOOT_OFF
+    contact = _first_inside(_times(events, strike, other), start, end)
+    opposite_off = _first_inside(_times(events, off, other), start, contact if np.isfinite(contact) else end)
+    foot_off = _first_inside(_times(events, off, side), start, end)
     complete = bool(np.isfinite([contact, opposite_off, foot_off]).all() and opposite_off < contact < foot_off)
 
     first, last = (_position(trial, side + foot_marker, t) for t in (start, end))
@@ -218,7 +225,7 @@ def _one_cycle(trial: Trial, events: Sequence[Event], side: str, index: int, sta
     values = _cycle_values(start, end, contact, opposite_off, foot_off, stride_mm, step_mm)
     # Vicon Workstation: the opposite Foot Off may come after the cycle; the step is the
     # opposite foot's, from this toe at the opening strike (module docstring)
-    late_off = _first_inside(_times(events, FOOT_OFF, other), start, math.inf)
+    late_off = _first_inside(_times(events, off, other), start, math.inf)
     workstation = _cycle_values(start, end, contact, late_off, foot_off, stride_mm,
                                 float(np.linalg.norm(opposite - first)))  # fmt: skip
     if workstation["Single Support"] < 0:  # the opposite foot never in swing inside the cycle
@@ -246,47 +253,54 @@ def _cycle_values(start: float, end: float, contact: float, opposite_off: float,
     }
 
 
-def side_parameters(trial: Trial, events: Sequence[Event], side: str,
+def side_parameters(trial: Trial, events: Sequence[Event | GaitEvent], side: str,
                     foot_marker: str = FOOT_MARKER) -> SideParameters:  # fmt: skip
     """The parameters of every gait cycle of one side (see the module docstring).
 
     Args:
         trial: markers in mm; needs ``L``/``R`` + ``foot_marker`` for the lengths (NaN
             without them).
-        events: Foot Strike / Foot Off events of both sides (times in s).
+        events: foot strike / foot off events of both sides (times in s), in any
+            spelling :func:`fuzzygait.gait.events.gait_events` reads (labels read once
+            here), or its typed values.
         side: ``"L"``/``"Left"`` or ``"R"``/``"Right"``.
         foot_marker: marker (without the side letter) whose positions at the strikes give
             the lengths; Nexus uses ``"TOE"``.
     """
     code = side_code(side)
+    typed = gait_events(events)
     cycles = [
-        _one_cycle(trial, events, code, cycle.index, cycle.start_time, cycle.end_time, foot_marker)
-        for cycle in gait_cycles(trial, events, code)
+        _one_cycle(trial, typed, code, cycle.index, cycle.start_time, cycle.end_time, foot_marker)
+        for cycle in gait_cycles(trial, typed, code)
     ]
     return SideParameters(code, cycles)
 
 
-def spatiotemporal_parameters(trial: Trial, events: Sequence[Event] | None = None,
+def spatiotemporal_parameters(trial: Trial, events: Sequence[Event | GaitEvent] | None = None,
                               foot_marker: str = FOOT_MARKER) -> TrialParameters:  # fmt: skip
     """Both sides' spatio-temporal parameters of a trial.
 
     Args:
-        events: the gait events; ``None`` takes the file's, or detects them
-            (:func:`~fuzzygait.gait.events.trial_gait_events`).
+        events: the gait events (any spelling :func:`~fuzzygait.gait.events.gait_events`
+            reads; labels read once here); ``None`` takes the file's, in any such
+            spelling, or detects them (:func:`~fuzzygait.gait.events.trial_gait_events`;
+            the source, ``"file"`` or the detection method, is
+            :attr:`TrialParameters.event_source`).
 
     Raises:
         EventError: naming the file, when neither side has a complete gait cycle (what
             to add is said).
         MarkerError: the file has no events and they cannot be detected.
     """
-    source = "given"
     if events is None:
-        events, source = trial_gait_events(trial)
-    sides = {code: side_parameters(trial, events, code, foot_marker) for code in SIDE_CONTEXTS}
+        typed, source = trial_gait_events_typed(trial)
+    else:
+        typed, source = gait_events(events), "given"
+    sides = {code: side_parameters(trial, typed, code, foot_marker) for code in SIDE_CONTEXTS}
     if not any(s.complete_cycles for s in sides.values()):
         counts = ", ".join(f"{len(s.cycles)} {SIDE_CONTEXTS[c].lower()}" for c, s in sides.items())
         raise EventError(
-            f"{trial.name}: no complete gait cycle ({counts} cycles from {len(events)} events, "
+            f"{trial.name}: no complete gait cycle ({counts} cycles from {len(typed)} events, "
             f"{source}): a cycle needs a Foot Strike, the opposite Foot Off and Foot Strike, "
             "this foot's Foot Off and its next Foot Strike; add the missing events (e.g. "
             "with Nexus' gait-event detection) or trim the trial to whole cycles"

@@ -78,7 +78,7 @@ def _root(path: Path) -> ET.Element:
         raise ParameterError(f"{path}: cannot read the QTM session.xml ({exc})") from None
     if root.tag != "Subject":
         raise ParameterError(f"{path}: not a QTM session.xml (its root element is <{root.tag}>, not <Subject>); "
-                             "give a .toml, .vsk or pyCGM2 .mp subject file instead")  # fmt: skip
+                             "give a .toml, .vsk or .mp subject file instead")  # fmt: skip
     return root
 
 
