@@ -40,8 +40,10 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
 from fuzzygait.mocap.sanity import check_trial, missing_throughout, moved_markers
+from fuzzygait.workflows.crosscheck import CrossCheck, check_run
 from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
     MARKER_DIAMETER_RANGE,
+    DiameterChoice,
     for_static_calibration,
     inter_asis_notes,
     resolve_subject,
@@ -117,6 +119,10 @@ class AnglesRun:
         warnings: what the user must know before trusting the angles (a stated marker
             diameter that contradicts the file's own outputs, ...); shown on report pages
             and printed by the commands.
+        crosscheck: ours against the angles the file already stores (Nexus', pyCGM2's),
+            None when it stores none (:mod:`fuzzygait.workflows.crosscheck`).
+        diameter: where the marker diameter came from
+            (:func:`~fuzzygait.workflows.subject_resolution.settle_marker_diameter`).
         clusters: the static cluster calibration of a cluster model (cgm2.3, cgm2.4; the
             marker-error analysis holds it fixed), else None.
     """
@@ -131,6 +137,8 @@ class AnglesRun:
     notes: list[str] = field(default_factory=list)
     clusters: ClusterCalibration | None = None
     warnings: list[str] = field(default_factory=list)
+    crosscheck: CrossCheck | None = None
+    diameter: DiameterChoice | None = None
 
     @property
     def model(self) -> str:
@@ -276,7 +284,8 @@ def run_angles(
             holding a cluster calibration (says what to give).
     """
     raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
-    trial, gaps = preprocessing.apply(check_trial(raw))
+    checked = check_trial(raw)
+    trial, gaps = preprocessing.apply(checked)
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
     diameter = settle_marker_diameter(resolve_subject(raw, subject_file), marker_diameter, (raw, static_trial))
     subject = diameter.subject
@@ -287,7 +296,7 @@ def run_angles(
         stored = read_stored_calibration(subject_file)
     model, why = choose_model(model, raw, static_trial, stored)
     notes += [f"model {model} ({why})", diameter.note]
-    clusters = None
+    clusters, moved = None, []
     if static_trial is not None:
         to_calibrate = for_static_calibration(subject, subject_file)
         calibration = calibrate_static(static_trial, to_calibrate, preprocessing=preprocessing, flat_foot=flat_foot,
@@ -296,7 +305,8 @@ def run_angles(
         subject, clusters = calibration.subject, calibration.clusters
         notes.append(calibration.describe())
         notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]
-        notes += moved_markers(static_trial, trial)
+        moved = moved_markers(static_trial, trial)
+        notes += moved
     else:
         if model_version(model).clusters:
             clusters = stored_clusters(stored, subject_file, model)
@@ -308,11 +318,16 @@ def run_angles(
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     mark_empty_angles(result, raw)
     notes += result.notes
+    check = check_run(checked, result.angles, raw, subject, diameter.recovered, model=model, clusters=clusters,
+                      flat_foot=bool(flat_foot if flat_foot is not None else subject.flat_foot))  # fmt: skip
+    if check is not None and moved:
+        check = check.with_cause(f"markers moved between the static trial and this one ({len(moved)} segments)")
+    notes += check.notes() if check is not None else []
     notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
     events, source = trial_gait_events(trial)
     if source != "file":
         notes.append(f"gait events {source}")
-    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings)
+    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
 
 
 def mark_empty_angles(result: CGMResult, raw: Trial) -> None:
