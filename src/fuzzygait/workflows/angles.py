@@ -36,10 +36,11 @@ from fuzzygait.kinematics.calibration_file import StoredCalibration, read_stored
 from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
 from fuzzygait.kinematics.kad import knee_method
 from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
+from fuzzygait.kinematics.marker_names import canonical_labels
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
-from fuzzygait.mocap.sanity import check_trial, missing_throughout, moved_markers
+from fuzzygait.mocap.sanity import check_trial, moved_markers
 from fuzzygait.workflows.crosscheck import CrossCheck, check_run
 from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
     MARKER_DIAMETER_RANGE,
@@ -49,6 +50,7 @@ from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_sub
     resolve_subject,
     settle_marker_diameter,
 )
+from fuzzygait.workflows.uncomputed import mark_empty_angles, refuse_empty
 
 AXES = ("X", "Y", "Z")
 #: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
@@ -226,10 +228,10 @@ def calibrate_static(
     that moves (a walking trial given as the static one), in the wrong unit or at an
     absurd rate is refused in one line; implausible samples are blanked and noted.
     """
-    trial = static if isinstance(static, Trial) else read_c3d(static)
+    trial, relabelled = canonical_labels(static if isinstance(static, Trial) else read_c3d(static))
     checked = check_trial(trial, static=True)
     clean, _ = replace(preprocessing, filter=False).apply(checked)
-    notes = tuple(checked.notes[len(trial.notes) :])
+    notes = (*relabelled, *checked.notes[len(trial.notes) :])
     if flat_foot is None:
         flat_foot = bool(subject.flat_foot)
         if subject.flat_foot is not None:
@@ -283,10 +285,11 @@ def run_angles(
         ParameterError: a cluster model with neither ``static`` nor a subject file
             holding a cluster calibration (says what to give).
     """
-    raw = dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic)
+    raw, relabelled = canonical_labels(dynamic if isinstance(dynamic, Trial) else read_c3d(dynamic))
     checked = check_trial(raw)
     trial, gaps = preprocessing.apply(checked)
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
+    static_trial = None if static_trial is None else canonical_labels(static_trial)[0]
     diameter = settle_marker_diameter(resolve_subject(raw, subject_file), marker_diameter, (raw, static_trial))
     subject = diameter.subject
     notes = list(trial.notes)
@@ -295,7 +298,7 @@ def run_angles(
     if static_trial is None and subject_file is not None:
         stored = read_stored_calibration(subject_file)
     model, why = choose_model(model, raw, static_trial, stored)
-    notes += [f"model {model} ({why})", diameter.note]
+    notes += [*relabelled, f"model {model} ({why})", diameter.note]
     clusters, moved = None, []
     if static_trial is not None:
         to_calibrate = for_static_calibration(subject, subject_file)
@@ -317,6 +320,7 @@ def run_angles(
                          f"its offsets are used by {model} as they are")  # fmt: skip
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     mark_empty_angles(result, raw)
+    refuse_empty(result, raw.name)
     notes += result.notes
     check = check_run(checked, result.angles, raw, subject, diameter.recovered, model=model, clusters=clusters,
                       flat_foot=bool(flat_foot if flat_foot is not None else subject.flat_foot))  # fmt: skip
@@ -328,21 +332,6 @@ def run_angles(
     if source != "file":
         notes.append(f"gait events {source}")
     return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
-
-
-def mark_empty_angles(result: CGMResult, raw: Trial) -> None:
-    """Add every angle NaN in every frame to ``result.unavailable`` (so that it is not
-    counted as computed), saying why: the markers of ``raw`` missing in every frame
-    (:func:`fuzzygait.mocap.sanity.missing_throughout`), when there are any."""
-    empty = [name for name, values in result.angles.items()
-             if name not in result.unavailable and not np.isfinite(values).any()]  # fmt: skip
-    if not empty:
-        return
-    missing = missing_throughout(raw)
-    why = "no frame could be computed" + (f" (marker{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
-                                          "missing in every frame)" if missing else "")  # fmt: skip
-    for name in empty:
-        result.unavailable[name] = why
 
 
 def choose_model(

@@ -22,6 +22,7 @@ from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidec
 from fuzzygait.io.subject import write_subject
 from fuzzygait.io.tomlfile import TomlData
 from fuzzygait.kinematics.calibration_file import cluster_table
+from fuzzygait.kinematics.marker_names import canonical_labels
 from fuzzygait.kinematics.versions import CLUSTER_MARKERS, FOREFOOT_MARKERS, MEDIAL_MARKERS, model_version
 from fuzzygait.workflows.angles import (
     DEFAULT_PREPROCESSING,
@@ -131,13 +132,14 @@ def calibrate_to_file(
     """
     out_file = Path(out_file)
     check_subject_path(out_file, "--out")
-    trial = static if isinstance(static, Trial) else read_c3d(static)
+    trial, relabelled = canonical_labels(static if isinstance(static, Trial) else read_c3d(static))
     diameter = settle_marker_diameter(resolve_subject(trial, subject_file), marker_diameter, (trial,))
     to_calibrate = for_static_calibration(diameter.subject, subject_file)
     name, why = calibration_model(trial, model)
     calibration = calibrate_static(trial, to_calibrate, preprocessing=preprocessing, flat_foot=flat_foot, model=name,
                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
-    notes = [diameter.note, *inter_asis_notes(diameter.subject, to_calibrate, calibration.subject, trial.name)]
+    notes = [*relabelled, diameter.note,
+             *inter_asis_notes(diameter.subject, to_calibrate, calibration.subject, trial.name)]  # fmt: skip
     source = Path(subject_file).name if subject_file is not None else f"{trial.name} PROCESSING group"
     static_name = Path(trial.name).name
     title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
