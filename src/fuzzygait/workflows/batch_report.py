@@ -250,7 +250,7 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
     page_name = "session.html" if flat else "index.html"
     href_prefix = f"{session.output}/" if session.output else ""
     trials = [SummaryTrial(o.source.name, f"{o.name}.html" if o.ok else None, o.entry.error, dict(o.entry.cycles),
-                           (*o.warnings, *o.entry.data_warnings), o.seconds, o.skipped,
+                           tuple(dict.fromkeys((*o.warnings, *o.entry.data_warnings))), o.seconds, o.skipped,
                            f"{o.name}.pdf" if pdf and o.ok else None)
               for o in outcomes]  # fmt: skip
     summary = SessionSummary(session.name, str(session.folder or "files given directly"), href_prefix + page_name,

@@ -35,6 +35,7 @@ from fuzzygait.workflows.subject_resolution import (
     inter_asis_notes,
     resolve_subject,
     settle_marker_diameter,
+    subject_warnings,
 )
 
 #: Subject file types ``calibrate`` writes.
@@ -174,5 +175,6 @@ def calibrate_to_file(
         metadata.update(clusters)
     files.insert(0, write_subject(calibration.subject, out_file, comments=comments, metadata=metadata,
                                   vsk_template=template))  # fmt: skip
-    warnings = [diameter.warning] if diameter.warning else []
+    warnings = ([diameter.warning] if diameter.warning else []) + subject_warnings(trial, subject_file, trial,
+                                                                                   diameter.subject)  # fmt: skip
     return CalibrationFile(calibration, name, why, files, removed, notes, warnings)

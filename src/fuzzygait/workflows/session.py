@@ -184,11 +184,24 @@ def _pick_subject_file(subject: str, files: Sequence[Path]) -> Path | None:
     return files[0] if len(files) == 1 else None
 
 
-def _mismatch(trial: str, subject: str, what: str, path: Path, other: str | None) -> str | None:
+def subject_mismatch(trial: str, subject: str, what: str, path: Path, other: str | None) -> str | None:
+    """The warning when the ``what`` at ``path`` belongs to ``other`` and the trial to
+    ``subject`` (None when either is unknown or they are the same, any case)."""
     if not subject or not other or _same(subject, other):
         return None
     return (f"subject mismatch: the trial is of subject {subject!r} but the {what} {path.name} is of {other!r}; "
             f"check that the right {what} is in the session folder")  # fmt: skip
+
+
+def unmatched_subject_files(subject: str, files: Sequence[Path]) -> str:
+    """The warning when a session folder holds several subject files and none names the
+    trial's subject: which files were seen, whose each is, and what is used instead."""
+    seen = ", ".join(f"{f.name} (of {name!r})" if (name := subject_file_name(f)) else f"{f.name} (names no subject)"
+                     for f in files)  # fmt: skip
+    who = f"its subject {subject!r}" if subject else "its subject (the C3D names none)"
+    return (f"none of the subject files {seen} is named after {who}: none is used, the trial's PROCESSING group "
+            "gives the subject; keep one subject file per session folder, name it after the subject, or give "
+            "--subject")
 
 
 def find_session(folder: Path, output: str) -> Session:
@@ -219,16 +232,16 @@ def find_session(folder: Path, output: str) -> Session:
         subject = trial.subject if trial is not None else ""
         static = _pick_static(path, subject, statics)
         subject_file = _pick_subject_file(subject, subject_files)
+        warned: list[str | None] = []
         if subject_file is None and len(subject_files) > 1:
-            notes.append(f"{path.name}: none of the subject files {', '.join(f.name for f in subject_files)} is "
-                         f"named after its subject {subject!r}; its PROCESSING group gives the subject")  # fmt: skip
-        mismatches = [
-            _mismatch(path.name, subject, "subject file", subject_file, subject_file_name(subject_file))
-            if subject_file is not None else None,
-            _mismatch(path.name, subject, "static trial", static.path, static.subject) if static is not None else None,
-        ]  # fmt: skip
+            warned.append(unmatched_subject_files(subject, subject_files))
+        if subject_file is not None:
+            warned.append(subject_mismatch(path.name, subject, "subject file", subject_file,
+                                          subject_file_name(subject_file)))  # fmt: skip
+        if static is not None:
+            warned.append(subject_mismatch(path.name, subject, "static trial", static.path, static.subject))
         trials.append(SessionTrial(path, static.path if static else None, subject_file, subject,
-                                   tuple(w for w in mismatches if w)))  # fmt: skip
+                                   tuple(w for w in warned if w)))  # fmt: skip
     return Session(folder.name, folder, output, tuple(trials), tuple(statics), tuple(subject_files), tuple(notes))
 
 
@@ -296,7 +309,8 @@ def _override(session: Session, static: Path | None, subject_file: Path | None, 
         new_subject = subject_file if subject_file is not None else t.subject_file
         found = [w for w in t.warnings if subject_file is None or "subject file" not in w]
         if subject_file is not None and check:
-            warning = _mismatch(t.path.name, subject, "subject file", subject_file, subject_file_name(subject_file))
+            warning = subject_mismatch(t.path.name, subject, "subject file", subject_file,
+                                       subject_file_name(subject_file))  # fmt: skip
             found += [warning] if warning else []
         trials.append(SessionTrial(t.path, static if static is not None else t.static, new_subject, subject,
                                    tuple(found)))  # fmt: skip

@@ -24,10 +24,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
+
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import DEFAULT_MARKER_DIAMETER, SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.kinematics.marker_size import CONTRADICTION_MM, RecoveredDiameter, recover_marker_diameter
+from fuzzygait.workflows.session import subject_file_name, subject_mismatch
 
 #: Marker diameters (mm) taken as plausible (the subject parameters' check).
 MARKER_DIAMETER_RANGE = (1.0, 40.0)
@@ -174,3 +177,72 @@ def inter_asis_notes(
         return [f"{note}, not {source}'s {stated.inter_asis_distance:.2f} mm ({differs:.2f} mm apart: an earlier "
                 "calibration's value; the static trial given is measured afresh, as Plug-in Gait does)"]
     return [f"{note} ({source}: {stated.inter_asis_distance:.2f} mm)"]
+
+
+#: Leg length against the static trial's ASIS-malleolus marker distance (ASI-MED, else
+#: ASI-ANK): a tape measure over the thigh and knee runs 1-3 % longer than the straight
+#: line, the markers sit a radius off the bone and a tape reads within 1-2 cm; more than
+#: this fraction apart is not a measurement of this subject.
+LEG_LENGTH_MARGIN = 0.10
+#: Knee (ankle) width against the static trial's KNE-KNM (ANK-MED) distance less one
+#: marker diameter: calipers press the soft tissue that the markers sit on; beyond both
+#: of these (mm and fraction) the width is not this subject's.
+WIDTH_MARGIN_MM = 15.0
+WIDTH_MARGIN = 0.20
+
+
+def _median_distance(trial: Trial, a: str, b: str) -> float | None:
+    if not (trial.has_marker(a) and trial.has_marker(b)):
+        return None
+    distance = np.linalg.norm(trial.marker(a) - trial.marker(b), axis=1)
+    distance = distance[np.isfinite(distance)]
+    return float(np.median(distance)) if distance.size else None
+
+
+def measurement_warnings(subject: SubjectParameters, static: Trial) -> list[str]:
+    """Subject measurements that the static trial's markers contradict beyond a plausible
+    margin (:data:`LEG_LENGTH_MARGIN`, :data:`WIDTH_MARGIN_MM` and :data:`WIDTH_MARGIN`):
+    leg length against the ASIS-malleolus distance, knee and ankle widths against the
+    KNE-KNM and ANK-MED distances less a marker diameter, where the markers are there."""
+    found = []
+    source = Path(subject.source).name or "the subject parameters"
+    for side in "LR":
+        values = subject.side(side)
+        malleolus = "MED" if static.has_marker(side + "MED") else "ANK"
+        measured = _median_distance(static, side + "ASI", side + malleolus)
+        if measured is not None and abs(measured - values.leg_length) > LEG_LENGTH_MARGIN * values.leg_length:
+            found.append(f"{source} gives {side}LegLength {values.leg_length:g} mm but the static trial "
+                         f"{Path(static.name).name}'s {side}ASI-{side}{malleolus} distance is {measured:.0f} mm "
+                         f"(more than {LEG_LENGTH_MARGIN:.0%} apart): check the measurement and the subject file")
+        for name, width, lateral, medial in (("KneeWidth", values.knee_width, "KNE", "KNM"),
+                                             ("AnkleWidth", values.ankle_width, "ANK", "MED")):  # fmt: skip
+            between = _median_distance(static, side + lateral, side + medial)
+            if between is None:
+                continue
+            measured = between - subject.marker_diameter
+            if abs(measured - width) > max(WIDTH_MARGIN_MM, WIDTH_MARGIN * width):
+                found.append(f"{source} gives {side}{name} {width:g} mm but the static trial's {side}{lateral}-"
+                             f"{side}{medial} distance less the {subject.marker_diameter:g} mm marker diameter is "
+                             f"{measured:.0f} mm: check the measurement and the subject file")
+    return found
+
+
+def subject_warnings(
+    trial: Trial, subject_file: str | os.PathLike[str] | None, static: Trial | None, subject: SubjectParameters
+) -> list[str]:
+    """What a run warns of about its subject: a subject file or static trial of another
+    subject than ``trial``'s (C3D ``SUBJECTS:NAMES``; the batch report's rule,
+    :func:`fuzzygait.workflows.session.subject_mismatch`), and measurements the static
+    trial contradicts (:func:`measurement_warnings`)."""
+    found = []
+    if subject_file is not None:
+        path = Path(subject_file)
+        found.append(subject_mismatch(Path(trial.name).name, trial.subject, "subject file", path,
+                                      subject_file_name(path)))  # fmt: skip
+    if static is not None and static is not trial:
+        found.append(subject_mismatch(Path(trial.name).name, trial.subject, "static trial", Path(static.name),
+                                      static.subject))  # fmt: skip
+    warnings = [w for w in found if w]
+    if static is not None:
+        warnings += measurement_warnings(subject, static)
+    return warnings

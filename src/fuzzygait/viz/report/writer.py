@@ -198,8 +198,9 @@ class ReportWriter:
         gps = clinical.profile.overall if clinical.profile is not None else None
         entry = TrialEntry.of(source, f"{name}.html", data, table, allowable, clinical.model_gaps(analysis.run.gaps),
                               gps)  # fmt: skip
+        warnings = list(dict.fromkeys([*item.warnings, *analysis.run.warnings]))  # the run's may repeat the job's
         page = trial_page(analysis, data, entry, table, files, source, clinical=clinical,
-                          session=item.session, warnings=[*item.warnings, *analysis.run.warnings])  # fmt: skip
+                          session=item.session, warnings=warnings)  # fmt: skip
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
 
