@@ -24,12 +24,21 @@ Printed: the evidence on the calibration input (fitted cluster geometry against 
 static trial's), the knee/ankle centre rules on the fitted markers, and one Markdown
 table: per angle component (both sides) and per joint centre, RMS and max of ours minus
 pyCGM2's (angles wrapped into (-180, 180] deg; centres: distance, mm) for (A) and (B).
+
+Tibial torsion (issue 36): pyCGM2's CGM 2.3 calibrates a tibial torsion when the static
+trial has MED and builds its foot on the ankle axis turned by it
+(:mod:`fuzzygait.kinematics.clusters`).  Printed: (B)'s spread of pyCGM2's foot in our
+turned uncorrected foot for a few torsions (a constant R_y R_x, SD and third angle 0,
+only at the torsion pyCGM2 used), and (A') the session's static trial with its KNM/MED
+(rule ``"medial"``): the torsion it calibrates and the ankle / foot-progression
+differences from pyCGM2 with the foot on the unturned axis (before issue 36) and on the
+turned one (after).
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +52,8 @@ from fuzzygait.kinematics import ANGLE_NAMES, CGMResult, compute_lower_body, sta
 from fuzzygait.kinematics.angles import ANGLE_TABLE, LEFT_MIRROR, wrap_degrees
 from fuzzygait.kinematics.clusters import CLUSTERS, ClusterChain, calibrate_clusters
 from fuzzygait.kinematics.joint_centres import chord_joint_centre
-from fuzzygait.kinematics.segments import side_sign
+from fuzzygait.kinematics.knee_ankle import calibration_chain
+from fuzzygait.kinematics.segments import foot_axis_correction, side_sign, turned_uncorrected_foot
 
 SESSION = ROOT.parent / "shared" / "data" / "cgm2" / "qualisys-cgm24-input"
 STATIC = SESSION / "Static - CGM2 1.c3d"
@@ -57,6 +67,9 @@ SUBJECT = {"Bodymass": 70.0, "Height": 1800.0, "LLegLength": 1000.0, "RLegLength
 STATIC_FRAMES = (539, 543)
 RULE = "pycgm2"
 CENTRES = ("HJC", "KJC", "AJC")
+#: Tibial torsions (deg) tried on pyCGM2's foot, and the outputs the torsion changes.
+TRIED_TORSIONS_DEG = (-5.0, -1.0, 0.0, 1.0, 5.0)
+FOOT_OUTPUTS = ("LAnkleAngles", "RAnkleAngles", "LFootProgressAngles", "RFootProgressAngles")
 
 
 @dataclass
@@ -208,6 +221,54 @@ def right_foot_progression(result: CGMResult, output: Trial) -> float:
     return float(np.abs(wrap_degrees(output.outputs["RFootProgressAngles"] - mirrored)).max())
 
 
+def torsion_spread(session: Session, subject: SubjectParameters) -> list[str]:
+    """(B) per side and tried torsion: pyCGM2's foot (as in :func:`pycgm2_foot_offsets`)
+    in our CGM 2.3 uncorrected foot turned by that torsion with its static correction on
+    pyCGM2's fitted static: the largest SD of its Y, X angles over the frames and its
+    largest third angle (deg), both 0 for the torsion pyCGM2's foot was built with."""
+    lines = ["| side | torsion (deg) | SD of R_y, R_x over frames (deg) | max third angle (deg) |", "|---|---|---|---|"]
+    static = fitted_static(session)
+    tracked = ClusterChain(session.fitted, subject, calibrate_clusters(static, subject, RULE))
+    chain = calibration_chain(static, subject, RULE, hip="hara", single_tibia=True)
+    for side in "LR":
+        foot = _frames_from_angles(tracked.ankle_tibia(side), session.output.outputs[side + "AnkleAngles"],
+                                   "Ankle", side)  # fmt: skip
+        for degrees in TRIED_TORSIONS_DEG:
+            torsion = float(np.radians(degrees))
+            per_frame = foot_axis_correction(chain.ajc(side), static.marker(side + "TOE"), chain.torsioned_tibia(side),
+                                             torsion, side)  # fmt: skip
+            correction = float(np.nanmean(per_frame))
+            turned = turned_uncorrected_foot(tracked.ajc(side), session.fitted.marker(side + "TOE"),
+                                             tracked.torsioned_tibia(side), torsion, correction, side)  # fmt: skip
+            yxz = Rotation.from_matrix(np.einsum("nji,njk->nik", turned, foot)).as_euler("YXZ", degrees=True)
+            lines.append(f"| {side} | {degrees:+.0f} | {yxz[:, :2].std(axis=0).max():.2g} "
+                         f"| {np.abs(yxz[:, 2]).max():.2g} |")  # fmt: skip
+    return lines
+
+
+def medial_run(session: Session) -> list[str]:
+    """(A'): the session's static trial with its KNM/MED (rule ``"medial"``): the
+    calibrated TibialTorsion and, per foot output, RMS / max (deg, over the components) of
+    ours minus pyCGM2's with the foot on the unturned axis (the calibration without its
+    torsion: before issue 36) and on the turned one (after)."""
+    calibrated = static_calibration(session.static, session.subject, model="cgm2.3", knee_ankle_centres="medial",
+                                    flat_foot=True)  # fmt: skip
+    clusters = calibrate_clusters(session.static, calibrated, "medial")
+    unturned = replace(clusters, shank_torsions={})
+    before = compute_lower_body(session.fitted, calibrated, model="cgm2.3", clusters=unturned)
+    after = compute_lower_body(session.fitted, calibrated, model="cgm2.3", clusters=clusters)
+    torsions = ", ".join(f"{side} {np.degrees(calibrated.side(side).tibial_torsion):.2f}" for side in "LR")
+    lines = [f"(A') TibialTorsion of the session's static trial (deg): {torsions}", "",
+             "| output | before: RMS / max (deg) | after: RMS / max (deg) | after minus before, max (deg) |",
+             "|---|---|---|---|"]  # fmt: skip
+    for name in FOOT_OUTPUTS:
+        (b_rms, b_max), (a_rms, a_max) = (angle_errors(run, session.output, name) for run in (before, after))
+        change = np.abs(wrap_degrees(after.angles[name] - before.angles[name])).max()
+        lines.append(f"| {name} | {b_rms.max():.3g} / {b_max.max():.3g} | {a_rms.max():.3g} / {a_max.max():.3g} "
+                     f"| {change:.3g} |")  # fmt: skip
+    return lines
+
+
 def main() -> None:
     session = load()
     print("## Calibration input: the static trial against pyCGM2's fitted clusters\n")
@@ -226,6 +287,11 @@ def main() -> None:
     print(
         f"\nRFootProgressAngles, pyCGM2 minus (X+180, -180-Y, Z+180) of ours, max: (A) {mirrored[0]}, (B) {mirrored[1]}"
     )
+    print(f"\n## Tibial torsion: the static trial has MED: {all(session.static.has_marker(s + 'MED') for s in 'LR')}; "
+          "(B) pyCGM2's foot in our CGM 2.3 foot turned by a torsion\n")  # fmt: skip
+    print("\n".join(torsion_spread(session, subject_b)))
+    print()
+    print("\n".join(medial_run(session)))
 
 
 if __name__ == "__main__":

@@ -10,6 +10,9 @@ Layout, under the subject file's ``[calibration]`` table (TOML; a ``.vsk``'s sid
     local = [[x, y, z], ...]              # mm, one row per marker
     [calibration.forefoot_joint_centres]  # CGM 2.4
     L = [x, y, z]                         # mm
+    [calibration.shank_torsion.L]         # calibrated with KNM/MED; also R
+    tibial_torsion = t                    # rad
+    foot_correction = d                   # rad, CGM 2.3's foot
 
 ``local`` holds each tracking marker's mean position in its segment's **anatomical**
 frame of the static trial (:class:`~fuzzygait.kinematics.clusters.ClusterCalibration`):
@@ -17,8 +20,10 @@ thigh origin KJC, tibia the torsioned tibia with origin AJC, forefoot origin vSM
 technical frame *is* the anatomical one, so the technical-to-anatomical transform is the
 identity and the knee and ankle joint centres are the frames' origins (0, 0, 0) -- the
 file stores no separate transform or joint centre.  The forefoot joint centre is in the
-hindfoot (Plug-in Gait foot) frame, origin AJC.  Numbers are written exactly (shortest
-round-trip decimals), so the file gives the static trial's angles to the last bit.
+hindfoot (Plug-in Gait foot) frame, origin AJC.  ``shank_torsion`` is the
+:class:`~fuzzygait.kinematics.clusters.ShankTorsion` of each side (absent: calibrated
+without MED, no torsion).  Numbers are written exactly (shortest round-trip decimals), so
+the file gives the static trial's angles to the last bit.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ import numpy as np
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.calibration_table import read_calibration_table
 from fuzzygait.io.tomlfile import TomlData
-from fuzzygait.kinematics.clusters import ClusterCalibration, SegmentCluster
+from fuzzygait.kinematics.clusters import ClusterCalibration, SegmentCluster, ShankTorsion
 from fuzzygait.kinematics.rigid import MIN_MARKERS
 
 #: Segment names of a cluster calibration and their spelling in the file.
@@ -50,9 +55,14 @@ def segment_key(side: str, name: str) -> str:
     return side + SEGMENT_NAMES[name]
 
 
+#: The fields of a side's ``shank_torsion`` table (rad).
+SHANK_TORSION_FIELDS = ("tibial_torsion", "foot_correction")
+
+
 def cluster_table(calibration: ClusterCalibration) -> dict[str, TomlData]:
     """``{"clusters": {"LThigh": {"markers": [...], "local": [[x, y, z], ...]}, ...},
-    "forefoot_joint_centres": {"L": [x, y, z], ...}}`` (the latter only when calibrated)."""
+    "forefoot_joint_centres": {"L": [x, y, z], ...}, "shank_torsion": {"L": {...}, ...}}``
+    (the latter two only when calibrated)."""
     clusters: dict[str, TomlData] = {}
     for (side, name), cluster in sorted(calibration.segments.items(), key=lambda item: _order(*item[0])):
         clusters[segment_key(side, name)] = {
@@ -64,6 +74,10 @@ def cluster_table(calibration: ClusterCalibration) -> dict[str, TomlData]:
     if centres:
         table["forefoot_joint_centres"] = {side: [float(v) for v in np.asarray(centres[side], dtype=float)]
                                            for side in sorted(centres)}  # fmt: skip
+    torsions = calibration.shank_torsions
+    if torsions:
+        table["shank_torsion"] = {side: {name: float(getattr(torsions[side], name)) for name in SHANK_TORSION_FIELDS}
+                                  for side in sorted(torsions)}  # fmt: skip
     return table
 
 
@@ -134,7 +148,22 @@ def clusters_from_table(table: Mapping[str, Any], source: str) -> ClusterCalibra
     if forefoot and sorted(centres) != ["L", "R"] or not forefoot and centres:
         raise ParameterError(f"{source}: the forefoot clusters and forefoot_joint_centres must both be there "
                              f"for both sides, or neither{again}")  # fmt: skip
-    return ClusterCalibration(segments, centres)
+    return ClusterCalibration(segments, centres, _shank_torsions(table.get("shank_torsion", {}), source))
+
+
+def _shank_torsions(raw: Any, source: str) -> dict[str, ShankTorsion]:
+    """The ``[calibration.shank_torsion]`` table's :class:`ShankTorsion` per side."""
+    where = f"{source}: [calibration.shank_torsion]"
+    if not isinstance(raw, Mapping) or set(raw) - {"L", "R"}:
+        raise ParameterError(f"{where} must hold L and/or R{AGAIN}")
+    torsions: dict[str, ShankTorsion] = {}
+    for side, entry in raw.items():
+        ok = isinstance(entry, Mapping) and set(entry) == set(SHANK_TORSION_FIELDS)
+        if not (ok and all(_is_number(entry[name]) and abs(entry[name]) <= np.pi for name in SHANK_TORSION_FIELDS)):
+            raise ParameterError(f"{where} {side} must be {{{', '.join(SHANK_TORSION_FIELDS)}}}, "
+                                 f"finite angles in rad{AGAIN}")  # fmt: skip
+        torsions[side] = ShankTorsion(*(float(entry[name]) for name in SHANK_TORSION_FIELDS))
+    return torsions
 
 
 @dataclass(frozen=True)

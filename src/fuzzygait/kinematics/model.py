@@ -151,7 +151,7 @@ def model_chain(
             f"{version.name} needs the forefoot calibrated on the static trial (FMH, SMH, VMH, TOE); "
             "calibrate with the cgm2.4 model, or use cgm2.3"
         )
-    return ClusterChain(trial, subject, clusters)
+    return ClusterChain(trial, subject, clusters, foot_torsion=version.foot_torsion)
 
 
 def compute_lower_body(

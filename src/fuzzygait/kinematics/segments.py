@@ -21,13 +21,23 @@ right-handed axis directions (no mirroring of axes):
   ``y_ankle`` the untorsioned tibia's y axis, y = z × x.  The static calibration offsets
   turn it into the anatomical foot: ``R_foot = R_uncorrected @ R_y(-StaticPlantFlex) @
   R_x(-s StaticRotOff)`` (``s = +1`` left, ``-1`` right).
+* **CGM 2.3 foot with a tibial torsion** (pyCGM2, static trial with MED): the ankle
+  axis of the uncorrected foot is the untorsioned tibia's y axis (pyCGM2's "proximal
+  shank": the knee's flexion axis as the shank carries it), and the uncorrected foot is
+  then turned about its own z axis by a constant ``δ`` calibrated on the static trial,
+  the angle that brings it onto the foot built on the torsioned tibia's own y axis
+  there: ``R_uncorrected = U(TOE, AJC, y_untorsioned) @ R_z(δ)``
+  (:func:`turned_uncorrected_foot`, :func:`foot_axis_correction`).  The tibial torsion
+  itself is the static angle between the thigh's and the tibia's flexion axes about the
+  tibia's long axis (:func:`flexion_axis_torsion`), Nexus' sign: negative when the ankle
+  axis is turned externally (lateral malleolus posterior) from the knee axis.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fuzzygait.kinematics.vectors import cross, frame_from_axes, rotate_frame, unit
+from fuzzygait.kinematics.vectors import cross, dot, frame_from_axes, relative_rotation, rotate_frame, unit
 
 
 def side_sign(side: str) -> float:
@@ -112,3 +122,65 @@ def foot_offsets(uncorrected: np.ndarray, foot_axis: np.ndarray, side: str) -> n
         plantar_flex = np.arctan(-u[:, 0] / u[:, 2])
         rot_off = side_sign(side) * np.arctan(u[:, 1] / np.hypot(u[:, 0], u[:, 2]))
     return np.stack([plantar_flex, rot_off], axis=-1)
+
+
+def flexion_axis_torsion(thigh: np.ndarray, tibia: np.ndarray, side: str) -> np.ndarray:
+    """pyCGM2's tibial torsion: the angle between the knee and the ankle flexion axes about
+    the tibia's long axis, per frame, rad ``(n,)``.
+
+    With ``φ`` the azimuth of the thigh's y axis (the knee flexion axis) in the tibia's x-y
+    plane, measured from the tibia's x axis towards its y axis (right-handed about the
+    tibia's z axis, ``AJC -> KJC``), the torsion is ``s (φ - 90°)`` (``s = +1`` left,
+    ``-1`` right), wrapped into ``[-π, π)``: 0 when the two flexion axes are parallel,
+    negative when the ankle axis is turned externally from the knee axis.  The same angle
+    and sign as Plug-in Gait's ``TibialTorsion`` (:mod:`fuzzygait.kinematics.kad`: ``-s``
+    × the angle from KNE to ANK about ``AJC -> KJC``) whenever the thigh's y axis is the
+    KNE direction, and :func:`untorsioned_tibia` turned by it has its y axis in the plane
+    of the tibia's z axis and the knee flexion axis.
+
+    Args:
+        thigh: ``(n, 3, 3)`` thigh frames (y = knee flexion axis).
+        tibia: ``(n, 3, 3)`` torsioned (marker-based) tibia frames (y = ankle axis).
+        side: ``"L"`` or ``"R"``.
+    """
+    knee_axis = thigh[:, :, 1]
+    azimuth = np.arctan2(dot(knee_axis, tibia[:, :, 1]), dot(knee_axis, tibia[:, :, 0]))
+    return side_sign(side) * (np.mod(azimuth - np.pi / 2 + np.pi, 2 * np.pi) - np.pi)
+
+
+def foot_axis_correction(
+    ajc: np.ndarray, toe: np.ndarray, tibia: np.ndarray, tibial_torsion: float, side: str
+) -> np.ndarray:
+    """The CGM 2.3 foot's static correction ``δ`` (rad, per frame ``(n,)``): the angle about
+    the uncorrected foot's z axis (``TOE -> AJC``) from the x axis of the foot built on the
+    untorsioned tibia's y axis to that of the foot built on the torsioned tibia's own y
+    axis, ``R_z(δ) = U(y_untorsioned)^T U(y_torsioned)``.  Calibrated on the static trial
+    (mean over its frames), it makes :func:`turned_uncorrected_foot` equal the plain
+    uncorrected foot there.
+
+    Args:
+        ajc, toe: ``(n, 3)`` mm.
+        tibia: ``(n, 3, 3)`` torsioned tibia frames.
+        tibial_torsion: rad (:func:`flexion_axis_torsion`).
+        side: ``"L"`` or ``"R"``.
+    """
+    turned = uncorrected_foot(ajc, toe, untorsioned_tibia(tibia, tibial_torsion, side)[:, :, 1])
+    relative = relative_rotation(turned, uncorrected_foot(ajc, toe, tibia[:, :, 1]))
+    return np.asarray(np.arctan2(relative[:, 1, 0], relative[:, 0, 0]))
+
+
+def turned_uncorrected_foot(
+    ajc: np.ndarray, toe: np.ndarray, tibia: np.ndarray, tibial_torsion: float, correction: float, side: str
+) -> np.ndarray:
+    """The CGM 2.3 uncorrected foot with a tibial torsion: :func:`uncorrected_foot` on the
+    y axis of the tibia turned by ``tibial_torsion`` (:func:`untorsioned_tibia`), then
+    turned about its own z axis by ``correction`` (rad, :func:`foot_axis_correction`).
+
+    Args:
+        ajc, toe: ``(n, 3)`` mm.
+        tibia: ``(n, 3, 3)`` torsioned tibia frames.
+        tibial_torsion, correction: rad.
+        side: ``"L"`` or ``"R"``.
+    """
+    axis = untorsioned_tibia(tibia, tibial_torsion, side)[:, :, 1]
+    return rotate_frame(uncorrected_foot(ajc, toe, axis), 2, correction)

@@ -25,6 +25,17 @@ malleolus markers (``L/RMED``) in the static trial (:func:`~fuzzygait.kinematics
 tells which), the knee and ankle centres come from them and the calibration also gives
 ``ThighRotation``, ``ShankRotation``, ``AnkleAbAdd`` and, with MED, ``TibialTorsion``
 (see :mod:`fuzzygait.kinematics.kad`); the foot offsets then use that chain.
+
+A cluster model (``cgm2.3``, ``cgm2.4``) calibrated with KNM/MED (rule ``"medial"``)
+reports its tibial torsion as ``TibialTorsion``: pyCGM2's static angle between the
+thigh's and the tibia's flexion axes about the tibia's long axis
+(:func:`~fuzzygait.kinematics.clusters.static_tibial_torsion`), which has Plug-in Gait's
+meaning and sign (``-s`` × the angle from the knee axis to the ankle axis about
+``AJC -> KJC``).  What it does differs: Plug-in Gait's knee angles untwist the tibia by
+it and its dynamic foot takes the untwisted axis without correction; CGM 2.x's knee and
+ankle keep the marker-based tibia and only CGM 2.3's foot takes the turned axis, with a
+static correction (:mod:`fuzzygait.kinematics.clusters`).  The foot offsets are
+calibrated on the marker-based tibia's axis in every model, as before.
 """
 
 from __future__ import annotations
@@ -37,6 +48,7 @@ from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
+from fuzzygait.kinematics.clusters import static_tibial_torsion
 from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method
 from fuzzygait.kinematics.knee_ankle import RULE_MARKERS, calibration_chain, knee_ankle_rule
 from fuzzygait.kinematics.segments import foot_offsets
@@ -82,6 +94,29 @@ def check_upright(static: Trial, chain: LowerBodyChain, seen: np.ndarray) -> Non
         )
 
 
+def calibration_markers(static: Trial, method: str, rule: str) -> list[str]:
+    """Every marker the static calibration needs: Plug-in Gait's with HEE, the KAD in place
+    of KNE (``method`` ``"KAD"``, ``"KAD+MED"``), MED with the latter, and the markers of
+    the knee/ankle centre ``rule`` (:data:`~fuzzygait.kinematics.knee_ankle.RULE_MARKERS`).
+
+    Raises:
+        MarkerError: any of them absent from ``static`` (all of them named).
+    """
+    labels = required_markers(static, use_medial_markers=False) + ["LHEE", "RHEE"]
+    if method != "plain":
+        labels = [m for m in labels if m[1:] != "KNE"] + [side + m for side in "LR" for m in KAD_MARKERS]
+    if method == "KAD+MED":
+        labels += ["LMED", "RMED"]
+    labels += [side + m for side in "LR" for m in RULE_MARKERS.get(rule, ())]
+    missing = [m for m in labels if not static.has_marker(m)]
+    if missing:
+        raise MarkerError(
+            f"{static.name}: static calibration needs marker(s) {', '.join(missing)}; "
+            "label them in the static trial"
+        )
+    return labels
+
+
 def static_calibration(
     static: Trial,
     subject: SubjectParameters,
@@ -112,7 +147,9 @@ def static_calibration(
         on both sides and, when it was None, ``inter_asis_distance`` = the distance (mm)
         between the mean LASI and RASI positions of the static trial.  With a KAD also
         ``thigh_rotation``, ``shank_rotation`` and ``ankle_abadd`` (0 without MED) and,
-        with MED, ``tibial_torsion`` (rad, :mod:`fuzzygait.kinematics.kad`).
+        with MED, ``tibial_torsion`` (rad, :mod:`fuzzygait.kinematics.kad`).  A cluster
+        model with the ``"medial"`` rule (KNM/MED) also sets ``tibial_torsion`` (rad,
+        module docstring); otherwise the subject's is kept.
 
     Raises:
         MarkerError: a needed marker is absent from the trial (all of them named), an
@@ -135,26 +172,14 @@ def static_calibration(
             f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use --model cgm1.0 "
             f"(not {version.name}) or a static trial with KNM/MED"
         )
-    labels = required_markers(static, use_medial_markers=False) + ["LHEE", "RHEE"]
-    if method != "plain":
-        labels = [m for m in labels if m[1:] != "KNE"] + [side + m for side in "LR" for m in KAD_MARKERS]
-    if method == "KAD+MED":
-        labels += ["LMED", "RMED"]
-    labels += [side + m for side in "LR" for m in RULE_MARKERS.get(rule, ())]
-    missing = [m for m in labels if not static.has_marker(m)]
-    if missing:
-        raise MarkerError(
-            f"{static.name}: static calibration needs marker(s) {', '.join(missing)}; "
-            "label them in the static trial"
-        )
+    labels = calibration_markers(static, method, rule)
     columns = [static.marker_labels.index(m) for m in labels]
     seen = np.all(np.isfinite(static.markers[:, columns, :]), axis=(1, 2))
     if not seen.any():
         raise ParameterError(f"{static.name}: no frame shows every marker {', '.join(labels)}")
     calibrated = subject
     if subject.inter_asis_distance is None:
-        mean_lasi, mean_rasi = static.marker("LASI")[seen].mean(0), static.marker("RASI")[seen].mean(0)
-        iad = float(np.linalg.norm(mean_lasi - mean_rasi))
+        iad = float(np.linalg.norm(static.marker("LASI")[seen].mean(0) - static.marker("RASI")[seen].mean(0)))
         calibrated = replace(subject, inter_asis_distance=iad).validate()
 
     static_foot = "flat" if flat_foot else "heel"
@@ -170,10 +195,19 @@ def static_calibration(
         chain = knee_chain
     if flat_foot:
         check_upright(static, chain, seen)
+    return with_foot_offsets(calibrated, chain, seen, torsion=version.clusters and rule == "medial")
+
+
+def with_foot_offsets(
+    subject: SubjectParameters, chain: LowerBodyChain, seen: np.ndarray, torsion: bool = False
+) -> SubjectParameters:
+    """``subject`` with both sides' ``static_plant_flex`` and ``static_rot_off`` (rad) of the
+    static ``chain`` (means over the frames ``seen``) and, with ``torsion`` (a cluster
+    model calibrated with KNM/MED), ``tibial_torsion`` (rad, module docstring)."""
     for side in "LR":
+        if torsion:
+            subject = subject.with_side(side, tibial_torsion=static_tibial_torsion(chain, side))
         offsets = foot_offsets(chain.uncorrected_foot(side), chain.heel_foot(side)[:, :, 2], side)
         plantar_flex, rot_off = np.mean(offsets[seen], axis=0)
-        calibrated = calibrated.with_side(
-            side, static_plant_flex=float(plantar_flex), static_rot_off=float(rot_off)
-        )
-    return calibrated.validate()
+        subject = subject.with_side(side, static_plant_flex=float(plantar_flex), static_rot_off=float(rot_off))
+    return subject.validate()

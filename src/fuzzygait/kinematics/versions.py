@@ -15,6 +15,10 @@
             ``L/RForeFootAngles``, :mod:`fuzzygait.kinematics.forefoot`).
 =========  ======================================================================
 
+With KNM/MED in the static trial both cluster versions calibrate the tibial torsion
+(pyCGM2's definition, :mod:`fuzzygait.kinematics.clusters`); ``cgm2.3``'s foot is built on
+the ankle axis turned by it (``foot_torsion``), ``cgm2.4``'s hindfoot, as pyCGM2's, is not.
+
 CGM 2.2 and 2.5 (OpenSim inverse kinematics) are out of scope.
 """
 
@@ -51,6 +55,9 @@ class ModelVersion:
             ankle and the foot's ankle axis (Plug-in Gait's knee untwists it by the
             tibial torsion).
         pelvis_sequence: ``"TOR"`` (Plug-in Gait) or ``"ROT"`` (CGM 1.1+, Baker 2001).
+        foot_torsion: the cluster model's foot takes the ankle axis turned by the tibial
+            torsion calibrated with MED, with its static correction (pyCGM2's CGM 2.3;
+            :class:`~fuzzygait.kinematics.clusters.ClusterChain`).
     """
 
     name: str
@@ -59,6 +66,7 @@ class ModelVersion:
     forefoot: bool
     single_tibia: bool = True
     pelvis_sequence: str = "ROT"
+    foot_torsion: bool = False
 
     @property
     def suffix(self) -> str:
@@ -70,7 +78,7 @@ _VERSIONS = {
     "cgm1.0": ModelVersion("cgm1.0", "davis", False, False, single_tibia=False, pelvis_sequence="TOR"),
     "cgm1.1": ModelVersion("cgm1.1", "davis", False, False),
     "cgm2.1": ModelVersion("cgm2.1", "hara", False, False),
-    "cgm2.3": ModelVersion("cgm2.3", "hara", True, False),
+    "cgm2.3": ModelVersion("cgm2.3", "hara", True, False, foot_torsion=True),
     "cgm2.4": ModelVersion("cgm2.4", "hara", True, True),
 }
 

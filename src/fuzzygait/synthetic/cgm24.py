@@ -87,6 +87,29 @@ the static trial's ForeFootAngles.  Walking: ``ForeFootAngles = neutral +``
 descriptor for the forefoot carries a "TODO check" in its source; the convention above is
 the one written there.
 
+Tibial torsion (opt-in, ``Cgm24Geometry(tibial_torsion=(τ_L, τ_R))``, rad; default 0)
+--------------------------------------------------------------------------------------
+The tibia's ankle axis is its knee axis turned about the tibia's long axis: the posed
+shank frame (``R_shank``, whose y axis carries ANK, MED, TIB, TIAP, TIAD and the foot) is
+``R_knee @ R_z(-s τ)`` with ``R_knee`` the frame the knee angles carry from the thigh
+(pyCGM2's "proximal shank", Nexus' untorsioned tibia).  It is posed by adding ``τ`` (deg)
+to the knee's rotation curve (static trial included: its knee rotation is ``τ``), so the
+truth knee angles are thigh -> ``R_shank``, what CGM 2.x's knee reports; ``τ < 0`` turns
+the ankle axis externally (lateral malleolus posterior).  KNE/KNM stay on the thigh's y
+axis and ANK/MED on the shank's, so in the static trial the angle between the two
+flexion axes about the shank's long axis -- pyCGM2's tibial torsion, ``s (φ - 90°)``
+with ``φ`` the azimuth of the thigh's y axis in the shank's x-y plane -- is ``τ``.  The
+subject parameters keep ``TibialTorsion`` 0: the CGM 2.x static calibration must find it
+from KNM/MED.  The posed hindfoot is built on the shank's own ankle axis as above (what
+pyCGM2's CGM 2.4 hindfoot takes); pyCGM2's **CGM 2.3** foot instead takes the knee axis
+``y_knee`` and a static correction: ``U(TOE, AJC, y_knee) R_z(δ) R_y R_x`` with ``U`` the
+uncorrected foot (z from TOE to AJC, x = ``unit(y × z)``) and ``R_z(δ) = U(y_knee)^T
+U(y_shank)`` in the static pose.  Both share the long axis ``z_u = unit(AJC - TOE)``; the
+CGM 2.3 foot is the posed hindfoot turned about ``z_u`` by ``δ - γ(t)``, ``γ`` the angle
+about ``z_u`` from ``x(y_knee)`` to ``x(y_shank)`` (``δ`` = ``γ`` of the static pose), which
+:func:`cgm23_foot_rotation` computes; ``make_cgm24_walking(foot_truth="cgm2.3")`` gives
+its ankle and foot-progression angles as the truth (the markers are the same).
+
 Truth table (walking)
 ---------------------
 ``frame``, ``time_s``, :func:`~fuzzygait.synthetic.generate.angle_columns` (pelvis,
@@ -97,7 +120,9 @@ tilt-obliquity-rotation sequence, not CGM 2.x's rotation-obliquity-tilt),
 regression, KJC, AJC; mm), :func:`forefoot_angle_columns` (``L/RForeFootAngles_X/Y/Z``,
 deg), :func:`fjc_columns` (``L/RFJC_X/Y/Z``, pyCGM2's forefoot joint centre, mm) and
 ``L/RFootProgressAngles_X/Y/Z`` (the hindfoot in the lab = progression frame, Vicon's
-convention: :func:`~fuzzygait.synthetic.leg_model.foot_progression_angles`; deg).
+convention: :func:`~fuzzygait.synthetic.leg_model.foot_progression_angles`; deg).  With
+``foot_truth="cgm2.3"`` the ankle and foot-progression columns are those of the CGM 2.3
+foot (section above; the same as the hindfoot's without torsion).
 """
 
 from __future__ import annotations
@@ -135,6 +160,7 @@ from fuzzygait.synthetic.leg_model import (
     joint_angles_from_rotation,
     joint_rotation,
     pose_lower_body,
+    rot_z,
 )
 
 #: Hip joint centre regressions of :func:`make_cgm24_static` / :func:`make_cgm24_walking`.
@@ -169,6 +195,10 @@ FOREFOOT_DEVIATION_CURVES: tuple[FourierCurve, FourierCurve, FourierCurve] = (
 )
 #: Diameter pyCGM2 uses to put the forefoot joint centre below TOE, mm (its default).
 FJC_MARKER_DIAMETER = 14.0
+#: ``foot_truth`` values of :func:`make_cgm24_walking`.
+FOOT_TRUTHS = ("hindfoot", "cgm2.3")
+#: Largest tibial torsion the generator takes, rad (a torsion is tens of degrees).
+MAX_TIBIAL_TORSION = np.pi / 4
 
 
 # ----------------------------------------------------------------------------- HJC
@@ -222,6 +252,9 @@ class Cgm24Geometry(SubjectGeometry):
             to the AJC in the static pose, left side (``y < 0`` = medial).
         hara_marker_diameter, hara_base_plate: marker diameter and base plate of the
             Hara regression, mm (pyCGM2's fixed 14 and 2, not the session's diameter).
+        tibial_torsion: ``(left, right)`` rad, the angle from the knee flexion axis to
+            the ankle axis about the shank's long axis, Nexus' / pyCGM2's sign (negative
+            = external; module docstring, "Tibial torsion"); default none.
     """
 
     hjc: str = "hara"
@@ -240,10 +273,35 @@ class Cgm24Geometry(SubjectGeometry):
     vmh_local: tuple[float, float, float] = (135.0, 38.0, -70.0)
     hara_marker_diameter: float = 14.0
     hara_base_plate: float = 2.0
+    tibial_torsion: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         if self.hjc not in HJC_METHODS:
             raise ParameterError(f"hjc must be one of {HJC_METHODS}; got {self.hjc!r}")
+        torsion = np.asarray(self.tibial_torsion, dtype=float)
+        if torsion.shape != (2,) or not np.all(np.abs(torsion) <= MAX_TIBIAL_TORSION):
+            raise ParameterError(
+                f"tibial_torsion must be (left, right) in rad within ±{MAX_TIBIAL_TORSION:.3f}; "
+                f"got {self.tibial_torsion!r}"
+            )
+
+    def torsion(self, side: str) -> float:
+        """The tibial torsion of ``side``, rad."""
+        return float(self.tibial_torsion[0 if _side_factor(side) > 0 else 1])
+
+    @property
+    def has_torsion(self) -> bool:
+        """Either tibia is twisted."""
+        return any(t != 0.0 for t in self.tibial_torsion)
+
+    def knee_with_torsion(self, knee: np.ndarray, side: str) -> np.ndarray:
+        """Knee angles ``(n, 3)`` (deg) from the thigh to the posed (ankle-axis) shank:
+        ``knee`` (thigh to the knee-axis frame) with the torsion added to the rotation,
+        since ``R_knee @ R_z(-s τ)`` is ``R_z(rs r) @ R_z(rs τ)`` in the knee's sequence
+        (``rs = -s``)."""
+        out = np.array(knee, dtype=float)
+        out[:, 2] += np.degrees(self.torsion(side))
+        return out
 
     def hjc_local(self, side: str) -> np.ndarray:
         """True hip joint centre of ``side`` in the pelvis frame (``hjc`` regression), mm."""
@@ -371,6 +429,53 @@ def forefoot_angle_curves(
     return neutral_forefoot_angles(geometry, side) + deviation
 
 
+# ----------------------------------------------------------------------------- CGM 2.3 foot
+def _turn_about(axis: np.ndarray, from_axis: np.ndarray, to_axis: np.ndarray) -> np.ndarray:
+    """Per row, the angle (rad) about the unit ``axis`` from ``unit(from_axis × axis)`` to
+    ``unit(to_axis × axis)``: how far the uncorrected-foot x axis built on ``to_axis``
+    is turned from the one built on ``from_axis``."""
+    a = np.cross(from_axis, axis)
+    b = np.cross(to_axis, axis)
+    a /= np.linalg.norm(a, axis=-1, keepdims=True)
+    b /= np.linalg.norm(b, axis=-1, keepdims=True)
+    return np.arctan2(np.einsum("ni,ni->n", axis, np.cross(a, b)), np.einsum("ni,ni->n", a, b))
+
+
+def _knee_axis_in_shank(geometry: Cgm24Geometry, side: str) -> np.ndarray:
+    """The knee flexion axis in the posed shank's frame: ``R_z(s τ) e_y``, ``(3,)``."""
+    return rot_z(_side_factor(side) * geometry.torsion(side))[0] @ np.array([0.0, 1.0, 0.0])
+
+
+def cgm23_static_correction(geometry: Cgm24Geometry, side: str) -> float:
+    """``δ`` (rad): :func:`_turn_about` of the static pose (foot = shank frame, TOE at
+    ``toe_local`` from the AJC), from the knee axis to the shank's y axis."""
+    long_axis = -np.asarray(geometry.foot_local(side)["TOE"], dtype=float)
+    long_axis /= np.linalg.norm(long_axis)
+    knee = _knee_axis_in_shank(geometry, side)
+    return float(_turn_about(long_axis[None], knee[None], np.array([[0.0, 1.0, 0.0]]))[0])
+
+
+def cgm23_foot_rotation(pose: Pose, geometry: Cgm24Geometry, side: str) -> np.ndarray:
+    """pyCGM2's CGM 2.3 foot of a posed walker, ``(n, 3, 3)`` in this package's foot axes:
+    the posed hindfoot turned about ``z_u = unit(AJC - TOE)`` by ``δ - γ(t)`` (module
+    docstring, "Tibial torsion"); the posed hindfoot itself without torsion."""
+    R_foot = pose.rotations[side + "Foot"]
+    if geometry.torsion(side) == 0.0:
+        return R_foot
+    R_shank = pose.rotations[side + "Shank"]
+    long_axis = pose.joint_centres[side + "AJC"] - pose.markers[side + "TOE"]
+    long_axis = long_axis / np.linalg.norm(long_axis, axis=-1, keepdims=True)
+    knee = _apply(R_shank, _knee_axis_in_shank(geometry, side))
+    angle = cgm23_static_correction(geometry, side) - _turn_about(long_axis, knee, R_shank[:, :, 1])
+    c, s_ = np.cos(angle)[:, None, None], np.sin(angle)[:, None, None]
+    k = long_axis
+    skew = np.zeros(k.shape + (3,))
+    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    skew -= np.swapaxes(skew, 1, 2)
+    turn = c * np.eye(3) + s_ * skew + (1.0 - c) * np.einsum("ni,nj->nij", k, k)
+    return turn @ R_foot
+
+
 # ----------------------------------------------------------------------------- pose
 def add_cgm24_markers(
     pose: Pose, forefoot_angles: dict[str, np.ndarray], geometry: Cgm24Geometry
@@ -462,11 +567,17 @@ def cgm24_walking_state(
     """Exact CGM 2.4 walker at ``times`` (s): ``(pose, angles, forefoot_angles, phase)``.
 
     The pelvis, hip, knee and ankle motion is that of
-    :func:`~fuzzygait.synthetic.generate.walking_state`; the pose is lowered by
-    :meth:`Cgm24Geometry.height_shift`; ``forefoot_angles`` are the known curves.
+    :func:`~fuzzygait.synthetic.generate.walking_state` (the knee rotation plus the
+    geometry's tibial torsion); the pose is lowered by :meth:`Cgm24Geometry.height_shift`;
+    ``forefoot_angles`` are the known curves.
     """
     g = _geometry(geometry, hjc)
     pose, angles, phase = walking_state(times, g, first_strike_time, x_offset)
+    if g.has_torsion:  # re-pose with the shank on the ankle axis (module docstring)
+        for side in SIDES:
+            angles[(side, "knee")] = g.knee_with_torsion(angles[(side, "knee")], side)
+        origin = 0.5 * (pose.markers["LASI"] + pose.markers["RASI"])
+        pose = pose_lower_body(origin, angles[("L", "pelvis")], angles, g)
     forefoot = {side: forefoot_angle_curves(phase, side, g) for side in SIDES}
     add_cgm24_markers(pose, forefoot, g)
     return _shifted(pose, g.height_shift()), angles, forefoot, phase
@@ -477,6 +588,7 @@ def make_cgm24_walking(
     rate: float = 100.0,
     geometry: Cgm24Geometry | None = None,
     hjc: str | None = None,
+    foot_truth: str = "hindfoot",
 ) -> tuple[Trial, pd.DataFrame]:
     """Clean CGM 2.4 walking trial with exactly known angles (deterministic).
 
@@ -485,8 +597,14 @@ def make_cgm24_walking(
 
     Args:
         n_cycles, rate: as for ``make_walking_trial``.
-        geometry: :class:`Cgm24Geometry` (default one).
+        geometry: :class:`Cgm24Geometry` (default one; its ``tibial_torsion`` twists
+            the tibiae, module docstring).
         hjc: ``"hara"`` or ``"davis"`` (default: the geometry's, ``"hara"``).
+        foot_truth: what the truth's ankle and foot-progression columns are of:
+            ``"hindfoot"`` the posed hindfoot (every model version's foot, and CGM 2.3's
+            without a tibial torsion), ``"cgm2.3"`` pyCGM2's CGM 2.3 foot on the ankle
+            axis turned by the torsion (:func:`cgm23_foot_rotation`).  The markers are
+            the same.
 
     Returns:
         ``(trial, truth)``: the markers of :data:`CGM24_DYNAMIC_LABELS`, events and
@@ -496,6 +614,8 @@ def make_cgm24_walking(
         raise ParameterError(f"n_cycles must be >= 1; got {n_cycles}")
     if not np.isfinite(rate) or rate <= 0:
         raise ParameterError(f"rate must be a positive number of Hz; got {rate}")
+    if foot_truth not in FOOT_TRUTHS:
+        raise ParameterError(f"foot_truth must be one of {FOOT_TRUTHS}; got {foot_truth!r}")
     g = _geometry(geometry, hjc)
     first_strike = LEAD_IN_CYCLES * STRIDE_TIME_S
     duration = (LEAD_IN_CYCLES + n_cycles + LEAD_OUT_CYCLES) * STRIDE_TIME_S
@@ -516,10 +636,23 @@ def make_cgm24_walking(
         notes=[f"synthetic CGM 2.4 walking trial generated by fuzzygait.synthetic (clean, "
                f"{g.hjc} HJC)"],
     )  # fmt: skip
+    return trial, _walking_truth(pose, angles, times, g, foot_truth)
+
+
+def _walking_truth(
+    pose: Pose, angles: dict[tuple[str, str], np.ndarray], times: np.ndarray, g: Cgm24Geometry, foot_truth: str
+) -> pd.DataFrame:
+    """The truth table of :func:`make_cgm24_walking` (module docstring)."""
     columns: dict[str, np.ndarray] = {
-        "frame": np.arange(1, n_frames + 1),
+        "frame": np.arange(1, len(times) + 1),
         "time_s": np.round(times, 9),
     }
+    feet = {side: pose.rotations[side + "HindFoot"] for side in SIDES}
+    for side in SIDES:
+        if foot_truth == "cgm2.3" and g.torsion(side) != 0.0:  # else the same foot
+            feet[side] = cgm23_foot_rotation(pose, g, side)
+            relative = np.swapaxes(pose.rotations[side + "Shank"], 1, 2) @ feet[side]
+            angles = {**angles, (side, "ankle"): joint_angles_from_rotation(relative, side, "ankle")}
     for side in SIDES:
         for joint, name in SEGMENT_ANGLE_NAMES.items():
             for i, axis in enumerate("XYZ"):
@@ -536,10 +669,10 @@ def make_cgm24_walking(
         for i, axis in enumerate("XYZ"):
             columns[f"{side}FJC_{axis}"] = pose.joint_centres[side + "FJC"][:, i]
     for side in SIDES:
-        progression = foot_progression_angles(pose.rotations[side + "HindFoot"], side)
+        progression = foot_progression_angles(feet[side], side)
         for i, axis in enumerate("XYZ"):
             columns[f"{side}FootProgressAngles_{axis}"] = progression[:, i]
-    return trial, pd.DataFrame(columns)
+    return pd.DataFrame(columns)
 
 
 def make_cgm24_static(
@@ -548,7 +681,8 @@ def make_cgm24_static(
     geometry: Cgm24Geometry | None = None,
     hjc: str | None = None,
 ) -> Trial:
-    """CGM 2.4 static standing trial: joint and pelvis angles 0, pelvis level.
+    """CGM 2.4 static standing trial: joint and pelvis angles 0 (the knee rotation: the
+    geometry's tibial torsion, module docstring), pelvis level.
 
     The forefoot markers are where :class:`Cgm24Geometry` puts them (ForeFootAngles =
     :func:`neutral_forefoot_angles`); :func:`cgm24_static_pose` gives the skeleton.
@@ -587,6 +721,8 @@ def cgm24_static_pose(
     origin = np.tile([0.0, 0.0, g.standing_pelvis_height()], (n, 1))
     zeros = np.zeros((n, 3))
     angles = {(side, joint): zeros for side in SIDES for joint in JOINTS}
+    if g.has_torsion:
+        angles.update({(side, "knee"): g.knee_with_torsion(zeros, side) for side in SIDES})
     pose = pose_lower_body(origin, zeros, angles, g, medial_markers=True)
     neutral = {side: np.tile(neutral_forefoot_angles(g, side), (n, 1)) for side in SIDES}
     return add_cgm24_markers(pose, neutral, g)
