@@ -9,6 +9,10 @@ Gait trials), plus a forefoot.  Nothing is solved with :mod:`fuzzygait.kinematic
 code this data tests); the CGM 2.x definitions used are pyCGM2's (as summarised in the
 project's CGM 2.x notes: Hara HJC, medial KJC/AJC, CGM 2.4 forefoot).
 
+The subject's geometry is :mod:`~fuzzygait.synthetic.cgm24_geometry`, the forefoot and
+the CGM 2.3 foot :mod:`~fuzzygait.synthetic.cgm24_foot` (their names importable from here
+too); this docstring defines all three.
+
 Frames and units
 ----------------
 Lab: X = walking direction, Y = left, Z = up; mm, degrees.  Segment frames as in
@@ -127,19 +131,28 @@ foot (section above; the same as the hindfoot's without torsion).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
-from fuzzygait.synthetic.gait_curves import (
-    JOINTS,
-    STRIDE_TIME_S,
-    FourierCurve,
-    limb_phase,
+from fuzzygait.synthetic.cgm24_foot import (
+    FJC_MARKER_DIAMETER,
+    FOREFOOT_DEVIATION_CURVES,
+    cgm23_foot_rotation,
+    cgm23_static_correction,
+    fjc_local,
+    forefoot_angle_curves,
+    forefoot_angles_from_rotation,
+    forefoot_rotation,
+    forefoot_static_axes,
+    neutral_forefoot_angles,
+    pycgm2_forefoot_frame,
 )
+from fuzzygait.synthetic.cgm24_geometry import HJC_METHODS, MAX_TIBIAL_TORSION, Cgm24Geometry, hara_hjc
+from fuzzygait.synthetic.gait_curves import JOINTS, STRIDE_TIME_S
 from fuzzygait.synthetic.generate import (
     JOINT_CENTRE_NAMES,
     LEAD_IN_CYCLES,
@@ -153,18 +166,12 @@ from fuzzygait.synthetic.generate import (
 from fuzzygait.synthetic.leg_model import (
     SIDES,
     Pose,
-    SubjectGeometry,
     _apply,
     _side_factor,
     foot_progression_angles,
     joint_angles_from_rotation,
-    joint_rotation,
     pose_lower_body,
-    rot_z,
 )
-
-#: Hip joint centre regressions of :func:`make_cgm24_static` / :func:`make_cgm24_walking`.
-HJC_METHODS = ("davis", "hara")
 
 #: Per-side marker labels of the CGM 2.4 dynamic trial, in column order.
 CGM24_SIDE_LABELS: tuple[str, ...] = (
@@ -184,299 +191,16 @@ CGM24_STATIC_LABELS: tuple[str, ...] = CGM24_DYNAMIC_LABELS + CGM24_MEDIAL_LABEL
 #: Markers of the forefoot segment; TOE, the mid-foot joint (rotation centre), is on the
 #: hindfoot too, HEE only on the hindfoot.
 FOREFOOT_MARKERS: tuple[str, ...] = ("TOE", "FMH", "SMH", "VMH")
-
-#: Forefoot-marker excursion from the static pose during walking: ForeFootAngles
-#: (degrees, ``(X, Y, Z)``) minus the static (neutral) ones, as functions of the limb's
-#: own phase; a few degrees, smooth, periodic.
-FOREFOOT_DEVIATION_CURVES: tuple[FourierCurve, FourierCurve, FourierCurve] = (
-    FourierCurve(1.0, (1.5, -1.0), (-2.5, 0.5)),
-    FourierCurve(-0.5, (1.0, 0.3), (2.0, -0.4)),
-    FourierCurve(0.5, (-1.5, 0.5), (1.0, 0.2)),
-)
-#: Diameter pyCGM2 uses to put the forefoot joint centre below TOE, mm (its default).
-FJC_MARKER_DIAMETER = 14.0
 #: ``foot_truth`` values of :func:`make_cgm24_walking`.
 FOOT_TRUTHS = ("hindfoot", "cgm2.3")
-#: Largest tibial torsion the generator takes, rad (a torsion is tens of degrees).
-MAX_TIBIAL_TORSION = np.pi / 4
 
 
-# ----------------------------------------------------------------------------- HJC
-def hara_hjc(
-    leg_length: float,
-    side: str,
-    marker_diameter: float = 14.0,
-    base_plate: float = 2.0,
-) -> np.ndarray:
-    """Hara et al. (2016) hip joint centre in the pelvis frame, mm, as pyCGM2 (CGM 2.1+).
-
-    Pelvis frame: origin ASIS midpoint (marker centres), y = RASI -> LASI, x anterior, z
-    up.  With ``LL`` = that side's leg length, ``d`` = marker diameter, ``t`` = base plate
-    and ``s = +1`` left, ``-1`` right::
-
-        x = 11 - 0.063 LL - d/2 - t
-        y = s (8 + 0.086 LL)
-        z = -9 - 0.078 LL
-
-    pyCGM2's HJC decorator uses its defaults ``d = 14``, ``t = 2`` mm whatever the
-    session's marker diameter (so ``x = 2 - 0.063 LL``); so do the defaults here.
-    (pyCGM2 output for LL = 1000 mm: ``(-61, +-94, -87)``.)
-    """
-    s = _side_factor(side)
-    x = 11.0 - 0.063 * leg_length - marker_diameter / 2.0 - base_plate
-    y = s * (8.0 + 0.086 * leg_length)
-    z = -9.0 - 0.078 * leg_length
-    return np.array([x, y, z])
-
-
-# ----------------------------------------------------------------------------- geometry
-@dataclass(frozen=True)
-class Cgm24Geometry(SubjectGeometry):
-    """:class:`~fuzzygait.synthetic.leg_model.SubjectGeometry` plus the CGM 2.4 markers.
-
-    Local positions are of the left side (the right side mirrors y), mm.
-
-    Attributes:
-        hjc: ``"hara"`` or ``"davis"``: where the true hip joint centre is.
-        thi_fraction, thi_offset, tib_fraction, tib_offset: as in ``SubjectGeometry``,
-            defaults of a real CGM 2.4 session's wand markers (module docstring).
-        thap, thad: thigh cluster markers ``(anterior, lateral, fraction)``: ``anterior``
-            and ``lateral`` in mm along the thigh's x and ``s y``, ``fraction`` = height
-            above the KJC as a fraction of the thigh length.
-        tiap, tiad: the same for the shank cluster (height above the AJC / shank length).
-        toe_local, hee_local: as in ``SubjectGeometry`` but CGM 2.4's TOE sits on the
-            dorsal mid-foot (pyCGM2: "TOE = CUN"), HEE at the same height (so HEE->TOE
-            stays parallel to the foot x axis).  TOE is also the mid-foot joint: the
-            forefoot rotates about it.
-        fmh_local, smh_local, vmh_local: forefoot markers in the hindfoot frame relative
-            to the AJC in the static pose, left side (``y < 0`` = medial).
-        hara_marker_diameter, hara_base_plate: marker diameter and base plate of the
-            Hara regression, mm (pyCGM2's fixed 14 and 2, not the session's diameter).
-        tibial_torsion: ``(left, right)`` rad, the angle from the knee flexion axis to
-            the ankle axis about the shank's long axis, Nexus' / pyCGM2's sign (negative
-            = external; module docstring, "Tibial torsion"); default none.
-    """
-
-    hjc: str = "hara"
-    thi_fraction: float = 0.24
-    thi_offset: float = 110.0
-    tib_fraction: float = 0.47
-    tib_offset: float = 108.0
-    thap: tuple[float, float, float] = (63.0, -23.0, 0.71)
-    thad: tuple[float, float, float] = (80.0, -20.0, 0.33)
-    tiap: tuple[float, float, float] = (62.0, -18.0, 0.725)
-    tiad: tuple[float, float, float] = (62.0, -9.0, 0.425)
-    toe_local: tuple[float, float, float] = (95.0, 0.0, -40.0)
-    hee_local: tuple[float, float, float] = (-50.0, 0.0, -40.0)
-    fmh_local: tuple[float, float, float] = (150.0, -35.0, -68.0)
-    smh_local: tuple[float, float, float] = (150.0, -5.0, -60.0)
-    vmh_local: tuple[float, float, float] = (135.0, 38.0, -70.0)
-    hara_marker_diameter: float = 14.0
-    hara_base_plate: float = 2.0
-    tibial_torsion: tuple[float, float] = (0.0, 0.0)
-
-    def __post_init__(self) -> None:
-        if self.hjc not in HJC_METHODS:
-            raise ParameterError(f"hjc must be one of {HJC_METHODS}; got {self.hjc!r}")
-        torsion = np.asarray(self.tibial_torsion, dtype=float)
-        if torsion.shape != (2,) or not np.all(np.abs(torsion) <= MAX_TIBIAL_TORSION):
-            raise ParameterError(
-                f"tibial_torsion must be (left, right) in rad within ±{MAX_TIBIAL_TORSION:.3f}; "
-                f"got {self.tibial_torsion!r}"
-            )
-
-    def torsion(self, side: str) -> float:
-        """The tibial torsion of ``side``, rad."""
-        return float(self.tibial_torsion[0 if _side_factor(side) > 0 else 1])
-
-    @property
-    def has_torsion(self) -> bool:
-        """Either tibia is twisted."""
-        return any(t != 0.0 for t in self.tibial_torsion)
-
-    def knee_with_torsion(self, knee: np.ndarray, side: str) -> np.ndarray:
-        """Knee angles ``(n, 3)`` (deg) from the thigh to the posed (ankle-axis) shank:
-        ``knee`` (thigh to the knee-axis frame) with the torsion added to the rotation,
-        since ``R_knee @ R_z(-s τ)`` is ``R_z(rs r) @ R_z(rs τ)`` in the knee's sequence
-        (``rs = -s``)."""
-        out = np.array(knee, dtype=float)
-        out[:, 2] += np.degrees(self.torsion(side))
-        return out
-
-    def hjc_local(self, side: str) -> np.ndarray:
-        """True hip joint centre of ``side`` in the pelvis frame (``hjc`` regression), mm."""
-        if self.hjc == "hara":
-            return hara_hjc(
-                self.leg_length, side, self.hara_marker_diameter, self.hara_base_plate
-            )
-        return super().hjc_local(side)
-
-    def height_shift(self) -> float:
-        """Standing-height difference to the Davis (Plug-in Gait) subject, mm (<= 0 Hara)."""
-        return self.standing_pelvis_height() - replace(self, hjc="davis").standing_pelvis_height()
-
-    def foot_local(self, side: str) -> dict[str, np.ndarray]:
-        """HEE, TOE, FMH, SMH, VMH of ``side`` in the static hindfoot frame (AJC origin)."""
-        mirror = np.array([1.0, _side_factor(side), 1.0])
-        return {
-            "HEE": np.asarray(self.hee_local, dtype=float) * mirror,
-            "TOE": np.asarray(self.toe_local, dtype=float) * mirror,
-            "FMH": np.asarray(self.fmh_local, dtype=float) * mirror,
-            "SMH": np.asarray(self.smh_local, dtype=float) * mirror,
-            "VMH": np.asarray(self.vmh_local, dtype=float) * mirror,
-        }
-
-
+# ----------------------------------------------------------------------------- pose
 def _cluster_local(spec: tuple[float, float, float], length: float, s: float) -> np.ndarray:
     anterior, lateral, fraction = spec
     return np.array([anterior, s * lateral, fraction * length])
 
 
-# ----------------------------------------------------------------------------- forefoot
-def forefoot_rotation(angles: np.ndarray, side: str) -> np.ndarray:
-    """Forefoot relative to hindfoot, ``(n, 3, 3)``, from ForeFootAngles ``(n, 3)`` (deg).
-
-    pyCGM2's CGM 2.4 definition (``R_rel = R_hindfoot^T R_forefoot`` of its anatomical
-    frames, intrinsic Y-X-Z Cardan ``(e1, e2, e3)``, left output ``(-e1, -e3, -e2)``, right
-    ``(-e1, +e3, +e2)``; both frames with Z along the foot, posterior, X dorsal, Y left)
-    written in this package's foot frames (x anterior, y left, z dorsal = pyCGM2's frame
-    turned by ``R_y(90 deg)``) is the ankle's Y-Z-X sequence with the ankle's signs:
-    ``R_y(-X) @ R_z(-s Z) @ R_x(s Y)`` (``s = +1`` left, ``-1`` right), i.e.
-    :func:`~fuzzygait.synthetic.leg_model.joint_rotation` with ``joint="ankle"``.  So X
-    + = forefoot dorsiflexion (toes up), Y + = the forefoot's lateral border up
-    (eversion-like, as the Plug-in Gait ankle Y), Z + = forefoot adduction (toes medial).
-    """
-    a = np.atleast_2d(np.asarray(angles, dtype=float))
-    return joint_rotation(a[:, 0], a[:, 1], a[:, 2], side, "ankle")
-
-
-def forefoot_angles_from_rotation(rotation: np.ndarray, side: str) -> np.ndarray:
-    """ForeFootAngles ``(n, 3)`` in degrees of ``R_hindfoot^T @ R_forefoot``.
-
-    The exact inverse of :func:`forefoot_rotation` (for ``|Y| < 90`` deg).
-    """
-    return joint_angles_from_rotation(rotation, side, "ankle")
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
-
-
-#: pyCGM2's foot axes (X dorsal, Y left, Z posterior) in this package's foot axes (x
-#: anterior, y left, z dorsal): ``R_pyCGM2 = R_here @ _PYCGM2_FOOT_AXES``.
-_PYCGM2_FOOT_AXES = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-
-
-def pycgm2_forefoot_frame(
-    toe: np.ndarray, fmh: np.ndarray, vmh: np.ndarray, smh: np.ndarray, side: str,
-    diameter: float = FJC_MARKER_DIAMETER,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """pyCGM2's CGM 2.4 forefoot construction on one set of marker positions (3-vectors).
-
-    * FJC: ``n = unit(VMH - TOE) x unit(FMH - TOE)``, ``z = -n`` (left) / ``+n`` (right),
-      ``FJC = TOE - diameter z``;
-    * technical frame [FMH, TOE, VMH]: ``Z = unit(TOE - FMH)``, ``X = -/+ unit(Z x (VMH -
-      FMH))`` (left/right), ``Y = Z x X``; vSMH = SMH with its local X set to 0 (SMH
-      projected onto the TOE-FMH-VMH plane);
-    * anatomical frame [vSMH, FJC, VMH]: ``Z = unit(FJC - vSMH)``, ``X = -/+ unit(Z x
-      (VMH - vSMH))``, ``Y = Z x X``, origin vSMH.
-
-    Returns ``(fjc, vsmh, axes)`` with ``axes`` the anatomical frame in **this package's
-    foot-axis convention** (columns x anterior, y left, z dorsal: pyCGM2's ``[X Y Z] @
-    _PYCGM2_FOOT_AXES.T``), in the coordinates the points are given in.
-    """
-    sign = -_side_factor(side)  # pyCGM2: ZXiY (X = -a2) on the left, ZXY on the right
-    n = np.cross(_unit(vmh - toe), _unit(fmh - toe))
-    fjc = toe - diameter * (sign * n)
-
-    def frame(a1: np.ndarray, v: np.ndarray) -> np.ndarray:
-        z = _unit(a1)
-        x = sign * _unit(np.cross(z, v))
-        return np.stack([x, np.cross(z, x), z], axis=-1)
-
-    technical = frame(toe - fmh, vmh - fmh)
-    local = technical.T @ (smh - toe)
-    vsmh = toe + technical @ np.array([0.0, local[1], local[2]])
-    anatomical = frame(fjc - vsmh, vmh - vsmh)
-    return fjc, vsmh, anatomical @ _PYCGM2_FOOT_AXES.T
-
-
-def forefoot_static_axes(geometry: Cgm24Geometry, side: str) -> np.ndarray:
-    """``Q``: pyCGM2's forefoot anatomical frame in the static hindfoot frame, ``(3, 3)``."""
-    local = geometry.foot_local(side)
-    return pycgm2_forefoot_frame(local["TOE"], local["FMH"], local["VMH"], local["SMH"], side)[2]
-
-
-def fjc_local(geometry: Cgm24Geometry, side: str) -> np.ndarray:
-    """pyCGM2's forefoot joint centre in the hindfoot frame (AJC origin), mm."""
-    local = geometry.foot_local(side)
-    return pycgm2_forefoot_frame(local["TOE"], local["FMH"], local["VMH"], local["SMH"], side)[0]
-
-
-def neutral_forefoot_angles(geometry: Cgm24Geometry | None, side: str) -> np.ndarray:
-    """ForeFootAngles ``(3,)`` (deg) of the static pose (forefoot markers as placed)."""
-    g = geometry or Cgm24Geometry()
-    return forefoot_angles_from_rotation(forefoot_static_axes(g, side)[None], side)[0]
-
-
-def forefoot_angle_curves(
-    phase: np.ndarray | float, side: str, geometry: Cgm24Geometry | None = None
-) -> np.ndarray:
-    """Known ForeFootAngles ``(n, 3)`` (deg) at the global ``phase`` for ``side``:
-    :func:`neutral_forefoot_angles` + :data:`FOREFOOT_DEVIATION_CURVES`."""
-    p = limb_phase(np.atleast_1d(np.asarray(phase, dtype=float)), side)
-    deviation = np.stack([curve(p) for curve in FOREFOOT_DEVIATION_CURVES], axis=-1)
-    return neutral_forefoot_angles(geometry, side) + deviation
-
-
-# ----------------------------------------------------------------------------- CGM 2.3 foot
-def _turn_about(axis: np.ndarray, from_axis: np.ndarray, to_axis: np.ndarray) -> np.ndarray:
-    """Per row, the angle (rad) about the unit ``axis`` from ``unit(from_axis × axis)`` to
-    ``unit(to_axis × axis)``: how far the uncorrected-foot x axis built on ``to_axis``
-    is turned from the one built on ``from_axis``."""
-    a = np.cross(from_axis, axis)
-    b = np.cross(to_axis, axis)
-    a /= np.linalg.norm(a, axis=-1, keepdims=True)
-    b /= np.linalg.norm(b, axis=-1, keepdims=True)
-    return np.arctan2(np.einsum("ni,ni->n", axis, np.cross(a, b)), np.einsum("ni,ni->n", a, b))
-
-
-def _knee_axis_in_shank(geometry: Cgm24Geometry, side: str) -> np.ndarray:
-    """The knee flexion axis in the posed shank's frame: ``R_z(s τ) e_y``, ``(3,)``."""
-    return rot_z(_side_factor(side) * geometry.torsion(side))[0] @ np.array([0.0, 1.0, 0.0])
-
-
-def cgm23_static_correction(geometry: Cgm24Geometry, side: str) -> float:
-    """``δ`` (rad): :func:`_turn_about` of the static pose (foot = shank frame, TOE at
-    ``toe_local`` from the AJC), from the knee axis to the shank's y axis."""
-    long_axis = -np.asarray(geometry.foot_local(side)["TOE"], dtype=float)
-    long_axis /= np.linalg.norm(long_axis)
-    knee = _knee_axis_in_shank(geometry, side)
-    return float(_turn_about(long_axis[None], knee[None], np.array([[0.0, 1.0, 0.0]]))[0])
-
-
-def cgm23_foot_rotation(pose: Pose, geometry: Cgm24Geometry, side: str) -> np.ndarray:
-    """pyCGM2's CGM 2.3 foot of a posed walker, ``(n, 3, 3)`` in this package's foot axes:
-    the posed hindfoot turned about ``z_u = unit(AJC - TOE)`` by ``δ - γ(t)`` (module
-    docstring, "Tibial torsion"); the posed hindfoot itself without torsion."""
-    R_foot = pose.rotations[side + "Foot"]
-    if geometry.torsion(side) == 0.0:
-        return R_foot
-    R_shank = pose.rotations[side + "Shank"]
-    long_axis = pose.joint_centres[side + "AJC"] - pose.markers[side + "TOE"]
-    long_axis = long_axis / np.linalg.norm(long_axis, axis=-1, keepdims=True)
-    knee = _apply(R_shank, _knee_axis_in_shank(geometry, side))
-    angle = cgm23_static_correction(geometry, side) - _turn_about(long_axis, knee, R_shank[:, :, 1])
-    c, s_ = np.cos(angle)[:, None, None], np.sin(angle)[:, None, None]
-    k = long_axis
-    skew = np.zeros(k.shape + (3,))
-    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-    skew -= np.swapaxes(skew, 1, 2)
-    turn = c * np.eye(3) + s_ * skew + (1.0 - c) * np.einsum("ni,nj->nij", k, k)
-    return turn @ R_foot
-
-
-# ----------------------------------------------------------------------------- pose
 def add_cgm24_markers(
     pose: Pose, forefoot_angles: dict[str, np.ndarray], geometry: Cgm24Geometry
 ) -> Pose:
@@ -726,3 +450,38 @@ def cgm24_static_pose(
     pose = pose_lower_body(origin, zeros, angles, g, medial_markers=True)
     neutral = {side: np.tile(neutral_forefoot_angles(g, side), (n, 1)) for side in SIDES}
     return add_cgm24_markers(pose, neutral, g)
+
+
+#: The session's public names, with the geometry (:mod:`~fuzzygait.synthetic.cgm24_geometry`)
+#: and the feet (:mod:`~fuzzygait.synthetic.cgm24_foot`) it is built from.
+__all__ = [
+    "CGM24_DYNAMIC_LABELS",
+    "CGM24_MEDIAL_LABELS",
+    "CGM24_SIDE_LABELS",
+    "CGM24_STATIC_LABELS",
+    "FJC_MARKER_DIAMETER",
+    "FOOT_TRUTHS",
+    "FOREFOOT_DEVIATION_CURVES",
+    "FOREFOOT_MARKERS",
+    "HJC_METHODS",
+    "MAX_TIBIAL_TORSION",
+    "Cgm24Geometry",
+    "add_cgm24_markers",
+    "cgm23_foot_rotation",
+    "cgm23_static_correction",
+    "cgm24_static_pose",
+    "cgm24_walking_state",
+    "fjc_columns",
+    "fjc_local",
+    "forefoot_angle_columns",
+    "forefoot_angle_curves",
+    "forefoot_angles_from_rotation",
+    "forefoot_rotation",
+    "forefoot_static_axes",
+    "forefoot_truth",
+    "hara_hjc",
+    "make_cgm24_static",
+    "make_cgm24_walking",
+    "neutral_forefoot_angles",
+    "pycgm2_forefoot_frame",
+]
