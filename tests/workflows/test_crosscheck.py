@@ -15,11 +15,13 @@ import numpy as np
 import pytest
 
 from fuzzygait.io import read_c3d, write_c3d
+from fuzzygait.io.subject import read_subject
 from fuzzygait.synthetic.generate import make_walking_trial
 from fuzzygait.synthetic.leg_model import SubjectGeometry
-from fuzzygait.workflows.angles import Preprocessing, model_output_trial, run_angles
+from fuzzygait.workflows.angles import Preprocessing, calibrate_static, model_output_trial, resolve_subject, run_angles
 from fuzzygait.workflows.compare import compare_trial
-from fuzzygait.workflows.crosscheck import AGREE_DEG, FLAG_DEG, compare_angles, stored_angle_names
+from fuzzygait.workflows.crosscheck import AGREE_DEG, FLAG_DEG, compare_angles, recover_flat_foot, stored_angle_names
+from fuzzygait.workflows.subject_resolution import for_static_calibration, settle_marker_diameter
 from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run_here, shared_file
 
 RAW = Preprocessing(filter=False)
@@ -142,3 +144,27 @@ def test_a_second_run_of_the_written_c3d_compares_with_our_own_outputs(tmp_path:
     run = run_angles(out, preprocessing=RAW)
     assert run.crosscheck is not None and max(run.crosscheck.groups.values()) < 1e-3
     assert np.isfinite(list(run.crosscheck.groups.values())).all()
+
+
+def test_a_static_trial_without_stored_angles_leaves_foot_flat_off() -> None:
+    static = read_c3d(SAMPLE_DATA / "static.c3d")
+    assert recover_flat_foot(static, read_subject(SAMPLE_DATA / "subject.toml")) is None
+
+
+@needs_shared
+@pytest.mark.parametrize(("name", "flat"), [("PiG_Calibration-FlatFoot-Full.c3d", True),
+                                            ("PiGKad_Calibration.c3d", False)])  # fmt: skip
+def test_the_static_trials_foot_flat_is_recovered_from_its_outputs(name: str, flat: bool) -> None:
+    """Nexus' foot-flat setting is not in the file; its static outputs tell it, and the
+    calibration then gives Nexus' offsets with nothing given by hand."""
+    static = read_c3d(shared_file("pig-options", name))
+    subject = settle_marker_diameter(resolve_subject(static, None), None, (static,)).subject
+    calibration = calibrate_static(static, for_static_calibration(subject, None))
+    assert calibration.flat_foot is flat
+    assert f"foot flat {'on' if flat else 'off'}, as the static trial's own stored Plug-in Gait angles were made " \
+           "(reproduced with it, not without)" in calibration.notes
+    motion = read_c3d(shared_file("pig-options", name.replace("Calibration", "Motion")))
+    for side in "LR":
+        ours, nexus = calibration.subject.side(side), motion.parameters
+        assert abs(ours.static_plant_flex - nexus[f"{side}StaticPlantFlex"]) < 1e-6
+        assert abs(ours.static_rot_off - nexus[f"{side}StaticRotOff"]) < 1e-6

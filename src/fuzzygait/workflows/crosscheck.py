@@ -43,6 +43,8 @@ AGREE_DEG = 0.01
 LENGTH_TOLERANCE_MM = 0.05
 ANGLE_TOLERANCE_RAD = 1e-4
 AXES = ("X", "Y", "Z")
+#: The angle groups the foot-flat setting changes.
+FOOT_GROUPS = ("LAnkleAngles", "RAnkleAngles", "LFootProgressAngles", "RFootProgressAngles")
 #: Endings of the PROCESSING names that are static offsets (rad).
 OFFSET_SUFFIXES = ("Rotation", "Torsion", "AbAdd", "PlantFlex", "RotOff")
 
@@ -255,3 +257,19 @@ def check_run(
         return check.with_cause(f"foot flat (the file's static outputs were made with foot flat "
                                 f"{'off' if flat_foot else 'on'})")  # fmt: skip
     return check
+
+
+def recover_flat_foot(static: Trial, subject: SubjectParameters, model: str = "cgm1.0") -> bool | None:
+    """Plug-in Gait's foot-flat setting of the static run whose outputs ``static`` stores:
+    True (False) when its stored ankle and foot angles are reproduced within
+    :data:`AGREE_DEG` with foot flat on (off) and not with the other; None when the trial
+    stores none, neither or both agree (a trial whose heel and toe are level)."""
+    if not stored_angle_names(static, ["LAnkleAngles", "RAnkleAngles"]) or not is_standing(static):
+        return None
+    agree = {}
+    for flat, foot in ((True, "flat"), (False, "heel")):
+        angles = compute_lower_body(static, subject, model=model, static_foot=foot).angles
+        groups = group_maxima(compare_angles(angles, static))
+        feet = [groups[name] for name in FOOT_GROUPS if name in groups]
+        agree[flat] = bool(feet) and max(feet) <= AGREE_DEG
+    return agree[True] if agree[True] != agree[False] else None
