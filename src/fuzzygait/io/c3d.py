@@ -9,7 +9,9 @@ as :class:`~fuzzygait.core.trial.AnalysisValue` objects.
 
 :func:`write_c3d` writes a trial back as a float C3D that Vicon Nexus, Mokka and ezc3d
 open: markers, model outputs (with Vicon's ``POINT:ANGLES`` etc. type lists), events,
-subject parameters and the subject prefix.
+subject parameters and the subject prefix; given the file the trial was read from, also
+everything of that file it does not change (analog channels, force platforms, every other
+parameter group, :mod:`fuzzygait.io.c3d_writeback`).
 
 Every problem with a file raises one :class:`~fuzzygait.core.errors.C3DError` whose message
 names the file and the cause.
@@ -22,7 +24,7 @@ import re
 import unicodedata
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -32,6 +34,9 @@ from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
 from fuzzygait.io.subject import PROCESSING_NAMES
 
+if TYPE_CHECKING:
+    from fuzzygait.io.c3d_writeback import Analogs
+
 
 class _EzC3D(Protocol):
     """The part of ``ezc3d.c3d`` (untyped) that the writer uses."""
@@ -39,6 +44,10 @@ class _EzC3D(Protocol):
     def __getitem__(self, key: str) -> Any: ...
 
     def add_parameter(self, group: str, name: str, value: object) -> None: ...
+
+    def add_event(self, **kwargs: object) -> None: ...
+
+    def write(self, path: str) -> None: ...
 
 
 #: Length units the reader understands, as factors to millimetres.
@@ -372,8 +381,12 @@ def _subject_name(raw: RawC3D) -> str:
 
 # =========================================================================== writing
 def write_c3d(
-    trial: Trial, path: str | os.PathLike[str], *, text_parameters: Mapping[str, Mapping[str, str]] | None = None
-) -> None:
+    trial: Trial,
+    path: str | os.PathLike[str],
+    *,
+    text_parameters: Mapping[str, Mapping[str, str]] | None = None,
+    source: str | os.PathLike[str] | None = None,
+) -> list[str]:
     """Write ``trial`` to a float C3D file at ``path``.
 
     Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
@@ -381,23 +394,55 @@ def write_c3d(
     ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. The file appears
     atomically: on any error nothing is left at ``path``.
 
+    With ``source`` (the C3D file the trial was read from) everything of that file the
+    writer does not change is carried over (:mod:`fuzzygait.io.c3d_writeback`): its analog
+    channels (samples and ``ANALOG`` parameters, cut to the trial's frames), force
+    platforms, the ``EVENT`` group when the trial's events are the file's, and every
+    other parameter group and parameter, byte for byte.
+
     Args:
         text_parameters: more parameters, ``{GROUP: {NAME: text}}`` (e.g. ``{"FUZZYGAIT":
             {"MODEL": "cgm2.3"}}``), each a one-string character parameter; groups other
             than the standard ones are ignored by C3D readers that do not know them.
+        source: the input C3D file to carry over (None: the trial alone is written).
+
+    Returns:
+        Notes for the user: one line naming what of ``source`` could not be carried over
+        and why ([] when everything was, or without ``source``).
 
     Raises:
         C3DError: the file cannot be written (names the path and the cause).
     """
-    import ezc3d
-
     path = Path(path)
     prefix = trial.label_prefix
-    names = list(trial.marker_labels) + list(trial.outputs)
-    too_long = [n for n in names if len(prefix + n) > _MAX_LABEL]
+    too_long = [n for n in [*trial.marker_labels, *trial.outputs] if len(prefix + n) > _MAX_LABEL]
     if too_long:
         raise _fail(path, f"labels longer than {_MAX_LABEL} characters: {too_long}; shorten them")
 
+    def write_stage(target: Path, analogs: Analogs | None = None) -> None:
+        _write_with_ezc3d(_ezc3d_trial(trial, text_parameters, analogs), target)
+
+    if source is None:
+        _atomic_write(path, write_stage)
+        return []
+    from fuzzygait.io.c3d_writeback import open_source, write_back
+
+    back = open_source(Path(source), trial)
+    notes: list[str] = []
+    _atomic_write(path, lambda tmp: notes.extend(write_back(tmp, path, back, trial, write_stage)))
+    return notes
+
+
+def _ezc3d_trial(
+    trial: Trial, text_parameters: Mapping[str, Mapping[str, str]] | None, analogs: Analogs | None
+) -> _EzC3D:
+    """``trial`` as an ezc3d object: points (mm, residual -1 where missing), output type
+    lists, subject, first frame, ``text_parameters`` and events; with ``analogs``, the
+    input's analog samples as stored (scale 1, offset 0: the input's ``ANALOG`` group
+    replaces these parameters afterwards, :mod:`fuzzygait.io.c3d_writeback`)."""
+    import ezc3d
+
+    names = list(trial.marker_labels) + list(trial.outputs)
     data = np.concatenate(
         [trial.markers, np.stack(list(trial.outputs.values()), axis=1)]
         if trial.outputs
@@ -411,7 +456,7 @@ def write_c3d(
 
     c = ezc3d.c3d()
     c["parameters"]["POINT"]["RATE"]["value"] = np.array([trial.rate])
-    c["parameters"]["POINT"]["LABELS"]["value"] = [prefix + n for n in names]
+    c["parameters"]["POINT"]["LABELS"]["value"] = [trial.label_prefix + n for n in names]
     c["parameters"]["POINT"]["DESCRIPTIONS"]["value"] = [""] * len(names)
     c["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
     c["data"]["points"] = block
@@ -432,7 +477,33 @@ def write_c3d(
             description=event.description,
             subject=event.subject,
         )
-    _atomic_write(path, c.write)
+    if analogs is not None:
+        _write_stored_analogs(c, analogs, trial.rate)
+    return c
+
+
+def _write_stored_analogs(c: _EzC3D, analogs: Analogs, rate: float) -> None:
+    """The input's analog samples as stored (placeholder labels, scale 1, offset 0) at
+    ``analogs.per_frame`` samples a frame of ``rate`` Hz."""
+    n = analogs.stored.shape[0]
+    c["data"]["analogs"] = analogs.stored[None]  # (1, channels, samples)
+    c.add_parameter("ANALOG", "LABELS", [f"A{i + 1}" for i in range(n)])
+    c.add_parameter("ANALOG", "SCALE", np.ones(n))
+    c.add_parameter("ANALOG", "RATE", np.array([analogs.per_frame * rate]))
+
+
+def _write_with_ezc3d(c: _EzC3D, target: Path) -> None:
+    """``c.write`` to ``target``: ezc3d appends ``.c3d`` to a name that does not end so
+    (e.g. ``OUT.C3D``), so it writes beside it and the file is moved onto ``target``."""
+    if target.name.endswith(".c3d"):
+        c.write(str(target))
+        return
+    beside = target.with_name(target.name + ".c3d")
+    try:
+        c.write(str(beside))
+        os.replace(beside, target)
+    finally:
+        beside.unlink(missing_ok=True)
 
 
 def _write_output_lists(c: _EzC3D, trial: Trial) -> None:
@@ -462,16 +533,18 @@ def _write_subject(c: _EzC3D, trial: Trial) -> None:
 def _write_trial_frames(c: _EzC3D, trial: Trial) -> None:
     """Record the first frame number in the header (ezc3d counts from 0 there).
 
-    Vicon's ``TRIAL:ACTUAL_START_FIELD`` is not written: ezc3d's Python API can only
-    store integer arrays as floats, which other readers reject for that parameter.
+    Vicon's ``TRIAL:ACTUAL_START_FIELD`` is not written here: ezc3d's Python API can only
+    store integer arrays as floats, which other readers reject for that parameter. An
+    input file's ``TRIAL`` group is carried over as stored (frame fields moved to the
+    trial's frames) by :mod:`fuzzygait.io.c3d_writeback`.
     """
     c["header"]["points"]["first_frame"] = int(trial.first_frame) - 1
 
 
-def _atomic_write(path: Path, write: Callable[[str], object]) -> None:
+def _atomic_write(path: Path, write: Callable[[Path], object]) -> None:
     try:
         with atomic_output(path) as tmp:
-            write(str(tmp))
+            write(tmp)
     except FuzzyGaitError as exc:
         raise _fail(path, str(exc).removeprefix(f"{path}: ")) from None
     except Exception as exc:

@@ -19,7 +19,7 @@ import pandas as pd
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
-from fuzzygait.gait.events import trial_gait_events
+from fuzzygait.gait.events import SOURCE_FILE, trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.calibration_table import sidecar_path
 from fuzzygait.io.subject import SubjectParameters
@@ -93,7 +93,9 @@ def preprocess_file(
     """Read a C3D file, pre-process it and write the result to ``out_file`` (its folder
     created); returns the trial as read after the content checks
     (:func:`fuzzygait.mocap.sanity.check_trial`: implausible samples of the labelled
-    markers blanked, each noted in its ``notes``) and the gap report.
+    markers blanked, each noted in its ``notes``) and the gap report. The written file
+    carries the input's analog channels, force platforms, events and parameters over
+    (:func:`fuzzygait.io.write_c3d`); what could not be is one more note.
 
     Raises:
         C3DError, MarkerError: an absurd rate, a unit mismatch, a marker with too many
@@ -101,7 +103,7 @@ def preprocess_file(
     raw = check_trial(read_c3d(input_file))
     cleaned, gaps = preprocessing.apply(raw)
     Path(out_file).parent.mkdir(parents=True, exist_ok=True)
-    write_c3d(cleaned, out_file)
+    raw.notes.extend(write_c3d(cleaned, out_file, source=input_file))
     return raw, gaps
 
 
@@ -389,7 +391,8 @@ def output_suffix(suffix: str, model: str) -> str:
 
 def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
     """The pre-processed trial with the computed angles and virtual markers as model
-    outputs, the subject parameters used and the events (for ``--c3d-out``).  The angle
+    outputs, the subject parameters used and the events (for ``--c3d-out``: the trial's
+    own, and the detected gait events when it had none).  The angle
     outputs keep Vicon's names (``LKneeAngles``) with ``suffix`` appended
     (:func:`output_suffix`); virtual markers and joint centres are not suffixed."""
     out = run.trial.with_markers(run.trial.markers)
@@ -402,7 +405,7 @@ def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
             out.outputs[name] = values
             out.output_kinds[name] = "modeled_marker" if name.endswith("JC") else "segment_frame"
     out.parameters.update(run.subject.to_processing())
-    out.events = list(run.events)
+    out.events = list(run.trial.events) + ([] if run.event_source == SOURCE_FILE else list(run.events))
     return out
 
 
@@ -450,7 +453,9 @@ class AngleOutputs:
         if self.c3d is not None:
             self.c3d.parent.mkdir(parents=True, exist_ok=True)
             trial = model_output_trial(run, self.suffix)
-            write_c3d(trial, self.c3d, text_parameters=model_parameters(run, self.suffix))
+            # the input's analog channels, force platforms and parameters carried over; a note if not all
+            parameters = model_parameters(run, self.suffix)
+            run.notes += write_c3d(trial, self.c3d, text_parameters=parameters, source=trial.source)
             written.append(self.c3d)
         return written
 
