@@ -41,7 +41,7 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
 from fuzzygait.mocap.sanity import check_trial, moved_markers
-from fuzzygait.workflows.crosscheck import CrossCheck, check_run
+from fuzzygait.workflows.crosscheck import CrossCheck, check_run, recover_flat_foot
 from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
     MARKER_DIAMETER_RANGE,
     DiameterChoice,
@@ -49,6 +49,7 @@ from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_sub
     inter_asis_notes,
     resolve_subject,
     settle_marker_diameter,
+    subject_warnings,
 )
 from fuzzygait.workflows.uncomputed import mark_empty_angles, refuse_empty
 
@@ -224,7 +225,9 @@ def calibrate_static(
     unfiltered 1e-8 rad).  ``knee_ankle_centres``: a cluster model's knee/ankle centre
     rule (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when present, else chord).
     ``flat_foot`` None takes the subject file's own setting (``subject.flat_foot``: a QTM
-    session.xml's "foot normalised to static trial"; noted), else off.
+    session.xml's "foot normalised to static trial"; noted), else the setting the static
+    trial's own stored Plug-in Gait angles were made with
+    (:func:`~fuzzygait.workflows.crosscheck.recover_flat_foot`; noted), else off.
 
     The content checks run first (:func:`fuzzygait.mocap.sanity.check_trial`): a trial
     that moves (a walking trial given as the static one), in the wrong unit or at an
@@ -234,6 +237,10 @@ def calibrate_static(
     checked = check_trial(trial, static=True)
     clean, _ = replace(preprocessing, filter=False).apply(checked)
     notes = (*relabelled, *checked.notes[len(trial.notes) :])
+    if flat_foot is None and subject.flat_foot is None and (found := recover_flat_foot(clean, subject)) is not None:
+        flat_foot = found
+        notes += (f"foot flat {'on' if found else 'off'}, as the static trial's own stored Plug-in Gait angles "
+                  "were made (reproduced with it, not without)",)  # fmt: skip
     if flat_foot is None:
         flat_foot = bool(subject.flat_foot)
         if subject.flat_foot is not None:
@@ -295,7 +302,8 @@ def run_angles(
     diameter = settle_marker_diameter(resolve_subject(raw, subject_file), marker_diameter, (raw, static_trial))
     subject = diameter.subject
     notes = list(trial.notes)
-    warnings = [diameter.warning] if diameter.warning else []
+    warnings = ([diameter.warning] if diameter.warning else []) + subject_warnings(raw, subject_file, static_trial,
+                                                                                   subject)  # fmt: skip
     stored = StoredCalibration()
     if static_trial is None and subject_file is not None:
         stored = read_stored_calibration(subject_file)
