@@ -322,12 +322,15 @@ def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
                     f"parameter {group}:{name} is a subject measurement outside the PROCESSING group; "
                     "it is not used (give it in a subject file if it is needed)"
                 )
+    # C3D parameter names are case-insensitive (the c3d package reads them in capitals):
+    # Vicon's spelling of the names this package knows
+    spelling = {name.upper(): name for name in PROCESSING_NAMES}
     result: dict[str, float] = {}
     for name in raw.parameter_names.get("PROCESSING", []):
         value = raw.get("PROCESSING", name)
         if value is None or isinstance(value, list) or np.size(value) != 1:
             continue
-        result[name] = float(np.ravel(value)[0])
+        result[spelling.get(name.upper(), name)] = float(np.ravel(value)[0])
     return result
 
 
