@@ -111,14 +111,14 @@ NEXUS = [("vicon", "Movement_trial.c3d", ()), ("vicon", "Static_trial.c3d", ()),
          ("pig-options", "PiGKad_Motion.c3d", ()), ("pig-options", "PiGKad_Calibration.c3d", ()),
          ("pig-options", "PiGKadMed_Motion.c3d", ()), ("pig-options", "PiGKadMed_Calibration.c3d", ()),
          ("pig-options", "PiG_Motion-FlatFoot-Full.c3d", ()),
-         ("pig-options", "PiG_Calibration-FlatFoot-Full.c3d", ("flat_foot",))]  # fmt: skip
+         ("pig-options", "PiG_Calibration-FlatFoot-Full.c3d", ())]  # fmt: skip
 
 
 @needs_shared
 @pytest.mark.parametrize(("folder", "name", "options"), NEXUS)
 def test_every_nexus_file_agrees_within_a_hundredth_of_a_degree(folder: str, name: str, options: tuple) -> None:
-    """With the file's own PROCESSING values and nothing given by hand but Nexus' foot-flat
-    option of the FlatFoot session's static trial (its marker size is recovered)."""
+    """With the file's own PROCESSING values and nothing given by hand (the FlatFoot
+    session's marker size and its static trial's foot flat are recovered)."""
     comparison = compare_trial(shared_file(folder, name), flat_foot=True if options else None)
     groups = comparison.check.groups
     assert len(groups) == 10 and max(groups.values()) <= 0.01, groups
@@ -127,8 +127,8 @@ def test_every_nexus_file_agrees_within_a_hundredth_of_a_degree(folder: str, nam
 
 
 @needs_shared
-def test_the_flat_foot_static_names_foot_flat_when_it_is_not_given() -> None:
-    comparison = compare_trial(shared_file("pig-options", "PiG_Calibration-FlatFoot-Full.c3d"))
+def test_the_flat_foot_static_names_foot_flat_when_given_the_other_way() -> None:
+    comparison = compare_trial(shared_file("pig-options", "PiG_Calibration-FlatFoot-Full.c3d"), flat_foot=False)
     assert set(comparison.check.flagged) <= {"LAnkleAngles", "RAnkleAngles", "LFootProgressAngles",
                                              "RFootProgressAngles"}  # fmt: skip
     assert comparison.check.causes[0] == "foot flat (the file's static outputs were made with foot flat on)"

@@ -333,7 +333,7 @@ def run_angles(
     refuse_empty(result, raw.name)
     notes += result.notes
     check = check_run(checked, result.angles, raw, subject, diameter.recovered, model=model, clusters=clusters,
-                      flat_foot=bool(flat_foot if flat_foot is not None else subject.flat_foot))  # fmt: skip
+                      flat_foot=flat_foot if flat_foot is not None else subject.flat_foot)  # fmt: skip
     if check is not None and moved:
         check = check.with_cause(f"markers moved between the static trial and this one ({len(moved)} segments)")
     notes += check.notes() if check is not None else []

@@ -235,17 +235,21 @@ def check_run(
     *,
     model: str,
     clusters: ClusterCalibration | None,
-    flat_foot: bool,
+    flat_foot: bool | None,
 ) -> CrossCheck | None:
     """The cross-check of a run: the model once more on ``on_file`` (the file's markers,
     content-checked, neither filled nor filtered) with the run's ``subject``, ``model``
     and ``clusters``, against what ``raw`` stores.  A standing trial is modelled as Nexus
     models its static trials (:func:`~fuzzygait.kinematics.compute_lower_body`'s
-    ``static_foot``: ``"flat"`` with ``flat_foot``, else ``"heel"``); when its foot
-    angles then differ but the other foot-flat setting agrees, that setting is named."""
+    ``static_foot``: ``"flat"`` with foot flat, else ``"heel"``).  With ``flat_foot``
+    None (nobody set it) a standing trial takes the setting its stored angles were made
+    with (:func:`recover_flat_foot`, off when they do not tell); when the foot angles of
+    a given setting differ but the other setting agrees, that setting is named."""
     if not stored_angle_names(raw, list(written_angles)):
         return None
     standing = is_standing(on_file)
+    if flat_foot is None:
+        flat_foot = bool(standing and recover_flat_foot(on_file, subject, model))
     foot = ("flat" if flat_foot else "heel") if standing else None
     angles = compute_lower_body(on_file, subject, model=model, clusters=clusters, static_foot=foot).angles
     check = cross_check(angles, written_angles, raw, subject, recovered)
