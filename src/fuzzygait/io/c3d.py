@@ -31,7 +31,8 @@ import numpy as np
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.trial import OUTPUT_UNITS, AnalysisValue, Event, Trial
 from fuzzygait.io.atomic import atomic_output
-from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
+from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode, suffixed
+from fuzzygait.io.c3d_params import check_blocks, event_parameters
 from fuzzygait.io.subject import PROCESSING_NAMES
 
 if TYPE_CHECKING:
@@ -44,8 +45,6 @@ class _EzC3D(Protocol):
     def __getitem__(self, key: str) -> Any: ...
 
     def add_parameter(self, group: str, name: str, value: object) -> None: ...
-
-    def add_event(self, **kwargs: object) -> None: ...
 
     def write(self, path: str) -> None: ...
 
@@ -271,16 +270,14 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
     used = raw.get("EVENT", "USED")
     n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
     if n <= 0:
-        stored = raw.get("EVENT", "LABELS")
-        if isinstance(stored, list) and any(stored):
+        stored = [v for part in suffixed(raw.get, "EVENT", "LABELS") if isinstance(part, list) for v in part]
+        if any(stored):
             notes.append(f"EVENT:USED is {n} but EVENT:LABELS lists {len(stored)} events; they are ignored")
         if raw.header_events:
             notes.append("events taken from the C3D header (no EVENT group); context unknown")
         return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
-    found = raw.get("EVENT", "TIMES")
-    times = np.zeros((2, 0)) if found is None or isinstance(found, list) else np.asarray(found, dtype=float)
-    if times.ndim != 2 or times.shape[0] != 2:  # stored flat: (minutes, seconds) pairs one after the other
-        times = times.ravel()[: times.size // 2 * 2].reshape(2, -1, order="F")
+    parts = [_event_times(part) for part in suffixed(raw.get, "EVENT", "TIMES")]  # TIMES2...: events 256...
+    times = np.concatenate([np.zeros((2, 0)), *parts], axis=1)
     if times.shape[-1] < n:
         notes.append(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; using {times.shape[-1]}")
         n = times.shape[-1]
@@ -291,9 +288,13 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
         )
     seconds = times[0, :n] * 60.0 + times[1, :n]
 
-    def texts(name: str, default: str) -> list[str]:
-        values = list(raw.get("EVENT", name) or [])
-        return (values + [default] * n)[:n]
+    def texts(name: str, default: str) -> list[str]:  # LABELS, LABELS2, ...: each as long as its TIMES part
+        stored = [part if isinstance(part, list) else [] for part in suffixed(raw.get, "EVENT", name)]
+        values: list[str] = []
+        for i, part in enumerate(parts):
+            got = stored[i] if i < len(stored) else []
+            values += (got + [default] * part.shape[1])[: part.shape[1]]
+        return values[:n]
 
     return [
         Event(label=lbl, context=ctx or "General", time=float(t), subject=subj, description=desc)
@@ -305,6 +306,14 @@ def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
             texts("DESCRIPTIONS", ""),
         )
     ]
+
+
+def _event_times(found: Any) -> np.ndarray:
+    """``EVENT:TIMES`` (or ``TIMES2``, ...) as ``(2, events)``: minutes, seconds."""
+    times = np.zeros((2, 0)) if isinstance(found, list) else np.asarray(found, dtype=float)
+    if times.ndim != 2 or times.shape[0] != 2:  # stored flat: (minutes, seconds) pairs one after the other
+        times = times.ravel()[: times.size // 2 * 2].reshape(2, -1, order="F")
+    return times
 
 
 def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
@@ -394,8 +403,9 @@ def write_c3d(
 
     Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
     of -1. Model outputs follow Vicon's conventions (angles in degrees listed in
-    ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. The file appears
-    atomically: on any error nothing is left at ``path``.
+    ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. Events beyond the
+    255th go to ``EVENT:TIMES2``, ``LABELS2``, ... (C3D's ``POINT:LABELS2`` convention;
+    the reader joins them). The file appears atomically: on any error nothing is left at ``path``.
 
     With ``source`` (the C3D file the trial was read from) everything of that file the
     writer does not change is carried over (:mod:`fuzzygait.io.c3d_writeback`): its analog
@@ -424,6 +434,7 @@ def write_c3d(
 
     def write_stage(target: Path, analogs: Analogs | None = None) -> None:
         _write_with_ezc3d(_ezc3d_trial(trial, text_parameters, analogs), target)
+        check_blocks(target)
 
     if source is None:
         _atomic_write(path, write_stage)
@@ -471,15 +482,8 @@ def _ezc3d_trial(
     for group, values in (text_parameters or {}).items():
         for name, text in values.items():
             c.add_parameter(group.upper(), name.upper(), [str(text)])
-    for event in trial.events:
-        minutes, seconds = divmod(event.time, 60.0)
-        c.add_event(
-            time=[float(minutes), float(seconds)],
-            context=event.context,
-            label=event.label,
-            description=event.description,
-            subject=event.subject,
-        )
+    for name, value in event_parameters(trial.events):  # beyond 255 events: TIMES2, LABELS2, ...
+        c.add_parameter("EVENT", name, value)
     if analogs is not None:
         _write_stored_analogs(c, analogs, trial.rate)
     return c

@@ -134,6 +134,16 @@ def _extra_labels(get: ParamGetter) -> list[str]:
     return extra
 
 
+def suffixed(get: ParamGetter, group: str, name: str) -> list[Any]:
+    """The values of ``group:name``, ``name2``, ``name3``, ... while they exist: C3D's
+    convention for a parameter of more than 255 entries (a dimension is one byte), as
+    in ``POINT:LABELS2`` or ``EVENT:TIMES2``."""
+    parts: list[Any] = []
+    while (value := get(group, f"{name}{len(parts) + 1}" if parts else name)) is not None:
+        parts.append(value)
+    return parts
+
+
 # --------------------------------------------------------------------------- c3d
 def _c3d_param_value(param: Any) -> Any:
     if param.bytes_per_element == -1:

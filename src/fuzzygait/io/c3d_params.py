@@ -7,20 +7,32 @@ of more than two dimensions, strips padding, and never writes ``ANALOG:OFFSET``)
 :mod:`fuzzygait.io.c3d_writeback` copies the records of an input file through this
 module instead: a record's type, dimensions, data, description and lock flag are kept
 exactly (numbers only converted to the Intel format the written file uses).
+
+:func:`event_parameters` gives the writer's ``EVENT`` group for any number of events
+(C3D's ``NAME2`` convention beyond 255), :func:`check_blocks` refuses a written file
+whose parameter section does not fit its one-byte block count.
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fuzzygait.io.c3d_guard import BLOCK
 
+if TYPE_CHECKING:
+    from fuzzygait.core.trial import Event
+
 _ELEMENT = {-1: 1, 1: 1, 2: 2, 4: 4}  # bytes per element of each parameter type
 _MAX_BLOCKS = 255  # the section's block count is one byte
 _MAX_BODY = 32765  # the offset to the next record is a signed 16-bit word (body + 2)
+PER_PARAMETER = 255  # entries of one parameter (a dimension is one byte); more go to NAME2, NAME3, ...
+_MAX_EVENTS = 32767  # EVENT:USED is a signed 16-bit integer
 
 
 class SectionError(Exception):
@@ -216,3 +228,55 @@ def int16s(values: list[int]) -> Parameter:
 def with_data(param: Parameter, data: bytes) -> Parameter:
     """``param`` with its values replaced by ``data`` (same type and dimensions)."""
     return replace(param, data=data)
+
+
+# --------------------------------------------------------------------------- events
+def event_parameters(events: Sequence[Event]) -> list[tuple[str, object]]:
+    """``(name, value)`` of the ``EVENT`` parameters for ezc3d's ``add_parameter``, in
+    the order, types and values ezc3d's ``add_event`` writes them (``USED``, ``TIMES``
+    as minutes and seconds, ``CONTEXTS``, ``LABELS``, ``DESCRIPTIONS``, ``SUBJECTS``,
+    ``ICON_IDS``, ``GENERIC_FLAGS``); beyond 255 events the next 255 go to ``TIMES2``,
+    ``CONTEXTS2``, ..., then ``TIMES3``, ... (C3D's convention for ``POINT:LABELS2``;
+    ``add_event`` would store the count modulo 256), ``USED`` counting them all.
+
+    Raises:
+        SectionError: more events than ``EVENT:USED`` can count.
+    """
+    if not events:
+        return []
+    if len(events) > _MAX_EVENTS:
+        raise SectionError(f"{len(events)} events: EVENT:USED counts at most {_MAX_EVENTS}; split the trial")
+    minutes, seconds = zip(*(divmod(float(e.time), 60.0) for e in events))
+    columns: dict[str, np.ndarray] = {
+        "TIMES": np.array([minutes, seconds], dtype=float),
+        "CONTEXTS": np.array([e.context for e in events]),
+        "LABELS": np.array([e.label for e in events]),
+        "DESCRIPTIONS": np.array([e.description for e in events]),
+        "SUBJECTS": np.array([e.subject for e in events]),
+        "ICON_IDS": np.zeros(len(events)),
+        "GENERIC_FLAGS": np.zeros(len(events)),
+    }
+    params: list[tuple[str, object]] = [("USED", len(events))]
+    for part, start in enumerate(range(0, len(events), PER_PARAMETER), start=1):
+        suffix = str(part) if part > 1 else ""
+        params += [(name + suffix, values[..., start : start + PER_PARAMETER]) for name, values in columns.items()]
+    return params
+
+
+def check_blocks(path: Path) -> None:
+    """Refuse the written C3D ``path`` if its parameter section spans more than 255
+    blocks (from the header's first parameter block to its data start): ezc3d writes
+    the section's one-byte block count modulo 256, and readers that trust the count
+    (the ``c3d`` package) lose the parameters beyond it, e.g. events past the ~3000th.
+
+    Raises:
+        SectionError: it does (the message says how many blocks).
+    """
+    with open(path, "rb") as handle:
+        head = handle.read(18)
+    blocks = int.from_bytes(head[16:18], "little") - head[0] if len(head) == 18 else 0
+    if blocks > _MAX_BLOCKS:
+        raise SectionError(
+            f"its parameters need {blocks} blocks of 512 bytes and a C3D file holds at most {_MAX_BLOCKS} "
+            "(too many events or labels; split the trial)"
+        )
