@@ -167,18 +167,22 @@ def test_every_shared_file_with_analog_data_is_round_tripped() -> None:
     assert set(WALKING) <= set(CARRIED)
 
 
-@needs_shared
-@pytest.mark.shared
-@pytest.mark.slow
-@pytest.mark.parametrize("name", CARRIED)
-def test_preprocess_carries_the_input_over(name: str, tmp_path: Path) -> None:
-    src = shared_file(*name.split("/"))
-    out = tmp_path / "out.c3d"
+def preprocess_carries_everything(src: Path, out: Path) -> None:
+    """``fuzzygait preprocess src --out out`` succeeds without a note of anything left out,
+    and ``out`` holds every analog sample, parameter and force platform of ``src``."""
     result = run_here("preprocess", src, "--out", out)
     assert result.returncode == 0, result.stderr
     assert carried_notes(result.stdout) == []
     assert_carried_over(src, out)
     assert_force_platforms_carried(src, out)
+
+
+@needs_shared
+@pytest.mark.shared
+@pytest.mark.slow
+@pytest.mark.parametrize("name", CARRIED)
+def test_preprocess_carries_the_input_over(name: str, tmp_path: Path) -> None:
+    preprocess_carries_everything(shared_file(*name.split("/")), tmp_path / "out.c3d")
 
 
 @needs_shared
@@ -268,11 +272,7 @@ def test_synthetic_preprocess_carries_everything_over(tmp_path: Path) -> None:
     values = ezc3d.c3d(str(src))["data"]["analogs"]
     assert np.signbit(values[0, 5]).any() and not np.isnan(values).any()  # channel of scale 0: -0.0 and 0.0
     out = tmp_path / "out.c3d"
-    result = run_here("preprocess", src, "--out", out)
-    assert result.returncode == 0, result.stderr
-    assert carried_notes(result.stdout) == []
-    assert_carried_over(src, out)
-    assert_force_platforms_carried(src, out)
+    preprocess_carries_everything(src, out)
     section = read_section(out.read_bytes())
     assert section["LAB"].parameters["FLAGS"] == Parameter("FLAGS", 1, (3,), bytes([1, 255, 7]), b"byte values")
     assert section["LAB"].parameters["GRID"].dims == (2, 2, 2)
