@@ -7,7 +7,6 @@ same trial, every section on the pages, and the pages rendered in headless Chrom
 
 from __future__ import annotations
 
-import pickle
 import re
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from support import run, synthetic_session
 from fuzzygait.gait.spatiotemporal import NAMES, UNITS
 from fuzzygait.synthetic.gait_curves import FOOT_OFF_PHASE, RIGHT_PHASE_SHIFT, STRIDE_TIME_S
 from fuzzygait.synthetic.generate import WALKING_SPEED_MM_S
+from fuzzygait.workflows.batch_report import load_entry
 
 CHROMIUM = Path("/usr/bin/chromium")
 #: What a trial page with fast bands and normative data shows.
@@ -83,8 +83,7 @@ def test_spatiotemporal_parameters_match_the_generator(report: Path) -> None:
 def test_gps_against_the_trials_own_normative_file_is_zero(report: Path) -> None:
     html = _text(report / "walk01.html")
     assert "Overall GPS: <b>0.0°</b>" in html and 'against the normative data <span class="mono">norm.csv' in html
-    with (report / "walk01_files" / "entry.pkl").open("rb") as stored:  # the unrounded score behind the page
-        entry = pickle.load(stored)
+    entry = load_entry(report, "walk01")  # the unrounded score behind the page (entry.json)
     assert entry.gps == pytest.approx(0.0, abs=1e-9)
 
 

@@ -3,7 +3,8 @@
 ezc3d is C++: on some corrupt files it dies with a segmentation fault or loops for
 minutes, and neither can be caught in the reading process. :func:`decode_isolated` runs
 it in a fresh ``python -m fuzzygait.io.c3d_child`` process (about 0.1 s to start) that
-sends back every parameter and the point data as a pickle; a crash or a run over the
+sends back every parameter and the point data (:func:`encode_raw`: an ``.npz`` archive of
+the arrays and a JSON document of the rest, read without pickle); a crash or a run over the
 time limit becomes a :class:`~fuzzygait.io.c3d_backends.BackendError` with one line. It
 is only used for files that :mod:`fuzzygait.io.c3d_guard` doubts and the ``c3d`` package
 refuses, so the normal path costs nothing.
@@ -11,13 +12,19 @@ refuses, so the normal path costs nothing.
 
 from __future__ import annotations
 
+import io
+import json
 import os
-import pickle
 import signal
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from fuzzygait.io.c3d_backends import RawC3D
 
 #: Seconds ezc3d may take in the child: a base plus a per-megabyte allowance (ezc3d
 #: reads about 20 ms per MB on one core; this leaves a factor of ~50 for a loaded machine).
@@ -30,7 +37,7 @@ def time_limit(size_bytes: int) -> float:
     return BASE_LIMIT_S + LIMIT_S_PER_MB * size_bytes / 1e6
 
 
-def decode_isolated(path: Path) -> Any:
+def decode_isolated(path: Path) -> RawC3D:
     """:func:`~fuzzygait.io.c3d_backends._decode_ezc3d` of ``path`` in a child process.
 
     Returns:
@@ -39,7 +46,7 @@ def decode_isolated(path: Path) -> Any:
     Raises:
         BackendError: ezc3d refused the file, crashed, or ran over :func:`time_limit`.
     """
-    from fuzzygait.io.c3d_backends import BackendError, RawC3D
+    from fuzzygait.io.c3d_backends import BackendError
 
     limit = time_limit(path.stat().st_size)
     env = dict(os.environ, PYTHONWARNINGS="ignore")
@@ -62,28 +69,108 @@ def decode_isolated(path: Path) -> Any:
             name = f"signal {-done.returncode}"
         raise BackendError(f"ezc3d crashed on it ({name})")
     try:
-        kind, payload = pickle.loads(done.stdout)
+        return decode_raw(done.stdout)
+    except ChildError as exc:
+        raise BackendError(str(exc)) from None
     except Exception:
         raise BackendError(f"ezc3d's child process failed (exit {done.returncode})") from None
-    if kind == "error":
-        raise BackendError(str(payload))
-    cache = payload.pop("cache")
-    return RawC3D(get=lambda g, p: cache.get((g, p)), **payload)
+
+
+class ChildError(Exception):
+    """The child reported ezc3d's refusal of the file (its one-line reason)."""
+
+
+def _plain(value: Any) -> Any:
+    """``json.dumps``' fallback: numpy scalars as Python numbers, nothing else."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} cannot be sent back")
+
+
+def _encode_value(value: Any, arrays: dict[str, np.ndarray]) -> list[Any]:
+    """A parameter's value as ``[kind, data]``: ``["none"]``, ``["array", key]`` (a
+    numeric or string array stored in ``arrays``), ``["objects", list]`` (an object
+    array) or ``["json", value]`` (lists of strings or numbers as ezc3d gives them)."""
+    if value is None:
+        return ["none"]
+    if isinstance(value, np.ndarray):
+        if value.dtype.hasobject:
+            return ["objects", value.tolist()]
+        key = f"parameter/{len(arrays)}"
+        arrays[key] = value
+        return ["array", key]
+    return ["json", value]
+
+
+def encode_raw(raw: RawC3D) -> bytes:
+    """What the child sends back: an ``.npz`` archive (no pickled object in it) holding
+    the points, every numeric parameter and ``meta``, the UTF-8 JSON of the other fields
+    and the parameters' values (:func:`decode_raw` reverses it)."""
+    arrays: dict[str, np.ndarray] = {"points": np.asarray(raw.points, dtype=float)}
+    parameters = [[g, p, _encode_value(raw.get(g, p), arrays)] for g, names in raw.parameter_names.items()
+                  for p in names]  # fmt: skip
+    meta = {"kind": "ok", "labels": raw.labels, "header_rate": raw.header_rate, "first_frame": raw.first_frame,
+            "header_events": raw.header_events, "parameter_names": raw.parameter_names, "backend": raw.backend,
+            "warnings": raw.warnings, "analog_per_frame": raw.analog_per_frame, "parameters": parameters}  # fmt: skip
+    return _archive(meta, arrays)
+
+
+def _archive(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
+    text = json.dumps(meta, default=_plain, ensure_ascii=False).encode("utf-8")
+    buffer = io.BytesIO()
+    np.savez(buffer, meta=np.frombuffer(text, dtype=np.uint8), **arrays)  # type: ignore[arg-type]
+    return buffer.getvalue()
+
+
+def _decode_value(kind: list[Any], data: Any) -> Any:
+    if kind[0] == "none":
+        return None
+    if kind[0] == "array":
+        return np.asarray(data[kind[1]])
+    if kind[0] == "objects":
+        return np.array(kind[1], dtype=object)
+    if kind[0] == "json":
+        return kind[1]
+    raise ValueError(f"unknown parameter kind {kind[0]!r}")
+
+
+def decode_raw(payload: bytes) -> RawC3D:
+    """The :class:`~fuzzygait.io.c3d_backends.RawC3D` of :func:`encode_raw`'s bytes
+    (read with ``allow_pickle=False``).
+
+    Raises:
+        ChildError: the child reported ezc3d's refusal of the file.
+        ValueError, KeyError, OSError: the bytes are not such an archive.
+    """
+    from fuzzygait.io.c3d_backends import RawC3D
+
+    with np.load(io.BytesIO(payload), allow_pickle=False) as data:
+        meta = json.loads(bytes(np.asarray(data["meta"], dtype=np.uint8)).decode("utf-8"))
+        if meta["kind"] == "error":
+            raise ChildError(str(meta["message"]))
+        cache = {(str(g), str(p)): _decode_value(kind, data) for g, p, kind in meta["parameters"]}
+        points = np.asarray(data["points"], dtype=float)
+    per_frame = meta["analog_per_frame"]
+    return RawC3D(points=points, labels=[str(x) for x in meta["labels"]], header_rate=float(meta["header_rate"]),
+                  first_frame=int(meta["first_frame"]),
+                  header_events=[(str(label), float(t)) for label, t in meta["header_events"]],
+                  get=lambda g, p: cache.get((g, p)),
+                  parameter_names={str(g): [str(p) for p in names] for g, names in meta["parameter_names"].items()},
+                  backend=str(meta["backend"]), warnings=[str(w) for w in meta["warnings"]],
+                  analog_per_frame=None if per_frame is None else int(per_frame))  # fmt: skip
 
 
 def _main(argv: list[str]) -> int:
-    """Child side: decode ``argv[0]`` with ezc3d and pickle the result to stdout."""
+    """Child side: decode ``argv[0]`` with ezc3d and write :func:`encode_raw` of the
+    result (or of ezc3d's refusal) to stdout."""
     from fuzzygait.io.c3d_backends import BackendError, _decode_ezc3d
 
     try:
         raw = _decode_ezc3d(Path(argv[0]))
     except BackendError as exc:
-        result: tuple[str, Any] = ("error", str(exc))
-    else:
-        fields = {name: getattr(raw, name) for name in raw.__dataclass_fields__ if name != "get"}
-        fields["cache"] = {(g, p): raw.get(g, p) for g, params in raw.parameter_names.items() for p in params}
-        result = ("ok", fields)
-    sys.stdout.buffer.write(pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        sys.stdout.buffer.write(_archive({"kind": "error", "message": str(exc)}, {}))
+        return 0
+    sys.stdout.buffer.write(encode_raw(raw))
     return 0
 
 

@@ -10,7 +10,8 @@ Layout of the report folder::
     OUT/<session>/index.html             the session summary (mean ± SD over every cycle)
     OUT/<session>/session_files/cycles.png|svg
     OUT/<session>/<trial>.html           one page per trial (+ <trial>.pdf with --pdf)
-    OUT/<session>/<trial>_files/         its figures, data.npz (the page's numbers), job.json
+    OUT/<session>/<trial>_files/         its figures, data.npz (the page's numbers),
+                                         entry.json (its index entry), job.json (its key)
 
 Trials given as files (not in a session folder) are written flat into ``OUT`` as before
 sessions, with ``OUT/session.html`` their summary (``OUT/index.html`` is the trial index
@@ -25,7 +26,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import pickle
 import re
 import shutil
 import tempfile
@@ -41,6 +41,7 @@ from fuzzygait.gait.spatiotemporal import pooled_parameters
 from fuzzygait.io.atomic import atomic_output, remove_path, replace_path
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.viz.report import TrialEntry
+from fuzzygait.viz.report.entry_store import ENTRY_SCHEMA, EntryFormatError, read_entry
 from fuzzygait.viz.report.pages import index_page
 from fuzzygait.viz.report.session import (
     SessionSummary,
@@ -59,15 +60,19 @@ from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outco
 __all__ = ["BatchReport", "job_key", "remove_stale_staging", "write_batch_report"]
 
 _CODE_DIGEST: str | None = None
+#: The files of the package that make up the program (not caches or built libraries).
+_CODE_SUFFIXES = frozenset({".py", ".toml", ".c", ".json", ".csv", ".txt"})
 
 
 def code_digest() -> str:
-    """SHA-256 of fuzzygait's source files (a changed program recomputes every trial)."""
+    """SHA-256 of fuzzygait's source and data files (a changed program recomputes every
+    trial)."""
     global _CODE_DIGEST
     if _CODE_DIGEST is None:
         root = Path(__file__).resolve().parents[1]
         digest = hashlib.sha256()
-        for path in sorted(root.rglob("*.py")):
+        paths = [p for p in root.rglob("*") if p.suffix in _CODE_SUFFIXES and "__pycache__" not in p.parts]
+        for path in sorted(paths):
             digest.update(str(path.relative_to(root)).encode())
             digest.update(path.read_bytes())
         _CODE_DIGEST = digest.hexdigest()
@@ -86,11 +91,12 @@ def _file_digest(path: Path | None) -> str:
 
 def job_key(job: TrialJob, normative: Path | None = None) -> str:
     """The content hash of a trial job: its trial, static and subject files' (and the
-    normative file's) contents, every option and the code; not the paths, nor where or
-    with how many workers it runs."""
+    normative file's) contents, every option (the session named on its page too), the
+    code and the version of ``entry.json``; not the paths, nor where or with how many
+    workers it runs."""
     settings = None if job.settings is None else replace(job.settings, workers=None)
     options = (job.name, job.marker_diameter, job.flat_foot, job.preprocessing, job.model, settings, job.warnings,
-               job.pdf)  # fmt: skip
+               job.pdf, job.session, ENTRY_SCHEMA)  # fmt: skip
     digest = hashlib.sha256(code_digest().encode())
     for path in (job.source, job.static, job.subject_file, normative):
         digest.update(_file_digest(path).encode())
@@ -390,14 +396,18 @@ def write_batch_report(
 
 def load_page_data(folder: Path, name: str) -> dict[str, np.ndarray]:
     """The numbers of a written trial page (``<name>_files/data.npz``), for checks."""
-    with np.load(folder / f"{name}_files" / "data.npz") as data:
+    with np.load(folder / f"{name}_files" / "data.npz", allow_pickle=False) as data:
         return {key: np.asarray(data[key]) for key in data.files}
 
 
 def load_entry(folder: Path, name: str) -> TrialEntry:
-    """The index entry of a written trial page."""
-    with open(folder / f"{name}_files" / "entry.pkl", "rb") as handle:
-        entry = pickle.load(handle)
-    if not isinstance(entry, TrialEntry):
-        raise FuzzyGaitError(f"{folder / name}: not a report entry")
-    return entry
+    """The index entry of a written trial page (``<name>_files/entry.json``).
+
+    Raises:
+        FuzzyGaitError: it is missing or not an entry of this version.
+    """
+    path = folder / f"{name}_files" / "entry.json"
+    try:
+        return read_entry(path)
+    except (OSError, EntryFormatError) as exc:
+        raise FuzzyGaitError(f"{path}: not a report entry of this version ({exc})") from None

@@ -3,7 +3,8 @@ batch's :class:`~fuzzygait.uncertainty.execution.Evaluator`.
 
 :func:`run_trial_job` reads and processes the trial, runs the marker-error analysis the
 job's uncertainty mode asks for (:data:`UNCERTAINTY_MODES`), draws its page, writes the
-page's data (``<name>_files/data.npz``) and, with ``pdf``, its PDF, all in a staging
+page's data (``<name>_files/data.npz``), its index entry (``<name>_files/entry.json``,
+:mod:`~fuzzygait.viz.report.entry_store`) and, with ``pdf``, its PDF, all in a staging
 folder beside the session's pages, then moves them into place and writes
 ``<name>_files/job.json`` (the job's key) last.  A trial killed half-way leaves no file
 in place and no ``job.json``, so the next run recomputes it; a trial whose ``job.json``
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import json
 import os
-import pickle
 import shutil
 import tempfile
 import time
@@ -32,6 +32,7 @@ from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
 from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
+from fuzzygait.viz.report.entry_store import EntryFormatError, read_entry, write_entry
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import (
     DEFAULT_SETTINGS,
@@ -233,8 +234,7 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
         if entry.page != f"{job.name}.html":
             return _failed(job, f"page name {entry.page} is not {job.name}.html (rename the file)", start)
         np.savez_compressed(built / f"{job.name}_files" / "data.npz", **page_data(analysis))  # type: ignore[arg-type]
-        with open(built / f"{job.name}_files" / "entry.pkl", "wb") as handle:
-            pickle.dump(entry, handle)
+        write_entry(built / f"{job.name}_files" / "entry.json", entry, job.key)
         if job.pdf:
             from fuzzygait.workflows.pdf import html_to_pdf
 
@@ -261,22 +261,23 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
 
 
 def finished_outcome(job: TrialJob) -> TrialOutcome | None:
-    """The outcome of an earlier run of the same job (same key, every file in place), or
-    None: it must be computed."""
+    """The outcome of an earlier run of the same job (same key in ``job.json`` and
+    ``entry.json``, every file in place, ``entry.json`` of this schema with every field
+    of its type: :func:`~fuzzygait.viz.report.entry_store.read_entry`), or None: it must
+    be computed.  An ``entry.pkl`` of an earlier version is never opened."""
     files = job.out_dir / f"{job.name}_files"
     try:
         stored = json.loads((files / "job.json").read_text(encoding="utf-8"))
-        if stored.get("key") != job.key or not (job.out_dir / f"{job.name}.html").is_file():
+        if not isinstance(stored, dict) or stored.get("key") != job.key:
+            return None
+        if not (job.out_dir / f"{job.name}.html").is_file() or not (files / "data.npz").is_file():
             return None
         if job.pdf and not (job.out_dir / f"{job.name}.pdf").is_file():
             return None
-        if not (files / "data.npz").is_file():
-            return None
-        with open(files / "entry.pkl", "rb") as handle:
-            entry = pickle.load(handle)
-    except (OSError, ValueError, pickle.UnpicklingError, AttributeError, EOFError, TypeError):
+        entry = read_entry(files / "entry.json", job.key)
+    except (OSError, EntryFormatError, ValueError, RecursionError):  # ValueError: job.json not JSON
         return None
-    if not isinstance(entry, TrialEntry):
+    if not entry.ok:
         return None
     entry.source = job.source
     return TrialOutcome(job.source, job.name, entry, job.warnings, 0.0, skipped=True)
