@@ -9,7 +9,6 @@ import typer
 
 from fuzzygait.cli.app import (
     EXIT_USER_ERROR,
-    StageBars,
     app,
     debugging,
     err,
@@ -35,6 +34,7 @@ from fuzzygait.cli.options import (
     SubjectOption,
     check_knee_ankle_centres,
     check_model,
+    estimated_stages,
     parse_alphas,
     parse_angles,
     with_option_groups,
@@ -354,7 +354,7 @@ def uncertainty(
                                               tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
         with progress_bars() as bars:
-            bar = StageBars(bars)
+            bar = estimated_stages(bars)
             bar.stage("joint angles")
             analysis = analyse_to_files(
                 dynamic, out_file, rrd=rrd, static=calibration.static, subject_file=calibration.subject,
@@ -484,6 +484,7 @@ def report(
     from fuzzygait.workflows.batch_report import write_batch_report
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
     from fuzzygait.workflows.trial_job import mode_settings
+    from fuzzygait.workflows.work_estimate import report_work
 
     def failed(path: Path, error: str) -> None:
         where = "" if path.name in error else f"{path}: "
@@ -499,14 +500,18 @@ def report(
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=workers, tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
-        mode_settings(uncertainty, settings)  # one clear line for a bad --uncertainty, before any work
+        analysed = mode_settings(uncertainty, settings)  # one clear line for a bad --uncertainty, before any work
         with progress_bars() as bars:
+            stages = estimated_stages(bars)
+            if analysed is not None:  # the work, before any trial is read
+                stages.estimate(report_work(inputs, analysed, static=calibration.static,
+                                            subject_file=calibration.subject, force=force))  # fmt: skip
             result = write_batch_report(
                 inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
                 marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
                 uncertainty=uncertainty, preprocessing=preprocessing.preprocessing(), model=model, pdf=pdf,
                 workers=workers, scheduler=scheduler, force=force, normative=normative, strict=debugging(),
-                trials=StageBars(bars), on_failure=failed,
+                trials=stages, on_failure=failed,
             )  # fmt: skip
     for summary in result.sessions:
         for warning in summary.warnings:

@@ -22,7 +22,10 @@ import typer
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
+    from rich.progress import Progress
+
     from fuzzygait.workflows.angles import Preprocessing
+    from fuzzygait.workflows.progress import Announced
 
 StaticOption = Annotated[Path | None, typer.Option("--static", help="Static trial for the calibration offsets.")]
 SubjectOption = Annotated[
@@ -88,7 +91,7 @@ ErrorsOption = Annotated[
 ]
 SourcesOption = Annotated[str, typer.Option(help="Marker error sources to add up, comma-separated.")]
 AlphasOption = Annotated[
-    str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added).")
+    str, typer.Option(help="α-levels below 1, comma-separated (1, the measured curve, is always added); at most 20.")
 ]
 AnglesOption = Annotated[
     str | None, typer.Option("--angles", help="Angles to analyse, comma-separated (e.g. LKneeAngles); default: all.")
@@ -226,7 +229,10 @@ def parse_tolerance(value: float) -> float | None:
 
 
 def parse_alphas(text: str) -> tuple[float, ...]:
-    """``"0,0.25,0.5"`` -> sorted α-levels in [0, 1), plus 1 (the measured curve)."""
+    """``"0,0.25,0.5"`` -> sorted α-levels in [0, 1), plus 1 (the measured curve); at most
+    :data:`~fuzzygait.workflows.work_estimate.MAX_ALPHA_LEVELS` below 1."""
+    from fuzzygait.workflows.work_estimate import check_alpha_count
+
     message = f"--alphas must be comma-separated numbers from 0 to below 1, e.g. 0,0.5; got {text!r}"
     try:
         values = {float(v) for v in text.split(",") if v.strip()}
@@ -235,6 +241,7 @@ def parse_alphas(text: str) -> tuple[float, ...]:
     values.discard(1.0)
     if not values or not all(0.0 <= v < 1.0 for v in values):
         raise FuzzyGaitError(message)
+    check_alpha_count(tuple(values))
     return (*sorted(values), 1.0)
 
 
@@ -275,3 +282,12 @@ def parse_overrides(texts: Sequence[str]) -> dict[str, float]:
                 raise FuzzyGaitError(f"--set: {name} is given twice")
             values[name] = number
     return values
+
+
+def estimated_stages(bars: Progress) -> Announced:
+    """A workflow's stages on ``bars`` with its work estimate (issue 37): the estimate's
+    line printed on stdout before the work starts, its labels on the stages' bars."""
+    from fuzzygait.cli.app import StageBars, out
+    from fuzzygait.workflows.progress import Announced
+
+    return Announced(StageBars(bars), lambda line: out.print(line, markup=False))

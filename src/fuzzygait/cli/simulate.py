@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from fuzzygait.cli.app import StageBars, app, out, progress_bars, user_errors
-from fuzzygait.cli.options import SchedulerOption, parse_alphas, parse_disc, parse_overrides
+from fuzzygait.cli.options import SchedulerOption, estimated_stages, parse_alphas, parse_disc, parse_overrides
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
@@ -98,7 +98,9 @@ def fuzzy_sim(
         str | None, typer.Option(help="total_deformation_energy (swing default), max_element_energy (stance "
                                  "default), last_node_x|y|z.")
     ] = None,  # fmt: skip
-    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.5,1",
+    alphas: Annotated[
+        str, typer.Option(help="α-levels, comma-separated (1 is always added; at most 20 below 1).")
+    ] = "0,0.5,1",
     stride: Annotated[int, typer.Option(help="Optimise every STRIDE-th time node (thesis: 100).")] = 100,
     novelty: Annotated[float, typer.Option(help="Novelty tolerance, relative (thesis: 0.01 % = 1e-4).")] = 1e-4,
     nodes: NodesOption = None,
@@ -120,7 +122,10 @@ def fuzzy_sim(
     scheduler: SchedulerOption = None,
 ) -> None:
     """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
-    (Graph Follower algorithm, linearised with the simulator's sensitivities)."""
+    (Graph Follower algorithm, linearised with the simulator's sensitivities).
+
+    Before it starts, one line estimates the work: at most how many forward simulations
+    (the novelty check skips most) and how long one takes (its first steps timed)."""
     from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
     from fuzzygait.workflows.fuzzy_dynamics import (
         FuzzySimOutputs,
@@ -143,7 +148,7 @@ def fuzzy_sim(
                 setup, spreads,
                 FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
                 target=target, alphas=levels, stride=stride, novelty=novelty, workers=workers, scheduler=scheduler,
-                progress=StageBars(bars),
+                progress=estimated_stages(bars),
             )  # fmt: skip
     out.print(_fuzzy_summary(scenario, spreads, result.attrs), markup=False)
     _print_written(written)
@@ -170,10 +175,13 @@ def frv_sim(
                                     "study's (stance E: 59.958e9 Pa, Table 5.3), else the scenario's. "
                                     "One --frv parameter only (else --set NAME=VALUE).")
     ] = None,
-    samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add).")] = 10000,
+    samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add); more than 10⁶ in one run only "
+                                         "with --force.")] = 10000,
     disc: Annotated[str, typer.Option(help="Grouping grid points N_p-disc: one number, or one per --frv "
                                       "parameter (e.g. 60,30 for E,rho).")] = "100",
-    alphas: Annotated[str, typer.Option(help="α-levels, comma-separated (1 is always added).")] = "0,0.25,0.5,0.75",
+    alphas: Annotated[
+        str, typer.Option(help="α-levels, comma-separated (1 is always added; at most 20 below 1).")
+    ] = "0,0.25,0.5,0.75",
     distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
     seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
     sampling: Annotated[str, typer.Option(help="Peaks: random (the thesis') or lhs (Latin hypercube per "
@@ -188,20 +196,25 @@ def frv_sim(
     scheduler: SchedulerOption = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists (the "
                                             "old one is replaced once the new one is complete).")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Draw more than 10⁶ samples in one run.")] = False,
 ) -> None:
     """FRV-GFA (thesis §2.7, §5.7): a leg parameter (or several independent ones) as a
     fuzzy random variable, grouped samples, Graph Follower hulls on the occurring
     intervals (boxes) only, output samples and their counts in a chunked zarr store.
 
     Every write commits atomically: a run that fails or is killed leaves the study as it
-    was (a new one: nothing); run the command again to complete it.
+    was (a new one: nothing); run the command again to complete it. Before it starts, one
+    line estimates the work: the forward simulations (exactly, for a new study of one
+    parameter) and how long one takes (its first steps timed).
     """
 
     from fuzzygait.workflows.frv_leg import FRVRequest, check_frv_parameter, run_frv_leg
     from fuzzygait.workflows.fuzzy_dynamics import LegSetup, check_scenario
+    from fuzzygait.workflows.work_estimate import check_frv_samples
 
     with user_errors():
         check_scenario(scenario)
+        check_frv_samples(samples, force)
         if out_store.suffix.lower() != ".zarr":
             raise FuzzyGaitError(f"{out_store}: --out must be a .zarr directory")
         check_frv_parameter(parameter)
@@ -214,7 +227,7 @@ def frv_sim(
                 LegSetup(scenario, nodes, dt, duration, values, scheme),
                 FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
-                progress=StageBars(bars),
+                progress=estimated_stages(bars),
             )  # fmt: skip
     out.print(_frv_summary(scenario, study.counts), markup=False)
     _print_written([out_store])

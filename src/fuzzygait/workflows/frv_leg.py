@@ -19,11 +19,12 @@ from typing import TYPE_CHECKING, Any
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, default_parameters
 from fuzzygait.mechanics.scenarios import SCENARIOS
-from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, simulation_timing
-from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, simulation_timing, time_simulation
+from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
 
 if TYPE_CHECKING:
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy
+    from fuzzygait.workflows.work_estimate import SimulationTiming, WorkEstimate
 
 __all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "frv_parameters", "run_frv_leg",
            "study_options"]  # fmt: skip
@@ -215,9 +216,12 @@ def run_frv_leg(
     names = frv_parameters(frv.parameter)
     specs = [FRVSpec(name, options["set"][name], alphas=tuple(frv.alphas), distribution=frv.distribution,
                      sampling=frv.sampling) for name in names]  # fmt: skip
+    stage = f"{setup.scenario}: FRV-GFA ({frv.samples} samples)"
+    announce(progress, _frv_work(setup, frv, specs, out_store if extend else None, stage, options["set"],
+                                 None if scheduler is not None else workers, progress))  # fmt: skip
     made_folders = [p for p in (out_store.parent, *out_store.parent.parents) if not p.exists()]
     out_store.parent.mkdir(parents=True, exist_ok=True)
-    progress.stage(f"{setup.scenario}: FRV-GFA ({frv.samples} samples)")
+    progress.stage(stage)
     try:
         with named_fixes(setup):
             spec = specs[0] if len(specs) == 1 else specs
@@ -232,3 +236,22 @@ def run_frv_leg(
             except OSError:
                 break
         raise
+
+
+def _frv_work(setup: LegSetup, frv: FRVRequest, specs: Sequence[FRVSpec], extended: Path | None, stage: str,
+              values: Mapping[str, float], workers: int | None, progress: StageProgress) -> WorkEstimate:  # fmt: skip
+    """The estimate of an FRV study (``extended``: the store of the study extended): its
+    new forward simulations, one of them timed first when there are any and ``progress``
+    takes estimates (at the full parameter ``values``, the FRVs at their p_det)."""
+    from fuzzygait.mechanics.scenarios import LegSimulator
+    from fuzzygait.uncertainty.frv.store import read_meta
+    from fuzzygait.workflows.work_estimate import frv_work
+
+    def timer() -> SimulationTiming | None:
+        progress.stage(f"{setup.scenario}: timing a forward simulation")
+        sim = LegSimulator(setup.scenario, nodes=setup.nodes)
+        return time_simulation(sim, sim.parameters(**values), setup)
+
+    meta = read_meta(extended) if extended is not None else None
+    return frv_work(setup.scenario, specs, frv.disc, frv.samples, stage, meta=meta,
+                    timer=timer if takes_estimates(progress) else None, workers=workers)  # fmt: skip

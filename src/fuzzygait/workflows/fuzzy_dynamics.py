@@ -16,10 +16,17 @@ import numpy as np
 from fuzzygait.core.errors import FuzzyGaitError, SimulationError
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
 from fuzzygait.workflows.outputs import write_all_or_none
-from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
 
 if TYPE_CHECKING:
     import xarray as xr
+
+    from fuzzygait.workflows.work_estimate import SimulationTiming, WorkEstimate
+
+#: Linearised steps per α-level optimisation at most (fuzzy-sim; the engine's default).
+MAX_ITERATIONS = 4
+#: Share of a simulation's time steps :func:`time_simulation` runs (at least TIMED_STEPS).
+TIMED_SHARE, TIMED_STEPS = 0.05, 10
 
 __all__ = [
     "FuzzySimOutputs",
@@ -33,6 +40,7 @@ __all__ = [
     "fuzzy_simulation",
     "simulate_leg",
     "simulation_timing",
+    "time_simulation",
 ]
 
 
@@ -131,6 +139,32 @@ def build_simulator(setup: LegSetup, progress: StageProgress = SILENT) -> tuple[
     return sim, sim.parameters(**setup.values)
 
 
+def time_simulation(sim: LegSimulator, p: np.ndarray, setup: LegSetup) -> SimulationTiming | None:
+    """How long one forward simulation of ``setup`` with sensitivities takes at the full
+    parameter vector ``p``: its first :data:`TIMED_SHARE` of the time steps (at least
+    :data:`TIMED_STEPS`) and its first step alone timed here (after one warm-up step),
+    the cost of a run extrapolated linearly in its steps from the two. None when those
+    steps fail (the run itself then says why)."""
+    import time
+
+    from fuzzygait.workflows.work_estimate import SimulationTiming
+
+    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    steps = max(1, int(round(span / step)))
+    timed = min(steps, max(TIMED_STEPS, int(np.ceil(TIMED_SHARE * steps))))
+    seconds = []
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            for n in (1, 1, timed):  # the first loads and warms up
+                start = time.perf_counter()
+                sim.run(p, dt=step, duration=n * step, sensitivities=True, scheme=setup.scheme)
+                seconds.append(time.perf_counter() - start)
+    except FuzzyGaitError:
+        return None
+    per_step = max(0.0, seconds[2] - seconds[1]) / (timed - 1) if timed > 1 else seconds[1]
+    return SimulationTiming(max(seconds[1], seconds[1] + per_step * (steps - 1)), timed, steps)
+
+
 @dataclass(frozen=True)
 class SimulationOutputs:
     """Files of a simulation: the results (``out_file``, .nc or .zarr) and optionally the
@@ -213,14 +247,19 @@ def fuzzy_simulation(
     check_scenario(setup.scenario)
     if stride < 1:
         raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
+    _check_target(target)
     sim, base = build_simulator(setup, progress)
-    progress.stage(f"{setup.scenario}: α-level optimisations")
+    stage = f"{setup.scenario}: α-level optimisations"
+    work, optimisations = _fuzzy_work(sim, base, setup, stage, alphas, stride,
+                                      None if scheduler is not None else workers, progress)  # fmt: skip
+    announce(progress, work)
+    progress.stage(stage, optimisations)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup), \
             Evaluator(workers=workers, scheduler=scheduler) as evaluator:  # fmt: skip
         result = fuzzy_forward_dynamics(
             sim, spreads, target=target, base=base, alphas=alphas, stride=stride, novelty_tol=novelty,
-            dt=setup.dt, duration=setup.duration, scheme=setup.scheme, progress=progress.update,
-            evaluator=None if evaluator.serial else evaluator, tracks=tracks,
+            max_iterations=MAX_ITERATIONS, dt=setup.dt, duration=setup.duration, scheme=setup.scheme,
+            progress=progress.update, evaluator=None if evaluator.serial else evaluator, tracks=tracks,
         )  # fmt: skip
     result.attrs["workers"] = workers if scheduler is None else f"scheduler {scheduler}"
     written = write_all_or_none([
@@ -230,3 +269,27 @@ def fuzzy_simulation(
         (outputs.rrd, lambda path: write_fuzzy_recording(result, path)),
     ])  # fmt: skip
     return result, written
+
+
+def _check_target(target: str | None) -> None:
+    """A :class:`FuzzyGaitError` for an unknown target, before any work."""
+    from fuzzygait.mechanics.targets import TARGETS
+
+    if target is not None and target not in TARGETS:
+        raise FuzzyGaitError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+
+
+def _fuzzy_work(sim: LegSimulator, base: np.ndarray, setup: LegSetup, stage: str, alphas: Sequence[float],
+                stride: int, workers: int | None, progress: StageProgress) -> tuple[WorkEstimate, int]:  # fmt: skip
+    """The estimate of a fuzzy simulation (one simulation timed first when ``progress``
+    takes estimates) and its α-level optimisations (the bar's total)."""
+    from fuzzygait.workflows.work_estimate import fuzzy_sim_optimisations, fuzzy_sim_work
+
+    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    n_time = int(round(span / step)) + 1
+    timing = None
+    if takes_estimates(progress):
+        progress.stage(f"{setup.scenario}: timing a forward simulation")
+        timing = time_simulation(sim, base, setup)
+    work = fuzzy_sim_work(setup.scenario, n_time, stride, alphas, MAX_ITERATIONS, stage, timing, workers)
+    return work, fuzzy_sim_optimisations(n_time, stride, alphas)

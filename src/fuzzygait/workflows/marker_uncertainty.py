@@ -14,7 +14,7 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypedDict, Unpack
+from typing import TYPE_CHECKING, TypedDict, Unpack
 
 import pandas as pd
 import xarray as xr
@@ -33,7 +33,10 @@ from fuzzygait.markererror.result import angle_components
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
-from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
+
+if TYPE_CHECKING:
+    from fuzzygait.workflows.work_estimate import WorkEstimate
 
 __all__ = [
     "DEFAULT_SETTINGS",
@@ -168,6 +171,8 @@ def analyse_run(
         stages.update(done, total)
 
     per_source_note = None
+    if takes_estimates(stages) and (estimate := _estimate(run, settings)) is not None:
+        announce(stages, estimate)
     with Evaluator(workers=max(1, int(options.workers))) as evaluator:
         stages.stage("fuzzy angles")
         fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, components,
@@ -204,6 +209,22 @@ def analyse_run(
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable)
+
+
+def _estimate(run: AnglesRun, settings: MarkerErrorSettings) -> WorkEstimate | None:
+    """The analysis' work on ``run``: per component asked for, the frames it is optimised
+    on (measured, and computable from the markers) × the α-levels, and the later runs;
+    None when no component asked for is computed (the analysis then says so)."""
+    from fuzzygait.kinematics import ALL_ANGLE_NAMES
+    from fuzzygait.markererror.analysis import component_tasks, split_component
+    from fuzzygait.markererror.angle_model import AXES
+    from fuzzygait.workflows.work_estimate import marker_error_work
+
+    names = [n for n in (settings.angles or ALL_ANGLE_NAMES) if split_component(n)[0] in run.result.angles]
+    if not names:
+        return None
+    tasks, _ = component_tasks(run.trial, run.subject, run.result, settings.options(), names, run.clusters)
+    return marker_error_work({f"{t.name}_{AXES[t.axis]}": int(t.frames.size) for t in tasks}, settings)
 
 
 def _per_source_note(fuzzy: xr.Dataset, n_components: int) -> str:
