@@ -257,17 +257,27 @@ def test_study_hulls_counts_and_truth(tmp_path) -> None:
     assert hull.dims == ("sample", "alpha", "bound", "time") and hull.shape == (1500, 5, 2, TIMES.size)
     centres = study.grid.centres(bins)
     peaks = generate_samples(spec, 1500, 1)[:, -1, 0]
-    hermite = study.grid.spacing**4 * TIMES**4 / 384 + 1e-12
+    h = study.grid.spacing
+    hermite = h**4 * TIMES**4 / 384 + 1e-12
+    # the α = 1 cell: the library entries (bin centres) on either side of the raw peak
+    k = np.clip(np.floor((peaks - study.grid.origin) / h - 0.5).astype(int), 0, study.grid.n_bins - 2)
     for i in (0, 77, 1499):  # each sample as if the GFA were applied to it alone (dense truth)
         sample = hull[i].to_numpy()
-        # α = 1: the model at the raw peak (Hermite interpolation of the library)
-        assert np.all(np.abs(sample[-1, 0] - model.evaluate(peaks[i : i + 1]).values) <= hermite)
+        cell = model.function(study.grid.centres(np.array([k[i], k[i] + 1]))[:, None])
+        # α = 1: the model at the raw peak (Hermite interpolation of the library), kept within
+        # the cell's two library values (clipping moves it no farther from the clipped model)
+        truth = np.clip(model.evaluate(peaks[i : i + 1]).values, cell.min(axis=0), cell.max(axis=0))
+        assert np.all(np.abs(sample[-1, 0] - truth) <= hermite)
         for a in range(4):
             lo, hi = centres[i, a, 0], centres[i, a, 1]
             true_lower, true_upper = dense_hull(model, lo, hi)
-            wide_lower, wide_upper = dense_hull(model, min(lo, peaks[i]), max(hi, peaks[i]))
+            wide_lower, wide_upper = dense_hull(model, min(lo, study.grid.centres(k[i])),
+                                                max(hi, study.grid.centres(k[i] + 1)))  # fmt: skip
             tol = hermite + (hi - lo) ** 2 / 2000**2 * TIMES**2 / 8
-            assert np.all(sample[a, 0] <= true_lower + tol) and np.all(sample[a, 1] >= true_upper - tol)
+            # the hull is the extreme library value: it misses an interior extremum of the
+            # model by at most (h/2)²/2·max|∂²f/∂p²| = h²t²/8, and never leaves the model's range
+            miss = h**2 * TIMES**2 / 8 + tol
+            assert np.all(sample[a, 0] <= true_lower + miss) and np.all(sample[a, 1] >= true_upper - miss)
             assert np.all(sample[a, 0] >= wide_lower - tol) and np.all(sample[a, 1] <= wide_upper + tol)
 
 

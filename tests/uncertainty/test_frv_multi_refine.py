@@ -24,6 +24,7 @@ from fuzzygait.uncertainty.frv import (
     interval_hulls,
 )
 from fuzzygait.uncertainty.frv.hulls import _hermite_rows
+from fuzzygait.uncertainty.frv.peaks import cell_keys, key_centres
 
 
 def corners_of(f, grad, origins, spacings, first, last, x):
@@ -140,19 +141,27 @@ def test_a_refined_study_gives_the_model_at_the_raw_peaks_and_the_closed_form_bo
     assert study.refine is True
     peaks = study.samples()["cut"].to_numpy()[:, :, -1, 0]
     hull = study.hulls()["hull"].to_numpy()
-    np.testing.assert_allclose(hull[:, -1, 0], model.function(peaks), rtol=1e-12, atol=1e-12)  # own peak, exact
-    # box hulls: p1 at its ends; p2² at the point of the box's p2 range nearest 0 (the
-    # interpolant is exact along the grid lines, so 0 itself when the box straddles it)
+    # α = 1: the model at the sample's own peak (the interpolant is exact), kept within the
+    # values at its lattice cell's corners — below them only where p2² turns inside the cell
+    corners = model.function(key_centres(study.grids, cell_keys(study.grids, study.peak_refine, peaks)[0]))
+    corners = corners.reshape(len(peaks), -1, TIMES.size)
+    exact = model.function(peaks)
+    np.testing.assert_allclose(hull[:, -1, 0], np.clip(exact, corners.min(axis=1), corners.max(axis=1)), rtol=1e-12,
+                               atol=1e-12)  # fmt: skip
+    assert 0 < np.count_nonzero(np.any(exact < corners.min(axis=1) - 1e-12, axis=1)) < len(peaks) / 4
+    # box hulls: the extreme simulated values, p1 at its ends; p2² at the grid point of the
+    # box nearest 0 (the interpolant's minimum between grid points, 0 itself when the box
+    # straddles 0, is not stored), and at the end farther from 0
     boxes, (g1, g2) = study.boxes(), study.grids
     left, right = boxes["left"].to_numpy(), boxes["right"].to_numpy()
     c2l, c2r = g2.centres(left[:, 1]), g2.centres(right[:, 1])
-    p2_min = np.clip(0.0, c2l, c2r)
+    p2_min = g2.centres(np.clip(np.floor(-g2.origin / g2.spacing), left[:, 1], right[:, 1]))
     p2_max = np.where(np.abs(c2l) >= np.abs(c2r), c2l, c2r)
     lower = (A * g1.centres(left[:, 0]) + B * p2_min**2)[:, None] * TIMES
     upper = (A * g1.centres(right[:, 0]) + B * p2_max**2)[:, None] * TIMES
     np.testing.assert_allclose(boxes["lower"].to_numpy(), lower, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(boxes["upper"].to_numpy(), upper, rtol=1e-12, atol=1e-12)
-    assert np.any(p2_min != np.where(np.abs(c2l) <= np.abs(c2r), c2l, c2r))  # some boxes straddle 0 between points
+    assert np.any((c2l < 0) & (c2r > 0) & (p2_min != 0))  # some boxes straddle 0 between grid points
     # every hull holds its box's closed form and the α = 1 value (nesting repair)
     assert np.all(hull[:, :-1, 0] <= hull[:, -1:, 0] + 1e-12) and np.all(hull[:, :-1, 1] >= hull[:, -1:, 1] - 1e-12)
     # slopes stored, read back, and extension bit-identical to a one-shot run

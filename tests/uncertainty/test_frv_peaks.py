@@ -13,7 +13,7 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
 from fuzzygait.uncertainty.frv import FRVMultiStudy, hermite_cells
 from fuzzygait.uncertainty.frv.grouping import Grid
-from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys, interpolation_error, key_centres
+from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys, interpolation_error, key_centres, lattice
 
 GRIDS = (Grid.from_range(0.0, 3.0, 7), Grid.from_range(-1.0, 1.0, 5))  # spacings 0.5 and 0.5
 
@@ -96,8 +96,16 @@ def test_the_alpha_one_lattice_is_refined_until_the_peaks_are_met(tmp_path) -> N
     assert grown.peak_refine == auto.peak_refine
     one_shot = FRVMultiStudy.create(model, specs(), 600, seed=5, store=tmp_path / "o.zarr", chunk=128,
                                     grids=grown.grids, peak_refine=auto.peak_refine)  # fmt: skip
-    np.testing.assert_allclose(grown.hulls()["hull"].to_numpy(), one_shot.hulls()["hull"].to_numpy(), rtol=1e-14,
-                               atol=1e-15)  # fmt: skip
+    # ... except a first-batch sample whose peak lies beyond the first grids' outermost
+    # lattice points: its α = 1 is extrapolated from the end cell and kept within that cell's
+    # values, where the one-shot run's wider grid interpolates between simulations around it
+    peaks = grown.samples()["cut"].to_numpy()[:400, :, -1, 0]
+    t = hermite_cells(*lattice(fixed.grids, auto.peak_refine), peaks)[1]
+    beyond = np.flatnonzero(np.any((t < 0) | (t > 1), axis=1))
+    assert 0 < beyond.size <= 2
+    keep = np.setdiff1d(np.arange(600), beyond)
+    np.testing.assert_allclose(grown.hulls()["hull"].to_numpy()[keep], one_shot.hulls()["hull"].to_numpy()[keep],
+                               rtol=1e-14, atol=1e-15)  # fmt: skip
     assert grown.counts["forward_simulations"] == one_shot.counts["forward_simulations"]
 
 

@@ -9,6 +9,7 @@ it (thesis OP-III).  Every ``evaluate`` is one forward simulation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Hashable, Sequence
 from dataclasses import astuple, dataclass
 
@@ -26,6 +27,12 @@ TARGETS = (
     "last_node_y",
     "last_node_z",
 )
+#: The values a target can take at all (:attr:`~fuzzygait.uncertainty.protocol.Output.bounds`):
+#: deformation energies are never negative; the node coordinates are unbounded.
+TARGET_BOUNDS: dict[str, tuple[float, float]] = {
+    "total_deformation_energy": (0.0, math.inf),
+    "max_element_energy": (0.0, math.inf),
+}
 
 
 class LegTargetModel:
@@ -94,7 +101,9 @@ class LegTargetModel:
 
     @property
     def output(self) -> Output:
-        return Output(self.target, "m" if self.target.startswith("last_node_") else "J")
+        """The target's name, units and bounds (energies ≥ 0, :data:`TARGET_BOUNDS`)."""
+        units = "m" if self.target.startswith("last_node_") else "J"
+        return Output(self.target, units, bounds=TARGET_BOUNDS.get(self.target, (-math.inf, math.inf)))
 
     @property
     def capabilities(self) -> frozenset[str]:

@@ -6,7 +6,7 @@ of one scalar output over its time nodes, and declares what else it can do::
 
     model.times              (n_time,)  time of each node (any unit, e.g. s)
     model.parameter_names    tuple of n_p names (checked against the FuzzyVector)
-    model.output             Output(name, units)
+    model.output             Output(name, units, description, bounds=(lower, upper))
     model.capabilities       frozenset, a subset of {"sensitivities", "nodes", "node_gradients"}
     model.evaluate(p, sensitivities=False) -> Evaluation(values (n_time,), jacobian (n_time, n_p) | None)
     model.evaluate_nodes(P, nodes) -> (k,)      only with "nodes": output of row P[i] at node nodes[i]
@@ -27,6 +27,7 @@ calls).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
@@ -52,11 +53,25 @@ class Output:
         name: short name (e.g. ``"LKneeAngles_X"``, ``"total_deformation_energy"``).
         units: physical units (e.g. ``"deg"``, ``"J"``, ``"m"``); empty if dimensionless.
         description: one line for plots and reports.
+        bounds: ``(lower, upper)``, the values the output can take at all (an energy:
+            ``(0, inf)``); ``(-inf, inf)``, the default, declares none. Results built from
+            the model's outputs (e.g. FRV hulls) are kept within them.
     """
 
     name: str = "output"
     units: str = ""
     description: str = ""
+    bounds: tuple[float, float] = (-math.inf, math.inf)
+
+    def __post_init__(self) -> None:
+        try:
+            lower, upper = (float(b) for b in self.bounds)
+        except (TypeError, ValueError):
+            raise ParameterError(f"Output {self.name!r}: bounds must be two numbers (lower, upper); "
+                                 f"got {self.bounds!r}") from None  # fmt: skip
+        if math.isnan(lower) or math.isnan(upper) or lower > upper:
+            raise ParameterError(f"Output {self.name!r}: bounds must satisfy lower <= upper; got {self.bounds!r}")
+        object.__setattr__(self, "bounds", (lower, upper))
 
 
 @dataclass(frozen=True)

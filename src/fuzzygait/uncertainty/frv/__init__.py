@@ -17,12 +17,15 @@ steps of the FRV-GFA (thesis §2.7.4, "FRV-GFA steps"):
    ``evaluator``). Because every interval end is a bin centre and the GFA's novelty check
    maps optima onto library entries, the α-level optimisation of an interval returns the
    extreme library value over the bins inside it; all occurring intervals are answered
-   at once by sparse-table range-max/min queries. With sensitivities the thesis'
-   linearisation between neighbouring library entries is used as a cubic Hermite
-   interpolant per sub-interval, whose interior extremum is taken in closed form
-   (``refine``).
+   at once by sparse-table range-max/min queries. A hull is thus always a value the
+   model produced: the extrema of the cubic Hermite interpolant between library entries
+   (:func:`hermite_segment_extrema`) are not stored, for where the grid does not resolve
+   the model they leave the range it can produce (a deformation energy below zero).
 6.–7. **Assembly**: each sample's output fuzzy number at every time node is its
-   intervals' hulls (α = 1: the library value at the peak bin), passed through
+   intervals' hulls (α = 1: the library value at the peak bin, or with sensitivities,
+   ``refine``, the cubic Hermite interpolant at the sample's own peak kept within its
+   cell's two library values), within the bounds the model declares for its output
+   (:attr:`~fuzzygait.uncertainty.protocol.Output.bounds`), passed through
    :func:`~fuzzygait.uncertainty.postprocess.repair_nesting` (Fig. 2.11).
 8.–9. **Increments and fitting** (:func:`fit_distributions`).
 
@@ -34,8 +37,8 @@ samples later, simulating only new bin centres and computing only new intervals
 :class:`FRVStudy` takes one FRV parameter (the Table 5.3 case, with the Hermite
 refinement); :class:`FRVMultiStudy` several independent ones (boxes of per-parameter
 intervals on tensor grids, :func:`generate_box_samples`, :func:`occurring_boxes`,
-:func:`possible_boxes`, :func:`box_extrema`, refined with sensitivities by
-:func:`hermite_box_extrema` and, for α = 1 at each sample's own peak, :func:`hermite_values`);
+:func:`possible_boxes`, :func:`box_extrema`, and with sensitivities α = 1 at each
+sample's own peak by :func:`hermite_values`);
 :func:`open_study` opens either.
 """
 

@@ -1,8 +1,10 @@
 """Batch evaluation of the model at parameter rows for the FRV-GFA library: the
-``evaluator`` interface ``P (k, n_p) -> F (k, n_time)`` or ``(F, J (k, n_time, n_p))``."""
+``evaluator`` interface ``P (k, n_p) -> F (k, n_time)`` or ``(F, J (k, n_time, n_p))``,
+and the bounds the model declares for its output."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -48,3 +50,14 @@ def _run_evaluator(evaluator: BatchFunction, P: np.ndarray, n_time: int) -> tupl
     if J is not None:
         J = np.asarray(J, dtype=float).reshape(k, n_time, -1)
     return F, J
+
+
+def declared_bounds(model: FuzzyModel) -> tuple[float, float]:
+    """``(lower, upper)`` the model declares for its output
+    (:attr:`~fuzzygait.uncertainty.protocol.Output.bounds`; ``(-inf, inf)`` when it
+    declares none, e.g. an output description without bounds)."""
+    bounds = getattr(getattr(model, "output", None), "bounds", None)
+    if bounds is None:
+        return -math.inf, math.inf
+    lower, upper = (float(b) for b in bounds)
+    return lower, upper

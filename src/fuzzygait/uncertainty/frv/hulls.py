@@ -1,12 +1,26 @@
 """Interval hulls over the model library (thesis §2.7.4 step 5): sparse-table range
-queries for all occurring intervals at once, and the cubic Hermite refinement between
-neighbouring library entries when the model gives sensitivities ``df/dp``."""
+queries for all occurring intervals at once, and the cubic Hermite interpolant between
+neighbouring library entries when the model gives sensitivities ``df/dp``.
+
+The studies store only values their forward simulations produced, or interpolate
+between: a hull is the extreme library value over its interval or box, and α = 1 is
+the Hermite interpolant kept within its cell's corner values (``bounded``). The
+interpolant's interior extrema (:func:`hermite_segment_extrema`, :func:`interval_hulls`
+and :func:`hermite_box_extrema` with slopes) estimate the model between the library
+entries; where the grid does not resolve the model they leave the range it can produce
+at all (the stance blade's maximum element energy, ≥ 0, reached −0.05 J on a 20-point
+grid), so no study stores them.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
+
+#: The commit-record entry ``hulls`` of a study whose stored hulls are the extreme library
+#: values over each interval or box (stores made before it held the Hermite extrema).
+HULLS = "simulated"
 
 
 def range_extrema(low_values: np.ndarray, high_values: np.ndarray, first: np.ndarray,
@@ -87,8 +101,10 @@ def interval_hulls(values: np.ndarray, left: np.ndarray, right: np.ndarray, *, s
         left, right: ``(k,)`` row indices (into ``values``) of each interval's ends.
         slopes: optional ``(m, n_time)`` ``df/dp``; given, the hull also takes the
             extrema of the cubic Hermite interpolant between neighbouring rows inside the
-            interval (the linearised refinement); otherwise it is exactly the extreme
-            library value over rows ``left … right``.
+            interval (the linearised refinement: an estimate of the model's extrema, which
+            can leave the range the model produces, see the module docstring); otherwise
+            it is exactly the extreme library value over rows ``left … right`` (what the
+            studies store).
         spacing: parameter distance between rows (needed with ``slopes``).
 
     Returns:
@@ -110,16 +126,20 @@ def interval_hulls(values: np.ndarray, left: np.ndarray, right: np.ndarray, *, s
 
 
 def _hermite_rows(values: np.ndarray, slopes: np.ndarray, first_centre: float, spacing: float,
-                  x: np.ndarray) -> np.ndarray:
+                  x: np.ndarray, *, bounded: bool = False) -> np.ndarray:  # fmt: skip
     """Cubic Hermite interpolation of library rows (grid points ``first_centre + k·spacing``)
-    at the parameter values ``x``: ``(len(x), n_nodes)``."""
+    at the parameter values ``x``: ``(len(x), n_nodes)``. ``bounded``: each value kept
+    within its cell's two corner values (the end cell's beyond the outermost rows)."""
     u = (np.asarray(x, float) - first_centre) / spacing
     i = np.clip(np.floor(u).astype(np.int64), 0, values.shape[0] - 2)
     t = (u - i)[:, None]
     h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
     h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
-    return (h00 * values[i] + h10 * spacing * slopes[i]
-            + h01 * values[i + 1] + h11 * spacing * slopes[i + 1])  # fmt: skip
+    out = (h00 * values[i] + h10 * spacing * slopes[i]
+           + h01 * values[i + 1] + h11 * spacing * slopes[i + 1])  # fmt: skip
+    if bounded:
+        out = np.clip(out, np.minimum(values[i], values[i + 1]), np.maximum(values[i], values[i + 1]))
+    return out
 
 
 def box_extrema(low_values: np.ndarray, high_values: np.ndarray, first: np.ndarray, last: np.ndarray,
@@ -226,7 +246,8 @@ def hermite_cells(origins: np.ndarray, spacings: np.ndarray, first_bins: np.ndar
     return k, t
 
 
-def hermite_values(values: np.ndarray, slopes: np.ndarray, spacings: np.ndarray, t: np.ndarray) -> np.ndarray:
+def hermite_values(values: np.ndarray, slopes: np.ndarray, spacings: np.ndarray, t: np.ndarray, *,
+                   bounded: bool = False) -> np.ndarray:  # fmt: skip
     """Cubic Hermite interpolation in ``D`` parameters, one parameter at a time.
 
     Along the last parameter the corner pairs are joined by the cubic Hermite interpolant
@@ -243,11 +264,15 @@ def hermite_values(values: np.ndarray, slopes: np.ndarray, spacings: np.ndarray,
         slopes: ``(n, 2^D, n_columns, D)`` their derivatives ``∂f/∂p_d``.
         spacings: ``(D,)`` grid spacing per parameter.
         t: ``(n, D)`` positions in the cell (:func:`hermite_cells`).
+        bounded: keep each value within the smallest and largest of its ``2^D`` corner
+            values (the simulations it is interpolated from).
 
     Returns:
         ``(n, n_columns)``.
     """
     f, m = np.asarray(values, dtype=float), np.asarray(slopes, dtype=float)
+    if bounded:
+        return np.clip(hermite_values(f, m, spacings, t), f.min(axis=1), f.max(axis=1))
     n, corners, n_col = f.shape
     for d in range(t.shape[1] - 1, -1, -1):
         f = f.reshape(n, corners // 2, 2, n_col)

@@ -20,12 +20,14 @@ as for one parameter.
 ``refine=False``). When the evaluator returns sensitivities (``refine``), α = 1 is the
 model at the sample's *own* peak by cubic Hermite interpolation in every parameter
 (:func:`~fuzzygait.uncertainty.frv.hulls.hermite_values`, from the values and gradients
-at the ``2^D`` lattice points around the peak, which the library then also holds), and
-the box hulls take the Hermite extrema along every grid line inside the box too
-(:func:`~fuzzygait.uncertainty.frv.hulls.hermite_box_extrema`). The grouped peak alone
-misses where the output changes quickly within a bin (the stance blade's energy changes
-by up to 50 % within 4 % of E, its vibration phase turning over), and the α = 1 outputs
-would then not follow the peak distribution.
+at the ``2^D`` lattice points around the peak, which the library then also holds), kept
+within those ``2^D`` values (``bounded``). The grouped peak alone misses where the
+output changes quickly within a bin (the stance blade's energy changes by up to 50 %
+within 4 % of E, its vibration phase turning over), and the α = 1 outputs would then not
+follow the peak distribution. Box hulls and α = 1 values stay within the simulations
+they are made from and within the model's declared bounds
+(:attr:`~fuzzygait.uncertainty.protocol.Output.bounds`); the interpolant's extrema
+between grid points are not stored (:mod:`fuzzygait.uncertainty.frv.hulls`).
 
 The α = 1 lattice (:mod:`fuzzygait.uncertainty.frv.peaks`) is the grouping grid, or
 finer along a parameter where the grid cannot follow the model: ``peak_refine`` gives
@@ -65,8 +67,16 @@ from fuzzygait.core.schema import BOUNDS
 from fuzzygait.io.atomic import tidy_beside
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
-from fuzzygait.uncertainty.frv.hulls import box_extrema, hermite_box_extrema, hermite_values
-from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys, interpolation_error, key_centres
+from fuzzygait.uncertainty.frv.hulls import HULLS, box_extrema
+from fuzzygait.uncertainty.frv.peaks import (
+    PEAK_CHECKS,
+    PEAK_FACTORS,
+    PEAK_TOLERANCE,
+    RESOLUTION,
+    PeakLattice,
+    _peak_factors,
+    key_centres,
+)
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, check_specs, generate_box_samples
 from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.frv.store import check, commit, open_group, read_meta
@@ -74,14 +84,7 @@ from fuzzygait.uncertainty.frv.study import FRVStudy, StudyState, _blocks, _new_
 from fuzzygait.uncertainty.postprocess import repair_nesting
 from fuzzygait.uncertainty.protocol import FuzzyModel
 
-__all__ = ["FRVMultiStudy", "is_multi_store", "open_study"]
-
-#: Default largest α = 1 interpolation error, as a fraction of the output's spread.
-PEAK_TOLERANCE = 0.01
-#: Test peaks per parameter and lattice level when the α = 1 lattice is chosen.
-PEAK_CHECKS = 16
-#: The α = 1 lattice refinement factors a parameter can have (divisors of RESOLUTION).
-PEAK_FACTORS = (1, 2, 4, 8)
+__all__ = ["PEAK_CHECKS", "PEAK_FACTORS", "PEAK_TOLERANCE", "FRVMultiStudy", "is_multi_store", "open_study"]
 
 
 def is_multi_store(meta: Mapping[str, Any]) -> bool:
@@ -106,7 +109,7 @@ def _sample_ranges(specs: Sequence[FRVSpec], seed: int, start: int, n: int) -> n
     return out
 
 
-class FRVMultiStudy(StudyState):
+class FRVMultiStudy(PeakLattice, StudyState):
     """An FRV-GFA study of several independent FRV parameters in a zarr store,
     extendable by samples (see the module docstring for the method and the layout).
 
@@ -179,8 +182,9 @@ class FRVMultiStudy(StudyState):
             options: JSON-compatible record of what the study is made with.
             grids: the grids to group on (one per parameter) instead of the first
                 batch's ranges, e.g. another study's, to compare two studies bin by bin.
-            refine: Hermite refinement with the sensitivities (α = 1 at the sample's own
-                peak, box hulls along grid lines); default: when the evaluator returns them.
+            refine: α = 1 by the Hermite interpolant of the values and sensitivities at
+                each sample's own peak (within its cell's corner values); default: when
+                the evaluator returns sensitivities.
             peak_refine: the α = 1 lattice per parameter (one factor for all or one
                 each, from :data:`PEAK_FACTORS`: 1 = the grouping grid, 2 = half its
                 spacing, ...); None: chosen on the first batch (module docstring).
@@ -218,7 +222,7 @@ class FRVMultiStudy(StudyState):
                 raise ParameterError(f"grids: give one Grid per parameter ({n_params})")
             discs = [g.n_points for g in grid_list]
         meta: dict[str, Any] = {"seed": seed, "grid": [g.to_dict() for g in grid_list], "n_disc": discs,
-                "time_stride": time_stride, "refine": refine, "peak_refine": factors,
+                "time_stride": time_stride, "refine": refine, "hulls": HULLS, "peak_refine": factors,
                 "peak_tolerance": float(peak_tolerance), "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
@@ -254,8 +258,10 @@ class FRVMultiStudy(StudyState):
             pairs = np.stack([table["left"].to_numpy(), table["right"].to_numpy()], axis=2)
             keys = pairs.reshape(study.interval_rows, -1)
             study._boxes = {tuple(k): i for i, k in enumerate(keys.tolist())}
-            study._box_lower = table["lower"].to_numpy()
-            study._box_upper = table["upper"].to_numpy()
+            if study.stored_hulls:
+                study._box_lower, study._box_upper = table["lower"].to_numpy(), table["upper"].to_numpy()
+            else:  # an older store: its hulls held the Hermite extrema; new samples use the library's
+                study._box_lower, study._box_upper = study._box_hulls(keys[:, 0::2], keys[:, 1::2])
         return study
 
     # ------------------------------------------------------------------ public
@@ -345,59 +351,6 @@ class FRVMultiStudy(StudyState):
                            last_new_intervals=int(new.shape[0]), last_wall_time=elapsed)  # fmt: skip
         self._write_meta()
 
-    def _factors(self) -> list[int]:
-        """The α = 1 lattice factors in use (the grid's until chosen)."""
-        return self.peak_refine if self.peak_refine is not None else [1] * self._n_params
-
-    def _peak_corners(self, start: int, stop: int) -> np.ndarray:
-        """Lattice keys ``(k, n_params)`` of the Hermite cell corners of the raw peaks of
-        samples ``start … stop−1`` on the α = 1 lattice in use."""
-        corners = np.empty((0, self._n_params), dtype=np.int64)
-        for a, b in _blocks(start, stop, self.chunk):
-            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
-            cells = cell_keys(self.grids, self._factors(), cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
-            corners = np.unique(np.concatenate([corners, cells]), axis=0)
-        return corners
-
-    def _choose_peak_refine(self, start: int, stop: int) -> int:
-        """Choose the α = 1 lattice on samples ``start … stop−1`` (module docstring).
-
-        Per parameter ``d`` in turn, :data:`PEAK_CHECKS` test peaks are moved onto their
-        lattice cell's lower corner in every other parameter (so only ``d`` is
-        interpolated) and simulated; ``d``'s spacing is halved while the interpolant at
-        those points misses the model by more than ``peak_tolerance`` of the output's
-        spread (:func:`~fuzzygait.uncertainty.frv.peaks.interpolation_error`). Returns
-        the simulations it ran (the test points' and the new lattice points')."""
-        pick = np.unique(np.linspace(start, stop - 1, min(PEAK_CHECKS, stop - start)).round().astype(np.int64))
-        peaks = np.concatenate([generate_box_samples(self.specs, 1, self.seed, int(i))[:, :, -1, 0] for i in pick])
-        grid_rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
-        factors, checks, simulations, tested = [1] * self._n_params, [], 0, 0
-        for d, grid in enumerate(self.grids):
-            if grid.n_bins < 2:
-                continue
-            corners = cell_keys(self.grids, factors, peaks)[0]
-            tests = key_centres(self.grids, corners[:, 0])
-            tests[:, d] = peaks[:, d]  # the peak along d, the cell's lower corner in the others
-            exact, _ = _run_evaluator(self.evaluator, tests, self.n_time)
-            tested += len(tests)
-            while True:
-                corners, t = cell_keys(self.grids, factors, peaks)
-                simulations += self._extend_library(corners.reshape(-1, self._n_params))
-                t_along = np.zeros_like(t)
-                t_along[:, d] = t[:, d]
-                predicted = self._hermite(corners, t_along, factors)
-                error = interpolation_error(predicted, exact[:, self.nodes], self._lib_values[grid_rows])
-                checks.append({"parameter": self.specs[d].name, "factor": factors[d], "error": error})
-                if error <= self.peak_tolerance or factors[d] == PEAK_FACTORS[-1]:
-                    break
-                factors[d] *= 2
-        self.peak_refine = factors
-        self.counts["peak_checks"] = checks
-        self.counts["peak_refine"] = {spec.name: factor for spec, factor in zip(self.specs, factors, strict=True)}
-        self.counts["forward_simulations"] += tested  # the library's are counted as they are added
-        self._write_meta()
-        return simulations + tested
-
     def _extend_library(self, keys: np.ndarray) -> int:
         """Simulate the lattice ``keys (k, n_params)`` (units of a bin / RESOLUTION) not
         yet in the library, in the given order (one evaluator call); returns their number."""
@@ -441,22 +394,7 @@ class FRVMultiStudy(StudyState):
         if not boxes.shape[0]:
             return
         lefts, rights = boxes[:, 0::2], boxes[:, 1::2]
-        origin = lefts.min(axis=0)
-        shape = tuple(rights.max(axis=0) - origin + 1)
-        dense = np.full((*shape, self.nodes.size), np.nan)  # the library on the boxes' bounding grid
-        points = np.array(list(self._points), dtype=np.int64).reshape(-1, self._n_params) - origin
-        rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
-        inside = np.all((points >= 0) & (points < np.array(shape)), axis=1)
-        dense[tuple(points[inside].T)] = self._lib_values[rows[inside]]
-        if self.refine:
-            dense_slopes = np.full((*shape, self.nodes.size, self._n_params), np.nan)
-            dense_slopes[tuple(points[inside].T)] = self._lib_slopes[rows[inside]]
-            spacings = np.array([g.spacing for g in self.grids])
-            lower, upper = hermite_box_extrema(dense, dense_slopes, spacings, lefts - origin, rights - origin)
-        else:
-            lower, upper = box_extrema(dense, dense, lefts - origin, rights - origin)
-        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
-            raise FuzzyGaitError("internal: a box reaches a grid point without a library entry")
+        lower, upper = self._box_hulls(lefts, rights)
         ds = xr.Dataset({"left": (("interval", "parameter"), lefts), "right": (("interval", "parameter"), rights),
                          "lower": (("interval", "time"), lower), "upper": (("interval", "time"), upper)},
                         coords={"time": self.times, "parameter": [s.name for s in self.specs]})  # fmt: skip
@@ -472,19 +410,21 @@ class FRVMultiStudy(StudyState):
         self.counts["interval_optimisations"] += 2 * proper * int(self.nodes.size)
         self._write_meta()
 
-    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
-        """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library
-        on the study's α = 1 lattice."""
-        corners, t = cell_keys(self.grids, self._factors(), peaks)
-        return self._hermite(corners, t, self._factors())
-
-    def _hermite(self, corners: np.ndarray, t: np.ndarray, factors: Sequence[int]) -> np.ndarray:
-        """The Hermite interpolant on the lattice of ``factors`` in cells of corner keys
-        ``(n, 2^D, n_params)`` at positions ``t (n, n_params)``."""
-        rows = np.array([self._keys[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
-                        dtype=np.int64).reshape(corners.shape[:2])  # fmt: skip
-        spacings = np.array([g.spacing for g in self.grids]) / np.asarray(factors)
-        return hermite_values(self._lib_values[rows], self._lib_slopes[rows], spacings, t)
+    def _box_hulls(self, lefts: np.ndarray, rights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper hulls of the boxes of grid bins ``lefts … rights`` (``(k,
+        n_params)`` each): the extreme library values over their grid points, within the
+        model's declared bounds."""
+        origin = lefts.min(axis=0)
+        shape = tuple(rights.max(axis=0) - origin + 1)
+        dense = np.full((*shape, self.nodes.size), np.nan)  # the library on the boxes' bounding grid
+        points = np.array(list(self._points), dtype=np.int64).reshape(-1, self._n_params) - origin
+        rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
+        inside = np.all((points >= 0) & (points < np.array(shape)), axis=1)
+        dense[tuple(points[inside].T)] = self._lib_values[rows[inside]]
+        lower, upper = box_extrema(dense, dense, lefts - origin, rights - origin)
+        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise FuzzyGaitError("internal: a box reaches a grid point without a library entry")
+        return np.clip(lower, *self.bounds), np.clip(upper, *self.bounds)
 
     def _assemble(self, bins: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, int]:
         """Hulls ``(nb, n_alpha, 2, n_nodes)`` of grouped box samples ``(nb, n_params,
@@ -502,17 +442,9 @@ class FRVMultiStudy(StudyState):
         else:
             grouped = np.array([self._points[tuple(p)] for p in bins[:, :, -1, 0].tolist()], dtype=np.int64)
             hull[:, -1, :] = self._lib_values[grouped][:, None, :]
+        hull[:, -1] = np.clip(hull[:, -1], *self.bounds)
         repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
         return repaired, int(np.count_nonzero(repaired != hull))
-
-
-def _peak_factors(peak_refine: int | Sequence[int], n_params: int) -> list[int]:
-    """``peak_refine`` as one factor per parameter, each one of :data:`PEAK_FACTORS`."""
-    factors = [peak_refine] * n_params if isinstance(peak_refine, (int, np.integer)) else list(peak_refine)
-    if len(factors) != n_params or not all(isinstance(f, (int, np.integer)) and f in PEAK_FACTORS for f in factors):
-        raise ParameterError(f"peak_refine: give one factor or one per parameter ({n_params}), each of "
-                             f"{', '.join(map(str, PEAK_FACTORS))}; got {peak_refine}")  # fmt: skip
-    return [int(f) for f in factors]
 
 
 def _box_points(boxes: np.ndarray) -> np.ndarray:

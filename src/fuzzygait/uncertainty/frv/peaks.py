@@ -13,21 +13,33 @@ for grid centre ``i``), so the points of every level share one dictionary.
 
 How fine: the interpolant's error against the simulated model at test peaks
 (:func:`interpolation_error`) decides whether a parameter's lattice is halved
-(:meth:`fuzzygait.uncertainty.frv.FRVMultiStudy.create`).
+(:meth:`fuzzygait.uncertainty.frv.FRVMultiStudy.create`); :class:`PeakLattice` is the part
+of :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` that chooses, fills and interpolates it.
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid
-from fuzzygait.uncertainty.frv.hulls import hermite_cells
+from fuzzygait.uncertainty.frv.hulls import hermite_cells, hermite_values
+from fuzzygait.uncertainty.frv.samples import FRVSpec, generate_box_samples
+from fuzzygait.uncertainty.frv.study import _blocks
 
 #: Finest lattice: ``h / RESOLUTION`` (a power of two; the refinement factors are its divisors).
 RESOLUTION = 8
+#: Default largest α = 1 interpolation error, as a fraction of the output's spread.
+PEAK_TOLERANCE = 0.01
+#: Test peaks per parameter and lattice level when the α = 1 lattice is chosen.
+PEAK_CHECKS = 16
+#: The α = 1 lattice refinement factors a parameter can have (divisors of RESOLUTION).
+PEAK_FACTORS = (1, 2, 4, 8)
 
 
 def lattice(grids: Sequence[Grid], factors: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -76,3 +88,108 @@ def interpolation_error(predicted: np.ndarray, exact: np.ndarray, library: np.nd
         return 0.0
     error = np.median(np.abs(np.asarray(predicted) - np.asarray(exact)), axis=0)
     return float(np.max(error[varies] / spread[varies]))
+
+
+def _peak_factors(peak_refine: int | Sequence[int], n_params: int) -> list[int]:
+    """``peak_refine`` as one factor per parameter, each one of :data:`PEAK_FACTORS`."""
+    factors = [peak_refine] * n_params if isinstance(peak_refine, (int, np.integer)) else list(peak_refine)
+    if len(factors) != n_params or not all(isinstance(f, (int, np.integer)) and f in PEAK_FACTORS for f in factors):
+        raise ParameterError(f"peak_refine: give one factor or one per parameter ({n_params}), each of "
+                             f"{', '.join(map(str, PEAK_FACTORS))}; got {peak_refine}")  # fmt: skip
+    return [int(f) for f in factors]
+
+
+class PeakLattice:
+    """The α = 1 lattice of :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` (a mixin:
+    the attributes below are the study's): which lattice, its cells' corner keys, its
+    choice on the first batch, and the bounded Hermite interpolant on it."""
+
+    specs: tuple[FRVSpec, ...]
+    grids: tuple[Grid, ...]
+    seed: int
+    chunk: int
+    n_time: int
+    nodes: np.ndarray
+    evaluator: BatchFunction
+    counts: dict[str, Any]
+    peak_refine: list[int] | None
+    peak_tolerance: float
+    _n_params: int
+    _points: dict[tuple[int, ...], int]
+    _keys: dict[tuple[int, ...], int]
+    _lib_values: np.ndarray
+    _lib_slopes: np.ndarray
+
+    def _extend_library(self, keys: np.ndarray) -> int:
+        raise NotImplementedError
+
+    def _write_meta(self) -> None:
+        raise NotImplementedError
+
+    def _factors(self) -> list[int]:
+        """The α = 1 lattice factors in use (the grid's until chosen)."""
+        return self.peak_refine if self.peak_refine is not None else [1] * self._n_params
+
+    def _peak_corners(self, start: int, stop: int) -> np.ndarray:
+        """Lattice keys ``(k, n_params)`` of the Hermite cell corners of the raw peaks of
+        samples ``start … stop−1`` on the α = 1 lattice in use."""
+        corners = np.empty((0, self._n_params), dtype=np.int64)
+        for a, b in _blocks(start, stop, self.chunk):
+            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
+            cells = cell_keys(self.grids, self._factors(), cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
+            corners = np.unique(np.concatenate([corners, cells]), axis=0)
+        return corners
+
+    def _choose_peak_refine(self, start: int, stop: int) -> int:
+        """Choose the α = 1 lattice on samples ``start … stop−1`` (module docstring).
+
+        Per parameter ``d`` in turn, :data:`PEAK_CHECKS` test peaks are moved onto their
+        lattice cell's lower corner in every other parameter (so only ``d`` is
+        interpolated) and simulated; ``d``'s spacing is halved while the interpolant at
+        those points misses the model by more than ``peak_tolerance`` of the output's
+        spread (:func:`~fuzzygait.uncertainty.frv.peaks.interpolation_error`). Returns
+        the simulations it ran (the test points' and the new lattice points')."""
+        pick = np.unique(np.linspace(start, stop - 1, min(PEAK_CHECKS, stop - start)).round().astype(np.int64))
+        peaks = np.concatenate([generate_box_samples(self.specs, 1, self.seed, int(i))[:, :, -1, 0] for i in pick])
+        grid_rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
+        factors, checks, simulations, tested = [1] * self._n_params, [], 0, 0
+        for d, grid in enumerate(self.grids):
+            if grid.n_bins < 2:
+                continue
+            corners = cell_keys(self.grids, factors, peaks)[0]
+            tests = key_centres(self.grids, corners[:, 0])
+            tests[:, d] = peaks[:, d]  # the peak along d, the cell's lower corner in the others
+            exact, _ = _run_evaluator(self.evaluator, tests, self.n_time)
+            tested += len(tests)
+            while True:
+                corners, t = cell_keys(self.grids, factors, peaks)
+                simulations += self._extend_library(corners.reshape(-1, self._n_params))
+                t_along = np.zeros_like(t)
+                t_along[:, d] = t[:, d]
+                predicted = self._hermite(corners, t_along, factors)
+                error = interpolation_error(predicted, exact[:, self.nodes], self._lib_values[grid_rows])
+                checks.append({"parameter": self.specs[d].name, "factor": factors[d], "error": error})
+                if error <= self.peak_tolerance or factors[d] == PEAK_FACTORS[-1]:
+                    break
+                factors[d] *= 2
+        self.peak_refine = factors
+        self.counts["peak_checks"] = checks
+        self.counts["peak_refine"] = {spec.name: factor for spec, factor in zip(self.specs, factors, strict=True)}
+        self.counts["forward_simulations"] += tested  # the library's are counted as they are added
+        self._write_meta()
+        return simulations + tested
+
+    def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
+        """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library
+        on the study's α = 1 lattice (within each cell's corner values)."""
+        corners, t = cell_keys(self.grids, self._factors(), peaks)
+        return self._hermite(corners, t, self._factors())
+
+    def _hermite(self, corners: np.ndarray, t: np.ndarray, factors: Sequence[int]) -> np.ndarray:
+        """The Hermite interpolant on the lattice of ``factors`` in cells of corner keys
+        ``(n, 2^D, n_params)`` at positions ``t (n, n_params)``, each value within its
+        cell's corner values."""
+        rows = np.array([self._keys[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
+                        dtype=np.int64).reshape(corners.shape[:2])  # fmt: skip
+        spacings = np.array([g.spacing for g in self.grids]) / np.asarray(factors)
+        return hermite_values(self._lib_values[rows], self._lib_slopes[rows], spacings, t, bounded=True)

@@ -18,9 +18,9 @@ from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.schema import BOUNDS
 from fuzzygait.io.atomic import replace_folder, temporary_folder, tidy_beside
 from fuzzygait.uncertainty.counting import CountedModel
-from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, serial_evaluator
+from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, declared_bounds, serial_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
-from fuzzygait.uncertainty.frv.hulls import _hermite_rows, interval_hulls
+from fuzzygait.uncertainty.frv.hulls import HULLS, _hermite_rows, interval_hulls
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, generate_samples
 from fuzzygait.uncertainty.frv.store import STORE_FORMAT, check, commit, new_store, open_group, read_meta
 from fuzzygait.uncertainty.frv.store import append as _append
@@ -77,6 +77,8 @@ class StudyState:
     evaluator: BatchFunction
     nodes: np.ndarray
     times: np.ndarray
+    bounds: tuple[float, float]
+    stored_hulls: bool
 
     def _read_common_meta(self, path: Path, model: FuzzyModel, meta: dict[str, Any],
                           evaluator: BatchFunction | None) -> None:  # fmt: skip
@@ -100,6 +102,9 @@ class StudyState:
             raise ParameterError(f"{path}: the study has {self.n_time} time nodes; the model has {times.size}")
         self.nodes = optimisation_nodes(self.n_time, self.time_stride)
         self.times = times[self.nodes]
+        self.bounds = declared_bounds(model)
+        # the stored interval hulls are the library extremes (older stores: Hermite extrema)
+        self.stored_hulls = meta.get("hulls") == HULLS
 
     def hulls(self) -> xr.Dataset:
         """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
@@ -142,12 +147,15 @@ class FRVStudy(StudyState):
 
     * root attributes, the commit record: ``spec``, ``seed``, ``grid``, ``n_disc``,
       ``time_stride``, ``refine``, ``chunk``, ``n_time`` (the model's), ``n_samples``,
-      ``counts``, the valid rows ``library_rows`` and ``interval_rows``, and the caller's
+      ``counts``, the valid rows ``library_rows`` and ``interval_rows``, ``hulls``
+      (``"simulated"``: the interval hulls are library extremes; absent in stores made
+      before, whose stored ones are recomputed on :meth:`open`), and the caller's
       ``options`` (what the study was made with, e.g. the command's options);
     * ``library``: ``value (bin, time)`` the model at each bin centre (``slope`` = df/dp
       when refining), ``centre (bin)``; rows in order of computation;
     * ``intervals``: ``left``, ``right (interval)`` bins and ``lower``, ``upper
-      (interval, time)`` hulls — the dictionary of occurring intervals;
+      (interval, time)`` hulls — the dictionary of occurring intervals: the extreme
+      library values over the interval's bins (thesis §2.7.4, post-processing);
     * ``samples``: ``hull (sample, alpha, bound, time)`` chunked ``(chunk, all, 2, all)``
       with the raw α-cuts ``cut (sample, alpha, bound)`` and their ``bin``, written block
       by block (one append along ``sample`` per block of ``chunk`` samples).
@@ -196,8 +204,9 @@ class FRVStudy(StudyState):
             evaluator: batch evaluator ``P (k, 1) -> (k, n_time)`` or ``((k, n_time),
                 (k, n_time, 1))`` with sensitivities; default :func:`serial_evaluator`.
             time_stride: keep every ``time_stride``-th time node (and the last).
-            refine: Hermite refinement between library entries; default: when the
-                evaluator returns sensitivities.
+            refine: α = 1 by the Hermite interpolant of the library values and
+                sensitivities at each sample's own peak (within its cell's two values);
+                default: when the evaluator returns sensitivities.
             chunk: samples per zarr chunk and per processing block.
             overwrite: replace an existing store (it stays intact until the new one is
                 complete).
@@ -223,7 +232,7 @@ class FRVStudy(StudyState):
         n_time = CountedModel(model, scale=np.ones(1)).n_time
         low, high = _sample_range(spec, seed, 0, n_samples, chunk)
         meta: dict[str, Any] = {"seed": seed, "grid": Grid.from_range(low, high, n_disc).to_dict(), "n_disc": n_disc,
-                "time_stride": time_stride, "refine": refine, "chunk": chunk, "n_time": n_time,
+                "time_stride": time_stride, "refine": refine, "hulls": HULLS, "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
                 "options": dict(options or {})}  # fmt: skip
         record = {"spec": spec.to_dict(), **meta}
@@ -247,11 +256,15 @@ class FRVStudy(StudyState):
             study._lib_slopes = lib["slope"].to_numpy() if "slope" in lib else None
         if study.interval_rows:
             table = study.intervals()
-            keys = _encode(table["left"].to_numpy(), table["right"].to_numpy())
+            left, right = table["left"].to_numpy(), table["right"].to_numpy()
+            keys = _encode(left, right)
             order = np.argsort(keys)
             study._keys = keys[order]
-            study._int_lower = table["lower"].to_numpy()[order]
-            study._int_upper = table["upper"].to_numpy()[order]
+            if study.stored_hulls:
+                study._int_lower = table["lower"].to_numpy()[order]
+                study._int_upper = table["upper"].to_numpy()[order]
+            else:  # an older store: its hulls held the Hermite extrema; new samples use the library's
+                study._int_lower, study._int_upper = study._interval_hulls(left[order], right[order])
         return study
 
     # ------------------------------------------------------------------ public
@@ -325,10 +338,18 @@ class FRVStudy(StudyState):
         self._write_meta()
 
     def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
+        """The model at raw ``peaks``: the Hermite interpolant of the library, each value
+        within its cell's two library values."""
         assert self._lib_slopes is not None  # only called when refining with a library of slopes
         slopes = self._lib_slopes[..., 0] if self._lib_slopes.ndim == 3 else self._lib_slopes
         first = float(self.grid.centres(self._lib_first))
-        return _hermite_rows(self._lib_values, slopes, first, self.grid.spacing, peaks)
+        return _hermite_rows(self._lib_values, slopes, first, self.grid.spacing, peaks, bounded=True)
+
+    def _interval_hulls(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper hulls of the intervals of bins ``left … right``: the extreme
+        library values over their bins, within the model's declared bounds."""
+        lower, upper = interval_hulls(self._lib_values, left - self._lib_first, right - self._lib_first)
+        return np.clip(lower, *self.bounds), np.clip(upper, *self.bounds)
 
     def _extend_library(self, bin_lo: int, bin_hi: int) -> int:
         """Simulate the bin centres of ``bin_lo … bin_hi`` not yet in the library (one
@@ -347,7 +368,7 @@ class FRVStudy(StudyState):
         if self.refine is None:
             self.refine = J is not None
         if self.refine and J is None:
-            raise ParameterError("this study refines hulls with sensitivities; the evaluator returned none")
+            raise ParameterError("this study interpolates α = 1 with sensitivities; the evaluator returned none")
         values = F[:, self.nodes]
         slopes = J[:, self.nodes, 0] if self.refine and J is not None else None
         ds = xr.Dataset({"value": (("bin", "time"), values)},
@@ -372,9 +393,7 @@ class FRVStudy(StudyState):
         if not keys.size:
             return
         left, right = _decode(keys)
-        rows_l, rows_r = left - self._lib_first, right - self._lib_first
-        slopes = self._lib_slopes if self.refine else None
-        lower, upper = interval_hulls(self._lib_values, rows_l, rows_r, slopes=slopes, spacing=self.grid.spacing)
+        lower, upper = self._interval_hulls(left, right)
         ds = xr.Dataset({"left": ("interval", left), "right": ("interval", right),
                          "lower": (("interval", "time"), lower), "upper": (("interval", "time"), upper)},
                         coords={"time": self.times})  # fmt: skip
@@ -396,8 +415,10 @@ class FRVStudy(StudyState):
 
         α = 1 is the model at the sample's own peak: with sensitivities, the cubic Hermite
         interpolant of the library (values and slopes at the two neighbouring grid points,
-        O(spacing⁴)) — so the α = 1 output keeps the peak distribution instead of the
-        grid's staircase; without sensitivities, the value at the peak's bin centre."""
+        O(spacing⁴)) kept within those two values — so the α = 1 output keeps the peak
+        distribution instead of the grid's staircase, and never leaves what the
+        simulations produced; without sensitivities, the value at the peak's bin centre.
+        Every value lies within the model's declared bounds."""
         idx = np.searchsorted(self._keys, _encode(bins[:, :-1, 0], bins[:, :-1, 1]))
         hull = np.empty((bins.shape[0], bins.shape[1], 2, self.nodes.size))
         hull[:, :-1, 0] = self._int_lower[idx]
@@ -406,6 +427,7 @@ class FRVStudy(StudyState):
             hull[:, -1, :] = self._peak_values(peaks)[:, None, :]
         else:
             hull[:, -1, :] = self._lib_values[bins[:, -1, 0] - self._lib_first][:, None, :]
+        hull[:, -1] = np.clip(hull[:, -1], *self.bounds)
         repaired = np.moveaxis(repair_nesting(np.moveaxis(hull, 0, 2)), 2, 0)
         return repaired, int(np.count_nonzero(repaired != hull))
 
