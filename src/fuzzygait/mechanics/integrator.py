@@ -28,6 +28,8 @@ REFRESH_CONTRACTION = 0.25
 # Largest Newton update of any coordinate per iteration (m for positions, 1 for directors);
 # a time step of a few ms never moves a coordinate this far, so larger updates are divergence.
 MAX_UPDATE = 0.2
+#: Times :func:`integrate` halves the step (repeating the run) after a step that does not converge.
+MAX_HALVINGS = 3
 
 
 ENGINES = ("auto", "compiled", "python")
@@ -120,6 +122,8 @@ def integrate(
     progress: Callable[[int], None] | None = None,
     scheme: str = "variational",
     engine: str = "auto",
+    max_halvings: int = MAX_HALVINGS,
+    substeps: int = 1,
 ) -> Trajectory:
     """Integrate ``n_steps`` steps of size ``dt`` (s) from ``q0`` with velocity ``v0``.
 
@@ -137,7 +141,78 @@ def integrate(
     ``stepper`` library), "python" the loop below over the compiled kernels, "auto" (default)
     the compiled loop where the model has one.  Both solve the same equations with the same
     iteration; trajectories agree to the Newton tolerance.
+
+    Step refinement: when a step does not converge (at dt = 1 ms the midpoint-type
+    variational integrator turns unstable for a stiff blade's unresolved high modes — the
+    energy grows by orders of magnitude within a few steps before Newton fails, so the
+    state there is already wrong), the whole run is repeated with ``dt/2`` sub-steps, up to
+    ``max_halvings`` times.  Every accepted step of the repeated run solves the scheme's step
+    equations (for the variational integrator the discrete Euler–Lagrange equations with the
+    uniform step ``dt/2^r``); the returned trajectory holds the time nodes ``k·dt`` of the
+    original grid, its ``iterations`` the Newton iterations summed over each node's sub-steps
+    and ``substeps`` = 2^r.  A folded element is not retried (the fold is the blade's
+    motion, not the time step's).  ``substeps`` (a power of two, at most 2^max_halvings):
+    start with that many sub-steps per ``dt`` (a caller's own acceptance test, e.g.
+    :class:`.scenarios.LegSimulator`'s energy balance, asks for more).
     """
+    if substeps < 1 or substeps & (substeps - 1) or substeps > 2**max_halvings:
+        raise ParameterError(f"substeps must be a power of two ≤ 2^max_halvings; got {substeps}")
+    while True:
+        try:
+            fine = _integrate_uniform(
+                model, q0, p, dt / substeps, n_steps * substeps, v0=v0, sensitivities=sensitivities,
+                tolerance=tolerance, constraint_tolerance=constraint_tolerance, max_iterations=max_iterations,
+                progress=None if progress is None else _coarse_progress(progress, substeps),
+                scheme=scheme, engine=engine,
+            )  # fmt: skip
+        except SimulationError as error:
+            if "did not converge" not in str(error) or substeps >= 2**max_halvings:
+                if substeps > 1:
+                    raise SimulationError(f"{error} (with {substeps} sub-steps per dt = {dt:g} s)") from None
+                raise
+            substeps *= 2
+            continue
+        return fine if substeps == 1 else _coarsen(fine, substeps)
+
+
+def _coarse_progress(progress: Callable[[int], None], substeps: int) -> Callable[[int], None]:
+    return lambda done: progress(done // substeps)
+
+
+def _coarsen(fine: Trajectory, substeps: int) -> Trajectory:
+    """The time nodes ``k·dt`` of a run with ``substeps`` uniform sub-steps per ``dt``."""
+    r = substeps
+    n_steps = (len(fine.times) - 1) // r
+    return Trajectory(
+        times=fine.times[::r],
+        q=fine.q[::r],
+        multipliers=fine.multipliers[r - 1 :: r],
+        iterations=fine.iterations.reshape(n_steps, r).sum(axis=1),
+        sensitivities=None if fine.sensitivities is None else fine.sensitivities[::r],
+        timings=fine.timings,
+        velocities=None if fine.velocities is None else fine.velocities[::r],
+        scheme=fine.scheme,
+        substeps=r,
+    )
+
+
+def _integrate_uniform(
+    model: DiscreteModel,
+    q0: np.ndarray,
+    p: np.ndarray,
+    dt: float,
+    n_steps: int,
+    *,
+    v0: np.ndarray | None,
+    sensitivities: bool,
+    tolerance: float,
+    constraint_tolerance: float,
+    max_iterations: int,
+    progress: Callable[[int], None] | None,
+    scheme: str,
+    engine: str,
+) -> Trajectory:
+    """:func:`integrate` with one uniform step ``dt`` (no refinement)."""
     import time as _time
 
     n, m = model.ndof, model.nconstraints

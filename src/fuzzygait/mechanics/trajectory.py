@@ -22,6 +22,8 @@ class Trajectory:
         velocities: (N+1, ndof) nodal velocities of the energy-momentum scheme (None for the
             variational integrator, whose energies use central differences).
         scheme: "variational" or "energy-momentum".
+        substeps: uniform integration steps per interval of ``times`` (> 1 when
+            :func:`.integrator.integrate` refined the step after a failed one).
         timings: seconds spent in residual/Jacobian evaluation, LU factorisation and solves.
     """
 
@@ -33,6 +35,7 @@ class Trajectory:
     timings: dict[str, float]
     velocities: np.ndarray | None = None
     scheme: str = "variational"
+    substeps: int = 1
 
 
 
