@@ -57,7 +57,7 @@ def simulate(
 
     The thesis' Table 4.3/4.4 values, except where they do not run on the shipped blade
     (swing: --set eta=1e5; stance: --scheme energy-momentum; printed as a note). A step
-    that does not converge, or a run whose energy balance is off by more than 0.1 %, is
+    that does not converge, or a run whose energy balance is off by more than 0.5 %, is
     repeated with 2, 4 or 8 sub-steps per --dt. Nothing is written when the simulation
     fails; the error names the options that fix it.
     """
