@@ -1,6 +1,6 @@
-"""The simulator commands' defaults (issue 18, Deliver 1): where the thesis' Table 4.3/4.4
-values do not run on the shipped blade, the command takes the nearest that do, says so
-in a note, and a run that stops names the options that fix it."""
+"""The simulator commands' defaults: where the thesis' Table 4.3/4.4 values do not run on
+the shipped blade, the command takes the nearest that do, says so in a note, and a run
+that stops names the options that fix it; the variational stance runs on sub-steps."""
 
 from __future__ import annotations
 
@@ -42,8 +42,13 @@ def test_the_thesis_swing_folds_and_the_error_names_the_fixes(tmp_path: Path) ->
 
 
 @pytest.mark.slow
-def test_the_thesis_stance_with_the_variational_scheme_stops_and_the_error_names_the_fixes(tmp_path: Path) -> None:
+def test_the_thesis_stance_with_the_variational_scheme_runs_on_sub_steps(tmp_path: Path) -> None:
+    """At dt = 1 ms the variational scheme is unstable on the stance blade (its energy grows
+    before Newton fails at t = 0.719 s); the integrator repeats the run on sub-steps of dt
+    and says so (``benchmarks/simulator_thesis_settings.py``)."""
     result = run_here("simulate", "stance", "--scheme", "variational", "--duration", "0.75", "--out", tmp_path / "s.nc")
-    assert_one_line_error(result, "Newton did not converge at t = 0.",
-                          "on the command line: --set eta=100000 or --scheme energy-momentum or --dt 0.0005")
-    assert not list(tmp_path.iterdir())
+    assert result.returncode == 0, result.stderr
+    assert "variational scheme (4 sub-steps each: a step at dt did not converge" in result.stdout
+    drift = float(result.stdout.split("energy drift max |total + dissipated − initial| / |initial|: ")[1].split()[0])
+    assert drift < 1e-4
+    assert (tmp_path / "s.nc").is_file()
