@@ -26,15 +26,27 @@ import psutil
 from batch_report_scaling import make_session
 
 
-def tree_rss(process: psutil.Process) -> tuple[int, int]:
-    """Total and largest resident set size (bytes) of ``process`` and its descendants."""
+def tree_rss(process: psutil.Process, peaks: dict[str, int]) -> tuple[int, int]:
+    """Total and largest resident set size (bytes) of ``process`` and its descendants;
+    ``peaks`` gathers each process's peak by role (``command`` or the child's kind)."""
     sizes = []
     for p in [process, *process.children(recursive=True)]:
         try:
-            sizes.append(p.memory_info().rss)
+            rss = p.memory_info().rss
+            role = "command" if p.pid == process.pid else _role(p.cmdline())
         except psutil.Error:
             continue
+        sizes.append(rss)
+        peaks[role] = max(peaks.get(role, 0), rss)
     return sum(sizes), max(sizes, default=0)
+
+
+def _role(cmdline: list[str]) -> str:
+    text = " ".join(cmdline)
+    for role in ("nanny", "worker", "resource_tracker", "spawn_main", "forkserver"):
+        if role in text:
+            return role
+    return text[:40]
 
 
 def main() -> None:
@@ -53,8 +65,9 @@ def main() -> None:
         proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         watched = psutil.Process(proc.pid)
         peak_total = peak_single = 0
+        roles: dict[str, int] = {}
         while proc.poll() is None:
-            total, single = tree_rss(watched)
+            total, single = tree_rss(watched, roles)
             peak_total, peak_single = max(peak_total, total), max(peak_single, single)
             time.sleep(0.5)
         out, err = proc.communicate()
@@ -64,7 +77,8 @@ def main() -> None:
     print(f"{args.trials} trials of {args.frames} frames, --uncertainty fast --workers {args.workers}: "
           f"exit {proc.returncode}, {seconds:.1f} s wall ({seconds / args.trials:.2f} s per trial)")
     print(f"peak resident memory: whole process tree {peak_total / 2**20:.0f} MiB, largest process "
-          f"{peak_single / 2**20:.0f} MiB")
+          f"{peak_single / 2**20:.0f} MiB; by role: "
+          + ", ".join(f"{role} {size / 2**20:.0f} MiB" for role, size in sorted(roles.items())))
     print("\n".join(summary + errors[:5]))
 
 
