@@ -8,8 +8,9 @@ option, missing argument, a value of the wrong type) is such a line too, naming 
 option and the command's ``--help``, exit 1.  Warnings raised while a command works are
 held until that work ends: printed (one line each) when it succeeds, left out when it
 fails (the error line says how many; ``--debug`` shows them), so a failing command
-prints its one error line only.  SIGINT and SIGTERM stop a command cleanly
-(:mod:`~fuzzygait.cli.interrupts`): one line, exit 130 or 143.
+prints its one error line only.  SIGINT and SIGTERM stop a command cleanly at any
+moment, from its start-up to its exit (:mod:`~fuzzygait.cli.interrupts`): one line, exit
+130 or 143, and no process it started is left running.
 """
 
 from __future__ import annotations
@@ -20,16 +21,36 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Annotated, Any, TypeVar
 
-import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
-from typer._click.exceptions import ClickException, NoArgsIsHelpError, UsageError
-from typer.core import TyperGroup
+from fuzzygait.cli.interrupts import prepare_command  # isort: skip
 
-from fuzzygait import __version__
-from fuzzygait.cli.interrupts import InterruptGuard, exit_code, interrupt_line
-from fuzzygait.cli.usage import usage_line
-from fuzzygait.core.errors import FuzzyGaitError
+# First, before the slower imports below: in the `fuzzygait` process, a signal from now on
+# ends the command with its one line (no KeyboardInterrupt traceback from an import).
+prepare_command()
+
+import typer  # noqa: E402
+from rich.console import Console  # noqa: E402
+from rich.progress import (  # noqa: E402
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
+from typer._click.exceptions import ClickException, NoArgsIsHelpError, UsageError  # noqa: E402
+from typer.core import TyperGroup  # noqa: E402
+
+from fuzzygait import __version__  # noqa: E402
+from fuzzygait.cli.interrupts import (  # noqa: E402
+    Interrupted,
+    InterruptGuard,
+    exit_code,
+    interrupt_line,
+    is_the_command,
+    received,
+)
+from fuzzygait.cli.usage import usage_line  # noqa: E402
+from fuzzygait.core.errors import FuzzyGaitError  # noqa: E402
 
 EXIT_USER_ERROR = 1
 EXIT_INTERNAL_ERROR = 3
@@ -53,7 +74,8 @@ class Commands(TyperGroup):
              **extra: Any) -> Any:  # fmt: skip
         _held.clear()
         code: int
-        with InterruptGuard() as guard:
+        # the command's own process: once the guard ends, the process is ending (interrupts.py)
+        with InterruptGuard(ending=standalone_mode and is_the_command()) as guard:
             try:
                 value = super().main(args, prog_name, complete_var, standalone_mode=False,
                                      windows_expand_args=windows_expand_args, **extra)  # fmt: skip
@@ -72,6 +94,9 @@ class Commands(TyperGroup):
                 code = EXIT_USER_ERROR
             except KeyboardInterrupt:  # raised before the guard was active, or not by a signal
                 guard.signum = guard.signum or 2
+            except BaseException as exc:  # after a signal: the interrupt's doing (interrupts.received)
+                if guard.signum is None or isinstance(exc, SystemExit):
+                    raise
         if guard.signum is not None:
             err.print(interrupt_line(guard.signum), markup=False)
             code = exit_code(guard.signum)
@@ -111,7 +136,8 @@ def user_errors() -> Iterator[None]:
 
     The warnings raised inside are held: printed when the block succeeds (to the
     enclosing block, if any), left out when it fails, the error line counting them.  An
-    interrupt (``KeyboardInterrupt``) passes through to :class:`Commands`."""
+    interrupt (``KeyboardInterrupt``) passes through to :class:`Commands`, and so does an
+    error raised after a signal was received (it is the interrupt's doing)."""
     held: list[str] = []
     _held.append(held)
     try:
@@ -121,11 +147,13 @@ def user_errors() -> Iterator[None]:
         raise
     except FuzzyGaitError as exc:
         _drop(held)
+        _interrupted_instead()
         if _state["debug"]:
             raise
         raise fail(str(exc) + _left_out(held)) from None
     except Exception as exc:  # a bug: still one line, unless debugging
         _drop(held)
+        _interrupted_instead()
         if _state["debug"]:
             raise
         raise fail(
@@ -136,6 +164,14 @@ def user_errors() -> Iterator[None]:
         _drop(held)
         raise
     _drop(held, failed=False)
+
+
+def _interrupted_instead() -> None:
+    """After a signal, an error is the interrupt's doing: raise the interrupt instead, so
+    that its line is the only one (:func:`fuzzygait.cli.interrupts.received`)."""
+    signum = received()
+    if signum is not None:
+        raise Interrupted(signum) from None
 
 
 def _drop(held: list[str], failed: bool = True) -> None:

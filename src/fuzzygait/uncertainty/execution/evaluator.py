@@ -50,11 +50,13 @@ import numpy as np
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty.execution.teardown import (
     CLOSE_TIMEOUT,
-    discard_cluster,
-    forget_cluster,
-    kill_workers,
+    interrupts_held,
+    new_loop,
+    pre_spawn_environ,
+    release_at_exit,
+    start_loop,
     started_clusters,
-    stop_workers_now,
+    tear_down,
 )
 from fuzzygait.uncertainty.execution.workers import (
     WORKER_ENV,
@@ -98,7 +100,11 @@ class _Resources:
 
     client: Any = None
     cluster: Any = None
+    loop: Any = None  # the local cluster's event loop (teardown.start_loop), a distributed LoopRunner
     owns_client: bool = False
+    closing: bool = False  # released (or being released): its loop's late error reports are dropped
+    token: str | None = None  # marks the local cluster's worker processes (teardown.POOL_VARIABLE)
+    settings: Any = None  # the Dask settings of the local cluster's start, while in force
     tmpdir: str | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
 
@@ -110,32 +116,47 @@ class _Resources:
         return self.tmpdir
 
     def release(self, interrupted: bool = False) -> None:
-        """Close the client and the cluster, kill any worker process left and remove the
+        """Close the client and the cluster, kill any process of the cluster left (a
+        worker, one still starting, or a process a worker started) and remove the
         temporary directory; ``interrupted`` (or after :func:`stop_quickly`): the workers
-        are stopped at once, their running tasks abandoned."""
-        with self.lock:
-            client, cluster, tmpdir = self.client, self.cluster, self.tmpdir
-            self.client = self.cluster = self.tmpdir = None
+        are frozen and killed at once, their running tasks abandoned.  No process of the
+        cluster is running when this returns (:func:`.teardown.tear_down`)."""
+        with self.lock, interrupts_held():  # a Ctrl-C now is raised once all is released
+            client, cluster, loop, tmpdir = self.client, self.cluster, self.loop, self.tmpdir
+            self.client = self.cluster = self.loop = self.tmpdir = None
+            self.closing = cluster is not None or self.closing
             _LIVE.discard(self)
-            try:
-                if cluster is not None and (_QUICKLY.is_set() or interrupted):
-                    stop_workers_now(cluster)
+
+            def close() -> None:
                 for owned, thing in ((self.owns_client, client), (True, cluster)):
                     if thing is not None and owned:
                         try:
                             thing.close(timeout=CLOSE_TIMEOUT)
                         except Exception:  # noqa: BLE001 - best effort at shutdown
                             pass
-            finally:  # even when the close is interrupted: no worker and no file left
-                if cluster is not None:
-                    kill_workers(cluster)
-                    forget_cluster(cluster)
+
+            try:
+                tear_down(cluster, self.token, loop, close, quickly=_QUICKLY.is_set() or interrupted)
+            finally:  # even when the close fails: no file left
+                self.restore_settings()
                 if tmpdir is not None:
                     shutil.rmtree(tmpdir, ignore_errors=True)
+
+    def restore_settings(self) -> None:
+        """End the Dask settings of the cluster's start (if still in force)."""
+        settings, self.settings = self.settings, None
+        if settings is not None:
+            settings.__exit__(None, None, None)
 
 
 #: Every evaluator's resources while it holds a cluster or a temporary directory.
 _LIVE: set[_Resources] = set()
+
+
+def _release_live() -> None:
+    """Release every live evaluator (at exit: their workers never see SIGTERM)."""
+    for res in list(_LIVE):
+        res.release(interrupted=True)
 
 
 #: Set by :func:`stop_quickly`: every evaluator closing from now on stops its workers at once.
@@ -197,21 +218,6 @@ class _AbandonedWaits(logging.Filter):
 
 
 _ABANDONED_WAITS = _AbandonedWaits()
-
-
-def _pre_spawn_environ() -> dict[str, object]:
-    """Dask's environment for new worker processes without its ``MALLOC_TRIM_THRESHOLD_``.
-
-    Dask sets glibc's trim threshold to 64 KiB in every worker so that memory goes back
-    to the system at once; the engine's evaluations allocate and free many mid-sized
-    arrays, and with that setting two workers ran the marker-error analysis no faster
-    than one plain process (1.9× slower than without it, the extra time mostly system
-    time; ``benchmarks/evaluator_overhead.py``). glibc's adaptive default is used instead."""
-    import dask
-
-    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
-    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-    return environ
 
 
 def _script_hint() -> str:
@@ -286,22 +292,31 @@ class Evaluator:
             scratch = os.path.join(res.make_tmpdir(), "dask")  # removed with the evaluator's directory
             before = {id(cluster) for cluster in list(SpecCluster._instances)}
             try:
-                with dask.config.set({"distributed.nanny.pre-spawn-environ": _pre_spawn_environ(),
-                                      "temporary-directory": scratch}):  # the scheduler's scratch too
-                    cluster = LocalCluster(
-                        n_workers=self.workers, threads_per_worker=1, processes=True,
-                        silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
-                        local_directory=scratch, preload=[WORKER_PRELOAD],
-                        # no dashboard; the scheduler's health endpoint on a free local port
-                        scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                    )  # fmt: skip
+                # the cluster's own event loop, in a thread that SIGINT and SIGTERM never reach:
+                # the worker processes it starts inherit that (teardown.start_loop)
+                res.closing, res.loop, res.token = False, new_loop(), uuid.uuid4().hex
+                start_loop(res.loop, quiet=lambda: res.closing or _QUICKLY.is_set())
+                release_at_exit(_release_live)
+                # in force until the cluster has started or its loop is stopped (release): its nannies,
+                # made on the loop, read them, also after an interrupt took this thread out of here
+                res.settings = dask.config.set({"distributed.nanny.pre-spawn-environ": pre_spawn_environ(res.token),
+                                                "temporary-directory": scratch})  # the scheduler's scratch too
+                cluster = LocalCluster(
+                    n_workers=self.workers, threads_per_worker=1, processes=True, loop=res.loop.loop,
+                    silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
+                    local_directory=scratch, preload=[WORKER_PRELOAD],
+                    # no dashboard; the scheduler's health endpoint on a free local port
+                    scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                )  # fmt: skip
+                res.restore_settings()
             except BaseException as err:
                 # a half-started cluster is the evaluator's: an interrupt's release closes it
                 res.cluster = next(iter(started_clusters(before)), None)
                 if not isinstance(err, Exception):
                     raise
-                discard_cluster(res.cluster)
-                res.cluster = None
+                cut, res.cluster, loop, res.loop = res.cluster, None, res.loop, None
+                tear_down(cut, res.token, loop, lambda: cut and cut.close(timeout=CLOSE_TIMEOUT), quickly=True)
+                res.restore_settings()
                 raise ParallelEvaluationError(f"cannot start a local Dask cluster: {err}{_script_hint()}") from None
             res.cluster = cluster
             res.client, res.owns_client = Client(cluster, set_as_default=False), True

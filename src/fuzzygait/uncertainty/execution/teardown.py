@@ -1,5 +1,37 @@
-"""Tearing down a local Dask cluster: its workers stopped at once, killed if they do not
-stop, and the cluster taken off distributed's list of clusters to close at exit.
+"""Starting and tearing down a local Dask cluster's processes so that no signal meant for
+the command reaches them, nothing they print reaches the user, and nothing of them
+outlives the evaluator.
+
+* **Workers born deaf to SIGINT and SIGTERM.**  A Ctrl-C in a terminal goes to every
+  process of the foreground process group, and the worker processes are in it (they
+  should be: ``ps -g PGID`` after the command ended is how one checks none is left).  A
+  worker that received it while importing (before Dask runs its preload,
+  :func:`~fuzzygait.uncertainty.execution.workers.dask_setup`) printed a
+  ``KeyboardInterrupt`` traceback and its nanny "failed to start".  The cluster's event
+  loop therefore runs in a thread started with both signals blocked
+  (:func:`start_loop`): the processes the cluster starts from that loop inherit the
+  blocked mask through ``fork``/``exec``, so they never see either signal, from their
+  first instruction on, nor do the processes they start; their parent stops them.
+* **Known from birth**: each worker starts with :data:`POOL_VARIABLE` set to its
+  cluster's token in its environment (:func:`pre_spawn_environ`), so that a worker
+  still starting — of a cluster cut short while starting, whose close closes nothing —
+  is found as surely as a running one (:func:`worker_processes`).
+* **Stopped at once when interrupted** (:func:`tear_down`): the worker processes and
+  everything they started (a C compiler building a simulator, a C3D reader child) are
+  frozen and listed, so that none can escape as an orphan, then killed, then the nannies
+  and the cluster closed; after a plain close whatever is left is killed.  Either way
+  the killed processes are waited for: none is left running when the evaluator's
+  close returns.  At interpreter exit, any worker still running is killed before
+  multiprocessing would wait for it for ever (:func:`release_at_exit`).
+* **Quiet**: the cluster's loop drops its reports of errors nobody waited for once the
+  teardown has begun (a start or a close cut short: "Task exception was never
+  retrieved ... Nanny failed to start").
+* **Forgotten by distributed** (:func:`forget_cluster`) once closed or killed, so that its
+  close at interpreter exit does not run a second time.
+* **Not cut short**: an interrupt arriving while an evaluator releases its cluster is
+  held until the release is complete (:func:`interrupts_held`; the ``fuzzygait``
+  command's handler honours it), so that a Ctrl-C at the end of a run cannot leave a
+  worker or the temporary directory behind.
 
 Used by :mod:`fuzzygait.uncertainty.execution.evaluator` when an evaluator closes, is
 interrupted or fails to start its cluster.
@@ -7,14 +39,171 @@ interrupted or fails to start its cluster.
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import os
 import signal
+import threading
+import time
+from collections.abc import Callable, Iterator
 from typing import Any
 
 #: Seconds the close of a cluster may take before its workers are killed.
 CLOSE_TIMEOUT = 10.0
 #: Seconds a worker is given to stop by itself when its evaluator stops quickly.
 QUICK_STOP_SECONDS = 0.5
+#: Seconds to wait for killed processes to be gone.
+KILL_WAIT_SECONDS = 5.0
+#: The signals the local cluster's processes never receive (the command's to handle).
+BLOCKED = frozenset({signal.SIGINT, signal.SIGTERM})
+
+
+_holding = 0
+_held: list[BaseException] = []
+
+
+@contextlib.contextmanager
+def interrupts_held() -> Iterator[None]:
+    """While inside (in the main thread), an interrupt is held, not raised, by a signal
+    handler that honours it (:func:`holding_interrupts`, :func:`hold`); the outermost
+    block raises the held exception as it ends.  Elsewhere it does nothing."""
+    global _holding
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _holding += 1
+    try:
+        yield
+    finally:
+        _holding -= 1
+        if _holding == 0 and _held:
+            error = _held[0]
+            _held.clear()
+            raise error
+
+
+def holding_interrupts() -> bool:
+    """Whether the main thread is inside :func:`interrupts_held`."""
+    return _holding > 0
+
+
+def hold(error: BaseException) -> None:
+    """Hold ``error`` (an interrupt) until the outermost :func:`interrupts_held` ends."""
+    _held.append(error)
+
+
+def _psutil() -> Any:
+    """psutil (untyped; it comes with distributed), or None."""
+    try:
+        return importlib.import_module("psutil")
+    except ImportError:  # pragma: no cover - a dependency of distributed
+        return None
+
+
+@contextlib.contextmanager
+def signals_blocked() -> Iterator[None]:
+    """SIGINT and SIGTERM blocked in the calling thread while inside (held pending, not
+    lost: delivered when the block ends).  A thread started inside inherits the block,
+    and so does every process that thread starts."""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def new_loop() -> Any:
+    """A distributed ``LoopRunner`` to start with :func:`start_loop` (separate, so that
+    its owner holds it before it starts and can stop it whatever happens next)."""
+    from distributed.utils import LoopRunner
+
+    return LoopRunner()
+
+
+def start_loop(runner: Any, quiet: Callable[[], bool]) -> None:
+    """Start ``runner``'s event-loop thread with SIGINT and SIGTERM blocked: the local
+    cluster run on that loop starts its worker processes from it, so they inherit the
+    block (see the module docstring).  Once ``quiet()`` is true (the cluster is being
+    torn down), the loop's reports of errors nobody waited for are dropped: the tasks of
+    a start or a close cut short by the teardown ("Task exception was never retrieved
+    ... Nanny failed to start", written by asyncio's default handler straight to
+    stderr).  Before that they are reported as usual.
+
+    The multiprocessing resource tracker is started first, from the calling thread: the
+    thread that starts it has both signals *unblocked* afterwards (CPython blocks them
+    around the tracker's start and unblocks them, not restores them), which, in the
+    loop's thread, let the workers be born with the terminal's SIGINT again."""
+    if os.name == "posix":
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()
+    with signals_blocked():
+        runner.start()
+
+    def report(loop: Any, context: dict[str, Any]) -> None:
+        if not quiet():
+            loop.default_exception_handler(context)
+
+    runner.loop.asyncio_loop.set_exception_handler(report)
+
+
+def stop_loop(runner: Any) -> None:
+    """Stop the event loop of :func:`start_loop` (None: nothing to do)."""
+    if runner is None:
+        return
+    try:
+        runner.stop(timeout=CLOSE_TIMEOUT)
+    except Exception:  # noqa: BLE001 - best effort at shutdown
+        pass
+
+
+#: The environment variable marking a local cluster's worker processes: its value is the
+#: cluster's token, set by Dask in the environment each worker starts with.
+POOL_VARIABLE = "FUZZYGAIT_POOL"
+
+
+def pre_spawn_environ(token: str) -> dict[str, object]:
+    """Dask's environment for new worker processes, with :data:`POOL_VARIABLE` set to
+    ``token`` (so that a worker is known as the cluster's from its first instruction,
+    :func:`worker_processes`) and without Dask's ``MALLOC_TRIM_THRESHOLD_``.
+
+    Dask sets glibc's trim threshold to 64 KiB in every worker so that memory goes back
+    to the system at once; the engine's evaluations allocate and free many mid-sized
+    arrays, and with that setting two workers ran the marker-error analysis no faster
+    than one plain process (1.9× slower than without it, the extra time mostly system
+    time; ``benchmarks/evaluator_overhead.py``). glibc's adaptive default is used instead."""
+    import dask
+
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    environ[POOL_VARIABLE] = token
+    return environ
+
+
+_AT_EXIT: list[Any] = []
+
+
+def release_at_exit(release: Callable[[], None]) -> None:
+    """Run ``release()`` (once per process, however often this is called), then kill
+    every worker process of any local cluster still running, at interpreter exit
+    *before* multiprocessing's own exit handler, which sends SIGTERM to the daemonic
+    child processes still running and joins them without a timeout: a local cluster's
+    workers never see SIGTERM (their parent stops them), so one left running would make
+    that join wait for ever."""
+    if _AT_EXIT:
+        return
+    from multiprocessing import util
+
+    def at_exit() -> None:
+        try:
+            release()
+        finally:
+            kill_processes(_marked_children(None))
+
+    _AT_EXIT.append(util.Finalize(None, at_exit, exitpriority=100))  # run by util._exit_function first
 
 
 async def close_nannies(nannies: list[Any], timeout: float) -> None:
@@ -23,27 +212,168 @@ async def close_nannies(nannies: list[Any], timeout: float) -> None:
     await asyncio.gather(*(nanny.close(timeout=timeout) for nanny in nannies), return_exceptions=True)
 
 
+def _nannies(cluster: Any) -> list[Any]:
+    """A local cluster's nannies: those running, and those still starting (a cluster
+    cut short while starting has none running yet, and its close closes none)."""
+    found = {id(n): n for n in [*getattr(cluster, "workers", {}).values(), *list(getattr(cluster, "_created", ()))]}
+    return list(found.values())
+
+
 def stop_workers_now(cluster: Any) -> None:
     """Close a local cluster's nannies with a short timeout: a worker busy with a task is
-    killed after :data:`QUICK_STOP_SECONDS` instead of the close's usual 4 s."""
-    nannies = list(getattr(cluster, "workers", {}).values())
+    killed after :data:`QUICK_STOP_SECONDS` instead of the close's usual 4 s; the wait
+    here is bounded even for a nanny whose worker is still starting."""
+    nannies = _nannies(cluster)
     try:
-        cluster.sync(close_nannies, nannies, QUICK_STOP_SECONDS)
+        cluster.sync(close_nannies, nannies, QUICK_STOP_SECONDS, callback_timeout=2 * QUICK_STOP_SECONDS + 1)
     except Exception:  # noqa: BLE001 - best effort: the close and the kill below follow
         pass
 
 
-def kill_workers(cluster: Any) -> None:
-    """SIGKILL what is left of a closed local cluster's worker processes (a close that
-    timed out, or one interrupted)."""
-    for nanny in list(getattr(cluster, "workers", {}).values()):
-        process = getattr(getattr(nanny, "process", None), "process", None)
+def _marked_children(token: str | None) -> list[Any]:
+    """This process's children that are worker processes of the local cluster ``token``
+    (None: of any), by :data:`POOL_VARIABLE` in the environment they started with."""
+    psutil = _psutil()
+    if psutil is None:  # pragma: no cover
+        return []
+    marked = []
+    for child in psutil.Process().children():
+        try:
+            value = child.environ().get(POOL_VARIABLE)
+        except psutil.Error:
+            continue
+        if value is not None and (token is None or value == token):
+            marked.append(child)
+    return marked
+
+
+def _worker_roots(cluster: Any, token: str | None) -> list[Any]:
+    """The worker processes of a local cluster: its nannies' (running or starting) and
+    this process's children marked with ``token`` (one being started right now)."""
+    psutil = _psutil()
+    if psutil is None:  # pragma: no cover
+        return []
+    roots = {p.pid: p for p in (_marked_children(token) if token else [])}
+    for nanny in _nannies(cluster):
+        process = getattr(getattr(nanny, "process", None), "process", None)  # distributed's AsyncProcess
         pid = getattr(process, "pid", None)
-        if pid:
+        if not pid or pid in roots or not getattr(process, "is_alive", lambda: True)():
+            continue
+        try:
+            root = psutil.Process(pid)
+            if root.ppid() == os.getpid():  # a worker is a child of this process (not a pid reused since)
+                roots[pid] = root
+        except psutil.Error:
+            continue
+    return list(roots.values())
+
+
+def worker_processes(cluster: Any, token: str | None = None, freeze: bool = False) -> list[Any]:
+    """The worker processes of a local cluster and all their descendants (``psutil``
+    processes); ``token``: the cluster's (:func:`pre_spawn_environ`).  ``freeze``: each
+    is stopped (SIGSTOP) as it is found and the search runs until no new one turns up,
+    so that the list is complete (a stopped process starts no other) — for a cluster
+    about to be killed."""
+    psutil = _psutil()
+    if psutil is None or cluster is None:
+        return []
+    found: dict[int, Any] = {}
+    for _ in range(20):  # a tree of processes forking as it is frozen: settles in a round or two
+        new = []
+        for root in _worker_roots(cluster, token):
             try:
-                os.kill(pid, signal.SIGKILL)
-            except OSError:
-                pass
+                tree = [root, *root.children(recursive=True)]
+            except psutil.Error:
+                tree = [root]
+            new += [p for p in tree if p.pid not in found]
+        if not new:
+            break
+        for process in new:
+            found[process.pid] = process
+            if freeze:
+                try:
+                    process.suspend()
+                except psutil.Error:
+                    pass
+        if not freeze:
+            break
+    return list(found.values())
+
+
+def tear_down(cluster: Any, token: str | None, loop: Any, close: Callable[[], object], quickly: bool) -> None:
+    """Close a local cluster (``close()``: its client's and its own close) and stop its
+    event loop; no process of the cluster is left running when this returns.
+
+    ``quickly`` (interrupted, or a start that failed): the cluster's processes are
+    frozen and listed first, the nannies told not to restart them, and they are killed
+    at once; then the close (now quick).  Otherwise the close stops the workers, and
+    anything of them left is killed after it.  ``cluster`` None (a remote scheduler):
+    only ``close()``.  An interrupt meanwhile is held until the end
+    (:func:`interrupts_held`)."""
+    with interrupts_held():
+        listed = worker_processes(cluster, token, freeze=quickly)
+        try:
+            if quickly and cluster is not None:
+                for nanny in _nannies(cluster):  # a worker dying now is not restarted
+                    with contextlib.suppress(Exception):
+                        nanny.close_gracefully(reason="fuzzygait-interrupted")
+                kill_processes(listed)
+                stop_workers_now(cluster)
+            close()
+        except Exception:  # noqa: BLE001 - best effort: the kill below follows
+            pass
+        finally:
+            stop_loop(loop)  # no process can be started by the cluster any more
+            if cluster is not None:
+                kill_processes(listed + worker_processes(cluster, token))  # including any started meanwhile
+                forget_cluster(cluster)
+
+
+def kill_processes(processes: list[Any]) -> None:
+    """SIGKILL ``processes`` (``psutil`` processes; the gone ones are skipped) and wait
+    until each is gone: reaped, or a zombie waiting for its parent (a worker's parent is
+    this process, whose multiprocessing thread reaps it; an orphan's is init)."""
+    psutil = _psutil()
+    if psutil is None or not processes:
+        return
+    for process in processes:
+        try:
+            process.kill()
+        except psutil.Error:
+            pass
+    deadline = time.monotonic() + KILL_WAIT_SECONDS
+    for process in processes:
+        while time.monotonic() < deadline:
+            try:
+                if not process.is_running() or process.status() == psutil.STATUS_ZOMBIE:
+                    break
+            except psutil.Error:
+                break
+            time.sleep(0.005)
+    _wait_reaped(processes, deadline)
+
+
+def _wait_reaped(processes: list[Any], deadline: float) -> None:
+    """Wait (until ``deadline``) for the dead children of this process among ``processes``
+    to be reaped by whoever waits for them (multiprocessing's watch thread of each
+    worker), so that none is left behind as a zombie; reap them after that."""
+    children = [p for p in processes if _parent_is_me(p)]
+    while children and time.monotonic() < deadline:
+        children = [p for p in children if os.path.exists(f"/proc/{p.pid}") and _parent_is_me(p)]
+        if children:
+            time.sleep(0.005)
+    for process in children:  # nobody reaped it in time: this process does
+        try:
+            os.waitpid(process.pid, os.WNOHANG)
+        except OSError:
+            pass
+
+
+def _parent_is_me(process: Any) -> bool:
+    try:
+        return bool(process.ppid() == os.getpid())
+    except Exception:  # noqa: BLE001 - gone
+        return False
 
 
 def forget_cluster(cluster: Any) -> None:
@@ -62,17 +392,3 @@ def started_clusters(before: set[int]) -> list[Any]:
     from distributed.deploy.spec import SpecCluster
 
     return [cluster for cluster in list(SpecCluster._instances) if id(cluster) not in before]
-
-
-def discard_cluster(cluster: Any) -> None:
-    """Close, kill and forget a cluster that failed to start (None: nothing to do); an
-    interrupt during the close still kills its workers."""
-    if cluster is None:
-        return
-    try:
-        cluster.close(timeout=CLOSE_TIMEOUT)
-    except Exception:  # noqa: BLE001 - best effort: the kill follows
-        pass
-    finally:
-        kill_workers(cluster)
-        forget_cluster(cluster)

@@ -63,7 +63,9 @@ def dask_setup(worker: object) -> None:
     ignores SIGINT, and logs nothing about its own shutdown.  A Ctrl-C in a terminal goes
     to the whole process group; the driver (the ``fuzzygait`` command) then shuts the pool
     down itself, so a worker has nothing to do with it but print a traceback of the task
-    it was running."""
+    it was running.  (The worker was born with SIGINT and SIGTERM blocked, before this
+    runs: :func:`fuzzygait.uncertainty.execution.teardown.start_loop`; ignoring SIGINT
+    keeps it so should anything unblock it.)"""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     noise = _ShutdownNoise(worker)
