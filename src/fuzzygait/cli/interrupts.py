@@ -16,7 +16,10 @@ depends on that moment:
   ignored; should it take longer than :data:`GRACE_SECONDS`, the command kills its
   remaining child processes, removes the evaluators' temporary directories and exits at
   once.  An evaluator releasing its cluster holds the interrupt until it is done
-  (:func:`fuzzygait.uncertainty.execution.teardown.interrupts_held`).
+  (:func:`fuzzygait.uncertainty.execution.teardown.interrupts_held`); one arriving while
+  Python runs a finalizer, where an exception cannot propagate, is delivered again once
+  that is done; an error raised after it (a C extension being imported turns it into an
+  ``ImportError``) is reported as the interrupt (:func:`received`).
 * **Ending** (the work is done, the exit code decided; Python runs its exit handlers):
   a signal no longer interrupts anything, so it does not turn a finished command into a
   failed one, nor print a traceback from an exit handler; it only makes sure the end
@@ -153,18 +156,25 @@ class InterruptGuard:
         self.signum: int | None = None
         self._previous: dict[int, object] = {}
         self._timer: threading.Timer | None = None
+        self._unraisable_hook: Any = None
+        self._in_hook = False
 
     def __enter__(self) -> InterruptGuard:
         if threading.current_thread() is threading.main_thread():
             for signum in SIGNALS:
                 self._previous[signum] = signal.signal(signum, self._handle)
             _ACTIVE.append(self)
+            self._unraisable_hook = sys.unraisablehook
+            sys.unraisablehook = self._unraisable
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:  # fmt: skip
         if self in _ACTIVE:
             _ACTIVE.remove(self)
+        if self._unraisable_hook is not None and sys.unraisablehook == self._unraisable:
+            sys.unraisablehook = self._unraisable_hook
+        self._unraisable_hook = None
         ending = _Ending(self.grace_seconds, self._timer) if self.ending and self._previous else None
         for signum, handler in self._previous.items():
             signal.signal(signum, ending or handler)  # type: ignore[arg-type]
@@ -173,6 +183,9 @@ class InterruptGuard:
             self._timer.cancel()
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self._in_hook:  # not here either (an exception in the hook is printed too): a moment later
+            _deliver_again(signum)
+            return
         if self.signum is not None:
             return  # the clean-up of the first signal is running: let it finish
         self.signum = signum
@@ -185,6 +198,35 @@ class InterruptGuard:
             teardown.hold(Interrupted(signum))
             return
         raise Interrupted(signum)
+
+    def _unraisable(self, unraisable: Any) -> None:
+        """``sys.unraisablehook`` while active: the signal came while Python ran code whose
+        exceptions cannot propagate (a ``weakref.finalize`` callback, a ``__del__``, the
+        garbage collector's), where :class:`Interrupted` would only be printed ("Exception
+        ignored in ...") and lost.  Deliver the signal again instead: it is raised at the
+        next ordinary point of the main thread.  Anything else goes to the usual hook."""
+        self._in_hook = True
+        try:
+            error = getattr(unraisable, "exc_value", None)
+            if isinstance(error, Interrupted) and error.signum == self.signum:
+                if self._timer is not None:
+                    self._timer.cancel()
+                self.signum = self._timer = None  # the next delivery is handled as the first
+                _deliver_again(error.signum)
+            elif self._unraisable_hook is not None:
+                self._unraisable_hook(unraisable)
+        finally:
+            self._in_hook = False
+
+
+def _deliver_again(signum: int, delay: float = 0.01) -> None:
+    """Send ``signum`` to this process again ``delay`` seconds from now (from a thread)."""
+
+    def send() -> None:
+        time.sleep(delay)
+        os.kill(os.getpid(), signum)
+
+    threading.Thread(target=send, daemon=True).start()
 
 
 #: The active guards (innermost last).
