@@ -46,6 +46,29 @@ def test_pool_workers_are_born_deaf_to_sigint_and_sigterm(tmp_path, monkeypatch)
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow  # starts local Dask clusters
+def test_a_second_pool_marks_its_workers_with_its_own_token(tmp_path, monkeypatch):
+    """Dask's nanny copies the token into this process's environment, and reads it back
+    from there before its setting: the token of a process's first pool marked the
+    workers of every later one, which a release then could not find by their token. The
+    environment is cleared, and each pool's workers carry that pool's token."""
+    pytest.importorskip("distributed")
+    import tempfile
+
+    from fuzzygait.uncertainty.execution import Evaluator
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    tokens = []
+    for _ in range(2):
+        with Evaluator(workers=2) as evaluator:
+            pids = evaluator.client.run(os.getpid).values()
+            tokens.append(evaluator._resources.token)
+            assert sorted(_token_children(tokens[-1])) == sorted(pids)
+            assert teardown.POOL_VARIABLE not in os.environ
+        assert teardown.POOL_VARIABLE not in os.environ
+    assert tokens[0] != tokens[1]
+
+
 def _own_pid(_: int) -> int:
     return os.getpid()
 

@@ -114,6 +114,29 @@ def test_local_pool_is_started_once_reused_and_closed(tmp_path) -> None:
     assert np.array_equal(np.load(tmp_path / "store" / "batch-00001-values.npy"), direct)
 
 
+def _profile_state(dask_worker=None) -> tuple[bool, int]:  # run on each worker by Client.run
+    import dask
+
+    return bool(dask.config.get("distributed.worker.profile.enabled")), len(dask_worker.profile_history)
+
+
+def test_pool_workers_keep_no_profile_between_tasks(evaluators) -> None:
+    """Dask's statistical profiler is off in the local pool's workers: it kept the last
+    1,000 one-second stack profiles and grew each worker by about 2 MB per report trial."""
+    pool = evaluators["pool"]
+    pool.map(_slow_square, list(range(6)))
+    states = pool.client.run(_profile_state)
+    assert len(states) == 2
+    assert all(state == (False, 0) for state in states.values()), states
+
+
+def _slow_square(x: int) -> int:
+    import time
+
+    time.sleep(0.05)  # several of the profiler's 10 ms samples, had it been on
+    return x * x
+
+
 def test_shared_array_inputs_are_memory_mapped_by_the_workers(evaluators, tmp_path) -> None:
     offset = np.linspace(-1.0, 1.0, 41) ** 3
     shared = SharedArray.create(offset, tmp_path / "offset.npy")

@@ -50,6 +50,7 @@ import numpy as np
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty.execution.teardown import (
     CLOSE_TIMEOUT,
+    clear_pool_variable,
     interrupts_held,
     new_loop,
     pre_spawn_environ,
@@ -60,6 +61,7 @@ from fuzzygait.uncertainty.execution.teardown import (
 )
 from fuzzygait.uncertainty.execution.workers import (
     WORKER_ENV,
+    WORKER_SETTINGS,
     WORKER_PRELOAD,
     ModelRecipe,
     Slot,
@@ -139,6 +141,7 @@ class _Resources:
                 tear_down(cluster, self.token, loop, close, quickly=_QUICKLY.is_set() or interrupted)
             finally:  # even when the close fails: no file left
                 self.restore_settings()
+                clear_pool_variable()
                 if tmpdir is not None:
                     shutil.rmtree(tmpdir, ignore_errors=True)
 
@@ -299,8 +302,10 @@ class Evaluator:
                 release_at_exit(_release_live)
                 # in force until the cluster has started or its loop is stopped (release): its nannies,
                 # made on the loop, read them, also after an interrupt took this thread out of here
+                clear_pool_variable()  # a former cluster's token must not mark this one's workers
                 res.settings = dask.config.set({"distributed.nanny.pre-spawn-environ": pre_spawn_environ(res.token),
-                                                "temporary-directory": scratch})  # the scheduler's scratch too
+                                                "temporary-directory": scratch,  # the scheduler's scratch too
+                                                **WORKER_SETTINGS})  # fmt: skip
                 cluster = LocalCluster(
                     n_workers=self.workers, threads_per_worker=1, processes=True, loop=res.loop.loop,
                     silence_logs=logging.ERROR, env=dict(WORKER_ENV), dashboard_address=None,
@@ -309,6 +314,7 @@ class Evaluator:
                     scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                 )  # fmt: skip
                 res.restore_settings()
+                clear_pool_variable()
             except BaseException as err:
                 # a half-started cluster is the evaluator's: an interrupt's release closes it
                 res.cluster = next(iter(started_clusters(before)), None)

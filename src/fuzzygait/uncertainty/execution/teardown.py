@@ -183,6 +183,17 @@ def pre_spawn_environ(token: str) -> dict[str, object]:
     return environ
 
 
+def clear_pool_variable() -> None:
+    """Take :data:`POOL_VARIABLE` out of this process's environment.
+
+    A nanny copies its ``pre-spawn-environ`` into ``os.environ`` before it starts a
+    worker, and reads that setting with ``os.environ`` taking precedence: left there, the
+    token of a process's first cluster marked the workers of every later one (which were
+    then not found by their own token when interrupted while starting), and any process
+    this one starts later (a browser for a PDF) looked like a worker."""
+    os.environ.pop(POOL_VARIABLE, None)
+
+
 _AT_EXIT: list[Any] = []
 
 
@@ -254,7 +265,7 @@ def _worker_roots(cluster: Any, token: str | None) -> list[Any]:
     if psutil is None:  # pragma: no cover
         return []
     roots = {p.pid: p for p in (_marked_children(token) if token else [])}
-    for nanny in _nannies(cluster):
+    for nanny in _nannies(cluster) if cluster is not None else []:
         process = getattr(getattr(nanny, "process", None), "process", None)  # distributed's AsyncProcess
         pid = getattr(process, "pid", None)
         if not pid or pid in roots or not getattr(process, "is_alive", lambda: True)():
@@ -275,7 +286,7 @@ def worker_processes(cluster: Any, token: str | None = None, freeze: bool = Fals
     so that the list is complete (a stopped process starts no other) — for a cluster
     about to be killed."""
     psutil = _psutil()
-    if psutil is None or cluster is None:
+    if psutil is None or (cluster is None and token is None):
         return []
     found: dict[int, Any] = {}
     for _ in range(20):  # a tree of processes forking as it is frozen: settles in a round or two
@@ -307,8 +318,10 @@ def tear_down(cluster: Any, token: str | None, loop: Any, close: Callable[[], ob
     ``quickly`` (interrupted, or a start that failed): the cluster's processes are
     frozen and listed first, the nannies told not to restart them, and they are killed
     at once; then the close (now quick).  Otherwise the close stops the workers, and
-    anything of them left is killed after it.  ``cluster`` None (a remote scheduler):
-    only ``close()``.  An interrupt meanwhile is held until the end
+    anything of them left is killed after it.  ``cluster`` None with a ``token``: a
+    local cluster interrupted before distributed listed it, whose workers (still being
+    started by its loop) are found by the token alone; ``cluster`` and ``token`` None (a
+    remote scheduler): only ``close()``.  An interrupt meanwhile is held until the end
     (:func:`interrupts_held`)."""
     with interrupts_held():
         listed = worker_processes(cluster, token, freeze=quickly)
@@ -324,8 +337,10 @@ def tear_down(cluster: Any, token: str | None, loop: Any, close: Callable[[], ob
             pass
         finally:
             stop_loop(loop)  # no process can be started by the cluster any more
+            # including any started meanwhile, and those of a cluster interrupted before distributed
+            # listed it (``cluster`` None): its token still marks them
+            kill_processes(listed + worker_processes(cluster, token))
             if cluster is not None:
-                kill_processes(listed + worker_processes(cluster, token))  # including any started meanwhile
                 forget_cluster(cluster)
 
 

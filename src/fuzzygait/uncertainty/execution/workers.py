@@ -32,6 +32,13 @@ from fuzzygait.uncertainty.protocol import SENSITIVITIES
 #: workers are the parallelism; nested threads only oversubscribe the cores).
 WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
+#: Dask settings of the local cluster's workers (a nanny hands its worker the settings in
+#: force when the nanny is made). Dask's statistical profiler is off: it samples every
+#: worker's stack every 10 ms and keeps the last 1,000 one-second profiles, which grew a
+#: worker by about 2 MB per trial page over a long batch report
+#: (``benchmarks/report_load.py``) and costs time no-one looks at without a dashboard.
+WORKER_SETTINGS = {"distributed.worker.profile.enabled": False}
+
 #: The Dask preload of the local cluster's workers (:func:`dask_setup` runs in each).
 WORKER_PRELOAD = __name__
 
