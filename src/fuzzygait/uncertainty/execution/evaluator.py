@@ -61,8 +61,8 @@ from fuzzygait.uncertainty.execution.teardown import (
 )
 from fuzzygait.uncertainty.execution.workers import (
     WORKER_ENV,
-    WORKER_SETTINGS,
     WORKER_PRELOAD,
+    WORKER_SETTINGS,
     ModelRecipe,
     Slot,
     evaluate_rows,
