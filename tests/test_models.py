@@ -62,6 +62,21 @@ def test_joint_angle_models(angles_run) -> None:
     assert cartesian.output == Output("LKneeAngles_X", "deg")
 
 
+def test_angle_components_model(angles_run) -> None:
+    """The three components of one angle as one model: ``blocks`` and ``time_step``
+    declared and kept (the frames are 6 of the trial's, whole numbers of its period)."""
+    from fuzzygait.markererror.angle_model import AngleComponentsModel, SphericalDeviationModel
+
+    angle = joint_angle_model(angles_run)
+    references = np.array([angles_run.result.angles["LKneeAngles"][angle.frames, axis] for axis in range(3)])
+    model = AngleComponentsModel(angle, (0, 1, 2), references)
+    p = np.random.default_rng(2).uniform(-5.0, 5.0, angle.n_parameters)
+    assert check_model(model, p, scale=np.full(p.size, 10.0))["nodes_error"] <= 1e-9
+    assert model.blocks == 3 and model.time_step == 1.0 / angles_run.trial.rate
+    spherical = SphericalDeviationModel(model)
+    assert spherical.blocks == 3 and check_model(spherical, np.tile([4.0, 1.0, 0.5], len(angle.markers)))
+
+
 @pytest.mark.slow
 def test_leg_target_model() -> None:
     from fuzzygait.mechanics.scenarios import LegSimulator
@@ -105,8 +120,15 @@ class Broken:
         self.times = np.linspace(0.0, 1.0, 5)
         self.parameter_names = ("a", "b") if defect == "names" else ("a",)
         self.output = Output()
-        self.capabilities = frozenset({"sensitivities", "nodes", "node_gradients"}) if defect != "undeclared" \
-            else frozenset({"magic"})  # fmt: skip
+        self.capabilities = frozenset({"sensitivities", "nodes", "node_gradients", "many", "blocks", "time_step"})
+        if defect == "undeclared":
+            self.capabilities = frozenset({"magic"})
+        if defect == "unused_nodes":  # has evaluate_nodes(_gradients), declares neither
+            self.capabilities -= {"nodes", "node_gradients"}
+        if defect == "unused_blocks":  # has blocks, does not declare it
+            self.capabilities -= {"blocks"}
+        self.blocks = 2 if defect == "blocks" else 1
+        self.time_step = 0.3 if defect == "time_step" else 0.25  # the times are 0.25 apart
         self.calls = 0
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation | np.ndarray:
@@ -132,6 +154,13 @@ class Broken:
         slope = self.times[nodes] * (1.1 if self.defect == "node_gradients" else 1.0)
         return self.evaluate_nodes(P, nodes), slope[:, None]
 
+    def evaluate_many(self, P: np.ndarray) -> np.ndarray:
+        return P[:, :1] * self.times[None, :] * (1.01 if self.defect == "many" else 1.0)
+
+    def evaluate_many_with_sensitivities(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        jacobians = np.broadcast_to(self.times[None, :, None], (P.shape[0], self.times.size, 1))
+        return self.evaluate_many(P), jacobians * (2.0 if self.defect == "many_sensitivities" else 1.0)
+
 
 @pytest.mark.parametrize(
     ("defect", "needle"),
@@ -145,12 +174,30 @@ class Broken:
         ("node_gradients", "node gradients differ from central differences"),
         ("names", "2 parameter names"),
         ("undeclared", "unknown capabilities"),
+        ("unused_nodes", "has evaluate_nodes_gradients, evaluate_nodes but does not declare 'node_gradients', 'nodes'"),
+        ("unused_blocks", "has blocks but does not declare 'blocks'"),
+        ("blocks", r"blocks \(2\) do not divide its 5 time nodes"),
+        ("time_step", "time_step 0.3 does not divide the steps"),
+        ("many", "evaluate_many gives other trajectories"),
+        ("many_sensitivities", "evaluate_many_with_sensitivities gives other"),
     ],
 )
 def test_check_model_finds_each_defect(defect: str, needle: str) -> None:
     check_model(Broken("none"), np.array([2.0]))
     with pytest.raises(ModelCheckError, match=needle):
         check_model(Broken(defect), np.array([2.0]))
+
+
+def test_the_engine_uses_only_declared_capabilities() -> None:
+    """A model's ``blocks`` and ``time_step`` count only when declared."""
+    from fuzzygait.uncertainty.protocol import declared_blocks, declared_time_step
+
+    declared, unused = Broken("none"), Broken("unused_blocks")
+    declared.blocks = unused.blocks = 5
+    assert declared_blocks(declared) == 5 and declared_blocks(unused) == 1
+    assert declared_time_step(declared) == 0.25 and declared_time_step(Broken("unused_nodes")) == 0.25
+    unused.capabilities -= {"time_step"}
+    assert declared_time_step(unused) is None
 
 
 def test_check_model_names_what_is_missing() -> None:

@@ -61,7 +61,15 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, Evaluation, Output
+from fuzzygait.uncertainty.protocol import (
+    BLOCKS,
+    NODE_GRADIENTS,
+    NODES,
+    TIME_STEP,
+    Evaluation,
+    Output,
+    declared_blocks,
+)
 
 AXES = ("X", "Y", "Z")
 
@@ -184,7 +192,7 @@ class JointAngleModel:
     def output(self) -> Output:
         return Output(f"{self.name}_{AXES[self.axis]}", "deg")
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS})
+    capabilities = frozenset({NODES, NODE_GRADIENTS, TIME_STEP})
 
     def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``
@@ -263,7 +271,7 @@ class AngleComponentsModel:
     axes: tuple[int, ...]
     references: np.ndarray
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS})
+    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP})
 
     def __post_init__(self) -> None:
         self.axes = tuple(int(a) for a in self.axes)
@@ -417,7 +425,11 @@ class SphericalDeviationModel:
 
     cartesian: JointAngleModel | AngleComponentsModel
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS})
+    @property
+    def capabilities(self) -> frozenset[str]:
+        """The Cartesian model's (nodes and their gradients, its time step) and its blocks
+        (1 for a single component)."""
+        return frozenset(self.cartesian.capabilities) | {BLOCKS}
 
     @property
     def times(self) -> np.ndarray:
@@ -430,7 +442,7 @@ class SphericalDeviationModel:
     @property
     def blocks(self) -> int:
         """Independent outputs (the components of :class:`AngleComponentsModel`)."""
-        return int(getattr(self.cartesian, "blocks", 1))
+        return declared_blocks(self.cartesian)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

@@ -13,12 +13,25 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.execution import SharedArray
-from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, SENSITIVITIES, Evaluation, Output, model_problem
+from fuzzygait.uncertainty.protocol import (
+    CAPABILITY_MEMBERS,
+    MANY,
+    NODE_GRADIENTS,
+    NODES,
+    SENSITIVITIES,
+    TIME_STEP,
+    Evaluation,
+    Output,
+    declared_blocks,
+    model_problem,
+    undeclared_capabilities,
+)
 
 
 class ModelCheckError(ParameterError):
@@ -39,7 +52,12 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     (node, parameter) pairs equals the full trajectories there (to 1e-9 relative); with
     ``"node_gradients"``, ``evaluate_nodes_gradients`` at those pairs gives the same
     values and gradients that agree with central differences of ``evaluate_nodes`` to
-    ``sensitivity_rtol`` of the largest derivative.
+    ``sensitivity_rtol`` of the largest derivative; with ``"many"``, ``evaluate_many``
+    (and with sensitivities ``evaluate_many_with_sensitivities``) gives ``evaluate``'s
+    rows; with ``"time_step"``, every step between time nodes of a block is a whole
+    number of time steps. A model that has the members of a capability it does not
+    declare (``evaluate_nodes`` without ``"nodes"``, a ``blocks`` attribute without
+    ``"blocks"``, ...) is rejected: the engine would ignore them.
 
     Returns:
         The measured figures: ``n_time``, ``sensitivity_error`` (relative, or 0),
@@ -51,6 +69,12 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     problem = model_problem(model)
     if problem is not None:
         raise ModelCheckError(problem)
+    undeclared = undeclared_capabilities(model)
+    if undeclared:
+        members = [m for c in undeclared for m in CAPABILITY_MEMBERS[c]]
+        raise ModelCheckError(f"{type(model).__name__} has {', '.join(members)} but does not declare "
+                              f"{', '.join(repr(c) for c in undeclared)} in its capabilities: the engine ignores "
+                              "what a model does not declare; declare it, or rename the member")  # fmt: skip
     p = np.asarray(p, dtype=float).ravel()
     names = tuple(model.parameter_names)  # type: ignore[attr-defined]
     if names and len(names) != p.size:
@@ -69,7 +93,38 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     if NODE_GRADIENTS in capabilities:
         report["node_gradients_error"] = _check_node_gradients(model, p, scale, n_time, n_nodes, seed, fd_step,
                                                                sensitivity_rtol)  # fmt: skip
+    if MANY in capabilities:
+        _check_many(model, p, scale, n_time, seed, SENSITIVITIES in capabilities)
+    if TIME_STEP in capabilities:
+        _check_time_step(model, n_time)
     return report
+
+
+def _check_many(model: Any, p: np.ndarray, scale: np.ndarray, n_time: int, seed: int, sensitivities: bool) -> None:
+    """``evaluate_many`` (and ``evaluate_many_with_sensitivities``) give ``evaluate``'s rows."""
+    P, _ = _random_pairs(p, scale, n_time, 3, seed)
+    rows = np.array([_values(model, row, n_time) for row in P])
+    many = np.asarray(model.evaluate_many(P), dtype=float)
+    if many.shape != rows.shape or not np.allclose(many, rows, rtol=1e-9, atol=0.0):
+        raise ModelCheckError(f"evaluate_many gives other trajectories (shape {many.shape}) than evaluate row by row")
+    if sensitivities:
+        values, jacobians = model.evaluate_many_with_sensitivities(P)
+        expected = [model.evaluate(row.copy(), sensitivities=True).jacobian for row in P]
+        if not (np.allclose(values, rows, rtol=1e-9, atol=0.0)
+                and np.allclose(jacobians, np.array(expected, dtype=float), rtol=1e-9, atol=0.0)):  # fmt: skip
+            raise ModelCheckError("evaluate_many_with_sensitivities gives other values or sensitivities than evaluate")
+
+
+def _check_time_step(model: Any, n_time: int) -> None:
+    """Each step between time nodes (within a block) is a whole number of ``time_step``s."""
+    step = float(model.time_step)
+    blocks = declared_blocks(model)
+    times = np.asarray(model.times, dtype=float).reshape(blocks, n_time // blocks)
+    ratios = np.diff(times, axis=1) / step
+    if ratios.size and not (np.all(ratios > 0.5) and np.allclose(ratios, np.round(ratios), rtol=0.0, atol=1e-6)):
+        low, high = float(np.min(ratios)), float(np.max(ratios))
+        raise ModelCheckError(f"time_step {step:g} does not divide the steps between the time nodes "
+                              f"(from {low:.4g} to {high:.4g} time steps)")  # fmt: skip
 
 
 def _values(model: object, p: np.ndarray, n_time: int, sensitivities: bool = False) -> np.ndarray:

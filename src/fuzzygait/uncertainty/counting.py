@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.uncertainty.protocol import NODE_GRADIENTS, NODES, SENSITIVITIES, Array, FuzzyModel
+from fuzzygait.uncertainty.protocol import MANY, NODE_GRADIENTS, NODES, SENSITIVITIES, Array, FuzzyModel
 
 
 @dataclass
@@ -86,15 +86,14 @@ class CountedModel:
     def trajectories_and_sensitivities_many(self, P: Array) -> tuple[Array, Array]:
         """:meth:`trajectory_and_sensitivities` of every row of ``P (k, n_p)``:
         ``(k, n_time)`` and ``(k, n_time, n_p)``. A model that evaluates many rows at
-        once (``evaluate_many_with_sensitivities``, e.g. on an evaluator's workers) gets
+        once (capability ``"many"``, e.g. on an evaluator's workers) gets
         them in one call; otherwise row after row."""
         P = np.atleast_2d(np.asarray(P, dtype=float))
-        many = getattr(self.model, "evaluate_many_with_sensitivities", None)
-        if many is None or not self.has_sensitivities:
+        if MANY not in self.model.capabilities or not self.has_sensitivities:
             pairs = [self.trajectory_and_sensitivities(p) for p in P]
             return np.array([f for f, _ in pairs]), np.array([j for _, j in pairs])
         self.evaluations += P.shape[0]
-        values, jacobians = many(P)
+        values, jacobians = self.model.evaluate_many_with_sensitivities(P)  # type: ignore[attr-defined]
         values = np.array([self._check(f, p) for f, p in zip(values, P, strict=True)])
         return values, np.asarray(jacobians, dtype=float).reshape(P.shape[0], self.n_time, P.shape[1])
 

@@ -7,12 +7,28 @@ of one scalar output over its time nodes, and declares what else it can do::
     model.times              (n_time,)  time of each node (any unit, e.g. s)
     model.parameter_names    tuple of n_p names (checked against the FuzzyVector)
     model.output             Output(name, units, description, bounds=(lower, upper))
-    model.capabilities       frozenset, a subset of {"sensitivities", "nodes", "node_gradients"}
+    model.capabilities       frozenset, a subset of CAPABILITIES (below)
     model.evaluate(p, sensitivities=False) -> Evaluation(values (n_time,), jacobian (n_time, n_p) | None)
-    model.evaluate_nodes(P, nodes) -> (k,)      only with "nodes": output of row P[i] at node nodes[i]
+
+and, only when it declares the capability in brackets::
+
+    model.evaluate_nodes(P, nodes) -> (k,)      ["nodes"] output of row P[i] at node nodes[i]
     model.evaluate_nodes_gradients(P, nodes) -> ((k,), (k, n_p))
-                                                only with "node_gradients": those outputs and their
+                                                ["node_gradients"] those outputs and their
                                                 gradients with respect to each row's parameters
+    model.evaluate_many(P) -> (k, n_time)       ["many"] the trajectories of all rows at once
+    model.evaluate_many_with_sensitivities(P) -> ((k, n_time), (k, n_time, n_p))
+                                                ["many" with "sensitivities"]
+    model.blocks -> int                         ["blocks"] the time nodes are that many equal,
+                                                consecutive runs of independent outputs of the
+                                                same parameters (the X/Y/Z of one joint angle)
+    model.time_step -> float                    ["time_step"] the sampling period, in the unit
+                                                of ``times``: a longer step between nodes is
+                                                a gap (frames without data)
+
+The engine uses a method or attribute of this list only when its capability is declared
+(an undeclared one is ignored, and :func:`fuzzygait.testing.check_model` rejects a model
+that has one without declaring it).
 
 One call of ``evaluate`` is one forward simulation. Without ``"sensitivities"`` the
 engine uses forward finite differences (``1 + n_p`` forward simulations, all counted).
@@ -42,7 +58,38 @@ Array = NDArray[np.float64]
 SENSITIVITIES = "sensitivities"
 NODES = "nodes"
 NODE_GRADIENTS = "node_gradients"
-CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS})
+MANY = "many"
+BLOCKS = "blocks"
+TIME_STEP = "time_step"
+CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS, MANY, BLOCKS, TIME_STEP})
+
+#: What each capability needs the model to have: methods (callable) and attributes.
+CAPABILITY_MEMBERS: dict[str, tuple[str, ...]] = {
+    NODES: ("evaluate_nodes",),
+    NODE_GRADIENTS: ("evaluate_nodes_gradients",),
+    MANY: ("evaluate_many",),
+    BLOCKS: ("blocks",),
+    TIME_STEP: ("time_step",),
+}
+
+
+def declared_blocks(model: object) -> int:
+    """The independent outputs a model's time nodes hold (``"blocks"``; 1 without it)."""
+    return int(getattr(model, "blocks")) if BLOCKS in getattr(model, "capabilities", ()) else 1  # noqa: B009
+
+
+def declared_time_step(model: object) -> float | None:
+    """A model's sampling period (``"time_step"``), or None without it."""
+    return float(getattr(model, "time_step")) if TIME_STEP in getattr(model, "capabilities", ()) else None  # noqa: B009
+
+
+def undeclared_capabilities(model: object) -> list[str]:
+    """The capabilities whose members ``model`` has without declaring them (the engine
+    ignores those members)."""
+    declared = set(getattr(model, "capabilities", ()))
+    found = [c for c, members in CAPABILITY_MEMBERS.items()
+             if c not in declared and all(hasattr(model, m) for m in members)]  # fmt: skip
+    return sorted(found)
 
 
 @dataclass(frozen=True)
@@ -170,6 +217,19 @@ def model_problem(model: object) -> str | None:
                                                and callable(getattr(model, "evaluate_nodes_gradients", None))):
         return (f"{type(model).__name__} declares 'node_gradients' but not 'nodes' with "
                 "evaluate_nodes_gradients(P, nodes)")  # fmt: skip
+    if MANY in capabilities:
+        needed = ["evaluate_many"] + (["evaluate_many_with_sensitivities"] if SENSITIVITIES in capabilities else [])
+        lacking = [m for m in needed if not callable(getattr(model, m, None))]
+        if lacking:
+            return f"{name} declares 'many' but has no {' or '.join(f'{m}(P)' for m in lacking)}"
+    if BLOCKS in capabilities:
+        blocks = getattr(model, "blocks", None)
+        if not isinstance(blocks, int | np.integer) or blocks < 1 or times.size % int(blocks):
+            return f"{name} declares 'blocks' but its blocks ({blocks!r}) do not divide its {times.size} time nodes"
+    if TIME_STEP in capabilities:
+        step = getattr(model, "time_step", None)
+        if not isinstance(step, float | int | np.floating) or not math.isfinite(step) or step <= 0:
+            return f"{name} declares 'time_step' but its time_step ({step!r}) is not a positive number"
     return None
 
 

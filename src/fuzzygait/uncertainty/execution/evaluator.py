@@ -69,7 +69,7 @@ from fuzzygait.uncertainty.execution.workers import (
     map_task,
     probe,
 )
-from fuzzygait.uncertainty.protocol import NODES, SENSITIVITIES, Evaluation, Output
+from fuzzygait.uncertainty.protocol import MANY, NODES, SENSITIVITIES, Evaluation, Output
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -573,7 +573,7 @@ class EvaluatedModel:
         self.times = np.asarray(info["times"], dtype=float)
         self.parameter_names: tuple[str, ...] = tuple(info["parameter_names"])
         self.output = Output(*info["output"])
-        self.capabilities = frozenset({NODES} | ({SENSITIVITIES} if batch.sensitivities else set()))
+        self.capabilities = frozenset({NODES, MANY} | ({SENSITIVITIES} if batch.sensitivities else set()))
 
     def evaluate_many(self, P: np.ndarray) -> np.ndarray:
         out = self.batch(np.atleast_2d(np.asarray(P, dtype=float)))

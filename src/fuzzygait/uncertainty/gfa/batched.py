@@ -38,6 +38,7 @@ from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
+from fuzzygait.uncertainty.protocol import declared_blocks, declared_time_step
 
 STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
@@ -246,19 +247,19 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     nesting repair), extremisers, the deterministic trajectory and the counts.
 
     A model whose nodes are ``blocks`` independent outputs of the same parameters, one
-    after the other (attribute ``blocks``, default 1: e.g. the components of one joint
-    angle) has each block optimised as it would be alone — its own runs of followed
+    after the other (capability ``"blocks"``; without it 1: e.g. the components of one
+    joint angle) has each block optimised as it would be alone — its own runs of followed
     nodes, neighbours, stopping tolerance and seeded random starts, so the same result
     up to the rounding of the model's batched array operations — while every model call
     serves all blocks."""
     deterministic = model.trajectory(params.deterministic)
     n_time = model.n_time
-    blocks = int(getattr(model.model, "blocks", 1))
+    blocks = declared_blocks(model.model)
     if blocks < 1 or n_time % blocks:
         raise ParameterError(f"a model of {n_time} time nodes cannot have {blocks} equal blocks")
     n_block = n_time // blocks
     times = np.asarray(model.model.times, dtype=float)
-    time_step = getattr(model.model, "time_step", None)
+    time_step = declared_time_step(model.model)
     spans = [slice(i * n_block, (i + 1) * n_block) for i in range(blocks)]
     nodes = np.concatenate([followed_nodes(times[span], strategy.stride, time_step) + span.start for span in spans])
     others = np.setdiff1d(np.arange(n_time), nodes)
