@@ -1,5 +1,5 @@
 """The package's structure: layers that import only downward, and modules of a size a
-reader can hold (README, "Layout")."""
+reader can hold (docs/architecture.md, "Layout")."""
 
 from __future__ import annotations
 
