@@ -3,7 +3,7 @@ component, for tables, dataset attributes, reports and recordings."""
 
 from __future__ import annotations
 
-import re
+from fuzzygait.core.names import AngleComponent
 
 #: Rows of the standard gait-report grid: (angle name without side, row title).
 ANGLE_ROWS = (
@@ -29,9 +29,13 @@ _PLANE_INFO = {axis: (plane, meaning) for axis, plane, meaning in PLANES}
 
 
 def parse_component(name: str) -> tuple[str, str, str] | None:
-    """``"LKneeAngles_X"`` -> ``("L", "KneeAngles", "X")``; None for other names."""
-    match = re.fullmatch(r"([LR])(\w+?)_([XYZ])", name)
-    return (match[1], match[2], match[3]) if match else None
+    """``"LKneeAngles_X"`` -> ``("L", "KneeAngles", "X")``; None for other names (and
+    for an angle of no side). The fields of :meth:`AngleComponent.parse
+    <fuzzygait.core.names.AngleComponent.parse>`, the one parser of component labels."""
+    component = AngleComponent.maybe(name)
+    if component is None or component.side is None:
+        return None
+    return component.side.value, component.joint, component.axis.value
 
 
 def component_label(name: str) -> str:

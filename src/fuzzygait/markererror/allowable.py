@@ -41,6 +41,7 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import angle_names, angle_of
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
@@ -181,7 +182,7 @@ class ScaleSearch:
 def _tasks(trial: Trial, subject: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
            components: Sequence[str], clusters: ClusterCalibration | None) -> dict[str, ComponentTask]:  # fmt: skip
     """The Graph Follower task of each component (as fuzzy_joint_angles builds it)."""
-    names = list(dict.fromkeys(c.rsplit("_", 1)[0] for c in components))
+    names = angle_names(components)
     tasks, _ = component_tasks(trial, subject, result, options, names, clusters)
     by_component = {f"{t.name}_{AXES[t.axis]}": t for t in tasks}
     return {c: by_component[c] for c in components}
@@ -516,8 +517,7 @@ def allowable_errors(
     assert runner is not None
     try:
         if fuzzy is None:
-            names = None if angles is None else list(dict.fromkeys(a.rsplit("_", 1)[0] if "_" in a else a
-                                                                   for a in angles))  # fmt: skip
+            names = None if angles is None else list(dict.fromkeys(angle_of(a) for a in angles))
             fuzzy = fuzzy_joint_angles(trial, subject, result, options, names, evaluator=runner, clusters=clusters)
         _check_consistent(fuzzy, options, sources)
         components = _components(fuzzy, angles)

@@ -45,6 +45,7 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import AngleComponent
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import ALL_ANGLE_NAMES, CGMResult
@@ -283,9 +284,9 @@ def split_component(requested: str) -> tuple[str, list[int]]:
     ``("LKneeAngles", [0])``.  A component analysed without its angle's middle Cardan
     component gets the 90° rule of the undetermined mask only, not the singularity rule
     (:func:`~fuzzygait.markererror.angle_model.gimbal_undetermined` needs the middle band)."""
-    name, _, axis = requested.rpartition("_")
-    if name and axis in AXES:
-        return name, [AXES.index(axis)]
+    component = AngleComponent.maybe(requested)
+    if component is not None:
+        return component.angle, [component.axis.column]
     return requested, [0, 1, 2]
 
 

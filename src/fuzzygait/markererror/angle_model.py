@@ -53,6 +53,7 @@ from autograd import make_vjp
 
 from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import angle_names
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.angles import ANGLE_TABLE, wrap_degrees
@@ -391,7 +392,7 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
     angle present in ``flags`` is marked undetermined, and the middle band is closed at
     ±90° there (the ``asin`` cannot pass it: the stored bound is a sound one).  The α-level
     ``measured_index`` (α = 1, the measured angle) is left as it is."""
-    for name in dict.fromkeys(column.rsplit("_", 1)[0] for column in hulls):
+    for name in angle_names(hulls):
         columns = [f"{name}_{a}" for a in AXES]
         middle = middle_component(name)
         if columns[middle] not in hulls:

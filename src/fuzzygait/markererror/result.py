@@ -13,6 +13,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import AngleComponent
 from fuzzygait.kinematics.labels import component_label
 
 
@@ -44,6 +45,7 @@ def fuzzy_angles_dataset(
             None: all False.
     """
     components = list(hulls)
+    parsed = [AngleComponent.parse(c) for c in components]
     shape = (len(components), len(alphas), len(frames))
     flags = np.zeros(shape, dtype=bool) if undetermined is None else np.stack([undetermined[c] for c in components])
     data: dict[str, tuple] = {
@@ -63,8 +65,8 @@ def fuzzy_angles_dataset(
         coords={
             "component": ("component", components, {"long_name": "angle component"}),
             "label": ("component", [component_label(c) for c in components]),
-            "angle": ("component", [c.rsplit("_", 1)[0] for c in components]),
-            "axis": ("component", [c.rsplit("_", 1)[-1] for c in components]),
+            "angle": ("component", [c.angle for c in parsed]),
+            "axis": ("component", [c.axis.value for c in parsed]),
             "alpha": np.asarray(alphas, dtype=float),
             "bound": ["lower", "upper"],
             "frame": np.asarray(frames),

@@ -72,6 +72,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.names import AngleComponent
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.kinematics.model import CGMResult
@@ -348,9 +349,10 @@ def _log_angles(
     alphas, variables, frames, times = _fuzzy_parts(fuzzy, trial, alphas_to_show)
     fuzzy_indexes = [rr.TimeColumn("frame", sequence=frames), rr.TimeColumn("time", duration=times)]
     for variable in variables:
-        angle, _, axis = variable.rpartition("_")
-        if not angle:
+        component = AngleComponent.maybe(variable)
+        if component is None:
             continue
+        angle, axis = component.angle, component.axis.value
         side_name, colour = _side_style(angle)
         data = component_hull(fuzzy, variable)
         flags = component_undetermined(fuzzy, variable)

@@ -12,6 +12,7 @@ from urllib.parse import quote
 import numpy as np
 
 from fuzzygait import __version__
+from fuzzygait.core.names import angle_names, is_flexion
 from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, component_label, parse_component
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
@@ -19,7 +20,6 @@ from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.mocap.sanity import moved_angles
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
-    FLEXION,
     DeltaPhiTable,
     Headline,
     TrialAnalysis,
@@ -230,7 +230,7 @@ def _quality_section(analysis: TrialAnalysis, data: TrialData, clinical: Clinica
                            "(a marker it needs is missing there).")  # fmt: skip
     no_band = [n for n in grid_components() if data.angle(n) is not None and data.hull(n) is None]
     if no_band:
-        angles = list(dict.fromkeys(n.rsplit("_", 1)[0] for n in no_band))
+        angles = angle_names(no_band)
         missing.append("No uncertainty band (not analysed): " + _esc(", ".join(angles)) + ".")
     if missing:
         parts.append("<ul class=\"notes\">" + "".join(f"<li>{m}</li>" for m in missing) + "</ul>")
@@ -313,7 +313,7 @@ def _names(components: Sequence[str]) -> str:
             continue
         side, base, axis = parsed
         row = ROW_TITLES.get(base, base).lower()
-        plane = "flexion" if FLEXION.fullmatch(name) else dict((a, p) for a, p, _ in PLANES).get(axis, axis)
+        plane = "flexion" if is_flexion(name) else dict((a, p) for a, p, _ in PLANES).get(axis, axis)
         groups.setdefault(f"{row} {plane}", []).append(side)
     nbsp = ",\u00a0"  # the sides stay together
     return ", ".join(f"{what} ({nbsp.join(sides)})" if sides else what for what, sides in groups.items())
@@ -324,7 +324,7 @@ def headline_lines(head: Headline) -> list[str]:
     lines = []
     if head.largest is not None:
         value, name, alpha = head.largest
-        what = "hip/knee/ankle flexion" if FLEXION.fullmatch(name) else "the analysed angles"
+        what = "hip/knee/ankle flexion" if is_flexion(name) else "the analysed angles"
         lines.append(f"Largest ΔΦ of {what} (determined bands): <b>{_fmt(value, 0)} %</b> at "
                      f"α = {alpha_text(alpha)} – {_esc(component_label(name))}")  # fmt: skip
     elif head.n_components:
