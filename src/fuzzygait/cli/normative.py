@@ -30,7 +30,7 @@ def normative(
 
     Session folders are searched as `report` does (static trial, subject file, walking
     trials); files given directly use --static/--subject (else their PROCESSING group).
-    Every gait cycle of every trial counts once; the file format is in the README
+    Every gait cycle of every trial counts once; the file format is in docs/reports.md
     ("Normative data"). A trial that fails gets one error line; the others are used.
     """
     from fuzzygait.core.errors import FuzzyGaitError
