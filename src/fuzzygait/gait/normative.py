@@ -204,7 +204,7 @@ def write_normative(data: NormativeData, path: str | os.PathLike[str]) -> Path:
 
 
 def _fail(path: Path, why: str) -> FuzzyGaitError:
-    return FuzzyGaitError(f"{path}: {why} (the format: docs/reports.md, "Normative data")")
+    return FuzzyGaitError(f"{path}: {why} (the format: docs/reports.md, 'Normative data')")
 
 
 def read_normative(path: str | os.PathLike[str]) -> NormativeData:
