@@ -8,10 +8,13 @@ import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
+
+if TYPE_CHECKING:
+    from fuzzygait.core.findings import Finding
 
 ROOT = Path(__file__).resolve().parents[1]  # the repository
 SAMPLE_DATA = ROOT / "sample_data"
@@ -126,7 +129,7 @@ class FakeAnalysis:
     run: Any
     fuzzy: Any
     delta_phi: Any
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
 
 
 def sparse_angles_run(angles_run: Any, n_frames: int = 6) -> Any:

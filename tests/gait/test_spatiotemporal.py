@@ -13,6 +13,7 @@ import pytest
 
 from support import shared_file
 from fuzzygait.core.errors import EventError, ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.core.trial import AnalysisValue, Trial
 from fuzzygait.gait.spatiotemporal import (
     NAMES,
@@ -134,7 +135,7 @@ def test_missing_toe_marker_gives_nan_lengths_and_a_note(synthetic: Trial) -> No
     left = result.sides["L"].mean()
     assert math.isnan(left["Stride Length"]) and math.isnan(left["Walking Speed"])
     assert left["Cadence"] == pytest.approx(120 / STRIDE_TIME_S)
-    assert any("LTOE missing" in note for note in result.notes)
+    assert any("LTOE missing" in note for note in messages(result.notes))
     # the right step length needs the left toe too
     assert math.isnan(result.sides["R"].mean()["Step Length"])
 

@@ -10,6 +10,7 @@ import pytest
 
 from support import C3D_FORMATS, SHARED_DATA, needs_shared, shared_file
 from fuzzygait.core.errors import C3DError
+from fuzzygait.core.findings import messages
 from fuzzygait.core.trial import AnalysisValue, Trial
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.c3d import _interpret
@@ -50,7 +51,7 @@ def test_files_without_analysis_values_give_an_empty_list() -> None:
         except C3DError:  # the corrupt sample: one clear error, as before
             continue
         assert trial.analysis == [], path.name  # USED = 0 or no group at all
-        assert not [n for n in trial.notes if "ANALYSIS" in n]
+        assert not [n for n in messages(trial.notes) if "ANALYSIS" in n]
 
 
 @needs_shared
@@ -81,10 +82,10 @@ def test_a_short_analysis_group_gives_what_it_holds_and_a_note(tmp_path: Path) -
     trial = read_c3d(path)
     assert trial.analysis == [AnalysisValue("Cadence", "Left", "steps/min", 110.0),
                               AnalysisValue("Stride Time", "General", "s", pytest.approx(1.1))]  # fmt: skip
-    assert any("ANALYSIS:USED says 3 values but the group holds 2" in n for n in trial.notes)
+    assert any("ANALYSIS:USED says 3 values but the group holds 2" in n for n in messages(trial.notes))
 
 
 def test_an_analysis_group_without_values_is_ignored_with_a_note(tmp_path: Path) -> None:
     trial = read_c3d(_with_analysis(tmp_path, USED=2, NAMES=["Cadence", "Stride Time"]))
     assert trial.analysis == []
-    assert any("ANALYSIS group without NAMES/VALUES" in n for n in trial.notes)
+    assert any("ANALYSIS group without NAMES/VALUES" in n for n in messages(trial.notes))

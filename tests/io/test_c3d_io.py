@@ -7,6 +7,7 @@ import pytest
 from support import C3D_FORMATS, SHARED_DATA, needs_shared, shared_file
 
 from fuzzygait.core.errors import C3DError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.c3d_backends import _decode_c3d, _decode_ezc3d
 
@@ -77,7 +78,7 @@ def test_both_backends_decode_the_same_numbers() -> None:
 @needs_shared
 def test_fallback_reader_is_noted() -> None:
     trial = read_c3d(C3D_FORMATS / "sgi_int.c3d")
-    assert any("read with the c3d package" in note for note in trial.notes)
+    assert any("read with the c3d package" in note for note in messages(trial.notes))
 
 
 @needs_shared
@@ -86,7 +87,7 @@ def test_duplicate_labels_and_missing_rate_are_repaired_and_noted() -> None:
     assert len(set(trial.marker_labels)) == trial.n_markers
     assert "r should" in trial.marker_labels and "r should_2" in trial.marker_labels
     assert trial.rate == 100.0
-    assert any("duplicate labels" in note for note in trial.notes)
+    assert any("duplicate labels" in note for note in messages(trial.notes))
 
 
 def test_truncated_and_missing_files_raise_c3d_error(tmp_path) -> None:
@@ -206,7 +207,7 @@ def test_round_trip_converts_metres_to_millimetres(tmp_path) -> None:
     c.write(str(path))
     back = read_c3d(path)
     assert np.nanmax(np.abs(back.markers - trial.markers)) <= 1e-3
-    assert any("converted from m to mm" in note for note in back.notes)
+    assert any("converted from m to mm" in note for note in messages(back.notes))
 
 
 @needs_shared

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import C3DError
+from fuzzygait.core.findings import messages
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.io import c3d as c3d_module
 from fuzzygait.io import read_c3d, write_c3d
@@ -84,7 +85,7 @@ def test_a_long_walking_trial_keeps_every_gait_event(tmp_path: Path) -> None:
     assert len(trial.events) == 367
     write_c3d(trial, tmp_path / "long.c3d")
     back = read_c3d(tmp_path / "long.c3d")
-    assert not any("c3d package" in note or "EVENT" in note for note in back.notes)
+    assert not any("c3d package" in note or "EVENT" in note for note in messages(back.notes))
     assert_same_events(back.events, trial.events)
 
 

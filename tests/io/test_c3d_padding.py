@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from support import SAMPLE_DATA
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 
 
@@ -37,5 +38,5 @@ def test_extra_frames_after_the_declared_ones_are_noted(tmp_path: Path) -> None:
     data = (SAMPLE_DATA / "walking.c3d").read_bytes()
     grown = tmp_path / "grown.c3d"
     grown.write_bytes(data + data[-1024:] + bytes(1024))
-    notes = read_c3d(grown).notes
+    notes = messages(read_c3d(grown).notes)
     assert any("the data block holds" in n for n in notes), notes

@@ -11,6 +11,7 @@ import ezc3d
 import numpy as np
 from support import SAMPLE_DATA, needs_shared, shared_file
 
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d
 from fuzzygait.io.c3d_backends import header_event_slots
 
@@ -41,7 +42,7 @@ def test_event_used_below_the_stored_events_reads_the_used_ones_with_a_note(tmp_
     assert [(e.label, e.context, e.time) for e in trial.events] == [
         (e.label, e.context, e.time) for e in original.events[:2]
     ]
-    note = [n for n in trial.notes if "EVENT:USED" in n]
+    note = [n for n in messages(trial.notes) if "EVENT:USED" in n]
     assert note == [f"EVENT:USED says 2 events but EVENT:TIMES holds {len(original.events)}; only the first 2 "
                     "are read (set EVENT:USED in the file if the others are real events)"]
 
@@ -57,7 +58,7 @@ def test_a_subject_measurement_in_another_group_is_named_and_not_used(tmp_path: 
     trial = read_c3d(_copy_with(tmp_path, move))
     assert "RAnkleWidth" not in trial.parameters
     assert {k: v for k, v in original.parameters.items() if k != "RAnkleWidth"} == trial.parameters
-    assert [n for n in trial.notes if "PROCESSING" in n] == [
+    assert [n for n in messages(trial.notes) if "PROCESSING" in n] == [
         "parameter POINT:RAnkleWidth is a subject measurement outside the PROCESSING group; "
         "it is not used (give it in a subject file if it is needed)"
     ]
@@ -72,7 +73,7 @@ def test_files_of_other_software_keep_their_subject_group_without_a_note(tmp_pat
 
     trial = read_c3d(_copy_with(tmp_path, other_software))
     assert trial.parameters == {} and len(trial.events) == len(read_c3d(WALKING).events)
-    assert not [n for n in trial.notes if "PROCESSING" in n]
+    assert not [n for n in messages(trial.notes) if "PROCESSING" in n]
 
 
 def test_header_event_slots_follow_the_header_count_and_note_labels_beyond_it() -> None:
@@ -99,4 +100,5 @@ def test_a_label_written_into_an_unused_header_event_slot_is_noted_not_read(tmp_
     original, trial = read_c3d(source), read_c3d(changed)
     assert [(e.label, e.time) for e in trial.events] == [(e.label, e.time) for e in original.events]
     assert len(trial.events) == 9
-    assert "the header declares 9 events but event slot(s) 18 also hold labels; those are not read" in trial.notes
+    expected = "the header declares 9 events but event slot(s) 18 also hold labels; those are not read"
+    assert expected in messages(trial.notes)

@@ -19,6 +19,7 @@ import pytest
 from support import C3D_FORMATS, SHARED_DATA, VICON, needs_shared, shared_file
 
 from fuzzygait.core.errors import C3DError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d
 from fuzzygait.io.c3d_backends import BackendError
 from fuzzygait.io.c3d_child import decode_isolated
@@ -70,7 +71,8 @@ def test_segfault_file_is_read_by_the_c3d_package_with_a_note(tmp_path: Path) ->
     truth = _c3d_package_points(path)  # the c3d package on its own reads all 332 frames
     assert trial.n_frames == truth.shape[0] == 332
     np.testing.assert_allclose(trial.markers, truth[:, : trial.n_markers], rtol=1e-6, atol=1e-4)
-    assert any("ANALOG:OFFSET holds 0 values for 32 analog channels" in n and "c3d package" in n for n in trial.notes)
+    assert any("ANALOG:OFFSET holds 0 values for 32 analog channels" in n and "c3d package" in n
+               for n in messages(trial.notes))  # fmt: skip
 
 
 @needs_shared
@@ -80,7 +82,7 @@ def test_hang_file_reads_the_markers_of_the_uncorrupted_file(tmp_path: Path) -> 
     assert trial.n_frames == original.n_frames == 89
     assert trial.marker_labels == original.marker_labels
     np.testing.assert_array_equal(trial.markers, original.markers)
-    assert any("DIST_RADIUS declares 69 dimensions" in n for n in trial.notes), trial.notes
+    assert any("DIST_RADIUS declares 69 dimensions" in n for n in messages(trial.notes)), trial.notes
 
 
 @needs_shared
@@ -147,7 +149,8 @@ def test_misaligned_ezc3d_frames_are_read_with_the_c3d_package() -> None:
     path = C3D_FORMATS / "dynamic.C3D"
     trial = read_c3d(path)
     np.testing.assert_allclose(trial.markers, _c3d_package_points(path), rtol=1e-6, atol=1e-4)
-    assert any("ezc3d read frames with 0 analog samples each, the header declares 6" in n for n in trial.notes)
+    found = messages(trial.notes)
+    assert any("ezc3d read frames with 0 analog samples each, the header declares 6" in n for n in found)
 
 
 # --------------------------------------------------------------------------- notes
@@ -159,7 +162,7 @@ def test_truncated_file_is_read_with_a_note(tmp_path: Path) -> None:
     trial, full = read_c3d(target), read_c3d(source)
     assert trial.n_frames == 80  # what the bytes hold: (559547 - 50176) // (4 * (4 * 239 + 621))
     np.testing.assert_array_equal(trial.markers, full.markers[:80])
-    assert any("323 frames announced, 80 read" in n and "truncated" in n for n in trial.notes), trial.notes
+    assert any("323 frames announced, 80 read" in n and "truncated" in n for n in messages(trial.notes)), trial.notes
 
 
 def _point_frames_at(data: bytes) -> int:
@@ -183,7 +186,8 @@ def test_point_frames_corrupted_to_one_reads_every_frame_with_a_note(tmp_path: P
     trial = read_c3d(target)
     assert trial.n_frames == 323
     np.testing.assert_array_equal(trial.markers, read_c3d(source).markers)
-    assert any("the header announces 323 frames but POINT:FRAMES says 1" in n for n in trial.notes), trial.notes
+    found = messages(trial.notes)
+    assert any("the header announces 323 frames but POINT:FRAMES says 1" in n for n in found), found
 
 
 @needs_shared
@@ -213,7 +217,7 @@ def test_control_characters_in_labels_are_replaced_with_a_note(tmp_path: Path) -
     trial = read_c3d(target)
     assert all(ch.isprintable() for lbl in trial.marker_labels for ch in lbl)
     assert trial.marker_labels[0].startswith("?[1m") and first != trial.marker_labels[0]
-    assert any("control characters" in n for n in trial.notes)
+    assert any("control characters" in n for n in messages(trial.notes))
 
 
 # --------------------------------------------------------------------------- every shared file

@@ -20,6 +20,7 @@ import ezc3d
 import numpy as np
 import pytest
 
+from fuzzygait.core.findings import FindingKind, messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.c3d_guard import inspect
 from fuzzygait.io.c3d_params import Parameter, read_section
@@ -300,7 +301,8 @@ def test_frames_outside_the_input_give_one_note_and_a_valid_file(tmp_path: Path)
     trial = read_c3d(src)
     out = tmp_path / "moved.c3d"
     notes = write_c3d(replace(trial, first_frame=trial.first_frame + 50), out, source=src)
-    assert notes == [
+    assert [note.kind for note in notes] == [FindingKind.OUTPUT_FILE]
+    assert messages(notes) == [
         f"{out}: the analog channels and force platforms of in.c3d could not be carried over (the trial's "
         f"frames 51-{50 + trial.n_frames} are not all among the file's analog frames 1-{trial.n_frames})"
     ]
@@ -335,7 +337,7 @@ def test_an_unreadable_parameter_section_gives_one_note_line(tmp_path: Path) -> 
     trial = read_c3d(SAMPLE_DATA / "walking.c3d")
     out = tmp_path / "out.c3d"
     notes = write_c3d(trial, out, source=src)
-    assert len(notes) == 1 and notes[0].startswith(f"{out}: the parameters of in.c3d could not be carried over")
+    assert len(notes) == 1 and notes[0].message.startswith(f"{out}: the parameters of in.c3d could not be carried over")
     assert read_c3d(out).n_frames == trial.n_frames
 
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.io.qtm_session import qtm_session_values, qtm_subject_name
 from fuzzygait.io.subject import is_subject_file, read_subject
 from support import SAMPLE_DATA, SHARED_DATA, needs_shared, run_here, trial_window
@@ -153,7 +154,7 @@ def test_shared_qtm_session_angles_equal_the_toml_route(tmp_path: Path) -> None:
                        subject_file=subject, model="auto", flat_foot=flat)
             for subject, flat in ((QTM_SESSION / "session.xml", None), (toml, True))]  # fmt: skip
     # session.xml normalises both feet to the static trial: foot flat on by default, noted
-    assert any("foot flat on as session.xml sets it" in note for note in runs[0].notes)
+    assert any("foot flat on as session.xml sets it" in note for note in messages(runs[0].notes))
     assert runs[0].result.model == "cgm2.4"
     names = sorted(runs[1].result.angles)
     assert sorted(runs[0].result.angles) == names and len(names) >= 10
@@ -223,16 +224,16 @@ def test_foot_flat_default_follows_session_xml(tmp_path: Path) -> None:
     default = calibrate_static(static, by_file)
     assert default.flat_foot is True and "foot flat on" in default.describe()
     assert ("foot flat on as session.xml sets it (feet normalised to the static trial); --no-flat-foot "
-            "overrides it") in default.notes  # fmt: skip
+            "overrides it") in messages(default.notes)  # fmt: skip
     overridden = calibrate_static(static, by_file, flat_foot=False)
-    assert overridden.flat_foot is False and not any("sets it" in n for n in overridden.notes)
+    assert overridden.flat_foot is False and not any("sets it" in n for n in messages(overridden.notes))
     plain = calibrate_static(static, toml)
-    assert plain.flat_foot is False and not any("sets it" in n for n in plain.notes)
+    assert plain.flat_foot is False and not any("sets it" in n for n in messages(plain.notes))
     xml.write_text(session_xml(VISIT, feet=("False", "False")), encoding="utf-16")
     off = calibrate_static(static, read_subject(xml))
     assert off.flat_foot is False
     assert ("foot flat off as session.xml sets it (feet not normalised to the static trial); --flat-foot "
-            "overrides it") in off.notes  # fmt: skip
+            "overrides it") in messages(off.notes)  # fmt: skip
 
 
 @needs_shared

@@ -9,6 +9,7 @@ import pytest
 from support import rot_pelvis_truth
 
 from fuzzygait.core.errors import MarkerError, ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.kinematics import compute_lower_body
 from fuzzygait.synthetic.cgm24 import make_cgm24_static, make_cgm24_walking
 from fuzzygait.workflows.angles import Preprocessing, calibrate_static, resolve_subject, run_angles
@@ -63,7 +64,7 @@ def test_auto_picks_cgm24_on_the_full_marker_set(sessions) -> None:
     run = run_angles(walking, static=static, preprocessing=NO_FILTER, model="auto")
     assert run.result.model == "cgm2.4"
     assert "LForeFootAngles" in run.result.angles and "RForeFootAngles" in run.result.angles
-    assert any(note.startswith("model cgm2.4 (") for note in run.notes)
+    assert any(note.startswith("model cgm2.4 (") for note in messages(run.notes))
 
 
 def test_forefoot_angles_follow_a_known_forefoot_turn(sessions) -> None:
@@ -142,8 +143,8 @@ def test_tracking_by_fewer_markers_is_noted_per_frame_range(sessions) -> None:
         markers[200:205, walking.marker_labels.index(label)] = np.nan  # two of four: no pose in 201-205
     run = run_angles(walking.with_markers(markers), static=static, preprocessing=Preprocessing(filter=False, max_gap=0),
                      model="cgm2.4")  # fmt: skip
-    assert "right forefoot: RSMH not seen in frames 41-90; tracked by the other markers there" in run.notes
-    assert "left tibia: fewer than 3 markers seen in frames 201-205; no pose there (NaN)" in run.notes
+    assert "right forefoot: RSMH not seen in frames 41-90; tracked by the other markers there" in messages(run.notes)
+    assert "left tibia: fewer than 3 markers seen in frames 201-205; no pose there (NaN)" in messages(run.notes)
     knee = run.result.angles["LKneeAngles"]
     assert np.isnan(knee[200:205]).all() and np.isfinite(knee[:200]).all() and np.isfinite(knee[205:]).all()
     assert np.isfinite(run.result.angles["LHipAngles"]).all()

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.subject import subject_from_processing
 from fuzzygait.kinematics import ANGLE_NAMES
@@ -54,7 +55,7 @@ def test_the_diameter_is_recovered_from_nexus_style_outputs(tmp_path: Path, diam
     # the run uses it, says so, and gets the generator's angles
     run = run_angles(path, preprocessing=Preprocessing(filter=False))
     assert run.subject.marker_diameter == pytest.approx(diameter, abs=0.01)
-    assert any(n.startswith(f"marker diameter {found.diameter:g} mm, recovered from") for n in run.notes)
+    assert any(n.startswith(f"marker diameter {found.diameter:g} mm, recovered from") for n in messages(run.notes))
     for name in ("LHipAngles", "RKneeAngles", "LAnkleAngles"):
         for k, axis in enumerate("XYZ"):
             error = np.abs(run.result.angles[name][:, k] - truth[f"{name}_{axis}"].to_numpy())
@@ -69,7 +70,7 @@ def test_a_stated_diameter_that_contradicts_the_file_is_a_warning(tmp_path: Path
     assert "marker diameter 14 mm (as given) contradicts" in run.warnings[0] and "16.00 mm" in run.warnings[0]
     # within 0.5 mm: agreement, no warning
     close = run_angles(path, marker_diameter=16.4)
-    assert close.warnings == [] and any("own Plug-in Gait outputs agree (16.00 mm)" in n for n in close.notes)
+    assert close.warnings == [] and any("own Plug-in Gait outputs agree (16.00 mm)" in n for n in messages(close.notes))
 
 
 def test_a_file_without_outputs_notes_the_assumed_diameter() -> None:
@@ -77,13 +78,13 @@ def test_a_file_without_outputs_notes_the_assumed_diameter() -> None:
     params = {k: v for k, v in walking.parameters.items() if k != "MarkerDiameter"}
     run = run_angles(replace(walking, parameters=params))
     assert run.subject.marker_diameter == 14.0
-    note = next(n for n in run.notes if n.startswith("marker diameter"))
+    note = next(n for n in messages(run.notes) if n.startswith("marker diameter"))
     assert note.startswith("marker diameter 14 mm assumed") and "no Plug-in Gait hip joint centres" in note
 
 
 def test_a_stated_diameter_without_evidence_is_used_and_named() -> None:
     run = run_angles(SAMPLE_DATA / "walking.c3d", subject_file=SAMPLE_DATA / "subject.toml")
-    assert "marker diameter 14 mm (from subject.toml)" in run.notes
+    assert "marker diameter 14 mm (from subject.toml)" in messages(run.notes)
 
 
 def test_other_subject_values_make_the_estimates_disagree(tmp_path: Path) -> None:
@@ -94,7 +95,7 @@ def test_other_subject_values_make_the_estimates_disagree(tmp_path: Path) -> Non
                                        "LAsisTrocanterDistance": 0.0, "RAsisTrocanterDistance": 0.0})  # fmt: skip
     choice = settle_marker_diameter(subject, None, (trial,))
     assert choice.subject.marker_diameter == 14.0 and choice.recovered is not None
-    assert choice.recovered.diameter is None and "inconsistent diameters" in choice.note
+    assert choice.recovered.diameter is None and "inconsistent diameters" in choice.note.message
 
 
 def test_the_static_trial_inter_asis_distance_replaces_the_processing_value() -> None:
@@ -106,7 +107,7 @@ def test_the_static_trial_inter_asis_distance_replaces_the_processing_value() ->
     run = run_angles(stale, static=static)
     measured = float(np.linalg.norm(static.marker("LASI")[0] - static.marker("RASI")[0]))
     assert run.subject.inter_asis_distance == pytest.approx(measured, abs=1e-6)
-    assert any("not walking.c3d PROCESSING group's 260.00 mm" in n for n in run.notes)
+    assert any("not walking.c3d PROCESSING group's 260.00 mm" in n for n in messages(run.notes))
     # the user's own subject file keeps its non-zero value
     own = run_angles(stale, static=static, subject_file=SAMPLE_DATA / "subject.toml")
     assert own.subject.inter_asis_distance == 250.0

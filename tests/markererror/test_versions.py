@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
 from fuzzygait.kinematics import compute_lower_body
@@ -162,7 +163,7 @@ def test_dataset_names_the_model_of_the_angles(runs: dict[str, AnglesRun]) -> No
     analysis = analyse_run(run, MarkerErrorSettings(alphas=(0.0,), angles=("LForeFootAngles",), workers=1))
     assert analysis.fuzzy.attrs["model"] == "cgm2.4"
     assert list(analysis.delta_phi.index) == ["LForeFootAngles_X", "LForeFootAngles_Y", "LForeFootAngles_Z"]
-    assert any("cgm2.4 marker model (static cluster calibration" in note for note in analysis.notes)
+    assert any("cgm2.4 marker model (static cluster calibration" in note for note in messages(analysis.notes))
     assert np.isfinite(relative_envelope_width(analysis.fuzzy).loc["LForeFootAngles_X", 0.0])
 
 

@@ -13,6 +13,7 @@ import pytest
 from scipy import signal
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import FindingKind
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import (
     ShortRunWarning,
@@ -168,7 +169,9 @@ def test_short_run_warning_from_filter_trial_names_markers():
     assert len(record) == 1
     assert np.array_equal(filtered.markers[60:63, 1], markers[60:63, 1])
     assert np.array_equal(np.isnan(filtered.markers), np.isnan(markers))
-    assert filtered.notes[-1] == "Butterworth low-pass 6 Hz, 4th order zero-lag"
+    assert filtered.notes[-1].message == "Butterworth low-pass 6 Hz, 4th order zero-lag"
+    assert filtered.notes[-1].kind is FindingKind.LOW_PASS
+    assert (filtered.notes[-1].cutoff_hz, filtered.notes[-1].order) == (6.0, 4)
     assert trial.notes == [] and np.array_equal(trial.markers, markers, equal_nan=True)
     np.testing.assert_array_equal(filtered.markers[:, 0], butterworth_lowpass(markers[:, 0], rate))
 

@@ -17,6 +17,7 @@ from scipy.interpolate import CubicSpline
 
 from support import cut
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, messages
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import Gap, GapRun, fill_gaps, fill_trial_gaps, find_gaps, gap_report_table
 from fuzzygait.mocap.gaps import WINDOW_VALID_SAMPLES
@@ -277,13 +278,16 @@ def test_find_gaps_positions():
 def test_fill_trial_gaps_returns_new_trial_with_note():
     truth = markers_at(100, seconds=5)
     holes = cut(truth, [(0, 100, 4), (0, 0, 3), (1, 300, 20)])
-    trial = Trial(markers=holes, marker_labels=["LHEE", "RHEE"], rate=100.0, notes=["read"])
+    read = Finding(FindingKind.FILE_FORMAT, "read")
+    trial = Trial(markers=holes, marker_labels=["LHEE", "RHEE"], rate=100.0, notes=[read])
     new, gaps = fill_trial_gaps(trial, max_gap=10)
-    assert new is not trial and new.notes == [
+    assert new is not trial and messages(new.notes) == [
         "read",
         "gap filling: 1 of 3 gaps filled (max_gap=10 frames, method=auto: 1 spline)",
     ]
-    assert trial.notes == ["read"] and np.array_equal(trial.markers, holes, equal_nan=True)
+    filling = new.notes[-1]
+    assert filling.kind is FindingKind.GAP_FILLING and (filling.max_gap, filling.method) == (10, "auto")
+    assert trial.notes == [read] and np.array_equal(trial.markers, holes, equal_nan=True)
     assert np.array_equal(new.markers, fill_gaps(holes, ["LHEE", "RHEE"])[0], equal_nan=True)
     assert [g.marker for g in gaps] == ["LHEE", "LHEE", "RHEE"]
 

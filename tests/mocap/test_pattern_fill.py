@@ -17,6 +17,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap import fill_gaps, fill_trial_gaps, gap_report_table
@@ -225,12 +226,13 @@ def test_fill_trial_gaps_passes_the_method_and_notes_it():
     holes = cut(rigid_body(), [(4, 100, 10), (0, 200, 3)])
     trial = Trial(markers=holes, marker_labels=LABELS, rate=RATE, notes=[])
     filled, gaps = fill_trial_gaps(trial, max_gap=10, method="pattern")
-    assert filled.notes == [
+    assert messages(filled.notes) == [
         "gap filling: 2 of 2 gaps filled (max_gap=10 frames, method=pattern: 2 pattern)"
     ]
+    assert (filled.notes[0].max_gap, filled.notes[0].method) == (10, "pattern")
     assert np.array_equal(filled.markers, fill_gaps(holes, LABELS, method="pattern")[0])
     filled, _ = fill_trial_gaps(trial, method="spline")
-    assert filled.notes[-1].endswith("(max_gap=10 frames, method=spline: 2 spline)")
+    assert filled.notes[-1].message.endswith("(max_gap=10 frames, method=spline: 2 spline)")
 
 
 # --------------------------------------------------------------------------- (e) Vicon

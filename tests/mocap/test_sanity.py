@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import C3DError, MarkerError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.io import read_c3d
 from fuzzygait.mocap import sanity
 from fuzzygait.workflows.angles import Preprocessing
@@ -95,7 +96,9 @@ def test_a_1e30_coordinate_is_blanked_and_noted(walking):
     markers[200, knee, 0] = 1e30
     bad = walking.with_markers(markers)
     checked = sanity.check_trial(bad)
-    assert checked.notes[-1].startswith(f"LKNE: 1 implausible sample blanked (frame {walking.first_frame + 200}:")
+    spike = checked.notes[-1]
+    assert spike.message.startswith(f"LKNE: 1 implausible sample blanked (frame {walking.first_frame + 200}:")
+    assert (spike.kind, spike.marker) == (FindingKind.SPIKES, "LKNE")
     assert np.isnan(checked.markers[200, knee]).all()
     # every other sample as read
     keep = np.ones(walking.n_frames, bool)
@@ -210,7 +213,7 @@ def test_degenerate_content_gives_one_line_and_no_warning(walking):
     markers = walking.markers.copy()
     markers[5, walking.marker_labels.index("RTOE")] = np.inf
     checked = sanity.check_trial(walking.with_markers(markers))
-    assert checked.notes[-1].startswith("RTOE: 1 implausible sample blanked (frame 6:")
+    assert checked.notes[-1].message.startswith("RTOE: 1 implausible sample blanked (frame 6:")
     with pytest.raises(C3DError, match=r"walking\.c3d: the body's markers all sit at one point"):
         sanity.check_trial(walking.with_markers(np.zeros_like(walking.markers)))
     with pytest.raises(MarkerError, match=r"walking\.c3d: marker LASI has 512 implausible samples of 512"):
@@ -269,12 +272,17 @@ def test_a_toe_marker_moved_along_the_foot_is_noted_on_its_side(walking, distanc
         assert notes == []
         return
     assert len(notes) == 1
-    (note,) = notes
+    (finding,) = notes
+    assert (finding.kind, finding.severity) == (FindingKind.MOVED_MARKERS, Severity.WARNING)
+    assert (finding.segment, finding.side) == ("left foot", "left")
+    note = finding.message
+    assert str(finding) == note
     assert note.startswith("left foot markers sit elsewhere than in the static trial static.c3d "
                            f"(LHEE-LTOE {190 + distance:.0f} mm, static 190 mm)")  # fmt: skip
     assert "left ankle and foot angles are unreliable" in note and "RHEE" not in note
     assert " moved)" not in note  # two foot markers: either may have moved
-    assert sanity.moved_segments(["left side done", note, "gap filling: 0 of 0 gaps filled"]) == ["left foot"]
+    others = [Finding(FindingKind.EVENTS, "left side done"), Finding(FindingKind.GAP_FILLING, "gap filling: 0 of 0")]
+    assert sanity.moved_segments([others[0], finding, others[1]]) == ["left foot"]
 
 
 def _cgm24_moved(label: str, mm: float, direction: tuple[str, str]):
@@ -293,7 +301,9 @@ def test_a_moved_forefoot_marker_of_the_cgm24_set_is_named():
     foot's note names RVMH as the marker every changed pair contains (RHEE-RVMH 191 mm
     there, now 40 mm shorter, less 1 mm for the heel's off-axis offset); the left side
     is silent."""
-    (note,) = sanity.moved_markers(*_cgm24_moved("RVMH", 40.0, ("RVMH", "RHEE")))
+    (finding,) = sanity.moved_markers(*_cgm24_moved("RVMH", 40.0, ("RVMH", "RHEE")))
+    assert (finding.segment, finding.side) == ("right foot", "right")
+    note = finding.message
     assert note.startswith("right foot markers")
     assert "RHEE-RVMH 152 mm, static 191 mm" in note
     assert "; RVMH moved):" in note and "sits where" not in note
@@ -323,7 +333,8 @@ def test_a_static_only_marker_left_on_and_labelled_toe_is_recognised():
     toe = walking.marker_labels.index("LTOE")
     for k in range(walking.n_frames):
         markers[k, toe] = _rigid_map(source, np.array([walking.marker(m)[k] for m in shank]), med)
-    (note,) = sanity.moved_markers(static, replace(walking, markers=markers))
+    (finding,) = sanity.moved_markers(static, replace(walking, markers=markers))
+    note = finding.message
     assert note.startswith("left foot markers sit elsewhere")
     assert re.search(r"LTOE moved and sits where the static trial's LMED was \(its distances to the other left foot "
                      r"markers agree within [0-5] mm median\): LMED labelled LTOE\?", note)  # fmt: skip
@@ -333,10 +344,13 @@ def test_a_moved_cluster_marker_names_its_segment_and_angles():
     """LTHAD moved 60 mm along the thigh in the synthetic CGM 2.4 walking trial: one
     note, on the left thigh, saying its hip and knee angles are unreliable; the
     report's words for it."""
-    (note,) = sanity.moved_markers(*_cgm24_moved("LTHAD", 60.0, ("LKNE", "LTHAP")))
-    assert note.startswith("left thigh markers sit elsewhere than in the static trial cgm24_static.c3d (")
-    assert "the left hip and knee angles are unreliable" in note
-    segments = sanity.moved_segments([note, "pelvis markers sit elsewhere than in the static trial s.c3d (x)"])
+    (finding,) = sanity.moved_markers(*_cgm24_moved("LTHAD", 60.0, ("LKNE", "LTHAP")))
+    assert finding.message.startswith("left thigh markers sit elsewhere than in the static trial cgm24_static.c3d (")
+    assert "the left hip and knee angles are unreliable" in finding.message
+    pelvis = Finding(FindingKind.MOVED_MARKERS, "x", Severity.WARNING, segment="pelvis")
+    # the segments come from the findings' typed field; a message that merely reads like one is not one
+    lookalike = Finding(FindingKind.STATIC_TRIAL, "right foot markers sit elsewhere than in the static trial s.c3d")
+    segments = sanity.moved_segments([finding, lookalike, pelvis])
     assert segments == ["left thigh", "pelvis"]
     assert sanity.moved_angles(segments) == "pelvis, hip and knee angles"
     assert sanity.moved_angles(["right foot"]) == "ankle and foot angles"
@@ -363,7 +377,8 @@ def test_the_qualisys_sessions_markers_moved_between_its_trials():
                      subject_file=folder / "session.xml", model="auto")  # fmt: skip
     segments = sanity.moved_segments(run.notes)
     assert segments == ["left thigh", "left shank", "left foot", "right thigh", "right shank", "right foot"]
-    moved = {s: next(n for n in run.notes if n.startswith(s + " markers sit")) for s in segments}
+    moved = {f.segment: f.message for f in run.notes if f.kind is FindingKind.MOVED_MARKERS}
+    assert list(moved) == segments and all(m.startswith(s + " markers sit") for s, m in moved.items())
     assert "LHEE-LTOE 96 mm, static 123 mm" in moved["left foot"]
     assert "RTOE-RVMH 137 mm, static 69 mm" in moved["right foot"]
     assert "LMED labelled LTOE?" in moved["left foot"] and "RMED labelled RTOE?" in moved["right foot"]

@@ -41,7 +41,7 @@ def test_only_the_markers_asked_for_are_filled_and_filtered() -> None:
         out = filter_trial(filled, markers=["LASI", "RASI"])
     assert np.array_equal(out.markers[:, 2], trial.markers[:, 2], equal_nan=True)
     assert not np.array_equal(out.markers[:, 1], filled.markers[:, 1])
-    assert out.notes[-1].endswith("(2 of 3 markers)")
+    assert out.notes[-1].message.endswith("(2 of 3 markers)")
     with pytest.warns(ShortRunWarning, match=r"\*127"):  # every marker, as before
         filter_trial(filled)
 

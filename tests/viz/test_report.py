@@ -20,6 +20,7 @@ import pandas as pd
 import pytest
 from support import SAMPLE_DATA, FakeAnalysis, assert_one_line_error, run, run_here
 
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.markererror.result import fuzzy_angles_dataset
 from fuzzygait.viz.report import ReportItem, component_label, cycle_bands, write_report
@@ -55,7 +56,8 @@ def fake_analysis(run_: AnglesRun, alphas: np.ndarray = ALPHAS) -> FakeAnalysis:
                                  attrs={"trial": run_.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
     keep = alphas < 1
     frame = pd.DataFrame({n: v[keep] for n, v in delta_phi.items()}, index=alphas[keep]).T
-    return FakeAnalysis(run_, fuzzy, frame, notes=["fake analysis for the report tests"])
+    note = Finding(FindingKind.UNCERTAINTY, "fake analysis for the report tests")
+    return FakeAnalysis(run_, fuzzy, frame, notes=[note])
 
 
 @pytest.fixture(scope="module")

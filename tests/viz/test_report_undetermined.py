@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.result import fuzzy_angles_dataset
@@ -59,7 +60,8 @@ def undetermined_analysis(run: AnglesRun) -> FakeAnalysis:
                                  ball_radius=np.full(run.trial.n_markers, 20.0),
                                  attrs={"trial": run.trial.name, "sources": "measurement,placement,sta"},
                                  undetermined=flags)  # fmt: skip
-    return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy), ["fake undetermined analysis"])
+    note = Finding(FindingKind.UNCERTAINTY, "fake undetermined analysis")
+    return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy), [note])
 
 
 @pytest.fixture(scope="module")

@@ -14,6 +14,7 @@ import pytest
 
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.findings import messages
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.kinematics import ANGLE_NAMES, FOREFOOT_ANGLE_NAMES
@@ -40,7 +41,7 @@ def _fuzzygait_group(path: Path) -> dict[str, str]:
 def test_plug_in_gait_outputs_name_cgm10_and_keep_vicon_names(tmp_path: Path) -> None:
     run, written = angles_to_files(SAMPLE_DATA / "walking.c3d", _outputs(tmp_path, "csv"), **SAMPLE)
     assert run.model == "cgm1.0" and len(written) == 3
-    assert "model cgm1.0 (given by name)" in run.notes
+    assert "model cgm1.0 (given by name)" in messages(run.notes)
     table = pd.read_csv(tmp_path / "angles.csv")  # plain read_csv
     assert table.columns[-1] == "model" and set(table["model"]) == {"cgm1.0"}
     expected = run.angle_table()
@@ -91,7 +92,7 @@ def test_bad_suffixes_are_refused() -> None:
 def test_cgm23_outputs_name_cgm23(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
     static, walking = cgm24_session
     run, _ = angles_to_files(walking, _outputs(tmp_path, "parquet", "model"), static=static, model="cgm2.3")
-    assert run.model == "cgm2.3" and "model cgm2.3 (given by name)" in run.notes
+    assert run.model == "cgm2.3" and "model cgm2.3 (given by name)" in messages(run.notes)
     assert pd.read_parquet(tmp_path / "angles.parquet").attrs["model"] == "cgm2.3"
     assert set(pd.read_parquet(tmp_path / "cycles.parquet")["model"]) == {"cgm2.3"}
     c3d = read_c3d(tmp_path / "model.c3d")

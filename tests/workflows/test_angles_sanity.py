@@ -12,6 +12,7 @@ import pytest
 from support import SAMPLE_DATA, VICON, assert_one_line_error, needs_shared, run, run_here
 
 from fuzzygait.core.errors import C3DError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.workflows.angles import run_angles
 from fuzzygait.workflows.calibrate import calibrate_to_file
@@ -40,8 +41,8 @@ def test_a_spike_is_blanked_and_the_angles_equal_the_clean_trial_s(trials, clean
     walking, static = trials
     spiked = _with(walking, "LKNE", lambda m: m.__setitem__((200, 0), 1e30))
     run = run_angles(spiked, static=static, subject_file=SUBJECT, model="cgm1.0")
-    assert any(n.startswith("LKNE: 1 implausible sample blanked (frame 201:") for n in run.notes)
-    assert any(n.startswith("gap filling: 1 of 1 gaps filled") for n in run.notes)
+    assert any(n.startswith("LKNE: 1 implausible sample blanked (frame 201:") for n in messages(run.notes))
+    assert any(n.startswith("gap filling: 1 of 1 gaps filled") for n in messages(run.notes))
     assert set(run.result.angles) == set(clean.result.angles) and not run.result.unavailable
     far = np.r_[0:180, 221:walking.n_frames]
     for name, values in clean.result.angles.items():
@@ -53,7 +54,7 @@ def test_a_spike_in_the_static_trial_is_blanked_and_noted(trials, clean):
     walking, static = trials
     spiked = _with(static, "RANK", lambda m: m.__setitem__((50, 2), -1e30))
     run = run_angles(walking, static=spiked, subject_file=SUBJECT, model="cgm1.0")
-    assert "static trial static.c3d: RANK: 1 implausible sample blanked (frame 51:" in " ".join(run.notes)
+    assert "static trial static.c3d: RANK: 1 implausible sample blanked (frame 51:" in " ".join(messages(run.notes))
     for name, values in clean.result.angles.items():
         np.testing.assert_allclose(run.result.angles[name], values, atol=1e-9, err_msg=name)
 
@@ -66,7 +67,8 @@ def test_a_marker_missing_throughout_is_named_and_its_angles_not_counted(trials,
     assert set(run.result.unavailable) == empty
     for name in empty:
         assert np.isnan(run.result.angles[name]).all()
-        assert f"{name} not computed: no frame could be computed (marker LKNE missing in every frame)" in run.notes
+        expected = f"{name} not computed: no frame could be computed (marker LKNE missing in every frame)"
+        assert expected in messages(run.notes)
     computed = [n for n in run.result.angles if n not in run.result.unavailable]
     assert computed and all(np.isfinite(run.result.angles[n]).any() for n in computed)
     for name in computed:  # the other side and the pelvis are as before
@@ -86,7 +88,7 @@ def test_a_motionless_walking_trial_has_no_gait_events(trials):
     _, static = trials
     run = run_angles(static, static=static, subject_file=SUBJECT, model="cgm1.0")
     assert run.events == [] and run.event_source.startswith("none detected: the trial is motionless")
-    assert any(n.startswith("gait events none detected: the trial is motionless") for n in run.notes)
+    assert any(n.startswith("gait events none detected: the trial is motionless") for n in messages(run.notes))
 
 
 def test_the_cli_refuses_metres_in_one_line(trials, tmp_path):
@@ -137,7 +139,7 @@ def test_preprocess_blanks_a_spike_before_the_filter(trials, tmp_path):
     walking, _ = trials
     write_c3d(_with(walking, "LKNE", lambda m: m.__setitem__((200, 0), 1e30)), tmp_path / "spike.c3d")
     checked, gaps = preprocess_file(tmp_path / "spike.c3d", tmp_path / "clean.c3d", Preprocessing(labelled_only=False))
-    assert checked.notes[-1].startswith("LKNE: 1 implausible sample blanked (frame 201:")
+    assert checked.notes[-1].message.startswith("LKNE: 1 implausible sample blanked (frame 201:")
     assert [(g.marker, g.start, g.filled) for g in gaps] == [("LKNE", 200, True)]
     reference, _ = Preprocessing(labelled_only=False).apply(walking)
     np.testing.assert_allclose(read_c3d(tmp_path / "clean.c3d").marker("LKNE"), reference.marker("LKNE"), atol=0.01)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject, write_subject
 from fuzzygait.kinematics.calibration_file import cluster_table, clusters_from_table, read_stored_calibration
@@ -46,11 +47,11 @@ def test_angles_from_the_calibration_file_equal_angles_from_the_static_trial(
     _same_angles(with_static, from_file)
     assert from_file.subject == with_static.subject
     assert any(note.startswith(f"cluster calibration from {files[-1].name} (static trial static.c3d") for note in
-               from_file.notes)  # fmt: skip
+               messages(from_file.notes))  # fmt: skip
     # auto without --static takes the file's model
     auto = run_angles(walking, subject_file=files[0], model="auto", preprocessing=NO_FILTER)
     assert auto.model == "cgm2.3" and f"model cgm2.3 (the model of the cluster calibration in {files[-1].name})" \
-        in auto.notes  # fmt: skip
+        in messages(auto.notes)  # fmt: skip
     _same_angles(with_static, auto)
 
 
@@ -145,14 +146,14 @@ def test_older_and_plug_in_gait_files_read_as_before(tmp_path: Path) -> None:
     stored = read_stored_calibration(old)
     assert stored.clusters is None and stored.model is None and stored.static == "static.c3d"
     run = run_angles(SAMPLE_DATA / "walking.c3d", subject_file=old, model="auto")
-    assert run.model == "cgm1.0" and not any("calibrated for" in note for note in run.notes)
+    assert run.model == "cgm1.0" and not any("calibrated for" in note for note in messages(run.notes))
     assert read_stored_calibration(SAMPLE_DATA / "subject.toml").clusters is None
 
 
 def test_model_mismatch_between_file_and_run_is_noted(tmp_path: Path) -> None:
     calibrate_to_file(SAMPLE_DATA / "static.c3d", tmp_path / "pig.toml", subject_file=SAMPLE_DATA / "subject.toml")
     run = run_angles(SAMPLE_DATA / "walking.c3d", subject_file=tmp_path / "pig.toml", model="cgm2.1")
-    assert "pig.toml was calibrated for cgm1.0; its offsets are used by cgm2.1 as they are" in run.notes
+    assert "pig.toml was calibrated for cgm1.0; its offsets are used by cgm2.1 as they are" in messages(run.notes)
 
 
 def test_a_plug_in_gait_vsk_removes_the_sidecar_of_an_earlier_cluster_calibration(

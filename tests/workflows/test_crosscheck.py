@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.subject import read_subject
 from fuzzygait.synthetic.generate import make_walking_trial
@@ -45,7 +46,7 @@ def test_a_file_made_with_our_inputs_agrees_and_the_notes_say_so(tmp_path: Path)
     check = run.crosscheck
     assert check is not None and not check.flagged
     assert len(check.groups) == 10 and max(check.groups.values()) < 1e-3  # float32 storage
-    assert any(f"agree within {AGREE_DEG:g}° in every group" in note for note in run.notes)
+    assert any(f"agree within {AGREE_DEG:g}° in every group" in note for note in messages(run.notes))
 
 
 def test_16_mm_outputs_run_at_14_mm_name_the_marker_diameter(tmp_path: Path) -> None:
@@ -53,7 +54,7 @@ def test_16_mm_outputs_run_at_14_mm_name_the_marker_diameter(tmp_path: Path) -> 
     check = run.crosscheck
     assert check is not None and check.flagged
     assert check.causes[0].startswith("marker diameter (14 mm used; the file's outputs were made with 16.00 mm")
-    note = next(n for n in run.notes if "stored angles" in n)
+    note = next(n for n in messages(run.notes) if "stored angles" in n)
     assert f"DIFFER by more than {FLAG_DEG:g}°" in note and "likely cause: marker diameter" in note
 
 
@@ -123,7 +124,7 @@ def test_every_nexus_file_agrees_within_a_hundredth_of_a_degree(folder: str, nam
     groups = comparison.check.groups
     assert len(groups) == 10 and max(groups.values()) <= 0.01, groups
     assert all(row.frames > 0 for row in comparison.check.rows)
-    assert any("agree within 0.01° in every group" in note for note in comparison.run.notes)
+    assert any("agree within 0.01° in every group" in note for note in messages(comparison.run.notes))
 
 
 @needs_shared
@@ -162,7 +163,7 @@ def test_the_static_trials_foot_flat_is_recovered_from_its_outputs(name: str, fl
     calibration = calibrate_static(static, for_static_calibration(subject, None))
     assert calibration.flat_foot is flat
     assert f"foot flat {'on' if flat else 'off'}, as the static trial's own stored Plug-in Gait angles were made " \
-           "(reproduced with it, not without)" in calibration.notes
+           "(reproduced with it, not without)" in messages(calibration.notes)
     motion = read_c3d(shared_file("pig-options", name.replace("Calibration", "Motion")))
     for side in "LR":
         ours, nexus = calibration.subject.side(side), motion.parameters

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.findings import messages
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.kinematics.marker_names import canonical_labels, canonical_name
 from fuzzygait.workflows.angles import run_angles
@@ -45,7 +46,7 @@ def test_a_sacrum_under_any_of_its_labels_gives_the_psis_angles(label: str) -> N
     run = run_angles(_without_psis(label))
     for name, values in reference.result.angles.items():
         np.testing.assert_allclose(run.result.angles[name], values, atol=1e-9, err_msg=name)
-    relabelled = [n for n in run.notes if n.startswith("marker labels read as the model's")]
+    relabelled = [n for n in messages(run.notes) if n.startswith("marker labels read as the model's")]
     assert relabelled == ([] if label == "SACR" else [f"marker labels read as the model's: {label} as SACR"])
 
 

@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import FindingKind, messages
 from fuzzygait.markererror.allowable import allowable_table, refined_levels
 from fuzzygait.uncertainty.storage import load_result
 from fuzzygait.workflows import marker_uncertainty
@@ -51,7 +52,7 @@ def test_refinement_follows_the_fuzzy_analysis(analysis: MarkerErrorAnalysis) ->
     pd.testing.assert_frame_equal(allowable_table(fuzzy), table)
     assert fuzzy.attrs["tolerance_deg"] == 2.5 and fuzzy.attrs["allowable_runs"] > 0
     assert int(refined_levels(fuzzy, "LKneeAngles_X")["refined"].sum()) == table.loc["LKneeAngles_X", "evaluations"]
-    (note,) = [n for n in analysis.notes if n.startswith("allowable marker error")]
+    (note,) = [n for n in messages(analysis.notes) if n.startswith("allowable marker error")]
     assert note.startswith(f"allowable marker error for ±2.5°: {fuzzy.attrs['allowable_runs']} refinement runs, ")
     assert note.endswith(" s")
     # ΔΦ of the refined dataset (its plain levels), the trial's name
@@ -61,7 +62,7 @@ def test_refinement_follows_the_fuzzy_analysis(analysis: MarkerErrorAnalysis) ->
 def test_no_tolerance_no_refinement(sparse_run: AnglesRun) -> None:
     plain = analyse_run(sparse_run, dataclasses.replace(SETTINGS, tolerance=None, angles=("LKneeAngles",)))
     assert plain.allowable is None and "allowable_status" not in plain.fuzzy
-    assert not [n for n in plain.notes if n.startswith("allowable")]
+    assert not [n for n in messages(plain.notes) if n.startswith("allowable")]
 
 
 @pytest.mark.parametrize("tolerance", [0.0, -1.0, float("nan"), float("inf")])
@@ -84,7 +85,7 @@ def test_saved_dataset_is_the_refined_one(sparse_run: AnglesRun, tmp_path: Path,
     pd.testing.assert_frame_equal(allowable_table(again), analysis.allowable, check_dtype=False)
     np.testing.assert_allclose(refined_levels(again, "LKneeAngles_X")["hull"],
                                refined_levels(analysis.fuzzy, "LKneeAngles_X")["hull"])  # fmt: skip
-    assert "(LKneeAngles_X)" in analysis.notes[-1]
+    assert analysis.notes[-1].kind is FindingKind.ALLOWABLE_ERROR and "(LKneeAngles_X)" in analysis.notes[-1].message
 
 
 def test_demo_summary_has_the_flexion_sentence(analysis: MarkerErrorAnalysis) -> None:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fuzzygait.core.findings import messages
 from fuzzygait.markererror.per_source import source_components, source_names, widest_source_bands
 from fuzzygait.uncertainty.storage import load_result
 from fuzzygait.workflows import marker_uncertainty
@@ -74,24 +75,24 @@ def test_default_per_source_with_progress_through_every_stage(sparse_run: Angles
     runs = fuzzy.attrs["allowable_runs"]
     assert recorder.updates("allowable marker error")[-1] == (runs, runs)
     assert recorder.updates("per-source bands") == [(1, 3), (2, 3), (3, 3)]
-    (note,) = [n for n in analysis.notes if n.startswith("per-source bands")]
+    (note,) = [n for n in messages(analysis.notes) if n.startswith("per-source bands")]
     assert note.startswith("per-source bands (Fig. 5.9): measurement, placement, sta each alone for 1 flexion "
                            "components at α = 0: 3 runs, ")  # fmt: skip
-    assert analysis.notes[-1].startswith("allowable marker error")  # its line stays last
+    assert analysis.notes[-1].message.startswith("allowable marker error")  # its line stays last
     table = widest_source_bands(fuzzy)
     assert table.width("LKneeAngles_X", "measurement") < table.width("LKneeAngles_X", "sta")
 
 
 def test_per_source_off_or_one_source(sparse_run: AnglesRun) -> None:
     off = analyse_run(sparse_run, dataclasses.replace(SETTINGS, per_source=False, tolerance=None))
-    assert "source_hull" not in off.fuzzy and not [n for n in off.notes if n.startswith("per-source")]
+    assert "source_hull" not in off.fuzzy and not [n for n in messages(off.notes) if n.startswith("per-source")]
     assert not MarkerErrorSettings.create(per_source=False).per_source
     recorder = Recorder()
     one = analyse_run(sparse_run, dataclasses.replace(SETTINGS, sources=("sta",), tolerance=None), stages=recorder)
     assert "source_hull" not in one.fuzzy and recorder.stages() == ["fuzzy angles"]
-    assert "per-source bands: not computed (a single error source is selected)" in one.notes
+    assert "per-source bands: not computed (a single error source is selected)" in messages(one.notes)
     frontal = analyse_run(sparse_run, dataclasses.replace(SETTINGS, angles=("LPelvisAngles",), tolerance=None))
-    assert "per-source bands: not computed (no hip/knee/ankle flexion analysed)" in frontal.notes
+    assert "per-source bands: not computed (no hip/knee/ankle flexion analysed)" in messages(frontal.notes)
 
 
 def test_saved_with_the_per_source_bands(sparse_run: AnglesRun, tmp_path: Path,

@@ -71,8 +71,8 @@ def compare(
         table.add_row(row.angle, _PLANES[row.axis], *stored, str(row.frames), f"{row.rms:.4f}", f"{row.max:.4f}{flag}")
     out.print(table)
     for note in check.notes():
-        out.print(note, markup=False)
+        out.print(note.message, markup=False)
     if run.diameter is not None:
-        out.print(run.diameter.note, markup=False)
+        out.print(run.diameter.note.message, markup=False)
     if comparison.written is not None:
         out.print(f"wrote {comparison.written}", markup=False)

@@ -40,6 +40,7 @@ from fuzzygait.cli.options import (
     with_option_groups,
 )
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.findings import FindingKind
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -128,8 +129,8 @@ def preprocess(
             markup=False,
         )
     for note in trial.notes:  # the reader's and the content checks' (the gap/filter ones are above)
-        if not note.startswith(("gap filling", "Butterworth")):
-            out.print(f"  note: {note}", markup=False)
+        if note.kind not in (FindingKind.GAP_FILLING, FindingKind.LOW_PASS):
+            out.print(f"  note: {note.message}", markup=False)
 
 
 # --------------------------------------------------------------------------- calibrate
@@ -183,9 +184,9 @@ def calibrate(
     out.print(f"model {written.model} ({written.why})", markup=False)
     out.print(calibration.describe(), markup=False)
     for note in written.notes:
-        out.print(f"  note: {note}", markup=False)
+        out.print(f"  note: {note.message}", markup=False)
     for note in calibration.notes:  # the content checks' notes on the static trial
-        out.print(f"  note: {note}", markup=False)
+        out.print(f"  note: {note.message}", markup=False)
     _print_calibrated(calibration.subject)
     if calibration.clusters is not None:
         segments = sorted(calibration.clusters.segments.items(), key=lambda item: ("LR".index(item[0][0]), item[0][1]))
@@ -295,7 +296,7 @@ def _print_run_summary(run: AnglesRun) -> None:
         markup=False,
     )
     for note in run.notes:
-        out.print(f"  note: {note}", markup=False)
+        out.print(f"  note: {note.message}", markup=False)
 
 
 # --------------------------------------------------------------------------- demo
@@ -363,7 +364,7 @@ def uncertainty(
             )  # fmt: skip
     _print_run_summary(analysis.run)
     for note in analysis.notes[len(analysis.run.notes) :]:
-        out.print(f"  note: {note}", markup=False)
+        out.print(f"  note: {note.message}", markup=False)
     out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|, over the determined frames "
               '("undetermined": a segment frame can flip at that α-level):', markup=False)  # fmt: skip
     out.print(_delta_phi_text(analysis.fuzzy, analysis.delta_phi), markup=False)

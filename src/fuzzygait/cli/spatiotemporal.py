@@ -54,7 +54,7 @@ def gait_parameters(
             table.add_row(column_name(name), *(_cell(r[column_name(name)], r[column_name(name, "SD")]) for r in rows))
         out.print(table)
         for note in result.notes:
-            out.print(f"{Path(result.trial).name}: {note}", markup=False)
+            out.print(f"{Path(result.trial).name}: {note.message}", markup=False)
     if run.out is not None:
         out.print(f"-> {run.out}", markup=False)
     if run.failures:

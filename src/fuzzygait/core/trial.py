@@ -20,6 +20,7 @@ import numpy as np
 
 from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import MarkerError, ParameterError
+from fuzzygait.core.findings import Finding
 
 #: Kinds of model-output points, after the ``POINT`` group's type lists of Vicon files.
 OUTPUT_KINDS = ("angle", "force", "moment", "power", "scalar", "modeled_marker", "segment_frame")
@@ -103,8 +104,9 @@ class Trial:
         subject: subject name, if the file names one.
         label_prefix: subject prefix stripped from the labels (e.g. ``"A22:"``), or ``""``.
         source: file the trial was read from, if any.
-        notes: data-quality notes gathered while reading (unit conversions, renamed
-            duplicate labels, fallback reader used, ...).
+        notes: data-quality and processing findings (:class:`~fuzzygait.core.findings.Finding`)
+            gathered while reading and processing (unit conversions, renamed duplicate
+            labels, fallback reader used, spikes blanked, gap filling, filter, ...).
     """
 
     markers: np.ndarray
@@ -119,7 +121,7 @@ class Trial:
     subject: str = ""
     label_prefix: str = ""
     source: Path | None = None
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.markers = floats(self.markers)  # a traced array stays traced (fuzzygait.core.arrays)
@@ -201,7 +203,7 @@ class Trial:
         """
         return self.markers[:, self._column(label), :]
 
-    def _copy(self, markers: np.ndarray, labels: list[str], notes: list[str]) -> Trial:
+    def _copy(self, markers: np.ndarray, labels: list[str], notes: list[Finding]) -> Trial:
         return replace(
             self,
             markers=np.array(markers, dtype=float),
@@ -214,9 +216,10 @@ class Trial:
             notes=notes,
         )
 
-    def with_markers(self, markers: np.ndarray, note: str | None = None) -> Trial:
-        """A copy of this trial with the marker array replaced (same labels)."""
-        notes = [*self.notes, note] if note else list(self.notes)
+    def with_markers(self, markers: np.ndarray, note: Finding | None = None) -> Trial:
+        """A copy of this trial with the marker array replaced (same labels), and
+        ``note`` added to its notes when given."""
+        notes = [*self.notes, note] if note is not None else list(self.notes)
         return self._copy(markers, self.marker_labels, notes)
 
     def select_markers(self, labels: list[str]) -> Trial:

@@ -64,6 +64,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait.core.errors import EventError, ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.gait.cycles import gait_cycles, side_code
 from fuzzygait.gait.events import (
@@ -178,13 +179,14 @@ class TrialParameters:
         trial: the trial's name (file name) for tables and messages.
         sides: ``"L"``/``"R"`` -> :class:`SideParameters`.
         event_source: where the events came from (``"file"`` or the detection method).
-        notes: what could not be computed and why (missing markers, incomplete cycles).
+        notes: findings on what could not be computed and why (missing markers,
+            incomplete cycles).
     """
 
     trial: str
     sides: dict[str, SideParameters]
     event_source: str
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
 
 
 def _times(events: Sequence[GaitEvent], kind: GaitEventKind, side: str) -> np.ndarray:
@@ -305,13 +307,16 @@ def spatiotemporal_parameters(trial: Trial, events: Sequence[Event | GaitEvent] 
             "this foot's Foot Off and its next Foot Strike; add the missing events (e.g. "
             "with Nexus' gait-event detection) or trim the trial to whole cycles"
         )
-    notes = []
+    notes: list[Finding] = []
     for code, result in sides.items():
         name = SIDE_CONTEXTS[code].lower()
         if not result.complete_cycles:
-            notes.append(f"{name}: no complete gait cycle; its parameters are NaN")
+            notes.append(Finding(FindingKind.SPATIOTEMPORAL, f"{name}: no complete gait cycle; its parameters are NaN",
+                                 Severity.WARNING, side=name))  # fmt: skip
         elif not np.isfinite(result.first_complete.values["Stride Length"]):  # type: ignore[union-attr]
-            notes.append(f"{name}: {code}{foot_marker} missing at a foot strike; lengths and speed are NaN")
+            notes.append(Finding(FindingKind.SPATIOTEMPORAL, f"{name}: {code}{foot_marker} missing at a foot strike; "
+                                 "lengths and speed are NaN", Severity.WARNING, side=name,
+                                 marker=code + foot_marker))  # fmt: skip
     return TrialParameters(trial.name, sides, source, notes)
 
 

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import OUTPUT_UNITS, AnalysisValue, Event, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode, suffixed
@@ -129,7 +130,7 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
 
 
 def _interpret(path: Path, raw: RawC3D) -> Trial:
-    notes = list(raw.warnings)
+    notes = [_warning(w) for w in raw.warnings]
     n_frames, n_points = raw.points.shape[:2]
     if n_frames == 0:
         raise _fail(path, "holds no frames of point data")
@@ -171,29 +172,34 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
     )
 
 
-def _point_rate(path: Path, raw: RawC3D, notes: list[str]) -> float:
+def _warning(message: str, kind: FindingKind = FindingKind.FILE_FORMAT) -> Finding:
+    """A reader's finding: what it had to assume or repair (a warning)."""
+    return Finding(kind, message, Severity.WARNING)
+
+
+def _point_rate(path: Path, raw: RawC3D, notes: list[Finding]) -> float:
     value = raw.get("POINT", "RATE")
     rate = float(np.ravel(value)[0]) if value is not None and np.size(value) else float("nan")
     if not np.isfinite(rate) or rate <= 0:
         if raw.header_rate > 0:
-            notes.append(f"POINT:RATE missing or invalid; using the header rate {raw.header_rate:g} Hz")
+            notes.append(_warning(f"POINT:RATE missing or invalid; using the header rate {raw.header_rate:g} Hz"))
             rate = raw.header_rate
         else:
             raise _fail(path, "has no valid point rate (POINT:RATE and header); cannot time the data")
     return rate
 
 
-def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[str]) -> list[str]:
+def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[Finding]) -> list[str]:
     labels = [_printable(str(lbl)) for lbl in raw.labels[:n_points]]
     cleaned = [new for new, old in zip(labels, raw.labels[:n_points]) if new != str(old).replace("\x00", " ").strip()]
     if cleaned:
         shown = ", ".join(cleaned[:5]) + (", ..." if len(cleaned) > 5 else "")
-        notes.append(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}")
+        notes.append(_warning(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}"))
     if len(labels) < n_points:
-        notes.append(f"{n_points - len(labels)} points have no label; named POINTnn")
+        notes.append(_warning(f"{n_points - len(labels)} points have no label; named POINTnn"))
         labels += [""] * (n_points - len(labels))
     elif labels and not all(labels):
-        notes.append(f"{labels.count('')} points have an empty label; named POINTnn")
+        notes.append(_warning(f"{labels.count('')} points have an empty label; named POINTnn"))
     return [lbl if lbl else f"POINT{i + 1}" for i, lbl in enumerate(labels)]
 
 
@@ -216,7 +222,7 @@ def _label_prefix(raw: RawC3D, labels: list[str]) -> str:
     return heads.pop() if len(heads) == 1 and "" not in heads else ""
 
 
-def _deduplicate(labels: list[str], notes: list[str]) -> list[str]:
+def _deduplicate(labels: list[str], notes: list[Finding]) -> list[str]:
     seen: dict[str, int] = {}
     result = []
     for lbl in labels:
@@ -224,21 +230,21 @@ def _deduplicate(labels: list[str], notes: list[str]) -> list[str]:
         result.append(lbl if seen[lbl] == 1 else f"{lbl}_{seen[lbl]}")
     renamed = sorted(lbl for lbl, count in seen.items() if count > 1)
     if renamed:
-        notes.append(f"duplicate labels renamed with _2, _3, ...: {', '.join(renamed)}")
+        notes.append(_warning(f"duplicate labels renamed with _2, _3, ...: {', '.join(renamed)}"))
     return result
 
 
-def _length_factor(path: Path, raw: RawC3D, notes: list[str]) -> float:
+def _length_factor(path: Path, raw: RawC3D, notes: list[Finding]) -> float:
     units = raw.get("POINT", "UNITS")
     unit = (units[0] if units else "").strip().lower()
     if not unit:
-        notes.append("POINT:UNITS missing; assuming millimetres")
+        notes.append(_warning("POINT:UNITS missing; assuming millimetres", FindingKind.UNITS))
         return 1.0
     if unit not in LENGTH_UNITS_TO_MM:
         raise _fail(path, f"unknown POINT:UNITS {unit!r}; expected mm, cm or m")
     factor = LENGTH_UNITS_TO_MM[unit]
     if factor != 1.0:
-        notes.append(f"marker positions converted from {unit} to mm")
+        notes.append(Finding(FindingKind.UNITS, f"marker positions converted from {unit} to mm"))
     return factor
 
 
@@ -266,26 +272,30 @@ def _output_kinds(raw: RawC3D, labels: list[str], prefix: str) -> dict[str, str]
     return kinds
 
 
-def _events(path: Path, raw: RawC3D, notes: list[str]) -> list[Event]:
+def _events(path: Path, raw: RawC3D, notes: list[Finding]) -> list[Event]:
     used = raw.get("EVENT", "USED")
     n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
     if n <= 0:
         stored = [v for part in suffixed(raw.get, "EVENT", "LABELS") if isinstance(part, list) for v in part]
         if any(stored):
-            notes.append(f"EVENT:USED is {n} but EVENT:LABELS lists {len(stored)} events; they are ignored")
+            notes.append(_warning(f"EVENT:USED is {n} but EVENT:LABELS lists {len(stored)} events; they are ignored",
+                                  FindingKind.EVENTS))  # fmt: skip
         if raw.header_events:
-            notes.append("events taken from the C3D header (no EVENT group); context unknown")
+            notes.append(_warning("events taken from the C3D header (no EVENT group); context unknown",
+                                  FindingKind.EVENTS))  # fmt: skip
         return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
     parts = [_event_times(part) for part in suffixed(raw.get, "EVENT", "TIMES")]  # TIMES2...: events 256...
     times = np.concatenate([np.zeros((2, 0)), *parts], axis=1)
     if times.shape[-1] < n:
-        notes.append(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; using {times.shape[-1]}")
+        notes.append(_warning(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; "
+                              f"using {times.shape[-1]}", FindingKind.EVENTS))  # fmt: skip
         n = times.shape[-1]
     elif times.shape[-1] > n:
-        notes.append(
+        notes.append(_warning(
             f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; only the first {n} are read "
-            "(set EVENT:USED in the file if the others are real events)"
-        )
+            "(set EVENT:USED in the file if the others are real events)",
+            FindingKind.EVENTS,
+        ))
     seconds = times[0, :n] * 60.0 + times[1, :n]
 
     def texts(name: str, default: str) -> list[str]:  # LABELS, LABELS2, ...: each as long as its TIMES part
@@ -316,7 +326,7 @@ def _event_times(found: Any) -> np.ndarray:
     return times
 
 
-def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
+def _processing_parameters(raw: RawC3D, notes: list[Finding]) -> dict[str, float]:
     """The single-number parameters of the ``PROCESSING`` group (Vicon's subject
     measurements, mm / kg / rad as stored); a subject measurement found in another group
     is noted and not used when the file has a ``PROCESSING`` group (a damaged group number
@@ -327,10 +337,10 @@ def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
             continue
         for name in names:
             if name.upper() in known:
-                notes.append(
+                notes.append(_warning(
                     f"parameter {group}:{name} is a subject measurement outside the PROCESSING group; "
                     "it is not used (give it in a subject file if it is needed)"
-                )
+                ))
     # C3D parameter names are case-insensitive (the c3d package reads them in capitals):
     # Vicon's spelling of the names this package knows
     spelling = {name.upper(): name for name in PROCESSING_NAMES}
@@ -343,7 +353,7 @@ def _processing_parameters(raw: RawC3D, notes: list[str]) -> dict[str, float]:
     return result
 
 
-def _analysis_values(raw: RawC3D, notes: list[str]) -> list[AnalysisValue]:
+def _analysis_values(raw: RawC3D, notes: list[Finding]) -> list[AnalysisValue]:
     """The ``ANALYSIS`` group: ``USED`` values with ``NAMES``, ``CONTEXTS``, ``UNITS``,
     ``VALUES`` (and ``SUBJECTS``, ``DESCRIPTIONS`` when present).
 
@@ -361,7 +371,7 @@ def _analysis_values(raw: RawC3D, notes: list[str]) -> list[AnalysisValue]:
         names = raw.get("ANALYSIS", "NAMES")
         values = raw.get("ANALYSIS", "VALUES")
         if not isinstance(names, list) or values is None or isinstance(values, list):
-            notes.append("ANALYSIS group without NAMES/VALUES lists; its values are ignored")
+            notes.append(_warning("ANALYSIS group without NAMES/VALUES lists; its values are ignored"))
             return []
         numbers = np.ravel(np.asarray(values, dtype=float))
 
@@ -372,7 +382,7 @@ def _analysis_values(raw: RawC3D, notes: list[str]) -> list[AnalysisValue]:
 
         count = min(n, len(names), numbers.size)
         if count < n:
-            notes.append(f"ANALYSIS:USED says {n} values but the group holds {count}; using {count}")
+            notes.append(_warning(f"ANALYSIS:USED says {n} values but the group holds {count}; using {count}"))
         return [
             AnalysisValue(name=name, context=ctx or "General", unit=unit, value=float(value),
                           subject=subj, description=desc)  # fmt: skip
@@ -382,7 +392,7 @@ def _analysis_values(raw: RawC3D, notes: list[str]) -> list[AnalysisValue]:
             )
         ]
     except (TypeError, ValueError, IndexError) as exc:
-        notes.append(f"ANALYSIS group unreadable ({exc}); its values are ignored")
+        notes.append(_warning(f"ANALYSIS group unreadable ({exc}); its values are ignored"))
         return []
 
 
@@ -398,7 +408,7 @@ def write_c3d(
     *,
     text_parameters: Mapping[str, Mapping[str, str]] | None = None,
     source: str | os.PathLike[str] | None = None,
-) -> list[str]:
+) -> list[Finding]:
     """Write ``trial`` to a float C3D file at ``path``.
 
     Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
@@ -420,8 +430,9 @@ def write_c3d(
         source: the input C3D file to carry over (None: the trial alone is written).
 
     Returns:
-        Notes for the user: one line naming what of ``source`` could not be carried over
-        and why ([] when everything was, or without ``source``).
+        Findings for the user (:attr:`~fuzzygait.core.findings.FindingKind.OUTPUT_FILE`):
+        one naming what of ``source`` could not be carried over and why ([] when
+        everything was, or without ``source``).
 
     Raises:
         C3DError: the file cannot be written (names the path and the cause).
@@ -442,9 +453,9 @@ def write_c3d(
     from fuzzygait.io.c3d_writeback import open_source, write_back
 
     back = open_source(Path(source), trial)
-    notes: list[str] = []
-    _atomic_write(path, lambda tmp: notes.extend(write_back(tmp, path, back, trial, write_stage)))
-    return notes
+    lost: list[str] = []
+    _atomic_write(path, lambda tmp: lost.extend(write_back(tmp, path, back, trial, write_stage)))
+    return [Finding(FindingKind.OUTPUT_FILE, line, Severity.WARNING) for line in lost]
 
 
 def _ezc3d_trial(

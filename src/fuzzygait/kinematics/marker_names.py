@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.trial import Trial
 
 #: Per side, the markers of Plug-in Gait's lower body (HEE: foot virtual markers, events).
@@ -42,7 +43,7 @@ def canonical_name(label: str) -> str | None:
     return upper if upper in MODEL_LABELS else None
 
 
-def canonical_labels(trial: Trial) -> tuple[Trial, list[str]]:
+def canonical_labels(trial: Trial) -> tuple[Trial, list[Finding]]:
     """``trial`` with the aliases of model markers renamed to the model's labels (when
     the model's label is not there already), and a note saying which; unchanged and no
     note when nothing is renamed."""
@@ -56,7 +57,8 @@ def canonical_labels(trial: Trial) -> tuple[Trial, list[str]]:
         return trial, []
     labels = [renames.get(label, label) for label in trial.marker_labels]
     listed = ", ".join(f"{old} as {new}" for old, new in renames.items())
-    return replace(trial, marker_labels=labels), [f"marker labels read as the model's: {listed}"]
+    note = Finding(FindingKind.MARKER_LABELS, f"marker labels read as the model's: {listed}")
+    return replace(trial, marker_labels=labels), [note]
 
 
 def required_markers(clusters: bool, forefoot: bool) -> str:

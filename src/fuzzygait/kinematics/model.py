@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
@@ -63,7 +64,7 @@ class CGMResult:
             markers).
         progression: ``(3, 3)`` progression frame (columns forward, left, up in lab
             coordinates) of the pelvis and foot-progression angles.
-        notes: remarks on the computation (measured parameters, ignored parameters...).
+        notes: findings on the computation (measured parameters, ignored parameters...).
         model: the model version that computed it (``"cgm1.0"``, ``"cgm2.3"``, ...).
     """
 
@@ -73,7 +74,7 @@ class CGMResult:
     virtual_markers: dict[str, np.ndarray] = field(default_factory=dict)
     unavailable: dict[str, str] = field(default_factory=dict)
     progression: np.ndarray = field(default_factory=lambda: np.full((3, 3), np.nan))
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
     model: str = "cgm1.0"
 
 
@@ -207,9 +208,8 @@ def compute_lower_body(
         chain = StaticKneeChain(trial, subject, static_foot=static_foot)
     result = CGMResult(model=version.name)
     if medial:
-        result.notes.append(
-            "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"
-        )
+        medial_note = "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"
+        result.notes.append(Finding(FindingKind.KINEMATICS, medial_note))
 
     missing_pelvis = chain.missing("pelvis")
     if missing_pelvis:
@@ -217,7 +217,8 @@ def compute_lower_body(
             result.unavailable[name] = _missing_reason(missing_pelvis)
         return result
     if subject.inter_asis_distance is None:
-        result.notes.append(f"InterAsisDistance measured on this trial: {chain.inter_asis_distance():.2f} mm")
+        measured = f"InterAsisDistance measured on this trial: {chain.inter_asis_distance():.2f} mm"
+        result.notes.append(Finding(FindingKind.SUBJECT, measured))
 
     origin, pelvis = chain.pelvis()
     hjc = {side: chain.hjc(side) for side in "LR"}
@@ -226,7 +227,8 @@ def compute_lower_body(
     try:
         result.progression = progression_frame(0.5 * (hjc["L"] + hjc["R"]), pelvis[:, :, 0])
     except FuzzyGaitError as exc:
-        result.notes.append(f"no progression frame ({exc}); pelvis and foot progression angles are NaN")
+        result.notes.append(Finding(FindingKind.KINEMATICS, f"no progression frame ({exc}); pelvis and foot "
+                                    "progression angles are NaN", Severity.WARNING))  # fmt: skip
 
     for side in "LR":
         long = "left" if side == "L" else "right"
@@ -274,7 +276,9 @@ def compute_lower_body(
             length = vm.foot_bone_length(hee, toe, subject.marker_radius)
             result.virtual_markers.update(vm.foot_markers(side, ajc, foot, length))
         else:
-            result.notes.append(f"no {side}HEE marker: {side}FO*/{side}TO* virtual markers not produced")
+            result.notes.append(Finding(FindingKind.KINEMATICS, f"no {side}HEE marker: {side}FO*/{side}TO* virtual "
+                                        "markers not produced", Severity.WARNING, side=long,
+                                        marker=side + "HEE"))  # fmt: skip
 
     result.virtual_markers.update(result.joint_centres)
     result.angles = {name: result.angles[name] for name in ALL_ANGLE_NAMES if name in result.angles}
@@ -288,10 +292,10 @@ def _frame_ranges(mask: np.ndarray, first_frame: int) -> str:
     return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in ranges)
 
 
-def cluster_tracking_notes(chain: ClusterChain, side: str, segments: tuple[str, ...]) -> list[str]:
+def cluster_tracking_notes(chain: ClusterChain, side: str, segments: tuple[str, ...]) -> list[Finding]:
     """Per cluster segment of ``side``, the C3D frames where a calibrated tracking marker is
     not seen (the pose from the others) and where fewer than three are (no pose, NaN)."""
-    notes = []
+    notes: list[Finding] = []
     long = "left" if side == "L" else "right"
     for name in segments:
         cluster = chain.calibration.segment(side, name)
@@ -306,11 +310,14 @@ def cluster_tracking_notes(chain: ClusterChain, side: str, segments: tuple[str, 
             hidden = ~seen[:, k] & ~too_few
             if marker in present and hidden.any():
                 frames = _frame_ranges(hidden, chain.trial.first_frame)
-                notes.append(f"{long} {name}: {marker} not seen in frames {frames}; tracked by the other markers there")
+                notes.append(Finding(FindingKind.KINEMATICS, f"{long} {name}: {marker} not seen in frames {frames}; "
+                                     "tracked by the other markers there", side=long, segment=f"{long} {name}",
+                                     marker=marker))  # fmt: skip
         if too_few.any():
             frames = _frame_ranges(too_few, chain.trial.first_frame)
-            notes.append(f"{long} {name}: fewer than {MIN_MARKERS} markers seen in frames {frames}; "
-                         "no pose there (NaN)")  # fmt: skip
+            notes.append(Finding(FindingKind.KINEMATICS, f"{long} {name}: fewer than {MIN_MARKERS} markers seen in "
+                                 f"frames {frames}; no pose there (NaN)", Severity.WARNING, side=long,
+                                 segment=f"{long} {name}"))  # fmt: skip
     return notes
 
 

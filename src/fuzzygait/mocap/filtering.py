@@ -49,6 +49,7 @@ import numpy as np
 from scipy import signal
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.trial import Trial
 
 #: Combined gain of the zero-lag filter at the cutoff: 20 log10(1/sqrt(2)) dB.
@@ -257,7 +258,8 @@ def butterworth_lowpass(
 def filter_trial(trial: Trial, cutoff: float = 6.0, order: int = 4, markers: Sequence[str] | None = None) -> Trial:
     """:func:`butterworth_lowpass` applied to a trial's markers (a new trial).
 
-    The note added reads e.g. ``"Butterworth low-pass 6 Hz, 4th order zero-lag"``.  Too
+    The :attr:`~fuzzygait.core.findings.FindingKind.LOW_PASS` finding added (``cutoff_hz``,
+    ``order``) reads e.g. ``"Butterworth low-pass 6 Hz, 4th order zero-lag"``.  Too
     short runs are reported in one :class:`ShortRunWarning` naming the markers.
 
     Args:
@@ -280,7 +282,8 @@ def filter_trial(trial: Trial, cutoff: float = 6.0, order: int = 4, markers: Seq
         trial.marker_labels[columns[m]]: int(per_marker[m]) for m in np.flatnonzero(per_marker)
     }
     _warn_short_runs(where, order, stacklevel=2)
-    note = f"Butterworth low-pass {cutoff:g} Hz, {_ordinal(order)} order zero-lag"
+    message = f"Butterworth low-pass {cutoff:g} Hz, {_ordinal(order)} order zero-lag"
     if markers is not None:
-        note += f" ({len(columns)} of {trial.n_markers} markers)"
+        message += f" ({len(columns)} of {trial.n_markers} markers)"
+    note = Finding(FindingKind.LOW_PASS, message, cutoff_hz=float(cutoff), order=int(order))
     return trial.with_markers(out, note=note)

@@ -64,6 +64,7 @@ import pandas as pd
 from scipy.interpolate import CubicSpline
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap.pattern_fill import (
     PatternModel,
@@ -517,7 +518,8 @@ def fill_trial_gaps(
             marker.  Labels the trial does not hold are ignored.
 
     Returns:
-        A new trial whose notes end with a summary such as
+        A new trial whose notes end with a :attr:`~fuzzygait.core.findings.FindingKind.GAP_FILLING`
+        finding (``max_gap`` and ``method`` as given) whose message reads e.g.
         ``"gap filling: 5 of 7 gaps filled (max_gap=10 frames, method=auto: 3 pattern,
         2 spline)"``, and the gap report.
     """
@@ -533,10 +535,11 @@ def fill_trial_gaps(
     n_filled = sum(gap.filled for gap in gaps)
     used = methods_used(gaps)
     which = "" if markers is None else f", {len(columns)} of {trial.n_markers} markers"
-    note = (
+    message = (
         f"gap filling: {n_filled} of {len(gaps)} gaps filled "
         f"(max_gap={max_gap} frames, method={method}{': ' + used if used else ''}{which})"
     )
+    note = Finding(FindingKind.GAP_FILLING, message, max_gap=max_gap, method=method)
     return trial.with_markers(out, note=note), gaps
 
 

@@ -40,6 +40,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fuzzygait.core.errors import C3DError, MarkerError
+from fuzzygait.core.findings import Finding, FindingKind, Severity, of_kind
 from fuzzygait.core.trial import Trial
 from fuzzygait.mocap.gaps import labelled_markers
 
@@ -244,7 +245,7 @@ def blank_spikes(trial: Trial) -> Trial:
     if not spikes:
         return trial
     markers = trial.markers.copy()
-    notes = []
+    notes: list[Finding] = []
     for label, samples in spikes.items():
         column = trial.marker_labels.index(label)
         visible = int((~np.isnan(trial.markers[:, column, :]).any(axis=1)).sum())  # samples with a value
@@ -254,9 +255,14 @@ def blank_spikes(trial: Trial) -> Trial:
                               f"{_frames_text(trial, samples)}): check its labelling in the capture software "
                               "or delete the trajectory")  # fmt: skip
         markers[samples, column, :] = np.nan
-        notes.append(f"{label}: {samples.size} implausible sample{'s' if samples.size > 1 else ''} blanked "
-                     f"({_frames_text(trial, samples)}: beyond {MAX_COORDINATE:g} mm or a jump faster than "
-                     f"{MAX_SPEED / 1000:g} m/s); filled like a gap where short enough")  # fmt: skip
+        notes.append(Finding(
+            FindingKind.SPIKES,
+            f"{label}: {samples.size} implausible sample{'s' if samples.size > 1 else ''} blanked "
+            f"({_frames_text(trial, samples)}: beyond {MAX_COORDINATE:g} mm or a jump faster than "
+            f"{MAX_SPEED / 1000:g} m/s); filled like a gap where short enough",
+            Severity.WARNING,
+            marker=label,
+        ))
     out = trial.with_markers(markers)
     out.notes.extend(notes)
     return out
@@ -375,7 +381,7 @@ MOVED_MARKER_FRACTION = 0.10
 #: segment's other markers of |walking distance to it - static distance of Y to it| is
 #: at most this (mm; the shared Qualisys session's TOE against its static MED: 1.5-2 mm).
 SAME_PLACE_MM = 5.0
-#: The words a moved-marker note starts with after its segment ("left foot", "pelvis").
+#: The words of a moved-marker finding's message after its segment ("left foot", "pelvis").
 MOVED_NOTE = "markers sit elsewhere than in the static trial"
 #: At most this many changed pairs are listed in a note (the largest changes first).
 MAX_PAIRS_SHOWN = 4
@@ -427,8 +433,9 @@ def _moved_markers(present: Sequence[str], flagged: Sequence[tuple[str, str]]) -
     return [m for m in present if m in common | every]
 
 
-def moved_markers(static: Trial, walking: Trial) -> list[str]:
-    """Notes, one per segment (:data:`SEGMENT_MARKERS`, the pelvis and each side's
+def moved_markers(static: Trial, walking: Trial) -> list[Finding]:
+    """Findings (:attr:`~fuzzygait.core.findings.FindingKind.MOVED_MARKERS`, the segment in
+    ``segment``, its side in ``side``), one per segment (:data:`SEGMENT_MARKERS`, the pelvis and each side's
     thigh, shank and foot), on marker pairs whose distance differs between ``static``
     and ``walking`` by more than :data:`MOVED_MARKER_MM` mm and
     :data:`MOVED_MARKER_FRACTION` of the static distance (medians over the frames).
@@ -443,7 +450,7 @@ def moved_markers(static: Trial, walking: Trial) -> list[str]:
     medial malleolus marker left on and labelled TOE), that marker.  An empty list when
     nothing moved.
     """
-    notes = []
+    notes: list[Finding] = []
     for segment, labels in _segment_groups():
         present = [m for m in labels if _visible(static, m) and _visible(walking, m)]
         changes: list[tuple[float, str, str, str]] = []
@@ -471,22 +478,19 @@ def moved_markers(static: Trial, walking: Trial) -> list[str]:
         angles = SEGMENT_ANGLES[segment.split()[-1]]
         if " " in segment:  # a side's segment: that side's angles
             angles = f"{segment.split()[0]} {angles}"
-        notes.append(f"{segment} {MOVED_NOTE} {static.name} ({shown}{which}): moved or relabelled between the "
-                     f"trials, so the static calibration of the {segment} does not fit this trial and the "
-                     f"{angles} are unreliable; check the labels, or calibrate on a static trial with the "
-                     "walking trial's marker placement")  # fmt: skip
+        message = (f"{segment} {MOVED_NOTE} {static.name} ({shown}{which}): moved or relabelled between the "
+                   f"trials, so the static calibration of the {segment} does not fit this trial and the "
+                   f"{angles} are unreliable; check the labels, or calibrate on a static trial with the "
+                   "walking trial's marker placement")  # fmt: skip
+        side = segment.split()[0] if " " in segment else None
+        notes.append(Finding(FindingKind.MOVED_MARKERS, message, Severity.WARNING, side=side, segment=segment))
     return notes
 
 
-def moved_segments(notes: Sequence[str]) -> list[str]:
-    """The segments (``"pelvis"``, ``"left thigh"``, ``"right foot"`` ...) that
-    :func:`moved_markers` notes among ``notes`` name, in order."""
-    found = []
-    for note in notes:
-        head, sep, _ = note.partition(" " + MOVED_NOTE)
-        if sep and (head == "pelvis" or head.split(" ")[0] in ("left", "right")) and len(head.split()) <= 2:
-            found.append(head)
-    return found
+def moved_segments(notes: Sequence[Finding]) -> list[str]:
+    """The segments (``"pelvis"``, ``"left thigh"``, ``"right foot"`` ...) of the
+    :func:`moved_markers` findings among ``notes``, in order."""
+    return [f.segment for f in of_kind(notes, FindingKind.MOVED_MARKERS) if f.segment is not None]
 
 
 def moved_angles(segments: Sequence[str]) -> str:

@@ -377,7 +377,7 @@ def read(path: Path, keep_points: bool = False) -> Reading:
         points = {lbl: trial.markers[:, i] for i, lbl in enumerate(trial.marker_labels)} | dict(trial.outputs)
     return Reading(
         "ok",
-        notes=tuple(trial.notes),
+        notes=tuple(note.message for note in trial.notes),
         structure=hashlib.sha256(structure.encode()).hexdigest(),
         counts=counts,
         n_parameters=len(trial.parameters),

@@ -74,5 +74,5 @@ def describe_trial(trial: Trial) -> str:
     gaps = describe_gaps(trial)
     lines.append(f"  gaps: {'none' if not gaps else f'{len(gaps)} markers'}")
     lines += [f"    {line}" for line in gaps]
-    lines += [f"  note: {note}" for note in trial.notes]
+    lines += [f"  note: {note.message}" for note in trial.notes]
     return "\n".join(lines)

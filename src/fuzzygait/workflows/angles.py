@@ -18,6 +18,7 @@ import pandas as pd
 
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import SOURCE_FILE, trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
@@ -120,7 +121,8 @@ class AnglesRun:
         gaps: gap report of the dynamic trial.
         events: gait events used for the cycles.
         event_source: ``"file"`` or how they were detected.
-        notes: data-quality notes for reports.
+        notes: data-quality and processing findings for reports (:class:`~fuzzygait.core.findings.Finding`;
+            their messages are what the commands print and the pages show).
         warnings: what the user must know before trusting the angles (a stated marker
             diameter that contradicts the file's own outputs, ...); shown on report pages
             and printed by the commands.
@@ -139,7 +141,7 @@ class AnglesRun:
     gaps: list[Gap]
     events: list[Event]
     event_source: str
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
     clusters: ClusterCalibration | None = None
     warnings: list[str] = field(default_factory=list)
     crosscheck: CrossCheck | None = None
@@ -197,7 +199,7 @@ class StaticCalibration:
     flat_foot: bool
     static: str
     clusters: ClusterCalibration | None = None
-    notes: tuple[str, ...] = ()
+    notes: tuple[Finding, ...] = ()
 
     def describe(self) -> str:
         """``"static offsets calibrated from S.c3d (KAD, foot flat off, 14 mm markers)"``."""
@@ -239,14 +241,15 @@ def calibrate_static(
     notes = (*relabelled, *checked.notes[len(trial.notes) :])
     if flat_foot is None and subject.flat_foot is None and (found := recover_flat_foot(clean, subject)) is not None:
         flat_foot = found
-        notes += (f"foot flat {'on' if found else 'off'}, as the static trial's own stored Plug-in Gait angles "
-                  "were made (reproduced with it, not without)",)  # fmt: skip
+        notes += (Finding(FindingKind.STATIC_CALIBRATION, f"foot flat {'on' if found else 'off'}, as the static "
+                          "trial's own stored Plug-in Gait angles were made (reproduced with it, not "
+                          "without)"),)  # fmt: skip
     if flat_foot is None:
         flat_foot = bool(subject.flat_foot)
         if subject.flat_foot is not None:
-            notes += (f"foot flat {'on' if flat_foot else 'off'} as {Path(subject.source).name} sets it (feet "
-                      f"{'' if flat_foot else 'not '}normalised to the static trial); --{'no-' if flat_foot else ''}"
-                      "flat-foot overrides it",)  # fmt: skip
+            notes += (Finding(FindingKind.STATIC_CALIBRATION, f"foot flat {'on' if flat_foot else 'off'} as "
+                              f"{Path(subject.source).name} sets it (feet {'' if flat_foot else 'not '}normalised to "
+                              f"the static trial); --{'no-' if flat_foot else ''}flat-foot overrides it"),)  # fmt: skip
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
                                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     method = knee_method(clean)
@@ -308,7 +311,7 @@ def run_angles(
     if static_trial is None and subject_file is not None:
         stored = read_stored_calibration(subject_file)
     model, why = choose_model(model, raw, static_trial, stored)
-    notes += [*relabelled, f"model {model} ({why})", diameter.note]
+    notes += [*relabelled, Finding(FindingKind.MODEL, f"model {model} ({why})"), diameter.note]
     clusters, moved = None, []
     if static_trial is not None:
         to_calibrate = for_static_calibration(subject, subject_file)
@@ -316,18 +319,21 @@ def run_angles(
                                        model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
         notes += inter_asis_notes(subject, to_calibrate, calibration.subject, calibration.static)
         subject, clusters = calibration.subject, calibration.clusters
-        notes.append(calibration.describe())
-        notes += [f"static trial {calibration.static}: {note}" for note in calibration.notes]
+        notes.append(Finding(FindingKind.STATIC_CALIBRATION, calibration.describe()))
+        notes += [Finding(FindingKind.STATIC_TRIAL, f"static trial {calibration.static}: {note.message}", note.severity)
+                  for note in calibration.notes]  # fmt: skip
         moved = moved_markers(static_trial, trial)
         notes += moved
     else:
         if model_version(model).clusters:
             clusters = stored_clusters(stored, subject_file, model)
-            notes.append(f"cluster calibration from {stored.source.name if stored.source else subject_file}"
-                         + (f" (static trial {stored.static})" if stored.static else ""))  # fmt: skip
+            notes.append(Finding(FindingKind.SUBJECT, f"cluster calibration from "
+                                 f"{stored.source.name if stored.source else subject_file}"
+                                 + (f" (static trial {stored.static})" if stored.static else "")))  # fmt: skip
         if stored.model is not None and stored.model != model:
-            notes.append(f"{Path(subject_file or '').name} was calibrated for {stored.model}; "
-                         f"its offsets are used by {model} as they are")  # fmt: skip
+            notes.append(Finding(FindingKind.SUBJECT, f"{Path(subject_file or '').name} was calibrated for "
+                                 f"{stored.model}; its offsets are used by {model} as they are",
+                                 Severity.WARNING))  # fmt: skip
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     mark_empty_angles(result, raw)
     refuse_empty(result, raw.name)
@@ -337,10 +343,11 @@ def run_angles(
     if check is not None and moved:
         check = check.with_cause(f"markers moved between the static trial and this one ({len(moved)} segments)")
     notes += check.notes() if check is not None else []
-    notes += [f"{name} not computed: {why}" for name, why in result.unavailable.items()]
+    notes += [Finding(FindingKind.ANGLE_NOT_COMPUTED, f"{name} not computed: {why}", Severity.WARNING)
+              for name, why in result.unavailable.items()]  # fmt: skip
     events, source = trial_gait_events(trial)
     if source != "file":
-        notes.append(f"gait events {source}")
+        notes.append(Finding(FindingKind.EVENTS, f"gait events {source}"))
     return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.findings import Finding
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidecar
 from fuzzygait.io.subject import write_subject
@@ -90,7 +91,7 @@ class CalibrationFile:
     why: str
     files: list[Path] = field(default_factory=list)
     removed: list[Path] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
 
 
@@ -150,7 +151,7 @@ def calibrate_to_file(
         f"Method {calibration.method}, foot flat {'on' if calibration.flat_foot else 'off'}, "
         f"{calibration.subject.marker_diameter:g} mm markers.",
         "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
-        *(f"Static trial note: {note}" for note in calibration.notes),
+        *(f"Static trial note: {note.message}" for note in calibration.notes),
     ]
     metadata: dict[str, TomlData] = {"model": name, "static": static_name, "method": calibration.method,
                                      "flat_foot": calibration.flat_foot, "fuzzygait": __version__}  # fmt: skip

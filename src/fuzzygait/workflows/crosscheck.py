@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import compute_lower_body
@@ -174,8 +175,9 @@ class CrossCheck:
         flagged (else unchanged)."""
         return replace(self, causes=[cause, *self.causes]) if self.flagged else self
 
-    def notes(self) -> list[str]:
-        """One or two lines for the run's notes (none without stored angles)."""
+    def notes(self) -> list[Finding]:
+        """One or two findings for the run's notes (none without stored angles): a warning
+        when a group differs by more than :data:`FLAG_DEG`."""
         groups = self.groups
         if not groups:
             return []
@@ -190,12 +192,14 @@ class CrossCheck:
             head = (f"DIFFER by more than {FLAG_DEG:g}° in {', '.join(self.flagged)}; likely cause: "
                     + ("; ".join(self.causes) if self.causes else "not told by the file (its markers, "
                        "model or options differ from ours)"))  # fmt: skip
-        lines = [f"the file's stored angles ({which}) against ours on the file's markers: {head} "
-                 f"(largest difference per group: {listed})"]  # fmt: skip
+        severity = Severity.WARNING if worst > FLAG_DEG else Severity.INFO
+        lines = [Finding(FindingKind.CROSSCHECK, f"the file's stored angles ({which}) against ours on the file's "
+                         f"markers: {head} (largest difference per group: {listed})", severity)]  # fmt: skip
         written = max(self.written.values(), default=0.0)
         if written > AGREE_DEG:
-            lines.append(f"the angles written, gap-filled and low-pass filtered, differ from the file's stored ones by "
-                         f"up to {written:.3f}° through that pre-processing")  # fmt: skip
+            lines.append(Finding(FindingKind.CROSSCHECK, f"the angles written, gap-filled and low-pass filtered, "
+                                 f"differ from the file's stored ones by up to {written:.3f}° through that "
+                                 "pre-processing"))  # fmt: skip
         return lines
 
 

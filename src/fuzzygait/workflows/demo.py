@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 from rich.console import Console
 
+from fuzzygait.core.findings import FindingKind
 from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics.labels import component_label
@@ -157,7 +158,8 @@ def cgm24_session(data: Path, out_dir: Path) -> list[str]:
     missing = [name for name in dict.fromkeys(c[:-2] for c in truth.columns if c.endswith("_X"))
                if name not in per_angle.index]  # fmt: skip
     lines += [f"- truth angles not compared (not computed by {version.name}): {', '.join(missing)}"] if missing else []
-    lines += [""] + [f"- {note}" for note in run.notes if not note.startswith(("model ", "gap filling"))]
+    shown = [note for note in run.notes if note.kind not in (FindingKind.MODEL, FindingKind.GAP_FILLING)]
+    lines += [""] + [f"- {note.message}" for note in shown]
     return lines
 
 
@@ -282,7 +284,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
     lines += ["", f"Session report (walking.c3d and walking_noisy.c3d, angles only): `{session.session_pages[0]}` "
               f"(mean ± SD over all cycles of both trials), trial pages from `{session.index}`"]
-    lines += ["", "Notes:"] + [f"- {note}" for note in run.notes]
+    lines += ["", "Notes:"] + [f"- {note.message}" for note in run.notes]
     lines += cgm24_lines
     lines += ["", "Files: `angles.csv`, `cycles.csv`, `gait_cycles.png`, `summary.md`, `report/index.html`, "
               "`session/session.html`, `session/index.html`, "

@@ -20,6 +20,7 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.trial import Trial
 from fuzzygait.markererror.allowable import DEFAULT_TOLERANCE, allowable_errors
 from fuzzygait.markererror.analysis import (
@@ -59,7 +60,7 @@ class MarkerErrorAnalysis:
     run: AnglesRun
     fuzzy: xr.Dataset
     delta_phi: pd.DataFrame
-    notes: list[str]
+    notes: list[Finding]
     allowable: pd.DataFrame | None = None
 
 
@@ -194,18 +195,19 @@ def analyse_run(
                                          clusters=run.clusters, progress=stages.update)  # fmt: skip
                 per_source_note = _per_source_note(fuzzy, len(flexion))
     fixed = "static cluster calibration, " if run.clusters is not None else ""
-    notes = list(run.notes) + [
+    notes = list(run.notes) + [Finding(
+        FindingKind.UNCERTAINTY,
         f"marker errors: {', '.join(options.sources)} ({settings.error_model.source}), {options.method} "
         f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}; {run.model} marker "
-        f"model ({fixed}static offsets and subject measures fixed)"
-    ]
+        f"model ({fixed}static offsets and subject measures fixed)",
+    )]
     if per_source_note is not None:
-        notes.append(per_source_note)
+        notes.append(Finding(FindingKind.UNCERTAINTY, per_source_note))
     if allowable is not None:
         which = "" if settings.allowable_angles is None else f" ({', '.join(settings.allowable_angles)})"
         runs, seconds = fuzzy.attrs["allowable_runs"], fuzzy.attrs["allowable_seconds"]
-        notes.append(f"allowable marker error for ±{settings.tolerance:g}°{which}: {runs} refinement runs, "
-                     f"{seconds:.1f} s")  # fmt: skip
+        notes.append(Finding(FindingKind.ALLOWABLE_ERROR, f"allowable marker error for ±{settings.tolerance:g}°"
+                             f"{which}: {runs} refinement runs, {seconds:.1f} s"))  # fmt: skip
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable)

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
 from fuzzygait.io.qtm_session import is_qtm_session, qtm_subject_name
@@ -89,7 +90,8 @@ class Session:
         trials: the walking trials.
         statics: every static trial found (with its rule).
         subject_files: every subject file found.
-        notes: what the discovery could not decide (one line each).
+        notes: what the discovery could not decide (:attr:`~fuzzygait.core.findings.FindingKind.SESSION`
+            findings, one line each).
     """
 
     name: str
@@ -98,7 +100,7 @@ class Session:
     trials: tuple[SessionTrial, ...]
     statics: tuple[StaticTrial, ...] = ()
     subject_files: tuple[Path, ...] = ()
-    notes: tuple[str, ...] = ()
+    notes: tuple[Finding, ...] = ()
 
     @property
     def warnings(self) -> list[str]:
@@ -218,14 +220,15 @@ def find_session(folder: Path, output: str) -> Session:
             walking.append(path)
         else:
             statics.append(StaticTrial(path, found[0], found[1], trial.subject if trial is not None else ""))
-    notes = []
+    notes: list[Finding] = []
     if not walking:
         raise FuzzyGaitError(f"{folder}: no walking trials in this session folder (every C3D file looks like a "
                              "static trial); give the walking trials as files")  # fmt: skip
     if not statics:
-        notes.append("no static trial found: the trials use their own PROCESSING offsets")
+        notes.append(Finding(FindingKind.SESSION, "no static trial found: the trials use their own PROCESSING offsets"))
     if not subject_files:
-        notes.append("no subject file (.vsk, .toml, .mp, session.xml): the trials' PROCESSING groups give the subject")
+        notes.append(Finding(FindingKind.SESSION, "no subject file (.vsk, .toml, .mp, session.xml): the trials' "
+                             "PROCESSING groups give the subject"))  # fmt: skip
     trials = []
     for path in walking:
         trial = read[path]
@@ -314,7 +317,8 @@ def _override(session: Session, static: Path | None, subject_file: Path | None, 
             found += [warning] if warning else []
         trials.append(SessionTrial(t.path, static if static is not None else t.static, new_subject, subject,
                                    tuple(found)))  # fmt: skip
-    note = [f"--static {static} / --subject {subject_file} given: used for every trial"] if session.folder else []
+    given = f"--static {static} / --subject {subject_file} given: used for every trial"
+    note = [Finding(FindingKind.SESSION, given)] if session.folder else []
     return Session(session.name, session.folder, session.output, tuple(trials), session.statics,
                    session.subject_files, session.notes + tuple(note))  # fmt: skip
 

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import DEFAULT_MARKER_DIAMETER, SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.kinematics.marker_size import CONTRADICTION_MM, RecoveredDiameter, recover_marker_diameter
@@ -72,13 +73,14 @@ class DiameterChoice:
     Attributes:
         subject: the subject parameters with that diameter.
         recovered: what the trials' own outputs gave (None: no trial had them).
-        note: one line for the run's notes (where the diameter comes from).
+        note: the run's finding on it (:attr:`~fuzzygait.core.findings.FindingKind.MARKER_DIAMETER`:
+            where the diameter comes from).
         warning: a contradiction between a stated and the recovered diameter ("" none).
     """
 
     subject: SubjectParameters
     recovered: RecoveredDiameter | None
-    note: str
+    note: Finding
     warning: str = ""
 
 
@@ -122,26 +124,31 @@ def settle_marker_diameter(
     if stated_by:
         note = f"marker diameter {subject.marker_diameter:g} mm ({stated_by})"
         if recovered is None or recovered.diameter is None:
-            return DiameterChoice(subject, recovered, note)
+            return DiameterChoice(subject, recovered, _diameter(note))
         if abs(recovered.diameter - subject.marker_diameter) <= CONTRADICTION_MM:
-            return DiameterChoice(subject, recovered, f"{note}; {where}'s own Plug-in Gait outputs agree "
-                                                      f"({recovered.diameter:.2f} mm)")  # fmt: skip
+            return DiameterChoice(subject, recovered, _diameter(f"{note}; {where}'s own Plug-in Gait outputs agree "
+                                                                f"({recovered.diameter:.2f} mm)"))  # fmt: skip
         warning = (f"marker diameter {subject.marker_diameter:g} mm ({stated_by}) contradicts {where}'s own "
                    f"Plug-in Gait outputs, made with {recovered.diameter:.2f} mm markers ({recovered.describe(where)}):"
                    " the joint centres and angles will differ from the file's; use the diameter the file was "
                    "processed with unless it is wrong")  # fmt: skip
-        return DiameterChoice(subject, recovered, note, warning)
+        return DiameterChoice(subject, recovered, _diameter(note), warning)
     if recovered is not None and recovered.diameter is not None:
         subject = replace(subject, marker_diameter=recovered.diameter)
         return DiameterChoice(subject, recovered,
-                              f"marker diameter {recovered.diameter:g} mm, {recovered.describe(where)}")
+                              _diameter(f"marker diameter {recovered.diameter:g} mm, {recovered.describe(where)}"))
     why = ("no subject file or C3D states it" + (f", and {recovered.reason}" if recovered is not None
                                                  else " and the files hold no Plug-in Gait hip joint centres "
                                                       "to recover it from"))  # fmt: skip
     subject = replace(subject, marker_diameter=DEFAULT_MARKER_DIAMETER)
     note = (f"marker diameter {DEFAULT_MARKER_DIAMETER:g} mm assumed ({why}); give MarkerDiameter in the subject "
             "file or the marker diameter on the command line if the markers were of another size")  # fmt: skip
-    return DiameterChoice(subject, recovered, note)
+    return DiameterChoice(subject, recovered, _diameter(note, Severity.WARNING))
+
+
+def _diameter(message: str, severity: Severity = Severity.INFO) -> Finding:
+    """The marker-diameter finding of a run."""
+    return Finding(FindingKind.MARKER_DIAMETER, message, severity)
 
 
 #: A PROCESSING group's InterAsisDistance that differs from the static trial's by more
@@ -161,7 +168,7 @@ def for_static_calibration(
 
 def inter_asis_notes(
     stated: SubjectParameters, used: SubjectParameters, calibrated: SubjectParameters, static_name: str
-) -> list[str]:
+) -> list[Finding]:
     """What the run says about the inter-ASIS distance of a static calibration: measured
     on ``static_name`` (``used`` gave none), and how far a value ``stated`` by a PROCESSING
     group lies from it when more than :data:`INTER_ASIS_NOTE_MM`."""
@@ -171,12 +178,13 @@ def inter_asis_notes(
     source = Path(stated.source).name or "the subject"
     note = f"InterAsisDistance measured on the static trial {static_name}: {measured:.2f} mm"
     if stated.inter_asis_distance is None:
-        return [f"{note} ({source} gives none, or 0: Plug-in Gait's 'compute it from the ASIS markers')"]
-    differs = abs(stated.inter_asis_distance - measured)
-    if differs > INTER_ASIS_NOTE_MM:
-        return [f"{note}, not {source}'s {stated.inter_asis_distance:.2f} mm ({differs:.2f} mm apart: an earlier "
-                "calibration's value; the static trial given is measured afresh, as Plug-in Gait does)"]
-    return [f"{note} ({source}: {stated.inter_asis_distance:.2f} mm)"]
+        text = f"{note} ({source} gives none, or 0: Plug-in Gait's 'compute it from the ASIS markers')"
+    elif (differs := abs(stated.inter_asis_distance - measured)) > INTER_ASIS_NOTE_MM:
+        text = (f"{note}, not {source}'s {stated.inter_asis_distance:.2f} mm ({differs:.2f} mm apart: an earlier "
+                "calibration's value; the static trial given is measured afresh, as Plug-in Gait does)")
+    else:
+        text = f"{note} ({source}: {stated.inter_asis_distance:.2f} mm)"
+    return [Finding(FindingKind.SUBJECT, text)]
 
 
 #: Leg length against the static trial's ASIS-malleolus marker distance (ASI-MED, else

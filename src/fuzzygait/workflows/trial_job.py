@@ -28,6 +28,7 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
@@ -76,7 +77,8 @@ def angles_only(run: AnglesRun) -> MarkerErrorAnalysis:
         coords={"component": np.array([], dtype=str), "alpha": [1.0], "bound": ["lower", "upper"], "frame": frames},
         attrs={"trial": Path(run.trial.name).name, "model": run.model},
     )  # fmt: skip
-    notes = [*run.notes, "uncertainty: not computed (--uncertainty none: the angles only)"]
+    skipped = Finding(FindingKind.UNCERTAINTY, "uncertainty: not computed (--uncertainty none: the angles only)")
+    notes = [*run.notes, skipped]
     return MarkerErrorAnalysis(run, fuzzy, pd.DataFrame(), notes)
 
 

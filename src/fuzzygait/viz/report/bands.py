@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 import pandas as pd
 
+from fuzzygait.core.findings import Finding
 from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points
 from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.analysis import undetermined_levels
@@ -57,7 +58,7 @@ class ReportRun(Protocol):
     @property
     def event_source(self) -> str: ...
     @property
-    def notes(self) -> list[str]: ...
+    def notes(self) -> list[Finding]: ...
     @property
     def warnings(self) -> list[str]: ...
 
@@ -73,7 +74,7 @@ class TrialAnalysis(Protocol):
     @property
     def delta_phi(self) -> pd.DataFrame: ...
     @property
-    def notes(self) -> list[str]: ...
+    def notes(self) -> list[Finding]: ...
 
 
 # ============================================================================ labels

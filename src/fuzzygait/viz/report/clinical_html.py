@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
+from fuzzygait.core.findings import Finding, FindingKind, of_kind
 from fuzzygait.gait.normative import GPS_VARIABLES
 from fuzzygait.gait.spatiotemporal import NAMES, UNITS, TrialParameters
 from fuzzygait.io.subject import is_subject_file
@@ -101,26 +101,23 @@ def _session_text(source: Path, session: str | None) -> str:
     return f"{stamp} <span class=\"small\">(the file's date; the C3D file stores none)</span>"
 
 
-def _gap_settings(note: str) -> str:
-    """The settings of a gap-filling note (``"gap filling: 0 of 3 gaps filled (max_gap=10
-    frames, method=auto)"`` -> ``"gaps of up to 10 frames filled (method auto)"``): its
-    counts include markers the model does not use, the data-quality section counts the
-    model's."""
-    found = re.search(r"max_gap=(\d+) frames, method=(\w+)", note)
-    if found is None:
-        return note
-    if found[1] == "0":
+def _gap_settings(finding: Finding) -> str:
+    """The settings of a gap-filling finding (``max_gap`` 10 frames, ``method`` auto ->
+    ``"gaps of up to 10 frames filled (method auto)"``; its message's counts include
+    markers the model does not use, the data-quality section counts the model's)."""
+    if finding.max_gap is None or finding.method is None:
+        return finding.message
+    if finding.max_gap == 0:
         return "gap filling: off (max_gap 0)"
-    return f"gaps of up to {found[1]} frames filled (method {found[2]}); what was filled: Data quality"
+    return f"gaps of up to {finding.max_gap} frames filled (method {finding.method}); what was filled: Data quality"
 
 
 def _processing_text(run: ReportRun) -> str:
-    """Gap filling and filter settings, as the run's notes say them."""
-    notes = list(run.trial.notes)
-    gap = [n for n in notes if n.startswith("gap filling")]
-    low = [n for n in notes if n.startswith("Butterworth")]
+    """Gap filling and filter settings, from the trial's gap-filling and low-pass findings."""
+    gap = of_kind(run.trial.notes, FindingKind.GAP_FILLING)
+    low = of_kind(run.trial.notes, FindingKind.LOW_PASS)
     parts = [_gap_settings(gap[-1]) if gap else "gap filling: not applied"]
-    parts.append(low[-1] if low else "no low-pass filter")
+    parts.append(low[-1].message if low else "no low-pass filter")
     return "<br>".join(_esc(p) for p in parts)
 
 
@@ -166,7 +163,7 @@ def spatiotemporal_section(clinical: ClinicalData) -> str:
     params = clinical.parameters
     if params is None:
         return head + f"<p class=\"small\">Not available: {_esc(clinical.parameters_error or 'no gait cycle')}</p>"
-    notes = "".join(f"<li>{_esc(n)}</li>" for n in params.notes)
+    notes = "".join(f"<li>{_esc(n.message)}</li>" for n in params.notes)
     return (head + "<p>Computed from the gait events and the toe markers as Vicon Nexus does, over the complete "
             "gait cycles of each side (a cycle with both feet's events in order). Percentages are of the gait "
             "cycle; “Opposite Foot Off/Contact” are the other foot's events.</p>" + spatiotemporal_table(params)
@@ -268,9 +265,10 @@ def deg_text(rad: float) -> str:
 
 def static_text(run: ReportRun) -> str:
     """Where the static offsets come from (a sentence)."""
-    static = [n for n in run.notes if n.startswith("static offsets")]
+    static = of_kind(run.notes, FindingKind.STATIC_CALIBRATION)
     if static:
-        return static[0][0].upper() + static[0][1:] + "."
+        text = static[0].message
+        return text[0].upper() + text[1:] + "."
     return "No static trial given: the static offsets are used as stored in the subject parameters."
 
 

@@ -18,6 +18,7 @@ from urllib.parse import quote
 import numpy as np
 
 from fuzzygait import __version__
+from fuzzygait.core.findings import Finding
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
 from fuzzygait.viz.report.clinical_html import spatiotemporal_table
@@ -62,7 +63,7 @@ class SessionSummary:
     href: str  # the session page, relative to the index
     facts: list[tuple[str, str]]  # (label, text), e.g. ("Static trial", "X.c3d (file name)")
     trials: list[SummaryTrial]
-    notes: list[str] = field(default_factory=list)
+    notes: list[Finding] = field(default_factory=list)
     pdf: str | None = None
 
     @property
@@ -196,7 +197,7 @@ def session_page(summary: SessionSummary, figure: str | None, index_href: str | 
                           + spatiotemporal_table(parameters))  # fmt: skip
     else:
         spatiotemporal = "<p>No complete gait cycle in the session's trials.</p>"
-    notes = "".join(f"<li>{escape(n)}</li>" for n in summary.notes)
+    notes = "".join(f"<li>{escape(n.message)}</li>" for n in summary.notes)
     pdf = f" · {_link('PDF of this page', summary.pdf)}" if summary.pdf else ""
     body = f"""
 {nav}

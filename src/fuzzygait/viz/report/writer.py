@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.findings import Finding
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.io.atomic import replace_path
@@ -64,7 +65,7 @@ class _AnglesOnly:
     run: ReportRun
     fuzzy: None
     delta_phi: pd.DataFrame
-    notes: list[str]
+    notes: list[Finding]
 
 
 def angles_only(analysis: TrialAnalysis) -> TrialAnalysis:
