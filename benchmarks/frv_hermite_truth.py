@@ -31,6 +31,7 @@ import numpy as np
 
 from fuzzygait.mechanics.fuzzy_dynamics import _recipe_of
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.targets import LegTargetModel
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.uncertainty.frv import hermite_segment_extrema
@@ -42,8 +43,8 @@ from fuzzygait.uncertainty.gfa import optimisation_nodes
 def _model(options: dict) -> LegTargetModel:
     simulator = LegSimulator(options["scenario"], nodes=options["nodes"])
     base = simulator.parameters(**options["set"])
-    return LegTargetModel(simulator, options["target"], (options["frv"],), base=base, dt=options["dt"],
-                          duration=options["duration"], scheme=options["scheme"])  # fmt: skip
+    settings = SolverSettings(dt=options["dt"], duration=options["duration"], scheme=options["scheme"])
+    return LegTargetModel(simulator, options["target"], (options["frv"],), base=base, settings=settings)
 
 
 def _stats(name: str, estimate: np.ndarray, reference: np.ndarray, scale: float) -> None:

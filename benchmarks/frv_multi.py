@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, generate_box_samples  # noqa: E402
@@ -48,8 +49,9 @@ def build(duration: float):
     sim = LegSimulator("stance")
     base = sim.parameters(E=MODULUS)
     names = ("E", "rho")
-    model = LegTargetModel(sim, TARGET, names, base=base, duration=duration, scheme=SCHEME)
-    recipe = LegModelRecipe("stance", TARGET, names, tuple(float(v) for v in base), duration=duration, scheme=SCHEME)
+    settings = SolverSettings(duration=duration, scheme=SCHEME)
+    model = LegTargetModel(sim, TARGET, names, base=base, settings=settings)
+    recipe = LegModelRecipe("stance", TARGET, names, tuple(float(v) for v in base), settings=settings)
     density = float(base[list(sim.parameter_names).index("rho")])
     specs = [FRVSpec("E", MODULUS, alphas=ALPHAS), FRVSpec("rho", density, alphas=ALPHAS)]
     return model, recipe, specs

@@ -28,6 +28,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, fit_distributions, generate_samples  # noqa: E402
@@ -52,9 +53,9 @@ def main() -> None:
     sim = LegSimulator("stance")
     base = sim.parameters(E=MODULUS)
     scheme = "energy-momentum"
-    model = LegTargetModel(sim, "max_element_energy", ("E",), base=base, duration=args.duration, scheme=scheme)
-    recipe = LegModelRecipe("stance", "max_element_energy", ("E",), tuple(float(v) for v in base),
-                            duration=args.duration, scheme=scheme)  # fmt: skip
+    settings = SolverSettings(duration=args.duration, scheme=scheme)
+    model = LegTargetModel(sim, "max_element_energy", ("E",), base=base, settings=settings)
+    recipe = LegModelRecipe("stance", "max_element_energy", ("E",), tuple(float(v) for v in base), settings=settings)
     spec = FRVSpec("E", MODULUS, alphas=ALPHAS)
     args.store.parent.mkdir(parents=True, exist_ok=True)
     with Evaluator(workers=args.workers) as pool:

@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 from fuzzygait.mechanics.fuzzy_dynamics import ELEVEN_PARAMETERS, dense_reference, fuzzy_forward_dynamics  # noqa: E402
 from fuzzygait.mechanics.leg import LEG_PARAMETERS  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty import FuzzyVector, sufficient_runs, triangular_relative  # noqa: E402
 from fuzzygait.viz.figures import save_figure  # noqa: E402
@@ -55,7 +56,7 @@ def _evaluator(model: LegTargetModel, scenario: str, workers: int):
     from fuzzygait.uncertainty.execution import Evaluator
 
     recipe = LegModelRecipe(scenario, model.target, tuple(model.names), tuple(float(v) for v in model.base),
-                            nodes=20, dt=model.dt, duration=model.duration, scheme=model.scheme)  # fmt: skip
+                            nodes=20, settings=model.settings)  # fmt: skip
     pool = Evaluator(workers=workers)
     return pool, pool.batch(recipe)
 
@@ -63,9 +64,10 @@ def _evaluator(model: LegTargetModel, scenario: str, workers: int):
 def swing_one_parameter(duration: float, workers: int) -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
-    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration)
+    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, settings=SolverSettings(duration=duration))
     e = base[0]
-    model = LegTargetModel(sim, "total_deformation_energy", ("E",), base=base, duration=duration)
+    model = LegTargetModel(sim, "total_deformation_energy", ("E",), base=base,
+                           settings=SolverSettings(duration=duration))
     pool, evaluator = _evaluator(model, "swing", workers)
     start = time.perf_counter()
     dense = dense_reference(model, 0.9 * e, 1.1 * e, 41, evaluator=evaluator)
@@ -95,8 +97,9 @@ def swing_one_parameter(duration: float, workers: int) -> None:
 def swing_eleven_parameters(duration: float) -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
-    result = fuzzy_forward_dynamics(sim, {n: 0.1 for n in ELEVEN_PARAMETERS}, base=base, duration=duration)
-    one = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration)
+    result = fuzzy_forward_dynamics(sim, {n: 0.1 for n in ELEVEN_PARAMETERS}, base=base,
+                                    settings=SolverSettings(duration=duration))
+    one = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, settings=SolverSettings(duration=duration))
     print(f"\n2. swing, 11 fuzzy parameters ±10 %, {duration:g} s")
     for label, r in (("11 parameters", result), ("1 parameter", one)):
         print(f"   {label}: {r.attrs['wall_time_s']:.1f} s wall, {r.attrs['forward_simulations']} forward simulations, "
@@ -107,7 +110,7 @@ def swing_eleven_parameters(duration: float) -> None:
     # (no sensitivities) and find the fewest that keep the hulls within 1 % / 0.1 % of their width.
     for label, r in (("11 parameters", result), ("1 parameter", one)):
         names = r.attrs["fuzzy_parameters"]
-        model = LegTargetModel(sim, r.attrs["target"], names, base=base, duration=duration)
+        model = LegTargetModel(sim, r.attrs["target"], names, base=base, settings=SolverSettings(duration=duration))
         params = FuzzyVector([triangular_relative(model.base[LEG_PARAMETERS.index(n)], 0.1, n) for n in names])
         def trajectory(p: np.ndarray, model: LegTargetModel = model) -> np.ndarray:
             return model.evaluate(p).values
@@ -122,7 +125,8 @@ def swing_eleven_parameters(duration: float) -> None:
 def stance_one_parameter(duration: float) -> None:
     sim = LegSimulator("stance")
     base = sim.parameters(E=STANCE_MODULUS)
-    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, duration=duration, scheme="energy-momentum")
+    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base,
+                                    settings=SolverSettings(duration=duration, scheme="energy-momentum"))
     print(f"\n3. stance, fuzzy E ±10 % about {STANCE_MODULUS:g} Pa (Table 5.3), max element energy, "
           f"{duration:g} s (energy-momentum)")
     print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, "

@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from fuzzygait.mechanics.fuzzy_dynamics import ELEVEN_PARAMETERS, fuzzy_forward_dynamics
+from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_STRATEGY, ELEVEN_PARAMETERS, fuzzy_forward_dynamics
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty.execution import Evaluator
 
 SWING_DAMPING = 1e5  # Pa s: the swing's command default (README "Defaults that run")
@@ -35,19 +37,20 @@ def main() -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
     spreads = {name: 0.1 for name in ELEVEN_PARAMETERS}
-    common = dict(base=base, duration=args.duration, alphas=(0.0, 0.5, 1.0))
+    common = dict(base=base, settings=SolverSettings(duration=args.duration), alphas=(0.0, 0.5, 1.0))
+    side_by_side = replace(DEFAULT_STRATEGY, tracks="side-by-side")
     runs = {}
     if not args.skip_baseline:
         runs["one-by-one, this process"] = fuzzy_forward_dynamics(sim, spreads, **common)
     if not args.skip_one_worker:
-        runs["side-by-side, 1 worker (this process)"] = fuzzy_forward_dynamics(sim, spreads, tracks="side-by-side",
+        runs["side-by-side, 1 worker (this process)"] = fuzzy_forward_dynamics(sim, spreads, strategy=side_by_side,
                                                                                **common)  # fmt: skip
     started = time.perf_counter()
     with Evaluator(workers=args.workers) as pool:
         pool.map(abs, [0] * args.workers)  # the pool's start-up is not the algorithm's
         start_up = time.perf_counter() - started
         runs[f"side-by-side, {args.workers} workers"] = fuzzy_forward_dynamics(
-            sim, spreads, tracks="side-by-side", evaluator=pool, **common)
+            sim, spreads, strategy=side_by_side, evaluator=pool, **common)
     print(f"swing, 11 fuzzy parameters ±10 %, {args.duration:g} s, α = 0, 0.5 (pool start-up {start_up:.1f} s, "
           "not counted)")
     print("| run | wall (s) | forward simulations | optimisations | library |\n|---|---:|---:|---:|---:|")

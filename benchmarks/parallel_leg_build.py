@@ -23,6 +23,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
 
@@ -37,7 +38,8 @@ def timed(func):
 
 def main() -> None:
     base = tuple(LegSimulator("swing", nodes=6).parameters(eta=1e5))  # compiles once if not cached
-    recipe = LegModelRecipe("swing", "total_deformation_energy", ("E",), base=base, nodes=6, duration=0.05)
+    recipe = LegModelRecipe("swing", "total_deformation_energy", ("E",), base=base, nodes=6,
+                            settings=SolverSettings(duration=0.05))
     build, _ = timed(recipe.build)
     with Evaluator() as serial:
         batch = serial.batch(recipe, sensitivities=True)

@@ -42,6 +42,7 @@ import numpy as np  # noqa: E402
 
 from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 
 FIGURE = ROOT / "benchmarks" / "figures" / "node_convergence.png"
 STIFF = dict(E=59958e6, rho=1710.0, eta=1.0)  # Table 4.2, reverse-engineered blade
@@ -54,7 +55,7 @@ def run(sim: LegSimulator, p: np.ndarray, scheme: str, dt: float, duration: floa
     """(V_max J, time of the maximum s, integration wall s), or the failure message."""
     kwargs = {} if scheme == "variational" else {"scheme": scheme}
     try:
-        ds = sim.run(p, dt=dt, duration=duration, **kwargs)
+        ds = sim.run(p, SolverSettings(dt=dt, duration=duration, **kwargs))
     except SimulationError as error:
         return str(error).split(": ")[0]
     energy = ds.internal_energy.values

@@ -127,6 +127,7 @@ from fuzzygait.mechanics.leg import segment_frame  # noqa: E402
 from fuzzygait.mechanics.presets import REVERSE_ENGINEERED, SHANK, SWING, THIGH  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, rectangle_torsion_constant  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 
 try:
     with warnings.catch_warnings():
@@ -455,7 +456,7 @@ def pendulum_case(repeats: int, schemes: list[str], references: bool) -> None:
             kwargs = {} if scheme == "variational" else {"scheme": scheme}
             start = time.perf_counter()
             try:
-                ds = sim.run(p, dt=dt, duration=DURATION, **kwargs)
+                ds = sim.run(p, SolverSettings(dt=dt, duration=DURATION, **kwargs))
             except SimulationError as error:
                 return time.perf_counter() - start, str(error).split(": ")[0]
             total = time.perf_counter() - start
@@ -536,7 +537,7 @@ def swing_case(repeats: int, schemes: list[str]) -> None:
             kwargs = {} if scheme == "variational" else {"scheme": scheme}
             start = time.perf_counter()
             try:
-                ds = sim.run(p, dt=dt, duration=SWING_DURATION, **kwargs)
+                ds = sim.run(p, SolverSettings(dt=dt, duration=SWING_DURATION, **kwargs))
             except SimulationError as error:
                 return time.perf_counter() - start, str(error).split(": ")[0]
             total = time.perf_counter() - start

@@ -52,6 +52,7 @@ import numpy as np  # noqa: E402
 
 from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 
 STIFF = dict(E=59958e6, rho=1710.0, eta=1.0)  # Table 4.2, reverse-engineered blade
 TARGET_S = 4.0  # s wall per 2 s simulated (issue)
@@ -93,7 +94,8 @@ def timed_run(sim: LegSimulator, p: np.ndarray, dt: float, duration: float, repe
     for _ in range(repeats):
         start = time.perf_counter()
         try:
-            ds = sim.run(p, dt=dt, duration=duration, **kwargs)
+            ds = sim.run(p, SolverSettings(dt=dt, duration=duration, scheme=kwargs.get("scheme", "variational")),
+                         sensitivities=kwargs.get("sensitivities", False))
         except SimulationError as error:
             return None, str(error)
         total = time.perf_counter() - start

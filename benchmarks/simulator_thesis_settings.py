@@ -7,7 +7,7 @@ Run:  .venv/bin/python benchmarks/simulator_thesis_settings.py                 (
 Diagnosis (``--diagnosis``, first): (1) the Table 4.3 swing at eta = 1 against the time step,
 the scheme, the node count, the damping and the stiffness — when and where the blade folds;
 (2) the Table 4.4 stance with the variational integrator without step refinement
-(``integrate(max_halvings=0)``) at dt, dt/2, dt/4: where it stops and its energy error.
+(``integrate``, ``SolverSettings(max_halvings=0)``) at dt, dt/2, dt/4: where it stops and its energy error.
 
 Cases, each with the variational integrator (thesis Eq. 4.26) and the energy-momentum
 scheme, at eta = 0 (conservative), 1 (Tables 4.3/4.4) and 1e5 Pa s (the swing command
@@ -40,6 +40,7 @@ import numpy as np  # noqa: E402
 from fuzzygait.core.errors import SimulationError  # noqa: E402
 from fuzzygait.mechanics.integrator import integrate  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator, energy_balance_error  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.trajectory import trajectory_energies  # noqa: E402
 
 CASES = (
@@ -67,7 +68,7 @@ def diagnosis(nodes: int) -> None:
         sim = sims.get(n) or sims.setdefault(n, LegSimulator("swing", nodes=n))
         p = sim.parameters(eta=eta, **({} if stiffness is None else {"E": stiffness}))
         try:
-            ds = sim.run(p, dt=dt, duration=2.0, scheme=scheme)
+            ds = sim.run(p, SolverSettings(dt=dt, duration=2.0, scheme=scheme))
             outcome = f"runs the 2 s ({ds.attrs['substeps']} sub-steps per dt)"
         except SimulationError as error:
             outcome = str(error).split(": its")[0]
@@ -84,12 +85,13 @@ def diagnosis(nodes: int) -> None:
         n_steps = int(round(2.0 / dt))
         start = time.perf_counter()
         try:
-            trajectory = integrate(sim.model, sim.leg.q0, p, dt, n_steps, max_halvings=0)
+            settings = SolverSettings(dt=dt, n_steps=n_steps, max_halvings=0)
+            trajectory = integrate(sim.model, sim.leg.q0, None, p, settings)
             outcome = "runs the 2 s"
         except SimulationError as error:
             outcome = str(error).split(": residual")[0]
             last = int(round(float(outcome.split("t = ")[1].split(" s")[0]) / dt)) - 1
-            trajectory = integrate(sim.model, sim.leg.q0, p, dt, last, max_halvings=0)
+            trajectory = integrate(sim.model, sim.leg.q0, None, p, SolverSettings(dt=dt, n_steps=last, max_halvings=0))
         wall = time.perf_counter() - start
         energies = trajectory_energies(sim.model, trajectory, p)
         balance = energies.total + energies.dissipated
@@ -124,7 +126,7 @@ def main() -> None:
             p = sim.parameters(eta=eta, **values)
             for scheme in SCHEMES:
                 try:
-                    ds = sim.run(p, dt=args.dt, duration=args.duration, scheme=scheme)
+                    ds = sim.run(p, SolverSettings(dt=args.dt, duration=args.duration, scheme=scheme))
                 except SimulationError as error:
                     reason = str(error).split("; parameters")[0]
                     print(f"| {label} | {eta:g} | {scheme} | {reason} |" + " |" * (4 + len(marks)), flush=True)

@@ -80,6 +80,7 @@ def test_angle_components_model(angles_run) -> None:
 @pytest.mark.slow
 def test_leg_target_model() -> None:
     from fuzzygait.mechanics.scenarios import LegSimulator
+    from fuzzygait.mechanics.solver import SolverSettings
     from fuzzygait.mechanics.targets import LegTargetModel
 
     # uncompiled (CasADi's virtual machine, the same functions): the contract is what is checked here, and
@@ -88,7 +89,8 @@ def test_leg_target_model() -> None:
     swing = LegSimulator("swing", nodes=6, compile=False)
     base = swing.parameters(eta=1e5)
     for scheme in ("variational", "energy-momentum"):
-        model = LegTargetModel(swing, "total_deformation_energy", ("E", "rho"), base=base, duration=0.03, scheme=scheme)
+        model = LegTargetModel(swing, "total_deformation_energy", ("E", "rho"), base=base,
+                               settings=SolverSettings(duration=0.03, scheme=scheme))
         p = np.array([base[0], base[2]])
         report = check_model(model, p, fd_step=1e-5, sensitivity_rtol=1e-3)
         assert report["sensitivity_error"] < 1e-3, scheme

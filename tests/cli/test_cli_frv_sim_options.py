@@ -16,12 +16,14 @@ import pytest
 from typer.testing import CliRunner
 
 from fuzzygait.cli import app
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty import FunctionModel
 from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
 from fuzzygait.workflows.frv_leg import FRVRequest, study_options
 from fuzzygait.workflows.fuzzy_dynamics import LegSetup
 
 MODULUS = 59.958e9  # Pa, Table 5.3
+SETTINGS = SolverSettings(duration=0.02, scheme="energy-momentum")
 MADE = ("stance", "--disc", "6", "--duration", "0.02", "--nodes", "6", "--set", f"E={MODULUS}")
 runner = CliRunner()
 
@@ -39,7 +41,7 @@ def _study(path: Path, options: dict | None) -> Path:
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
     options = study_options(setup, FRVRequest(disc=6), None)
     assert options["set"]["eta"] == 1.0 and options["dt"] == 0.001  # the scenario's, resolved
     return _study(tmp_path_factory.mktemp("options") / "study.zarr", options)
@@ -123,7 +125,7 @@ RHO = 8550.0  # kg/m³, the stance scenario's
 def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from fuzzygait.uncertainty.frv import FRVMultiStudy
 
-    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
     options = study_options(setup, FRVRequest("E,rho", disc=6), None)
     assert options["frv"] == "E,rho" and options["value"] == [MODULUS, options["set"]["rho"]]
     times = np.linspace(0.0, 1.0, 5)
@@ -160,7 +162,7 @@ def test_several_frvs_take_no_value_and_unknown_or_repeated_names_are_refused(tm
 
 
 def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: Path) -> None:
-    setup = LegSetup("stance", nodes=6, duration=0.02, values={"E": MODULUS}, scheme="energy-momentum")
+    setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
     options = study_options(setup, FRVRequest(disc=6), None)
     del options["sampling"]  # as recorded before --sampling existed
     old = _study(tmp_path / "old" / "study.zarr", options)

@@ -8,6 +8,7 @@ import pytest
 from support import assert_one_line_error, run
 
 from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty.frv import FRVSpec
 
 distributed = pytest.importorskip("distributed")
@@ -15,7 +16,8 @@ distributed = pytest.importorskip("distributed")
 pytestmark = pytest.mark.slow  # leg simulations on a Dask cluster and through the CLI
 
 MODULUS = 59.958e9  # Pa, Table 5.3
-SMALL = dict(nodes=6, duration=0.03, n_disc=8, base_overrides={"E": MODULUS})
+SETTINGS = SolverSettings(duration=0.03, scheme="energy-momentum")  # the study's default scheme
+SMALL = dict(nodes=6, settings=SETTINGS, n_disc=8, base_overrides={"E": MODULUS})
 
 
 def test_one_and_two_workers_give_bit_identical_hulls(tmp_path, cluster):
@@ -52,7 +54,7 @@ def test_two_frvs_one_and_two_workers_bit_identical_and_the_command(tmp_path, cl
 
     alphas = (0.0, 0.5, 1.0)
     specs = [FRVSpec("E", MODULUS, alphas=alphas), FRVSpec("rho", 8550.0, alphas=alphas)]
-    small = {**SMALL, "n_disc": 4, "duration": 0.02}
+    small = {**SMALL, "n_disc": 4, "settings": SETTINGS.derive(duration=0.02)}
     serial = leg_frv_study("stance", specs, 40, tmp_path / "one.zarr", workers=1, **small)
     parallel = leg_frv_study("stance", specs, 40, tmp_path / "two.zarr", scheduler=cluster.scheduler_address, **small)
     assert isinstance(serial, FRVMultiStudy) and serial.counts["possible_intervals"] == 6 * 6

@@ -6,13 +6,16 @@ Truths: a dense sampling of the fuzzy parameter's α = 0 interval, the determini
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from support import assert_one_line_error, run
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.mechanics.fuzzy_dynamics import dense_reference, fuzzy_forward_dynamics, parse_fuzzy
+from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_STRATEGY, dense_reference, fuzzy_forward_dynamics, parse_fuzzy
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.targets import LegTargetModel
 
 DURATION = 0.15
@@ -26,13 +29,15 @@ def swing() -> LegSimulator:
 @pytest.fixture(scope="module")
 def result(swing):
     base = swing.parameters(eta=1e5)  # the soft Table 4.3 blade needs damping (README)
-    return fuzzy_forward_dynamics(swing, {"E": 0.1}, base=base, duration=DURATION, stride=25), base
+    return fuzzy_forward_dynamics(swing, {"E": 0.1}, base=base, settings=SolverSettings(duration=DURATION),
+                                  strategy=replace(DEFAULT_STRATEGY, stride=25)), base
 
 
 @pytest.mark.slow
 def test_hulls_match_dense_sampling(swing, result):
     fuzzy, base = result
-    model = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base, duration=DURATION)
+    settings = SolverSettings(duration=DURATION)
+    model = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base, settings=settings)
     e = base[0]
     dense = dense_reference(model, 0.9 * e, 1.1 * e, 21)
     upper = fuzzy["hull"].sel(alpha=0.0, bound="upper").values
@@ -50,7 +55,8 @@ def test_hulls_match_dense_sampling(swing, result):
 @pytest.mark.slow
 def test_alpha_one_is_the_deterministic_run_bit_for_bit(swing, result):
     fuzzy, base = result
-    deterministic = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base, duration=DURATION)
+    deterministic = LegTargetModel(swing, "total_deformation_energy", ("E",), base=base,
+                                   settings=SolverSettings(duration=DURATION))
     values = deterministic.evaluate(np.array([base[0]])).values
     for bound in ("lower", "upper"):
         assert np.array_equal(fuzzy["hull"].sel(alpha=1.0, bound=bound).values, values)

@@ -27,6 +27,7 @@ from scipy.optimize import brentq
 
 from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
+from fuzzygait.mechanics.solver import SolverSettings
 
 E, NU, RHO = 1e9, 0.3, 1000.0
 
@@ -111,7 +112,7 @@ def test_large_deflection_matches_elastica():
     for load in (1.0, 2.0):
         beam = build_cantilever(length, width, thickness, 20, (0.0, 0.0, -load * ei / length**2), compile=False)
         start = beam.q0 if q is None else q  # the previous load's equilibrium
-        trajectory = integrate(beam.model, start, p, dt, 600)  # 15/ω1
+        trajectory = integrate(beam.model, start, None, p, SolverSettings(dt=dt, n_steps=600))  # 15/ω1
         tip = beam.tip_position(trajectory)
         assert np.max(np.abs(tip[-1] - tip[-20])) < 1e-4 * length  # settled (measured 3e-6 m)
         q = trajectory.q[-1]

@@ -14,6 +14,7 @@ from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 
 
 @pytest.fixture(scope="module")
@@ -56,26 +57,26 @@ def test_bad_parameter_vector_passed_to_run(sim):
     p = sim.parameters()
     p[LEG_PARAMETERS.index("nu")] = 0.6
     with pytest.raises(ParameterError) as error:
-        sim.run(p, dt=1e-3, duration=0.01)
+        sim.run(p, SolverSettings(dt=1e-3, duration=0.01))
     assert "nu" in one_line(error)
     with pytest.raises(ParameterError) as error:
-        sim.run(p[:5], dt=1e-3, duration=0.01)
+        sim.run(p[:5], SolverSettings(dt=1e-3, duration=0.01))
     assert "parameters" in one_line(error)
 
 
 @pytest.mark.parametrize("dt", [0.0, -1e-3, float("nan")])
 def test_bad_time_step(sim, dt):
     with pytest.raises(ParameterError) as error:
-        sim.run(sim.parameters(), dt=dt, duration=0.01)
+        sim.run(sim.parameters(), SolverSettings(dt=dt, duration=0.01))
     assert "dt" in one_line(error)
     with pytest.raises(ParameterError) as error:
-        integrate(sim.model, sim.leg.q0, sim.parameters(), dt, 3)
+        integrate(sim.model, sim.leg.q0, None, sim.parameters(), SolverSettings(dt=dt, n_steps=3))
     assert "dt" in one_line(error)
 
 
 def test_bad_duration(sim):
     with pytest.raises(ParameterError) as error:
-        sim.run(sim.parameters(), dt=1e-3, duration=0.0)
+        sim.run(sim.parameters(), SolverSettings(dt=1e-3, duration=0.0))
     assert "duration" in one_line(error)
 
 
@@ -108,7 +109,7 @@ def test_inconsistent_initial_configuration(sim):
     q0 = sim.leg.q0.copy()
     q0[0] += 0.01  # move the thigh off the hip
     with pytest.raises(ParameterError) as error:
-        integrate(sim.model, q0, sim.parameters(), 1e-3, 3)
+        integrate(sim.model, q0, None, sim.parameters(), SolverSettings(dt=1e-3, n_steps=3))
     assert "constraint" in one_line(error)
 
 
@@ -117,10 +118,11 @@ def test_non_converging_run_names_time_residual_and_parameters(sim):
     # (measured: fails at t = 0.2 s, step 4, residual norm 2.75; without step refinement —
     # with it, the run at 25 ms sub-steps folds the blade at t = 0.175 s instead)
     with pytest.raises(SimulationError) as error:
-        integrate(sim.model, sim.leg.q0, sim.parameters(E=1e3, eta=0.0), 0.05, 10, max_halvings=0)
+        integrate(sim.model, sim.leg.q0, None, sim.parameters(E=1e3, eta=0.0),
+                  SolverSettings(dt=0.05, n_steps=10, max_halvings=0))  # fmt: skip
     message = one_line(error)
     for needle in ("t = ", "residual", "E=1000", "eta=0", "dt"):
         assert needle in message, message
     with pytest.raises(SimulationError) as error:
-        sim.run(sim.parameters(E=1e3, eta=0.0), dt=0.05, duration=0.5)
+        sim.run(sim.parameters(E=1e3, eta=0.0), SolverSettings(dt=0.05, duration=0.5))
     assert "folded" in one_line(error) and "(with 2 sub-steps per dt = 0.05 s)" in one_line(error)

@@ -8,6 +8,7 @@ import pytest
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.homogenisation import LayerMaterials
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 
 E_FACE = 59958e6  # Pa, Table 4.2
 DENSITY = 1.71e3
@@ -15,7 +16,7 @@ DENSITY = 1.71e3
 
 def _max_internal(section: str, layers: LayerMaterials | None) -> float:
     sim = LegSimulator("swing", nodes=6, compile=False, section=section, layers=layers)
-    ds = sim.run(sim.parameters(E=E_FACE, rho=DENSITY), duration=0.08)
+    ds = sim.run(sim.parameters(E=E_FACE, rho=DENSITY), SolverSettings(duration=0.08))
     return float(ds.internal_energy.max())
 
 

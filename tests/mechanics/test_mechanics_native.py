@@ -18,6 +18,7 @@ from fuzzygait.core.errors import ParameterError, SimulationError
 from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 
 DT = 1e-3
 STIFF = {"E": 59958e6, "rho": 1710.0}  # Table 4.2 blade: runs for seconds with eta = 1
@@ -28,8 +29,9 @@ def swing():
     return LegSimulator("swing")
 
 
-def run_both(model, q0, p, n_steps, **kwargs):
-    return [integrate(model, q0, p, DT, n_steps, engine=engine, **kwargs) for engine in ("python", "compiled")]
+def run_both(model, q0, p, n_steps, sensitivities=False, **settings):
+    return [integrate(model, q0, None, p, SolverSettings(dt=DT, n_steps=n_steps, engine=engine, **settings),
+                      sensitivities=sensitivities) for engine in ("python", "compiled")]  # fmt: skip
 
 
 def test_the_swing_model_has_a_compiled_stepper(swing):
@@ -82,7 +84,8 @@ def test_fold_stops_both_loops_with_the_same_message(swing):
     messages = []
     for engine in ("python", "compiled"):
         with pytest.raises(SimulationError) as error:
-            integrate(swing.model, swing.leg.q0, swing.default_parameters, DT, 400, engine=engine)
+            integrate(swing.model, swing.leg.q0, None, swing.default_parameters,
+                      SolverSettings(dt=DT, n_steps=400, engine=engine))  # fmt: skip
         messages.append(str(error.value))
     assert messages[0] == messages[1]
     assert "folded at t = " in messages[1]
@@ -92,29 +95,33 @@ def test_newton_failure_names_the_same_step(swing):
     messages = []
     for engine in ("python", "compiled"):
         with pytest.raises(SimulationError) as error:
-            integrate(swing.model, swing.leg.q0, swing.parameters(**STIFF), DT, 5, engine=engine, max_iterations=1,
-                      max_halvings=0)  # fmt: skip
+            integrate(swing.model, swing.leg.q0, None, swing.parameters(**STIFF),
+                      SolverSettings(dt=DT, n_steps=5, engine=engine, max_iterations=1, max_halvings=0))  # fmt: skip
         messages.append(str(error.value).split(": residual")[0])
     assert messages[0] == messages[1] == "Newton did not converge at t = 0.0010 s (step 1, dt = 0.001 s)"
 
 
 def test_engine_choice_is_checked(swing):
     with pytest.raises(ParameterError, match="engine must be one of"):
-        integrate(swing.model, swing.leg.q0, swing.default_parameters, DT, 1, engine="fortran")
+        SolverSettings(dt=DT, n_steps=1, engine="fortran")
+    assert swing.model.stepper is not None
 
 
 def test_uncompiled_model_steps_in_python():
     sim = LegSimulator("swing", foot="none", compile=False)
     assert sim.model.stepper is None
     with pytest.raises(ParameterError, match="no compiled stepper"):
-        integrate(sim.model, sim.leg.q0, sim.default_parameters, DT, 1, engine="compiled")
-    trajectory = integrate(sim.model, sim.leg.q0, sim.default_parameters, DT, 20)  # auto: the Python loop
+        integrate(sim.model, sim.leg.q0, None, sim.default_parameters,
+                  SolverSettings(dt=DT, n_steps=1, engine="compiled"))  # fmt: skip
+    settings = SolverSettings(dt=DT, n_steps=20)  # engine "auto": the Python loop
+    trajectory = integrate(sim.model, sim.leg.q0, None, sim.default_parameters, settings)
     assert "pivot_orders" not in trajectory.timings
 
 
 def test_progress_is_reported_between_chunks(swing):
     seen: list[int] = []
-    integrate(swing.model, swing.leg.q0, swing.parameters(**STIFF), DT, 120, engine="compiled", progress=seen.append)
+    integrate(swing.model, swing.leg.q0, None, swing.parameters(**STIFF),
+              SolverSettings(dt=DT, n_steps=120, engine="compiled"), progress=seen.append)  # fmt: skip
     assert seen[-1] == 120 and seen == sorted(seen) and len(seen) >= 3
 
 
@@ -125,7 +132,7 @@ def test_newton_path_does_not_depend_on_sensitivities():
     (the library the scheme and README tests compile too): 7 pivot orders in 200 steps."""
     sim = LegSimulator("stance")
     p = sim.parameters(E=59.39e9)
-    runs = [integrate(sim.model, sim.leg.q0, p, DT, 200, scheme="energy-momentum", engine="compiled",
-                      sensitivities=s) for s in (False, True)]  # fmt: skip
+    settings = SolverSettings(dt=DT, n_steps=200, scheme="energy-momentum", engine="compiled")
+    runs = [integrate(sim.model, sim.leg.q0, None, p, settings, sensitivities=s) for s in (False, True)]
     assert runs[0].timings["pivot_orders"] >= 2
     assert np.array_equal(runs[0].q, runs[1].q) and np.array_equal(runs[0].iterations, runs[1].iterations)

@@ -30,6 +30,7 @@ from scipy.integrate import solve_ivp
 from fuzzygait.mechanics.leg import RigidFoot
 from fuzzygait.mechanics.presets import SHANK, SWING, THIGH
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 
 GRAVITY = 9.81
 DURATION = 1.0
@@ -101,7 +102,7 @@ def swing_run(foot: str):
     p = sim.parameters()
     errors = {}
     for dt in (1e-3, 5e-4):
-        ds = sim.run(p, dt=dt, duration=DURATION)
+        ds = sim.run(p, SolverSettings(dt=dt, duration=DURATION))
         hip, knee = double_pendulum(sim.leg.rigid_foot, ds.time.values, SWING.hip_angle, SWING.knee_angle)
         errors[dt] = (
             float(np.max(np.abs(ds.hip_flexion.values - hip))),

@@ -13,6 +13,7 @@ import pytest
 from fuzzygait.core.errors import SimulationError
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import trajectory_energies
 
 STIFF = dict(E=59958e6, rho=1.71e3)  # Table 4.2 blade
@@ -24,7 +25,7 @@ def swing() -> LegSimulator:
 
 
 def _balance(sim: LegSimulator, p: np.ndarray, dt: float, duration: float, scheme: str):
-    trajectory = integrate(sim.model, sim.leg.q0, p, dt, int(round(duration / dt)), scheme=scheme)
+    trajectory = integrate(sim.model, sim.leg.q0, None, p, SolverSettings(dt=dt, duration=duration, scheme=scheme))
     energies = trajectory_energies(sim.model, trajectory, p)
     balance = energies.total + energies.dissipated
     return np.max(np.abs(balance - balance[0])) / abs(balance[0]), energies
@@ -48,8 +49,8 @@ def test_variational_balance_error_is_second_order(swing):
 def test_schemes_converge_to_the_same_motion(swing):
     p = swing.parameters(**STIFF)
     n = 400
-    a = integrate(swing.model, swing.leg.q0, p, 2.5e-4, n, scheme="variational")
-    b = integrate(swing.model, swing.leg.q0, p, 2.5e-4, n, scheme="energy-momentum")
+    a = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=2.5e-4, n_steps=n))
+    b = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=2.5e-4, n_steps=n, scheme="energy-momentum"))
     ea = trajectory_energies(swing.model, a, p).internal.max()
     eb = trajectory_energies(swing.model, b, p).internal.max()
     assert np.max(np.abs(a.q[:, -12:-9] - b.q[:, -12:-9])) < 1e-5  # toe position, m
@@ -62,7 +63,7 @@ def test_presets_run_their_full_two_seconds_with_energy_momentum(scenario, overr
     """Table 4.3 / 4.4 values (dt = 1 ms, T = 2 s); the soft swing blade needs η = 10⁵ Pa s
     with the shipped geometry (see the next test and the README)."""
     sim = LegSimulator(scenario, nodes=20)
-    ds = sim.run(sim.parameters(**overrides), scheme="energy-momentum")
+    ds = sim.run(sim.parameters(**overrides), SolverSettings(scheme="energy-momentum"))
     assert float(ds.time[-1]) == pytest.approx(2.0)
     balance = ds.total_energy + ds.dissipated_energy
     assert float(np.abs(balance - balance[0]).max() / abs(balance[0])) < 1e-8
@@ -82,7 +83,7 @@ def test_soft_swing_blade_without_damping_stops_with_the_fold_error():
     returning the near-free stretching of a folded two-node element."""
     sim = LegSimulator("swing", nodes=20)
     with pytest.raises(SimulationError, match=r"blade element \d+ folded at t = 0\.2\d+ s.*more damping"):
-        sim.run(scheme="energy-momentum")
+        sim.run(settings=SolverSettings(scheme="energy-momentum"))
 
 
 @pytest.mark.parametrize(("name", "tolerance"), [("E", 1e-6), ("eta", 1e-5), ("thigh_mass", 1e-6)])
@@ -93,9 +94,8 @@ def test_energy_momentum_sensitivities_match_finite_differences(name, tolerance)
     sim = LegSimulator("swing", nodes=6, compile=False)
     p = sim.parameters(**STIFF, eta=1e7)
     k = sim.parameter_names.index(name)
-    run = lambda params, **kw: integrate(  # noqa: E731
-        sim.model, sim.leg.q0, params, 1e-3, 60, scheme="energy-momentum", tolerance=1e-13, **kw
-    )
+    settings = SolverSettings(dt=1e-3, n_steps=60, scheme="energy-momentum", tolerance=1e-13)
+    run = lambda params, **kw: integrate(sim.model, sim.leg.q0, None, params, settings, **kw)  # noqa: E731
     analytic = run(p, sensitivities=True).sensitivities[:, :, k]
     step = 1e-3 * p[k]
     q = [run(p + np.eye(len(p))[k] * s * step).q for s in (-2, -1, 1, 2)]

@@ -35,6 +35,7 @@ from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import trajectory_energies
 
 DT = 1e-3
@@ -61,7 +62,7 @@ def relative_error(fd: np.ndarray, analytic: np.ndarray) -> float:
 def swing():
     sim = LegSimulator("swing", nodes=6, compile=False)
     p = sim.parameters(E=59958e6, rho=1.71e3, eta=1e7)
-    ds = sim.run(p, dt=DT, duration=N_STEPS * DT, sensitivities=True)
+    ds = sim.run(p, SolverSettings(dt=DT, duration=N_STEPS * DT), sensitivities=True)
     return sim, p, ds
 
 
@@ -74,7 +75,8 @@ def test_swing_sensitivities_match_finite_differences(swing, name):
     index = LEG_PARAMETERS.index(name)
 
     def outputs(q_p):
-        trajectory = integrate(sim.model, sim.leg.q0, q_p, DT, N_STEPS, tolerance=TIGHT)
+        settings = SolverSettings(dt=DT, n_steps=N_STEPS, tolerance=TIGHT)
+        trajectory = integrate(sim.model, sim.leg.q0, None, q_p, settings)
         energies = trajectory_energies(sim.model, trajectory, q_p)
         return [trajectory.q, energies.element.sum(axis=1), trajectory.q[:, -12:-9]]
 
@@ -117,7 +119,7 @@ def test_cantilever_tip_sensitivity_to_E():
     analytic = trajectory.sensitivities[:, -12:-9, 0][:, 2]
 
     def tip_z(q_p):
-        return [beam.tip_position(integrate(beam.model, beam.q0, q_p, dt, n_steps, tolerance=TIGHT))[:, 2]]
+        return [beam.tip_position(beam.run(q_p, dt, n_steps, tolerance=TIGHT))[:, 2]]
 
     (fd,) = five_point(tip_z, p, 0, 1e-3)
     assert relative_error(fd, analytic) <= 1e-5  # measured 3.5e-8

@@ -30,6 +30,7 @@ from fuzzygait.mechanics.cantilever import build_cantilever
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.presets import SWING_RUNS_FROM, thesis_setting_note
 from fuzzygait.mechanics.scenarios import ENERGY_TOLERANCE, LegSimulator, energy_balance_error
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import trajectory_energies
 from support import run_here
 
@@ -41,30 +42,32 @@ def swing() -> LegSimulator:
 
 def test_sub_steps_are_the_uniform_run_at_the_smaller_step(swing: LegSimulator) -> None:
     p = swing.parameters(eta=1e5)
-    coarse = integrate(swing.model, swing.leg.q0, p, 2e-3, 20, substeps=2)
-    fine = integrate(swing.model, swing.leg.q0, p, 1e-3, 40)
+    coarse = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=2e-3, n_steps=20, substeps=2))
+    fine = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=1e-3, n_steps=40))
     assert coarse.substeps == 2 and fine.substeps == 1
     np.testing.assert_array_equal(coarse.times, np.arange(21) * 2e-3)
     np.testing.assert_array_equal(coarse.q, fine.q[::2])
     np.testing.assert_array_equal(coarse.iterations, fine.iterations.reshape(20, 2).sum(axis=1))
     with pytest.raises(ParameterError, match="substeps"):
-        integrate(swing.model, swing.leg.q0, p, 2e-3, 20, substeps=3)
+        SolverSettings(dt=2e-3, n_steps=20, substeps=3)
 
 
 def test_a_step_that_does_not_converge_is_retried_with_sub_steps(swing: LegSimulator) -> None:
     p = swing.parameters(eta=1e5)
     # max_iterations = 6 is too few at a 4 ms and a 2 ms step and enough at 1 ms
     with pytest.raises(SimulationError, match="did not converge"):
-        integrate(swing.model, swing.leg.q0, p, 4e-3, 10, max_iterations=6, max_halvings=0)
-    refined = integrate(swing.model, swing.leg.q0, p, 4e-3, 10, max_iterations=6)
+        integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=4e-3, n_steps=10, max_iterations=6,
+                                                                      max_halvings=0))  # fmt: skip
+    refined = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=4e-3, n_steps=10, max_iterations=6))
     assert refined.substeps == 4 and len(refined.times) == 11
-    reference = integrate(swing.model, swing.leg.q0, p, 4e-3 / refined.substeps, 10 * refined.substeps)
+    reference = integrate(swing.model, swing.leg.q0, None, p,
+                          SolverSettings(dt=4e-3 / refined.substeps, n_steps=10 * refined.substeps))  # fmt: skip
     np.testing.assert_allclose(refined.q, reference.q[:: refined.substeps], atol=1e-8)
 
 
 def test_variational_energy_error_is_bounded_without_damping_and_external_work(swing: LegSimulator) -> None:
     p = swing.parameters(eta=0.0, E=2e7)  # stiff enough for the shipped blade (SWING_RUNS_FROM)
-    ds = swing.run(p, duration=0.3)
+    ds = swing.run(p, SolverSettings(duration=0.3))
     assert ds.attrs["substeps"] == 1
     balance = ds.total_energy.values + ds.dissipated_energy.values
     scale = float(np.max(ds.kinetic_energy.values + ds.internal_energy.values))
@@ -75,7 +78,7 @@ def test_variational_energy_error_is_bounded_without_damping_and_external_work(s
 
 def test_energy_balance_error_is_relative_to_the_energy_in_motion(swing: LegSimulator) -> None:
     p = swing.parameters(eta=1e5)
-    trajectory = integrate(swing.model, swing.leg.q0, p, 1e-3, 50)
+    trajectory = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=1e-3, n_steps=50))
     energies = trajectory_energies(swing.model, trajectory, p)
     error = energy_balance_error(energies)
     assert 0.0 <= error < ENERGY_TOLERANCE
@@ -96,7 +99,7 @@ def test_the_note_names_what_the_table_4_3_swing_needs_on_the_shipped_blade() ->
 @pytest.mark.slow
 def test_the_thesis_stance_runs_with_the_variational_integrator_at_20_nodes() -> None:
     sim = LegSimulator("stance", nodes=20)
-    ds = sim.run(sim.parameters(), scheme="variational")  # Table 4.4: eta = 1, dt = 1 ms, 2 s
+    ds = sim.run(sim.parameters(), SolverSettings(scheme="variational"))  # Table 4.4: eta = 1, dt = 1 ms, 2 s
     assert float(ds.time[-1]) == pytest.approx(2.0)
     assert ds.attrs["substeps"] == 4
     assert ds.attrs["energy_error"] < 1e-4
@@ -108,7 +111,7 @@ def test_the_table_4_3_swing_folds_whatever_the_time_step() -> None:
     p = sim.parameters(eta=1.0)
     for dt in (1e-3, 2.5e-4):
         with pytest.raises(SimulationError, match=r"element 16 folded at t = 0\.27"):
-            sim.run(p, dt=dt, duration=0.3)
+            sim.run(p, SolverSettings(dt=dt, duration=0.3))
     ds = sim.run(sim.parameters(eta=1.0, E=SWING_RUNS_FROM["E"]))  # the measured threshold runs the 2 s
     assert float(ds.time[-1]) == pytest.approx(2.0)
 
@@ -134,8 +137,8 @@ def test_the_clamped_beam_runs_with_the_variational_integrator_at_eta_1() -> Non
     # without refinement the energy grows from 0.12 J at 0.5 s to 7e3 J and Newton fails at t = 0.913 s
     beam = build_cantilever(0.35, 0.055, 0.010, 20, (0.0, 0.0, -50.0))
     p = np.array([59958e6, 0.265, 1710.0, 1.0])
-    trajectory = integrate(beam.model, beam.q0, p, 1e-3, 1000)
+    trajectory = integrate(beam.model, beam.q0, None, p, SolverSettings(dt=1e-3, n_steps=1000))
     assert trajectory.substeps == 2 and float(trajectory.times[-1]) == pytest.approx(1.0)
-    fine = integrate(beam.model, beam.q0, p, 5e-4, 2000)  # its energies on the sub-step grid
+    fine = integrate(beam.model, beam.q0, None, p, SolverSettings(dt=5e-4, n_steps=2000))  # on the sub-step grid
     energies = trajectory_energies(beam.model, fine, p)
     assert energy_balance_error(energies) < 0.02  # measured 1.2e-2 (the 77 Hz mode at 0.5 ms), no growth

@@ -15,6 +15,7 @@ import pytest
 distributed = pytest.importorskip("distributed")
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError  # noqa: E402
+from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe  # noqa: E402
 from fuzzygait.testing import AnalyticRecipe  # noqa: E402
 from fuzzygait.uncertainty import (  # noqa: E402
@@ -155,7 +156,8 @@ def test_leg_model_in_parallel_is_bit_identical_and_not_recompiled(evaluators) -
     # the driver builds the simulator once: this populates the on-disk cache if needed
     base = tuple(LegSimulator("swing", nodes=6).parameters(eta=1e5))
     libraries = {p: p.stat().st_mtime_ns for p in cache_dir().glob("fg_*.so")}
-    recipe = LegModelRecipe("swing", "total_deformation_energy", ("E",), base=base, nodes=6, duration=0.05)
+    recipe = LegModelRecipe("swing", "total_deformation_energy", ("E",), base=base, nodes=6,
+                            settings=SolverSettings(duration=0.05))
     P = np.array([[4.0e5], [5.0e5], [6.0e5], [7.0e5]])
 
     batch = evaluators["cluster"].batch(recipe, sensitivities=True)

@@ -216,7 +216,7 @@ def frv_sim(
     """
 
     from fuzzygait.workflows.frv_leg import FRVRequest, check_frv_parameter, run_frv_leg
-    from fuzzygait.workflows.fuzzy_dynamics import LegSetup, check_scenario
+    from fuzzygait.workflows.fuzzy_dynamics import LegSetup, check_scenario, solver_settings
     from fuzzygait.workflows.work_estimate import check_frv_samples
 
     with user_errors():
@@ -231,7 +231,7 @@ def frv_sim(
         given = {"scenario"} | {k for name, k in _RECORDED.items() if _given(ctx, name)}
         with progress_bars() as bars:
             study = run_frv_leg(
-                LegSetup(scenario, nodes, dt, duration, values, scheme),
+                LegSetup(scenario, nodes, values, solver_settings(scenario, dt, duration, scheme)),
                 FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling), out_store,
                 target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
                 progress=estimated_stages(bars),

@@ -10,6 +10,7 @@ for large ones.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -20,6 +21,7 @@ from fuzzygait.mechanics.discrete import DiscreteModel
 from fuzzygait.mechanics.geometry import BladeMesh, straight_beam
 from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.sections import SHEAR_CORRECTION_RECTANGLE, RectangleSection
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import Trajectory
 
 BEAM_PARAMETERS: tuple[str, ...] = ("E", "nu", "rho", "eta")
@@ -58,9 +60,11 @@ class Cantilever:
             SHEAR_CORRECTION_RECTANGLE * shear * area
         )
 
-    def run(self, p, dt: float, n_steps: int, **kwargs) -> Trajectory:
-        """Integrate from rest in the reference configuration."""
-        return integrate(self.model, self.q0, p, dt, n_steps, **kwargs)
+    def run(self, p, dt: float, n_steps: int, *, sensitivities: bool = False, **settings: Any) -> Trajectory:
+        """Integrate ``n_steps`` steps of ``dt`` (s) from rest in the reference configuration;
+        ``settings``: the other fields of :class:`.solver.SolverSettings` (scheme, tolerance, ...)."""
+        solver = SolverSettings(dt=dt, n_steps=n_steps, **settings)
+        return integrate(self.model, self.q0, None, p, solver, sensitivities=sensitivities)
 
 
 def build_clamped_beam(

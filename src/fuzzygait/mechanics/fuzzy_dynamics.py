@@ -19,12 +19,16 @@ import xarray as xr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, PARAMETER_UNITS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.targets import TARGETS, LegModelRecipe, LegTargetModel
 from fuzzygait.uncertainty import FuzzyVector, Linearised, graph_follower, triangular_relative
 from fuzzygait.uncertainty.execution import Evaluator
 
 DEFAULT_TARGET = {"swing": "total_deformation_energy", "stance": "max_element_energy"}
 ELEVEN_PARAMETERS: tuple[str, ...] = tuple(n for n in LEG_PARAMETERS if n != "eta")  # §5.3
+#: The Graph Follower settings of :func:`fuzzy_forward_dynamics` (the thesis': an
+#: optimisation every 100th time node, novelty tolerance 0.01 %, at most 4 linearised steps).
+DEFAULT_STRATEGY = Linearised(stride=100, novelty_tol=1e-4, max_iterations=4, tracks="one-by-one")
 
 
 def parse_fuzzy(specs: Sequence[str]) -> dict[str, float]:
@@ -64,16 +68,11 @@ def fuzzy_forward_dynamics(
     *,
     target: str | None = None,
     base: np.ndarray | None = None,
+    settings: SolverSettings | None = None,
     alphas: Sequence[float] = (0.0, 0.5, 1.0),
-    stride: int = 100,
-    novelty_tol: float = 1e-4,
-    max_iterations: int = 4,
-    dt: float | None = None,
-    duration: float | None = None,
-    scheme: str = "variational",
+    strategy: Linearised = DEFAULT_STRATEGY,
     progress: Callable[[int, int], None] | None = None,
     evaluator: Evaluator | None = None,
-    tracks: str = "one-by-one",
 ) -> xr.Dataset:
     """Fuzzy target output of a scenario for triangular fuzzy parameters.
 
@@ -84,13 +83,16 @@ def fuzzy_forward_dynamics(
         target: one of :data:`~fuzzygait.mechanics.targets.TARGETS` (default: total
             deformation energy for swing, maximum element energy for stance).
         base: full parameter vector (default: the scenario's).
-        alphas, stride, novelty_tol, max_iterations: Graph Follower settings.
-        dt, duration, scheme: simulation settings.
+        settings: the simulations' solver settings (default: the scenario's,
+            :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`).
+        alphas: the α-levels.
+        strategy: the Graph Follower's :class:`~fuzzygait.uncertainty.Linearised` settings
+            (default :data:`DEFAULT_STRATEGY`: stride 100, novelty tolerance 1e-4, 4
+            iterations, ``tracks`` "one-by-one", the thesis' order; "side-by-side": the (α,
+            bound) tracks at once, their simulations of a round evaluated together, in
+            parallel on ``evaluator``).
         evaluator: runs the forward simulations on its workers (default: in this
             process); the hulls are bit-identical either way.
-        tracks: the Linearised strategy's order (:class:`~fuzzygait.uncertainty.Linearised`):
-            "one-by-one" (the thesis') or "side-by-side" (the (α, bound) tracks at once,
-            their simulations of a round evaluated together: in parallel on ``evaluator``).
 
     Returns:
         The Graph Follower result (``hull (alpha, bound, time)``, ``deterministic``,
@@ -101,10 +103,9 @@ def fuzzy_forward_dynamics(
     if target not in TARGETS:
         raise ParameterError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
     names = tuple(spreads)
-    model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
+    model = LegTargetModel(simulator, target, names, base=base, settings=settings)
     numbers = [triangular_relative(model.base[LEG_PARAMETERS.index(n)], spreads[n], n) for n in names]
     start = time.perf_counter()
-    strategy = Linearised(stride=stride, novelty_tol=novelty_tol, max_iterations=max_iterations, tracks=tracks)
     engine_model = model if evaluator is None else evaluator.model(_recipe_of(model), sensitivities=True)
     result = graph_follower(engine_model, FuzzyVector(numbers), alphas, strategy=strategy, progress=progress)
     result.attrs.update(
@@ -118,7 +119,7 @@ def fuzzy_forward_dynamics(
         base_parameter_names=list(LEG_PARAMETERS),
         dt=float(model.dt),
         duration=float(model.duration),
-        scheme=scheme,
+        scheme=model.scheme,
         nodes=simulator.configuration.nodes,
         wall_time_s=time.perf_counter() - start,
     )
@@ -130,8 +131,8 @@ def _recipe_of(model: LegTargetModel) -> LegModelRecipe:
     """The recipe that rebuilds ``model`` in a worker process."""
     simulator = model.simulator
     return LegModelRecipe(simulator.scenario, model.target, tuple(model.names), tuple(float(v) for v in model.base),
-                          nodes=simulator.configuration.nodes, dt=model.dt, duration=model.duration,
-                          scheme=model.scheme, foot=simulator.configuration.foot)  # fmt: skip
+                          nodes=simulator.configuration.nodes, settings=model.settings,
+                          foot=simulator.configuration.foot)  # fmt: skip
 
 
 def dense_reference(model: LegTargetModel, low: float, high: float, count: int = 41,
@@ -156,9 +157,7 @@ def leg_frv_study(
     n_disc: int | Sequence[int] = 100,
     seed: int = 0,
     nodes: int = 20,
-    dt: float | None = None,
-    duration: float | None = None,
-    scheme: str = "energy-momentum",
+    settings: SolverSettings | None = None,
     workers: int = 1,
     scheduler: str | None = None,
     sensitivities: bool = True,
@@ -172,7 +171,8 @@ def leg_frv_study(
     parameter, or a sequence of several (independent FRVs, one α-level set: an
     :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`; ``n_disc`` one grid size for all
     or one per parameter; refined with the sensitivities as one parameter is); the other
-    parameters are the scenario's with ``base_overrides``.  Forward
+    parameters are the scenario's with ``base_overrides``; ``settings``: the solver
+    settings (default: the scenario's with the energy-momentum scheme).  Forward
     simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
     (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
     compiled simulator library from the on-disk cache.  An existing store is extended with
@@ -194,7 +194,8 @@ def leg_frv_study(
     base = simulator.parameters(**dict(base_overrides or {}))
     target = target or DEFAULT_TARGET[scenario]
     names = tuple(one.name for one in specs)
-    model = LegTargetModel(simulator, target, names, base=base, dt=dt, duration=duration, scheme=scheme)
+    settings = simulator.preset.solver.derive(scheme="energy-momentum") if settings is None else settings
+    model = LegTargetModel(simulator, target, names, base=base, settings=settings)
     path = Path(store)
     multi = len(specs) > 1
     study: FRVStudy | FRVMultiStudy

@@ -22,6 +22,7 @@ from fuzzygait.mechanics.cantilever import build_clamped_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.integrator import integrate
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import trajectory_energies
 from fuzzygait.uncertainty.protocol import Evaluation, Output
 
@@ -109,7 +110,8 @@ class LayeredBladeModel:
         model, q0 = build_clamped_beam(mesh, self.tip_force, stiffness=stiffness,
                                        reference_modulus=values["face_modulus"])  # fmt: skip
         p_beam = np.array([values["face_modulus"], self.poisson, self.density, self.damping])
-        trajectory = integrate(model, q0, p_beam, self.dt, self.times.size - 1, scheme="energy-momentum")
+        settings = SolverSettings(dt=self.dt, n_steps=self.times.size - 1, scheme="energy-momentum")
+        trajectory = integrate(model, q0, None, p_beam, settings)
         self.runs += 1
         if self.target == "total_deformation_energy":
             return trajectory_energies(model, trajectory, p_beam).internal

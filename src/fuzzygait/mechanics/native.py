@@ -25,6 +25,7 @@ from scipy.sparse.linalg import splu
 
 from fuzzygait.mechanics.assembly import SystemBuilder
 from fuzzygait.mechanics.codegen import build_library, cache_dir, compiler, library_key
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.step_functions import function_names, step_functions
 
 SOURCE = Path(__file__).with_name("native") / "stepper.c"
@@ -133,67 +134,92 @@ class NativeRun:
     pivot_orders: int
 
 
+@dataclass(frozen=True)
+class NativeProblem:
+    """The system a compiled run integrates: ``n`` coordinates, ``m`` constraints, the
+    parameter vector ``p``, the model's ``constants`` and ``group_constants`` and
+    ``fold_pairs``: offsets in ``q`` of the tangent directors d3 at the two nodes of every
+    element and the start of each group's elements."""
+
+    n: int
+    m: int
+    p: np.ndarray
+    constants: np.ndarray
+    group_constants: np.ndarray
+    fold_pairs: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
 def run(
     path: Path,
-    *,
-    n: int,
-    m: int,
-    p: np.ndarray,
-    constants: np.ndarray,
-    group_constants: np.ndarray,
-    fold_pairs: tuple[np.ndarray, np.ndarray, np.ndarray],
+    problem: NativeProblem,
     q0: np.ndarray,
     v0: np.ndarray,
-    dt: float,
-    n_steps: int,
-    scheme: str,
-    sensitivities: bool,
-    tolerance: float,
-    constraint_tolerance: float,
-    max_iterations: int,
+    settings: SolverSettings,
+    *,
+    sensitivities: bool = False,
     progress: Callable[[int], None] | None = None,
 ) -> NativeRun:
-    """Integrate with the compiled loop; ``fold_pairs``: offsets in ``q`` of the tangent
-    directors d3 at the two nodes of every element and the start of each group's elements."""
+    """Integrate ``settings.steps`` uniform steps ``settings.dt`` with the compiled loop of
+    the library at ``path`` (``settings.substeps`` and ``max_halvings`` are the caller's:
+    :func:`.integrator.integrate`)."""
     lib = load(path)
+    n, m, p, n_steps = problem.n, problem.m, problem.p, settings.steps
     n_p = int(p.size)
-    energy_momentum = scheme == "energy-momentum"
+    energy_momentum = settings.scheme == "energy-momentum"
     q = np.empty((n_steps + 1, n))
     lam = np.empty((n_steps, m))
     iterations = np.zeros(n_steps, dtype=np.int32)
     velocities = np.empty((n_steps + 1, n)) if energy_momentum else None
     sens = np.empty((n_steps + 1, n, n_p)) if sensitivities else None
-    arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, constants, group_constants, q0, v0)]
-    pair_a, pair_b, starts = (np.ascontiguousarray(a, dtype=np.int32) for a in fold_pairs)
-    ctx = lib.fg_new(n, m, n_p, n_steps, int(energy_momentum), int(sensitivities), float(dt), float(tolerance),
-                     float(constraint_tolerance), int(max_iterations), *arrays, q, lam, velocities, sens, iterations,
+    arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, problem.constants, problem.group_constants, q0, v0)]
+    pair_a, pair_b, starts = (np.ascontiguousarray(a, dtype=np.int32) for a in problem.fold_pairs)
+    ctx = lib.fg_new(n, m, n_p, n_steps, int(energy_momentum), int(sensitivities), float(settings.dt),
+                     float(settings.tolerance), float(settings.constraint_tolerance), int(settings.max_iterations),
+                     *arrays, q, lam, velocities, sens, iterations,
                      int(pair_a.size), pair_a, pair_b, int(starts.size - 1), starts)  # fmt: skip
     if not ctx:
         raise MemoryError("the compiled simulator could not allocate its work arrays")
-    N = n + m
-    pivot_orders = 0
-    stopped: Stopped | None = None
     try:
+        loop = _Loop(lib, ctx, n + m)
+        stopped = loop.run(n_steps, sensitivities, progress)
+        statistics = np.empty(5)
+        lib.fg_statistics(ctx, statistics)
+    finally:
+        lib.fg_free(ctx)
+    timings = dict(zip(("evaluation", "factorisation", "solve", "sensitivity", "factorisations"), statistics.tolist()))
+    return NativeRun(q, lam, iterations.astype(int), velocities, sens, timings, stopped, loop.pivot_orders)
+
+
+class _Loop:
+    """Drives a compiled run ``ctx`` chunk by chunk; gives it SuperLU pivot orders when it asks."""
+
+    def __init__(self, lib: ctypes.CDLL, ctx: int, size: int) -> None:
+        self.lib, self.ctx, self.size = lib, ctx, size
+        self.pivot_orders = 0
         nnz = lib.fg_jacobian_nnz(ctx)
-        indptr, indices = np.empty(N + 1, dtype=np.int32), np.empty(nnz, dtype=np.int32)
-        lib.fg_jacobian_pattern(ctx, indptr, indices)
-        values = np.empty(nnz)
+        self.indptr, self.indices = np.empty(size + 1, dtype=np.int32), np.empty(nnz, dtype=np.int32)
+        lib.fg_jacobian_pattern(ctx, self.indptr, self.indices)
+        self.values = np.empty(nnz)
 
-        def new_pivot_order(which: tuple[int, ...]) -> bool:
-            """SuperLU's order for the Jacobian where the stepper stands, for the Newton LU
-            (0) and/or the sensitivities' LU (1); False if that Jacobian is singular."""
-            nonlocal pivot_orders
-            lib.fg_jacobian(ctx, values)
-            try:
-                factor = splu(sp.csc_matrix((values, indices, indptr), shape=(N, N)), permc_spec="COLAMD")
-            except RuntimeError:  # singular Jacobian: Newton cannot continue
-                return False
-            pivot_orders += 1
-            perm_r = np.ascontiguousarray(factor.perm_r, dtype=np.int32)
-            perm_c = np.ascontiguousarray(factor.perm_c, dtype=np.int32)
-            return all(lib.fg_set_pivots(ctx, w, perm_r, perm_c) for w in which)
+    def new_pivot_order(self, which: tuple[int, ...]) -> bool:
+        """SuperLU's order for the Jacobian where the stepper stands, for the Newton LU
+        (0) and/or the sensitivities' LU (1); False if that Jacobian is singular."""
+        lib, ctx, N = self.lib, self.ctx, self.size
+        lib.fg_jacobian(ctx, self.values)
+        try:
+            factor = splu(sp.csc_matrix((self.values, self.indices, self.indptr), shape=(N, N)), permc_spec="COLAMD")
+        except RuntimeError:  # singular Jacobian: Newton cannot continue
+            return False
+        self.pivot_orders += 1
+        perm_r = np.ascontiguousarray(factor.perm_r, dtype=np.int32)
+        perm_c = np.ascontiguousarray(factor.perm_c, dtype=np.int32)
+        return all(lib.fg_set_pivots(ctx, w, perm_r, perm_c) for w in which)
 
-        if not new_pivot_order((0, 1) if sensitivities else (0,)):
+    def run(self, n_steps: int, sensitivities: bool, progress: Callable[[int], None] | None) -> Stopped | None:
+        """Run to ``n_steps``; why it stopped early (None: it did not)."""
+        lib, ctx = self.lib, self.ctx
+        stopped: Stopped | None = None
+        if not self.new_pivot_order((0, 1) if sensitivities else (0,)):
             stopped = Stopped("newton", 0, 0, 0, float("nan"))
         renewals: dict[tuple[int, int], int] = {}  # (step, which LU) -> orders computed there
         while stopped is None and lib.fg_step(ctx) < n_steps:
@@ -203,7 +229,7 @@ def run(
                 where = (lib.fg_step(ctx), lib.fg_pivot_which(ctx))
                 renewals[where] = renewals.get(where, 0) + 1
                 # fresh orders failing again and again at one step: the Jacobian is (nearly) singular there
-                if renewals[where] > MAX_RENEWALS or not new_pivot_order((where[1],)):
+                if renewals[where] > MAX_RENEWALS or not self.new_pivot_order((where[1],)):
                     stopped = Stopped("newton", where[0], 0, 0, float("nan"))
                 continue
             if status in (NEWTON, FOLD):
@@ -213,9 +239,4 @@ def run(
                                   value.value)  # fmt: skip
             if progress is not None:
                 progress(lib.fg_step(ctx))
-        statistics = np.empty(5)
-        lib.fg_statistics(ctx, statistics)
-    finally:
-        lib.fg_free(ctx)
-    timings = dict(zip(("evaluation", "factorisation", "solve", "sensitivity", "factorisations"), statistics.tolist()))
-    return NativeRun(q, lam, iterations.astype(int), velocities, sens, timings, stopped, pivot_orders)
+        return stopped

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.mechanics.solver import SolverSettings
 
 
 @dataclass(frozen=True)
@@ -147,6 +148,12 @@ class ScenarioPreset:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ParameterError(f"scenario {self.name!r}: {name} must be > 0; got {value!r}")
 
+    @property
+    def solver(self) -> SolverSettings:
+        """The table's time stepping: Δt and T, the other settings the solver's defaults
+        (the variational scheme)."""
+        return SolverSettings(dt=self.dt, duration=self.duration)
+
 
 #: Pendulum swing, thesis Table 4.3: hip extension π/6, knee flexion π/3, Δt = 1 ms, T = 2 s;
 #: the shank keeps its Table 4.1 mass.
@@ -190,6 +197,10 @@ class CommandDefaults:
     scheme: str
     nodes: int
     reason: str
+
+    def solver(self, preset: ScenarioPreset) -> SolverSettings:
+        """The solver settings of the command: the scenario ``preset``'s with :attr:`scheme`."""
+        return preset.solver.derive(scheme=self.scheme)
 
 
 #: The command-line defaults of each scenario; the library (:class:`ScenarioPreset`) keeps

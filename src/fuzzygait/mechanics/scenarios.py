@@ -19,7 +19,7 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.discrete import BufferedFunction, DiscreteModel
 from fuzzygait.mechanics.geometry import BladeGeometry, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials
-from fuzzygait.mechanics.integrator import MAX_HALVINGS, integrate
+from fuzzygait.mechanics.integrator import integrate
 from fuzzygait.mechanics.leg import (
     LEG_PARAMETERS,
     PARAMETER_UNITS,
@@ -30,6 +30,7 @@ from fuzzygait.mechanics.leg import (
     default_parameters,
 )
 from fuzzygait.mechanics.presets import STANCE, SWING, ScenarioPreset
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.trajectory import trajectory_energies
 
 SCENARIOS: dict[str, ScenarioPreset] = {"swing": SWING, "stance": STANCE}
@@ -97,42 +98,39 @@ class LegSimulator:
     def run(
         self,
         p: np.ndarray | None = None,
+        settings: SolverSettings | None = None,
         *,
-        dt: float | None = None,
-        duration: float | None = None,
         sensitivities: bool = False,
         progress: Callable[[int], None] | None = None,
-        scheme: str = "variational",
     ) -> xr.Dataset:
         """Simulate and return the results (see the module docstring for the variables).
 
-        ``scheme``: "variational" (Eq. 4.26, with sensitivities) or "energy-momentum" (exact
-        energy balance, more robust for very flexible and stiff blades; also with sensitivities) — see
-        :func:`fuzzygait.mechanics.integrator.integrate`.
+        ``settings``: time step, simulated time, scheme ("variational", Eq. 4.26, or
+        "energy-momentum": exact energy balance, more robust for very flexible and stiff
+        blades; both with sensitivities) and Newton settings — see
+        :func:`fuzzygait.mechanics.integrator.integrate`; None: the scenario's
+        (:attr:`.presets.ScenarioPreset.solver`).  A run whose energy balance is off by more
+        than :data:`ENERGY_TOLERANCE` is repeated with twice the sub-steps while that helps,
+        up to ``2^settings.max_halvings``.
         """
         p = self.default_parameters.copy() if p is None else np.asarray(p, dtype=float).ravel()
         validate_parameters(p)
-        dt = self.preset.dt if dt is None else float(dt)
-        duration = self.preset.duration if duration is None else float(duration)
-        if not (np.isfinite(dt) and dt > 0):
-            raise ParameterError(f"dt must be > 0 s; got {dt}")
-        if not (np.isfinite(duration) and duration >= dt):
-            raise ParameterError(f"duration must be ≥ dt ({dt} s); got {duration}")
-        n_steps = int(round(duration / dt))
+        settings = self.preset.solver if settings is None else settings
         start = time.perf_counter()
-        substeps, previous = 1, np.inf
+        substeps, previous = settings.substeps, np.inf
         while True:
-            trajectory = integrate(self.model, self.leg.q0, p, dt, n_steps, sensitivities=sensitivities,
-                                   progress=progress, scheme=scheme, substeps=substeps)  # fmt: skip
+            trajectory = integrate(self.model, self.leg.q0, None, p, settings.derive(substeps=substeps),
+                                   sensitivities=sensitivities, progress=progress)  # fmt: skip
             energies = trajectory_energies(self.model, trajectory, p)
             error = energy_balance_error(energies)
             # refine while the balance is off and refining helps: an error that halving the step
             # does not halve is the O(dt²) error of evaluating the energies on the dt grid itself
-            if error <= ENERGY_TOLERANCE or error > 0.5 * previous or trajectory.substeps >= 2**MAX_HALVINGS:
+            if (error <= ENERGY_TOLERANCE or error > 0.5 * previous
+                    or trajectory.substeps >= 2**settings.max_halvings):  # fmt: skip
                 break
             substeps, previous = 2 * trajectory.substeps, error
         wall = time.perf_counter() - start
-        return self._dataset(trajectory, energies, error, p, dt, wall)
+        return self._dataset(trajectory, energies, error, p, settings.dt, wall)
 
     # -- results --------------------------------------------------------------------------
     def _dataset(self, trajectory, energies, energy_error: float, p: np.ndarray, dt: float,

@@ -34,8 +34,7 @@ import scipy.sparse as sp
 
 from fuzzygait.mechanics.assembly import ElementGroup
 from fuzzygait.mechanics.discrete import KERNEL_KINDS, BufferedFunction, DiscreteModel
-
-SCHEMES = ("variational", "energy-momentum")
+from fuzzygait.mechanics.solver import SCHEMES as SCHEMES  # the schemes, listed with the solver settings
 
 
 class _Pattern:

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable, Sequence
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS
 from fuzzygait.mechanics.scenarios import LegSimulator
+from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty.protocol import SENSITIVITIES, Evaluation, Output
 
 TARGETS = (
@@ -44,29 +45,44 @@ class LegTargetModel:
         names: the varying parameters (names of :data:`~fuzzygait.mechanics.leg.LEG_PARAMETERS`),
             in the order of the engine's parameter vector.
         base: the full parameter vector the others are fixed at (default: the scenario's).
-        dt, duration: time step and simulated time (s; default: the scenario's).
-        scheme: time stepping scheme, "variational" or "energy-momentum" (both give sensitivities).
+        settings: time step, simulated time, scheme ("variational" or "energy-momentum", both
+            give sensitivities) and Newton settings (default: the scenario's,
+            :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`).
 
     Attributes ``runs`` counts the simulations run.
     """
 
     def __init__(self, simulator: LegSimulator, target: str = "total_deformation_energy",
-                 names: Sequence[str] = ("E",), base: np.ndarray | None = None, dt: float | None = None,
-                 duration: float | None = None, scheme: str = "variational") -> None:  # fmt: skip
+                 names: Sequence[str] = ("E",), base: np.ndarray | None = None,
+                 settings: SolverSettings | None = None) -> None:  # fmt: skip
         if target not in TARGETS:
             raise ParameterError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
         unknown = [n for n in names if n not in LEG_PARAMETERS]
         if unknown:
             raise ParameterError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(LEG_PARAMETERS)}")
-        self.simulator, self.target, self.scheme = simulator, target, scheme
+        self.simulator, self.target = simulator, target
         self.names: tuple[str, ...] = tuple(names)
         self.base: np.ndarray = simulator.default_parameters.copy() if base is None else np.asarray(base, float)
-        self.dt: float = simulator.preset.dt if dt is None else float(dt)
-        self.duration: float = simulator.preset.duration if duration is None else float(duration)
-        n_steps = int(round(self.duration / self.dt))
-        self.times = np.arange(n_steps + 1) * self.dt
+        self.settings: SolverSettings = simulator.preset.solver if settings is None else settings
+        self.times = np.arange(self.settings.steps + 1) * self.settings.dt
         self._index = [LEG_PARAMETERS.index(n) for n in self.names]
         self.runs = 0
+
+    @property
+    def dt(self) -> float:
+        """Time step (s)."""
+        return self.settings.dt
+
+    @property
+    def duration(self) -> float:
+        """Simulated time (s): the settings' ``duration``, else ``n_steps · dt``."""
+        duration = self.settings.duration
+        return self.settings.steps * self.settings.dt if duration is None else duration
+
+    @property
+    def scheme(self) -> str:
+        """Time stepping scheme."""
+        return self.settings.scheme
 
     def __repr__(self) -> str:
         return (f"LegTargetModel({self.simulator.scenario!r}, {self.target!r}, names={self.names}, "
@@ -80,10 +96,7 @@ class LegTargetModel:
 
     def _run(self, p: np.ndarray, sensitivities: bool):
         self.runs += 1
-        return self.simulator.run(
-            self.full_parameters(p), dt=self.dt, duration=self.duration,
-            sensitivities=sensitivities, scheme=self.scheme,
-        )
+        return self.simulator.run(self.full_parameters(p), self.settings, sensitivities=sensitivities)
 
     def _select(self, ds, sensitivities: bool):
         if self.target.startswith("last_node_"):
@@ -129,9 +142,14 @@ class LegModelRecipe:
         names: the varying parameters, in the order of the columns of ``P``.
         base: the full leg parameter vector the others are fixed at (None: the scenario's).
         nodes: blade nodes.
-        dt, duration: time step and simulated time (s; None: the scenario's).
-        scheme: time stepping scheme ("variational" or "energy-momentum").
+        settings: the solver settings (None: the scenario's,
+            :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`).
         foot: "beam", "rigid" or "none".
+
+    The :attr:`key` is ``("LegModelRecipe", scenario, target, names, base, nodes, dt,
+    duration, scheme, foot)`` as before the settings were one object (``None, None,
+    "variational"`` without settings), followed by the ``(field, value)`` of every other
+    solver setting that differs from its default.
     """
 
     scenario: str = "swing"
@@ -139,9 +157,7 @@ class LegModelRecipe:
     names: tuple[str, ...] = ("E",)
     base: tuple[float, ...] | None = None
     nodes: int = 20
-    dt: float | None = None
-    duration: float | None = None
-    scheme: str = "variational"
+    settings: SolverSettings | None = None
     foot: str = "beam"
 
     def __post_init__(self) -> None:
@@ -149,15 +165,23 @@ class LegModelRecipe:
         if self.base is not None:
             object.__setattr__(self, "base", tuple(float(v) for v in np.asarray(self.base, float).ravel()))
         object.__setattr__(self, "nodes", int(self.nodes))
-        for name in ("dt", "duration"):
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, float(getattr(self, name)))
+        if self.settings is not None and not isinstance(self.settings, SolverSettings):
+            raise ParameterError(f"settings must be a SolverSettings or None; got {self.settings!r}")
 
     @property
     def key(self) -> Hashable:
-        return ("LegModelRecipe", *astuple(self))
+        settings = self.settings
+        if settings is None:
+            return ("LegModelRecipe", self.scenario, self.target, self.names, self.base, self.nodes, None, None,
+                    "variational", self.foot)  # fmt: skip
+        default = SolverSettings()
+        others = tuple((f.name, getattr(settings, f.name)) for f in fields(SolverSettings)
+                       if f.name not in ("dt", "duration", "scheme")
+                       and getattr(settings, f.name) != getattr(default, f.name))  # fmt: skip
+        return ("LegModelRecipe", self.scenario, self.target, self.names, self.base, self.nodes, settings.dt,
+                settings.duration, settings.scheme, self.foot, *others)  # fmt: skip
 
     def build(self) -> LegTargetModel:
         simulator = LegSimulator(self.scenario, nodes=self.nodes, foot=self.foot)  # type: ignore[arg-type]
         base = None if self.base is None else np.asarray(self.base, dtype=float)
-        return LegTargetModel(simulator, self.target, self.names, base, self.dt, self.duration, self.scheme)
+        return LegTargetModel(simulator, self.target, self.names, base, self.settings)

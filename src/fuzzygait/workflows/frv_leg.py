@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, default_parameters
 from fuzzygait.mechanics.scenarios import SCENARIOS
-from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, simulation_timing, time_simulation
+from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, time_simulation
 from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
 
 if TYPE_CHECKING:
@@ -102,7 +102,7 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
     filled in) and JSON-compatible: the record a study keeps and an extension must match."""
     from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_TARGET
 
-    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    settings = setup.settings
     values = {**_scenario_values(setup.scenario), **{k: float(v) for k, v in setup.values.items()}}
     names = frv_parameters(frv.parameter)
     if len(names) > 1 and frv.value is not None:
@@ -115,8 +115,9 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
     return {"scenario": setup.scenario, "frv": ",".join(names), "value": value, "set": values,
             "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
             "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed),
-            "disc": _disc_record(frv.disc), "nodes": int(setup.nodes), "dt": float(step), "duration": float(span),
-            "scheme": setup.scheme}  # fmt: skip
+            "disc": _disc_record(frv.disc), "nodes": int(setup.nodes), "dt": float(settings.dt),
+            "duration": float(settings.steps * settings.dt if settings.duration is None else settings.duration),
+            "scheme": settings.scheme}  # fmt: skip
 
 
 def _disc_record(disc: int | Sequence[int]) -> int | list[int]:
@@ -132,8 +133,8 @@ def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mappi
     """The request with every option not ``given`` taken from the ``stored`` record; the
     given ``--set`` values are laid over the stored ones."""
     values = {**stored["set"], **setup.values}
-    setup = replace(setup, values=values, **{k: stored[k] for k in ("nodes", "dt", "duration", "scheme")
-                                             if k not in given})  # fmt: skip
+    solver = setup.settings.derive(**{k: stored[k] for k in ("dt", "duration", "scheme") if k not in given})
+    setup = replace(setup, values=values, solver=solver, nodes=setup.nodes if "nodes" in given else stored["nodes"])
     taken: dict[str, Any] = {"parameter": stored["frv"]} if "frv" not in given else {}
     taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "sampling", "seed") if k not in given})
     if "value" not in given:
@@ -227,8 +228,8 @@ def run_frv_leg(
             spec = specs[0] if len(specs) == 1 else specs
             return leg_frv_study(setup.scenario, spec, frv.samples, out_store, target=options["target"],
                                  base_overrides=options["set"], n_disc=frv.disc, seed=frv.seed, nodes=setup.nodes,
-                                 dt=setup.dt, duration=setup.duration, scheme=setup.scheme, workers=workers,
-                                 scheduler=scheduler, overwrite=overwrite, options=options)  # fmt: skip
+                                 settings=setup.settings, workers=workers, scheduler=scheduler, overwrite=overwrite,
+                                 options=options)  # fmt: skip
     except BaseException:
         for folder in made_folders:  # innermost first; only if still empty
             try:

@@ -15,6 +15,7 @@ import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, SimulationError
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
+from fuzzygait.mechanics.solver import BladeFolded, SolverSettings
 from fuzzygait.workflows.outputs import write_all_or_none
 from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
 
@@ -40,6 +41,7 @@ __all__ = [
     "fuzzy_simulation",
     "simulate_leg",
     "simulation_timing",
+    "solver_settings",
     "time_simulation",
 ]
 
@@ -52,7 +54,7 @@ def check_scenario(scenario: str) -> None:
 
 def check_scheme(scheme: str) -> None:
     """A :class:`FuzzyGaitError` unless ``scheme`` is a time integrator."""
-    from fuzzygait.mechanics.integrator import SCHEMES
+    from fuzzygait.mechanics.solver import SCHEMES
 
     if scheme not in SCHEMES:
         raise FuzzyGaitError(f"--scheme must be {' or '.join(SCHEMES)}; got {scheme!r}")
@@ -70,18 +72,35 @@ def simulation_timing(scenario: str, dt: float | None, duration: float | None) -
     return step, span
 
 
+def solver_settings(scenario: str, dt: float | None, duration: float | None, scheme: str) -> SolverSettings:
+    """The scenario's solver settings with the command's time step and simulated time (s;
+    None: the scenario's) and ``scheme``; a :class:`FuzzyGaitError` naming the option for
+    an impossible one."""
+    check_scheme(scheme)
+    step, span = simulation_timing(scenario, dt, duration)
+    return SCENARIOS[scenario].solver.derive(dt=step, duration=span, scheme=scheme)
+
+
 @dataclass(frozen=True)
 class LegSetup:
-    """A leg scenario as simulated: preset, blade nodes, time step and simulated time (s;
-    None: the scenario's), parameter ``values`` in SI units (the others: the scenario's)
-    and the time integrator."""
+    """A leg scenario as simulated: preset, blade nodes, parameter ``values`` in SI units
+    (the others: the scenario's) and the ``solver`` settings (None: the scenario's,
+    :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`)."""
 
     scenario: str
     nodes: int = 20
-    dt: float | None = None
-    duration: float | None = None
     values: Mapping[str, float] = field(default_factory=dict)
-    scheme: str = "variational"
+    solver: SolverSettings | None = None
+
+    @property
+    def settings(self) -> SolverSettings:
+        """The solver settings, the scenario's filled in."""
+        return SCENARIOS[self.scenario].solver if self.solver is None else self.solver
+
+    @property
+    def scheme(self) -> str:
+        """The time integrator."""
+        return self.settings.scheme
 
 
 def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: float | None,
@@ -94,6 +113,7 @@ def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: 
     check_scenario(scenario)
     if scheme is not None:
         check_scheme(scheme)
+    step, span = simulation_timing(scenario, dt, duration)
     defaults = COMMAND_DEFAULTS[scenario]
     taken = {k: v for k, v in defaults.values.items() if k not in values}
     changed = [f"--set {k}={v:g}" for k, v in taken.items()]
@@ -107,7 +127,8 @@ def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: 
             changed.append(f"--nodes {nodes}")
     note = (f"{scenario} runs with {', '.join(changed)} by default ({defaults.reason}); give the option to change it"
             if changed else None)  # fmt: skip
-    return LegSetup(scenario, nodes, dt, duration, {**taken, **values}, scheme), note
+    solver = defaults.solver(SCENARIOS[scenario]).derive(dt=step, duration=span, scheme=scheme)
+    return LegSetup(scenario, nodes, {**taken, **values}, solver), note
 
 
 @contextmanager
@@ -120,9 +141,9 @@ def named_fixes(setup: LegSetup) -> Iterator[None]:
     except SimulationError as exc:
         preset = SCENARIOS[setup.scenario]
         eta = float(setup.values.get("eta", preset.material.damping))
-        step = preset.dt if setup.dt is None else setup.dt
+        step = setup.settings.dt
         fixes = [f"--set eta={max(10 * eta, 1e5):g}"]
-        if "folded" in str(exc):
+        if isinstance(exc, BladeFolded):
             fixes.append(f"--nodes {2 * setup.nodes}")
         else:
             if setup.scheme != "energy-momentum":
@@ -149,15 +170,15 @@ def time_simulation(sim: LegSimulator, p: np.ndarray, setup: LegSetup) -> Simula
 
     from fuzzygait.workflows.work_estimate import SimulationTiming
 
-    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
-    steps = max(1, int(round(span / step)))
+    settings = setup.settings
+    step, steps = settings.dt, max(1, settings.steps)
     timed = min(steps, max(TIMED_STEPS, int(np.ceil(TIMED_SHARE * steps))))
     seconds = []
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             for n in (1, 1, timed):  # the first loads and warms up
                 start = time.perf_counter()
-                sim.run(p, dt=step, duration=n * step, sensitivities=True, scheme=setup.scheme)
+                sim.run(p, settings.derive(duration=n * step), sensitivities=True)
                 seconds.append(time.perf_counter() - start)
     except FuzzyGaitError:
         return None
@@ -188,14 +209,13 @@ def simulate_leg(
     from fuzzygait.viz.mechanics import write_energy_figure, write_simulation_recording
 
     check_scenario(setup.scenario)
-    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
+    settings = setup.settings
     sim, p = build_simulator(setup, progress)
-    progress.stage(f"{setup.scenario}: time steps", int(round(span / step)))
+    progress.stage(f"{setup.scenario}: time steps", settings.steps)
     # the integrator checks for non-finite values itself; numpy's overflow warnings on a
     # diverging step would only add lines to its one-line error
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup):
-        ds = sim.run(p, dt=step, duration=span, sensitivities=sensitivities, scheme=setup.scheme,
-                     progress=progress.update)  # fmt: skip
+        ds = sim.run(p, settings, sensitivities=sensitivities, progress=progress.update)
     config = sim.configuration
     ds.attrs.update({f"{seg.name}_{key}_m": float(getattr(seg, key))
                      for seg in (config.thigh, config.shank) for key in ("length", "com_from_proximal")})  # fmt: skip
@@ -239,6 +259,7 @@ def fuzzy_simulation(
     at once) those of a round run in parallel, and the hulls do not depend on the
     number of workers."""
     from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics
+    from fuzzygait.uncertainty import Linearised
     from fuzzygait.uncertainty.execution import Evaluator
     from fuzzygait.uncertainty.storage import save_result
     from fuzzygait.viz.figures import save_figure
@@ -256,10 +277,10 @@ def fuzzy_simulation(
     progress.stage(stage, optimisations)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup), \
             Evaluator(workers=workers, scheduler=scheduler) as evaluator:  # fmt: skip
+        strategy = Linearised(stride=stride, novelty_tol=novelty, max_iterations=MAX_ITERATIONS, tracks=tracks)
         result = fuzzy_forward_dynamics(
-            sim, spreads, target=target, base=base, alphas=alphas, stride=stride, novelty_tol=novelty,
-            max_iterations=MAX_ITERATIONS, dt=setup.dt, duration=setup.duration, scheme=setup.scheme,
-            progress=progress.update, evaluator=None if evaluator.serial else evaluator, tracks=tracks,
+            sim, spreads, target=target, base=base, settings=setup.settings, alphas=alphas, strategy=strategy,
+            progress=progress.update, evaluator=None if evaluator.serial else evaluator,
         )  # fmt: skip
     result.attrs["workers"] = workers if scheduler is None else f"scheduler {scheduler}"
     written = write_all_or_none([
@@ -285,8 +306,7 @@ def _fuzzy_work(sim: LegSimulator, base: np.ndarray, setup: LegSetup, stage: str
     takes estimates) and its α-level optimisations (the bar's total)."""
     from fuzzygait.workflows.work_estimate import fuzzy_sim_optimisations, fuzzy_sim_work
 
-    step, span = simulation_timing(setup.scenario, setup.dt, setup.duration)
-    n_time = int(round(span / step)) + 1
+    n_time = setup.settings.steps + 1
     timing = None
     if takes_estimates(progress):
         progress.stage(f"{setup.scenario}: timing a forward simulation")
