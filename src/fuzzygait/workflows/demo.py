@@ -36,6 +36,7 @@ import pandas as pd
 from rich.console import Console
 
 from fuzzygait.core.findings import FindingKind
+from fuzzygait.core.names import AngleComponent, angle_names
 from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics.labels import component_label
@@ -88,10 +89,13 @@ def truth_comparison(run: AnglesRun, truth: pd.DataFrame, pelvis_sequence: str =
     same_pelvis = model_version(run.result.model).pelvis_sequence == pelvis_sequence
     rows = []
     for column in at_frames.columns:
-        name, axis = column[:-2], column[-1:]
-        if name not in run.result.angles or axis not in AXES or (name.endswith("PelvisAngles") and not same_pelvis):
+        component = AngleComponent.maybe(column)  # the truth table's columns: the edge
+        if component is None:
             continue
-        diff = run.result.angles[name][:, AXES.index(axis)] - at_frames[column].to_numpy()
+        name = component.angle
+        if name not in run.result.angles or (component.joint == "PelvisAngles" and not same_pelvis):
+            continue
+        diff = run.result.angles[name][:, component.axis.column] - at_frames[column].to_numpy()
         diff = diff[np.isfinite(diff)]
         if diff.size:
             rows.append({"angle": column, "rms_deg": float(np.sqrt(np.mean(diff**2))),
@@ -105,7 +109,7 @@ def accuracy_lines(comparison: pd.DataFrame) -> list[str]:
     |computed - truth| in degrees, 3 decimals; a component the comparison lacks is "–"."""
     lines = ["| angle | RMS X / Y / Z (°) | max X / Y / Z (°) |", "|---|---|---|"]
     by_component = comparison.set_index("angle")
-    names = dict.fromkeys(str(column)[:-2] for column in comparison["angle"])
+    names = angle_names(str(column) for column in comparison["angle"])
 
     def cell(name: str, quantity: str) -> str:
         values = (by_component[quantity].get(f"{name}_{axis}") for axis in AXES)
@@ -118,8 +122,7 @@ def accuracy_lines(comparison: pd.DataFrame) -> list[str]:
 def _centre_error(run: AnglesRun, truth: pd.DataFrame) -> tuple[float, list[str]]:
     """Max |computed - truth| (mm) over the joint centres both have, and their names."""
     at_frames = truth.set_index("frame").reindex(run.trial.frames)
-    in_truth = dict.fromkeys(c[:-2] for c in truth.columns if c.endswith("_X"))
-    names = [n for n in in_truth if n in run.result.joint_centres]
+    names = [n for n in run.result.joint_centres if all(f"{n}_{a}" in truth.columns for a in "XYZ")]
     errors = [np.nanmax(np.abs(run.result.joint_centres[n] - at_frames[[f"{n}_{a}" for a in "XYZ"]].to_numpy()))
               for n in names]  # fmt: skip
     return (float(max(errors)) if errors else float("nan")), names
@@ -137,7 +140,8 @@ def cgm24_session(data: Path, out_dir: Path) -> list[str]:
     # 6 significant digits: the errors are ~1e-5 deg (write_table keeps 6 decimals)
     accuracy.assign(model=version.name).to_csv(out_dir / "cgm24_accuracy.csv", index=False, float_format="%.6g")
     centre_mm, centres = _centre_error(run, pd.read_csv(data / "cgm24_walking_truth_joint_centres.csv"))
-    per_angle = accuracy.assign(name=accuracy["angle"].str[:-2], sq=accuracy["rms_deg"] ** 2).groupby(
+    angle_of_row = [AngleComponent.parse(label).angle for label in accuracy["angle"]]
+    per_angle = accuracy.assign(name=angle_of_row, sq=accuracy["rms_deg"] ** 2).groupby(
         "name", sort=False).agg(rms=("sq", "mean"), max=("max_deg", "max"))  # fmt: skip
     lines = [
         "",
@@ -155,8 +159,8 @@ def cgm24_session(data: Path, out_dir: Path) -> list[str]:
         "|---|---|---|",
     ]
     lines += [f"| {name} | {np.sqrt(rms):.5f} | {top:.5f} |" for name, rms, top in per_angle.itertuples()]
-    missing = [name for name in dict.fromkeys(c[:-2] for c in truth.columns if c.endswith("_X"))
-               if name not in per_angle.index]  # fmt: skip
+    in_truth = angle_names(c for c in truth.columns if AngleComponent.maybe(c) is not None)
+    missing = [name for name in in_truth if name not in per_angle.index]
     lines += [f"- truth angles not compared (not computed by {version.name}): {', '.join(missing)}"] if missing else []
     shown = [note for note in run.notes if note.kind not in (FindingKind.MODEL, FindingKind.GAP_FILLING)]
     lines += [""] + [f"- {note.message}" for note in shown]

@@ -7,7 +7,6 @@ The fuzzy marker-error dataset is read only through :mod:`fuzzygait.markererror.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait.core.findings import Finding
+from fuzzygait.core.names import is_flexion
 from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, percent_points
 from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.analysis import undetermined_levels
@@ -283,7 +283,6 @@ class TrialData:
 
 
 # ============================================================================ numbers
-FLEXION = re.compile(r"[LR](Hip|Knee|Ankle)Angles_X")
 
 
 @dataclass
@@ -420,7 +419,7 @@ def headline(table: DeltaPhiTable) -> Headline:
     alphas = sorted(table.alphas)
     if not alphas or not table.components:
         return Headline()
-    flexion = [n for n in table.components if FLEXION.fullmatch(n)]
+    flexion = [n for n in table.components if is_flexion(n)]
     largest = widest = None
     for alpha in alphas:
         determined = table.determined(alpha)

@@ -3,7 +3,6 @@ resources), one per trial and the index of the batch."""
 
 from __future__ import annotations
 
-import datetime as _dt
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -11,7 +10,6 @@ from urllib.parse import quote
 
 import numpy as np
 
-from fuzzygait import __version__
 from fuzzygait.core.names import angle_names, is_flexion
 from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, component_label, parse_component
 from fuzzygait.markererror.result import ball_radius
@@ -28,6 +26,7 @@ from fuzzygait.viz.report.bands import (
     alpha_text,
     grid_components,
 )
+from fuzzygait.viz.report.chrome import model_title, page_document, page_footer
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.clinical_html import (
     deg_text,
@@ -68,52 +67,6 @@ def _sources_text(fuzzy: xr.Dataset) -> str:
     return ", ".join(SOURCE_TITLES.get(str(n).strip(), str(n).strip()) for n in names if str(n).strip())
 
 
-CSS = """
-body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, Arial, sans-serif;
-       margin: 0 auto; max-width: 1180px; padding: 0 1.2rem 2rem; color: #1d1d1f;
-       line-height: 1.45; background: #fff; }
-nav { padding: .7rem 0; border-bottom: 1px solid #ddd; margin-bottom: .6rem; font-size: .95rem; }
-a { color: #0b57b0; }
-h1 { font-size: 1.6rem; margin: .6rem 0 .2rem; word-break: break-all; }
-h2 { font-size: 1.2rem; margin: 1.8rem 0 .5rem; border-bottom: 2px solid #e4e4e4; padding-bottom: .2rem; }
-h3 { font-size: 1rem; margin: 1rem 0 .3rem; }
-p.lead { color: #555; margin-top: 0; }
-table { border-collapse: collapse; margin: .4rem 0 1rem; font-size: .92rem; }
-th, td { border: 1px solid #d5d5d5; padding: .25rem .55rem; text-align: left; vertical-align: top; }
-thead th { background: #f2f4f7; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-table.kv th { background: #f7f7f7; font-weight: 600; white-space: nowrap; }
-.cols { display: flex; flex-wrap: wrap; gap: 0 2.5rem; align-items: flex-start; }
-.lead-box { background: #eef6ee; border: 1px solid #bcd9bf; border-radius: 6px; padding: .6rem 1rem;
-            margin: .6rem 0; font-size: 1.05rem; }
-.lead-box p { margin: .25rem 0; }
-.index-table table { font-size: .86rem; }
-.index-table th, .index-table td { padding: .25rem .4rem; }
-.box { background: #f5f8fc; border: 1px solid #cfdcec; border-radius: 6px; padding: .7rem 1rem; margin: .8rem 0; }
-.ok { color: #17692e; font-weight: 700; }
-.failed { color: #b3261e; font-weight: 700; }
-tr.failed-row td { background: #fff4f3; }
-code, .mono { font-family: ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; font-size: .88em; }
-span.error { display: inline-block; max-width: 24rem; overflow-wrap: anywhere; color: #7a1c16; font-size: .85em; }
-span.warning { display: inline-block; max-width: 24rem; overflow-wrap: anywhere; color: #8a4b00; font-size: .85em; }
-figure { margin: .6rem 0 1rem; }
-figure img { max-width: 100%; height: auto; border: 1px solid #e2e2e2; }
-figcaption { font-size: .9rem; color: #444; margin-top: .3rem; }
-.small { font-size: .85rem; color: #555; }
-.undet { color: #6b4a00; font-style: italic; }
-span.wrap { display: inline-block; max-width: 11rem; white-space: normal; }
-.nowrap { white-space: nowrap; }
-ul.notes li { margin: .15rem 0; }
-.guide { background: #fffbea; border: 1px solid #e6d9a8; border-radius: 6px; padding: .3rem 1rem .5rem;
-         margin: .8rem 0; }
-.guide h2 { margin: .4rem 0 .3rem; border: 0; font-size: 1.1rem; }
-.guide li { margin: .25rem 0; }
-.warn { background: #fff1e6; border: 1px solid #e8b48a; border-radius: 6px; padding: .5rem 1rem; margin: .6rem 0; }
-sup.fn a { text-decoration: none; font-size: .8em; }
-.footnotes ol { padding-left: 1.4rem; }
-footer { margin-top: 2.5rem; border-top: 1px solid #ddd; padding-top: .6rem; font-size: .85rem; color: #666; }
-"""
-
 ALPHA_SENTENCE = (
     "Each shaded band shows how far the joint angle could be off if every marker were "
     "displaced by up to (1 − α) times its assumed maximum error: the lightest, widest "
@@ -142,34 +95,6 @@ _CYCLES_ALT = (
     "Grid of joint angles (pelvis, hip, knee, ankle, foot progression; sagittal, frontal, "
     "transverse) over the gait cycle, left and right, with uncertainty bands per alpha-level"
 )
-
-
-def _page(title: str, body: str) -> str:
-    """A complete HTML5 document with the report's CSS."""
-    return (
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-        "<meta name=\"generator\" content=\"fuzzygait " + _esc(__version__) + "\">\n"
-        f"<title>{_esc(title)}</title>\n<style>{CSS}</style>\n</head>\n<body>\n{body}\n"
-        "</body>\n</html>\n"
-    )
-
-
-def model_title(model: str) -> str:
-    """A model version as the report names it: ``"cgm1.0"`` -> ``"CGM 1.0 (Plug-in
-    Gait)"``, ``"cgm2.3"`` -> ``"CGM 2.3"``."""
-    title = "CGM " + model.removeprefix("cgm")
-    return title + " (Plug-in Gait)" if model == "cgm1.0" else title
-
-
-def _footer(model: str = "cgm1.0") -> str:
-    """The footer: version and time of the report, what the numbers are."""
-    stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
-    return (
-        f"<footer>Generated by fuzzygait {_esc(__version__)} on {_esc(stamp)}. "
-        f"Angles: {_esc(model_title(model))} lower body; uncertainty: fuzzy marker-position errors "
-        "propagated with the Graph Follower algorithm (α-level optimisation).</footer>"
-    )
 
 
 def _quality_section(analysis: TrialAnalysis, data: TrialData, clinical: ClinicalData) -> str:
@@ -460,8 +385,8 @@ alt="Grid of joint angles over time for the whole trial"></a>
 {footnotes_section()}
 <p><a href="index.html">← Back to all trials</a></p>
 </main>
-{_footer(run.result.model)}"""
-    return _page(f"{source.name} – fuzzygait report", body)
+{page_footer(run.result.model)}"""
+    return page_document(f"{source.name} – fuzzygait report", body)
 
 
 def _index_numbers(head: Headline) -> tuple[str, str, str]:
@@ -553,5 +478,5 @@ angle.</p>
 <ol class="small">{sources}</ol>
 {footnotes_section()}
 </main>
-{_footer()}"""
-    return _page("fuzzygait report – all trials", body)
+{page_footer()}"""
+    return page_document("fuzzygait report – all trials", body)

@@ -21,10 +21,10 @@ from fuzzygait import __version__
 from fuzzygait.core.findings import Finding
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE
+from fuzzygait.viz.report.chrome import CSS
 from fuzzygait.viz.report.clinical_html import spatiotemporal_table
 from fuzzygait.viz.report.grid import SESSION_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
-from fuzzygait.viz.report.pages import CSS
 
 __all__ = [
     "SessionSummary",
