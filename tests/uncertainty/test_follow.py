@@ -118,6 +118,7 @@ class BlocksModel(LinearBallModel):
     not the other's), counting the model calls."""
 
     blocks = 2
+    capabilities = LinearBallModel.capabilities | {"blocks"}
     kept = np.setdiff1d(np.arange(TIMES.size), np.arange(60, 80))
     times = np.tile(TIMES[kept], 2)
 
@@ -175,5 +176,5 @@ def test_blocks_must_divide_the_nodes() -> None:
     class Uneven(BlocksModel):
         blocks = 7  # 2 x 180 nodes
 
-    with pytest.raises(ParameterError, match="360 time nodes cannot have 7 equal blocks"):
+    with pytest.raises(ParameterError, match=r"declares 'blocks' but its blocks \(7\) do not divide its 360 time nodes"):
         graph_follower(Uneven(), balls(), (0.0,), strategy=BatchedDirect())
