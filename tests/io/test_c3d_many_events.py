@@ -21,6 +21,7 @@ from fuzzygait.core.trial import Event, Trial
 from fuzzygait.io import c3d as c3d_module
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.c3d_backends import _decode_c3d
+from fuzzygait.io.c3d_groups import read_events
 from fuzzygait.io.c3d_params import read_section
 from fuzzygait.synthetic.generate import make_walking_trial
 
@@ -76,7 +77,7 @@ def test_more_than_255_events_round_trip(walk: Trial, n: int, tmp_path: Path) ->
     assert np.shape(params["TIMES"]["value"]) == (2, 255)
     raw = _decode_c3d(out)  # the c3d package (the reader's fallback) gives the same events
     notes: list[str] = []
-    assert c3d_module._events(out, raw, notes) == back.events
+    assert read_events(out, raw, notes) == back.events
     assert notes == []
 
 

@@ -5,7 +5,8 @@ missing samples), subject prefixes removed from the labels, model outputs (Plug-
 angles, forces, moments, powers, modelled and segment-frame virtual markers) kept apart
 from the markers, the ``EVENT`` group as :class:`~fuzzygait.core.trial.Event` objects, the ``PROCESSING`` group
 as subject parameters and the ``ANALYSIS`` group (Vicon Nexus' spatio-temporal parameters)
-as :class:`~fuzzygait.core.trial.AnalysisValue` objects.
+as :class:`~fuzzygait.core.trial.AnalysisValue` objects (these three groups:
+:mod:`fuzzygait.io.c3d_groups`).
 
 :func:`write_c3d` writes a trial back as a float C3D that Vicon Nexus, Mokka and ezc3d
 open: markers, model outputs (with Vicon's ``POINT:ANGLES`` etc. type lists), events,
@@ -30,11 +31,11 @@ import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
-from fuzzygait.core.trial import OUTPUT_UNITS, AnalysisValue, Event, Trial
+from fuzzygait.core.trial import OUTPUT_UNITS, Trial
 from fuzzygait.io.atomic import atomic_output
-from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode, suffixed
+from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
+from fuzzygait.io.c3d_groups import read_analysis_values, read_events, read_processing_parameters, warning
 from fuzzygait.io.c3d_params import check_blocks, event_parameters
-from fuzzygait.io.subject import PROCESSING_NAMES
 
 if TYPE_CHECKING:
     from fuzzygait.io.c3d_writeback import Analogs
@@ -130,7 +131,7 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
 
 
 def _interpret(path: Path, raw: RawC3D) -> Trial:
-    notes = [_warning(w) for w in raw.warnings]
+    notes = [warning(w) for w in raw.warnings]
     n_frames, n_points = raw.points.shape[:2]
     if n_frames == 0:
         raise _fail(path, "holds no frames of point data")
@@ -162,9 +163,9 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
         first_frame=raw.first_frame,
         outputs=outputs,
         output_kinds=kinds,
-        events=_events(path, raw, notes),
-        parameters=_processing_parameters(raw, notes),
-        analysis=_analysis_values(raw, notes),
+        events=read_events(path, raw, notes),
+        parameters=read_processing_parameters(raw, notes),
+        analysis=read_analysis_values(raw, notes),
         subject=_subject_name(raw),
         label_prefix=prefix,
         source=path,
@@ -172,17 +173,12 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
     )
 
 
-def _warning(message: str, kind: FindingKind = FindingKind.FILE_FORMAT) -> Finding:
-    """A reader's finding: what it had to assume or repair (a warning)."""
-    return Finding(kind, message, Severity.WARNING)
-
-
 def _point_rate(path: Path, raw: RawC3D, notes: list[Finding]) -> float:
     value = raw.get("POINT", "RATE")
     rate = float(np.ravel(value)[0]) if value is not None and np.size(value) else float("nan")
     if not np.isfinite(rate) or rate <= 0:
         if raw.header_rate > 0:
-            notes.append(_warning(f"POINT:RATE missing or invalid; using the header rate {raw.header_rate:g} Hz"))
+            notes.append(warning(f"POINT:RATE missing or invalid; using the header rate {raw.header_rate:g} Hz"))
             rate = raw.header_rate
         else:
             raise _fail(path, "has no valid point rate (POINT:RATE and header); cannot time the data")
@@ -194,12 +190,12 @@ def _point_labels(path: Path, raw: RawC3D, n_points: int, notes: list[Finding]) 
     cleaned = [new for new, old in zip(labels, raw.labels[:n_points]) if new != str(old).replace("\x00", " ").strip()]
     if cleaned:
         shown = ", ".join(cleaned[:5]) + (", ..." if len(cleaned) > 5 else "")
-        notes.append(_warning(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}"))
+        notes.append(warning(f"{len(cleaned)} labels held control characters, replaced by '?': {shown}"))
     if len(labels) < n_points:
-        notes.append(_warning(f"{n_points - len(labels)} points have no label; named POINTnn"))
+        notes.append(warning(f"{n_points - len(labels)} points have no label; named POINTnn"))
         labels += [""] * (n_points - len(labels))
     elif labels and not all(labels):
-        notes.append(_warning(f"{labels.count('')} points have an empty label; named POINTnn"))
+        notes.append(warning(f"{labels.count('')} points have an empty label; named POINTnn"))
     return [lbl if lbl else f"POINT{i + 1}" for i, lbl in enumerate(labels)]
 
 
@@ -230,7 +226,7 @@ def _deduplicate(labels: list[str], notes: list[Finding]) -> list[str]:
         result.append(lbl if seen[lbl] == 1 else f"{lbl}_{seen[lbl]}")
     renamed = sorted(lbl for lbl, count in seen.items() if count > 1)
     if renamed:
-        notes.append(_warning(f"duplicate labels renamed with _2, _3, ...: {', '.join(renamed)}"))
+        notes.append(warning(f"duplicate labels renamed with _2, _3, ...: {', '.join(renamed)}"))
     return result
 
 
@@ -238,7 +234,7 @@ def _length_factor(path: Path, raw: RawC3D, notes: list[Finding]) -> float:
     units = raw.get("POINT", "UNITS")
     unit = (units[0] if units else "").strip().lower()
     if not unit:
-        notes.append(_warning("POINT:UNITS missing; assuming millimetres", FindingKind.UNITS))
+        notes.append(warning("POINT:UNITS missing; assuming millimetres", FindingKind.UNITS))
         return 1.0
     if unit not in LENGTH_UNITS_TO_MM:
         raise _fail(path, f"unknown POINT:UNITS {unit!r}; expected mm, cm or m")
@@ -270,130 +266,6 @@ def _output_kinds(raw: RawC3D, labels: list[str], prefix: str) -> dict[str, str]
                     kinds[lbl] = kind
                     break
     return kinds
-
-
-def _events(path: Path, raw: RawC3D, notes: list[Finding]) -> list[Event]:
-    used = raw.get("EVENT", "USED")
-    n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
-    if n <= 0:
-        stored = [v for part in suffixed(raw.get, "EVENT", "LABELS") if isinstance(part, list) for v in part]
-        if any(stored):
-            notes.append(_warning(f"EVENT:USED is {n} but EVENT:LABELS lists {len(stored)} events; they are ignored",
-                                  FindingKind.EVENTS))  # fmt: skip
-        if raw.header_events:
-            notes.append(_warning("events taken from the C3D header (no EVENT group); context unknown",
-                                  FindingKind.EVENTS))  # fmt: skip
-        return [Event(label=lbl, context="General", time=t) for lbl, t in raw.header_events]
-    parts = [_event_times(part) for part in suffixed(raw.get, "EVENT", "TIMES")]  # TIMES2...: events 256...
-    times = np.concatenate([np.zeros((2, 0)), *parts], axis=1)
-    if times.shape[-1] < n:
-        notes.append(_warning(f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; "
-                              f"using {times.shape[-1]}", FindingKind.EVENTS))  # fmt: skip
-        n = times.shape[-1]
-    elif times.shape[-1] > n:
-        notes.append(_warning(
-            f"EVENT:USED says {n} events but EVENT:TIMES holds {times.shape[-1]}; only the first {n} are read "
-            "(set EVENT:USED in the file if the others are real events)",
-            FindingKind.EVENTS,
-        ))
-    seconds = times[0, :n] * 60.0 + times[1, :n]
-
-    def texts(name: str, default: str) -> list[str]:  # LABELS, LABELS2, ...: each as long as its TIMES part
-        stored = [part if isinstance(part, list) else [] for part in suffixed(raw.get, "EVENT", name)]
-        values: list[str] = []
-        for i, part in enumerate(parts):
-            got = stored[i] if i < len(stored) else []
-            values += (got + [default] * part.shape[1])[: part.shape[1]]
-        return values[:n]
-
-    return [
-        Event(label=lbl, context=ctx or "General", time=float(t), subject=subj, description=desc)
-        for lbl, ctx, t, subj, desc in zip(
-            texts("LABELS", "Event"),
-            texts("CONTEXTS", "General"),
-            seconds,
-            texts("SUBJECTS", ""),
-            texts("DESCRIPTIONS", ""),
-        )
-    ]
-
-
-def _event_times(found: Any) -> np.ndarray:
-    """``EVENT:TIMES`` (or ``TIMES2``, ...) as ``(2, events)``: minutes, seconds."""
-    times = np.zeros((2, 0)) if isinstance(found, list) else np.asarray(found, dtype=float)
-    if times.ndim != 2 or times.shape[0] != 2:  # stored flat: (minutes, seconds) pairs one after the other
-        times = times.ravel()[: times.size // 2 * 2].reshape(2, -1, order="F")
-    return times
-
-
-def _processing_parameters(raw: RawC3D, notes: list[Finding]) -> dict[str, float]:
-    """The single-number parameters of the ``PROCESSING`` group (Vicon's subject
-    measurements, mm / kg / rad as stored); a subject measurement found in another group
-    is noted and not used when the file has a ``PROCESSING`` group (a damaged group number
-    moves a parameter silently otherwise; files of other software keep e.g. ``SUBJECT:HEIGHT``)."""
-    known = {name.upper() for name in PROCESSING_NAMES}
-    for group, names in raw.parameter_names.items():
-        if group == "PROCESSING" or "PROCESSING" not in raw.parameter_names:
-            continue
-        for name in names:
-            if name.upper() in known:
-                notes.append(_warning(
-                    f"parameter {group}:{name} is a subject measurement outside the PROCESSING group; "
-                    "it is not used (give it in a subject file if it is needed)"
-                ))
-    # C3D parameter names are case-insensitive (the c3d package reads them in capitals):
-    # Vicon's spelling of the names this package knows
-    spelling = {name.upper(): name for name in PROCESSING_NAMES}
-    result: dict[str, float] = {}
-    for name in raw.parameter_names.get("PROCESSING", []):
-        value = raw.get("PROCESSING", name)
-        if value is None or isinstance(value, list) or np.size(value) != 1:
-            continue
-        result[spelling.get(name.upper(), name)] = float(np.ravel(value)[0])
-    return result
-
-
-def _analysis_values(raw: RawC3D, notes: list[Finding]) -> list[AnalysisValue]:
-    """The ``ANALYSIS`` group: ``USED`` values with ``NAMES``, ``CONTEXTS``, ``UNITS``,
-    ``VALUES`` (and ``SUBJECTS``, ``DESCRIPTIONS`` when present).
-
-    A group that is absent or declares no values gives ``[]``; one whose lists are
-    shorter than ``USED`` or not of the expected types gives what it holds consistently
-    (or nothing) and a note -- never an error, since the group is informative only.
-    """
-    if "ANALYSIS" not in raw.parameter_names:
-        return []
-    try:
-        used = raw.get("ANALYSIS", "USED")
-        n = int(np.ravel(used)[0]) if used is not None and np.size(used) else 0
-        if n <= 0:
-            return []
-        names = raw.get("ANALYSIS", "NAMES")
-        values = raw.get("ANALYSIS", "VALUES")
-        if not isinstance(names, list) or values is None or isinstance(values, list):
-            notes.append(_warning("ANALYSIS group without NAMES/VALUES lists; its values are ignored"))
-            return []
-        numbers = np.ravel(np.asarray(values, dtype=float))
-
-        def texts(name: str) -> list[str]:
-            found = raw.get("ANALYSIS", name)
-            found = found if isinstance(found, list) else []
-            return (found + [""] * n)[:n]
-
-        count = min(n, len(names), numbers.size)
-        if count < n:
-            notes.append(_warning(f"ANALYSIS:USED says {n} values but the group holds {count}; using {count}"))
-        return [
-            AnalysisValue(name=name, context=ctx or "General", unit=unit, value=float(value),
-                          subject=subj, description=desc)  # fmt: skip
-            for name, ctx, unit, value, subj, desc in zip(
-                names[:count], texts("CONTEXTS"), texts("UNITS"), numbers[:count],
-                texts("SUBJECTS"), texts("DESCRIPTIONS"), strict=False,
-            )
-        ]
-    except (TypeError, ValueError, IndexError) as exc:
-        notes.append(_warning(f"ANALYSIS group unreadable ({exc}); its values are ignored"))
-        return []
 
 
 def _subject_name(raw: RawC3D) -> str:

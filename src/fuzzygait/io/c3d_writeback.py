@@ -37,6 +37,7 @@ import numpy as np
 
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.c3d_backends import _first_sentence
+from fuzzygait.io.c3d_groups import read_events  # the reader's own rules
 from fuzzygait.io.c3d_guard import BLOCK, Layout, inspect
 from fuzzygait.io.c3d_params import Group, Parameter, Section, SectionError, int16s, read_section, section_bytes
 
@@ -175,7 +176,6 @@ def _open_source(path: Path, trial: Trial) -> Source:
 def _same_events(source: Source, trial: Trial) -> bool:
     """Whether the input's ``EVENT`` group, read as :func:`fuzzygait.io.c3d.read_c3d`
     reads it, gives the trial's events (then it is copied whole, icons and flags kept)."""
-    from fuzzygait.io.c3d import _events  # the reader's own rules (deferred: c3d imports this module)
     from fuzzygait.io.c3d_backends import RawC3D
 
     assert source.section is not None
@@ -191,7 +191,7 @@ def _same_events(source: Source, trial: Trial) -> bool:
 
     raw = RawC3D(np.zeros((0, 0, 3)), [], 0.0, 1, [], get, {}, "section")
     try:
-        return Counter(_events(source.path, raw, [])) == Counter(trial.events)
+        return Counter(read_events(source.path, raw, [])) == Counter(trial.events)
     except Exception:  # a group the reader would note as unreadable: the writer's own is written
         return False
 
