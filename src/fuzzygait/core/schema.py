@@ -13,7 +13,9 @@ A fuzzy result is an :class:`xarray.Dataset` with
   (single-node evaluations), plus strategy-specific counts.
 
 Analyses of several outputs (the marker-error analysis: one per angle component) stack
-such results along a ``component`` dimension.
+such results along a ``component`` dimension. Every result is read the same way through
+the ``dataset.fuzzy`` accessor (:mod:`fuzzygait.core.accessor`), and
+:func:`fuzzygait.testing.check_result` checks one.
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
+
+import fuzzygait.core.accessor  # noqa: F401 - registers ``dataset.fuzzy`` for every result made here
 
 BOUNDS = ("lower", "upper")
 #: Sign that turns each bound's search into a maximisation.

@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
+import fuzzygait.core.accessor  # noqa: F401 - registers ``dataset.fuzzy``
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import AngleComponent
 from fuzzygait.kinematics.labels import component_label

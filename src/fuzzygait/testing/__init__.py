@@ -4,6 +4,7 @@ for the parallel :class:`~fuzzygait.uncertainty.execution.Evaluator`).
 
     from fuzzygait.testing import check_model
     report = check_model(model, p)       # raises ModelCheckError naming the first failure
+    check_result(dataset)                # a fuzzy result: its layout, bounds and nesting
 
 The seeded C3D fault campaign shared by the fuzz tests and ``benchmarks/fuzz_c3d.py`` is
 :mod:`fuzzygait.testing.c3d_fuzz`.
@@ -16,7 +17,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import xarray as xr
 
+import fuzzygait.core.accessor  # noqa: F401 - registers ``dataset.fuzzy``
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.execution import SharedArray
 from fuzzygait.uncertainty.protocol import (
@@ -125,6 +128,45 @@ def _check_time_step(model: Any, n_time: int) -> None:
         low, high = float(np.min(ratios)), float(np.max(ratios))
         raise ModelCheckError(f"time_step {step:g} does not divide the steps between the time nodes "
                               f"(from {low:.4g} to {high:.4g} time steps)")  # fmt: skip
+
+
+def check_result(result: xr.Dataset, *, rtol: float = 1e-9) -> dict[str, float]:
+    """Check that ``result`` keeps the fuzzy-result schema (:mod:`fuzzygait.core.accessor`):
+    the layout (``hull (..., alpha, bound, time|frame)``, α ascending to 1, the bounds,
+    stated units), and the numbers: lower ≤ upper, α = 1 a single value (lower = upper),
+    and the bands nested — the band at a higher α-level lies within the band at a lower
+    one — wherever both are determined and finite, to ``rtol`` of the largest magnitude.
+
+    Returns:
+        ``values`` (finite hull values checked) and ``largest_violation`` (the largest
+        breach found, relative; 0 when none).
+
+    Raises:
+        ModelCheckError: naming the first check that failed.
+    """
+    problems = result.fuzzy.problems()
+    if problems:
+        raise ModelCheckError(f"not a fuzzy result: {'; '.join(problems)}")
+    hull = result.fuzzy.hull().load()
+    flags = result.fuzzy.undetermined().load()
+    values = np.asarray(hull.transpose(..., "alpha", "bound", result.fuzzy.axis).values, dtype=float)
+    hidden = np.asarray(flags.transpose(..., "alpha", result.fuzzy.axis).values, dtype=bool)
+    lower, upper = values[..., 0, :], values[..., 1, :]
+    lower, upper = np.where(hidden, np.nan, lower), np.where(hidden, np.nan, upper)
+    scale = max(float(np.nanmax(np.abs(values))) if np.isfinite(values).any() else 0.0, np.finfo(float).tiny)
+    breaches = {
+        "lower above upper": lower - upper,
+        "α = 1 not a single value": np.abs(upper[..., -1, :] - lower[..., -1, :]),
+        "a band wider than the band of a lower α-level (not nested)": np.maximum(
+            lower[..., :-1, :] - lower[..., 1:, :], upper[..., 1:, :] - upper[..., :-1, :]),
+    }  # fmt: skip
+    largest = 0.0
+    for what, excess in breaches.items():
+        worst = float(np.nanmax(excess)) / scale if np.isfinite(excess).any() else 0.0
+        if worst > rtol:
+            raise ModelCheckError(f"{what}: by {worst:.2e} of the largest value (tolerance {rtol:g})")
+        largest = max(largest, worst)
+    return {"values": float(np.isfinite(values).sum()), "largest_violation": largest}
 
 
 def _values(model: object, p: np.ndarray, n_time: int, sensitivities: bool = False) -> np.ndarray:

@@ -26,7 +26,7 @@ from fuzzygait.uncertainty.frv.store import STORE_FORMAT, check, commit, new_sto
 from fuzzygait.uncertainty.frv.store import append as _append
 from fuzzygait.uncertainty.gfa import optimisation_nodes
 from fuzzygait.uncertainty.postprocess import repair_nesting
-from fuzzygait.uncertainty.protocol import FuzzyModel
+from fuzzygait.uncertainty.protocol import FuzzyModel, Output
 
 __all__ = ["STORE_FORMAT", "FRVStudy"]
 
@@ -78,6 +78,7 @@ class StudyState:
     nodes: np.ndarray
     times: np.ndarray
     bounds: tuple[float, float]
+    output: Output
     stored_hulls: bool
 
     def _read_common_meta(self, path: Path, model: FuzzyModel, meta: dict[str, Any],
@@ -103,14 +104,17 @@ class StudyState:
         self.nodes = optimisation_nodes(self.n_time, self.time_stride)
         self.times = times[self.nodes]
         self.bounds = declared_bounds(model)
+        self.output = model.output  # what the hulls are, and their units
         # the stored interval hulls are the library extremes (older stores: Hermite extrema)
         self.stored_hulls = meta.get("hulls") == HULLS
 
     def hulls(self) -> xr.Dataset:
         """The output ``hull (sample, alpha, bound, time)``, lazily (nothing loaded),
-        with the counts as attributes."""
+        in the model output's units, with the counts as attributes (a fuzzy result:
+        ``hulls().fuzzy``)."""
         ds = open_group(self.path, "samples", self.n_samples)[["hull"]]
-        ds.attrs.update(self.counts)
+        ds["hull"].attrs["units"] = self.output.units
+        ds.attrs.update(self.counts, output=self.output.name, units=self.output.units)
         return ds
 
     def samples(self) -> xr.Dataset:
