@@ -10,12 +10,11 @@ from fuzzygait.mocap.filtering import (
     filter_trial,
     min_run_length,
 )
+from fuzzygait.mocap.gap_plan import GapRun, find_gaps
 from fuzzygait.mocap.gaps import (
     Gap,
-    GapRun,
     fill_gaps,
     fill_trial_gaps,
-    find_gaps,
     gap_report_table,
     is_unlabelled,
     labelled_markers,

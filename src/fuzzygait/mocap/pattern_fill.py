@@ -2,8 +2,9 @@
 
 Used by :func:`fuzzygait.mocap.fill_gaps` (``method="pattern"`` or ``"auto"``) to fill a
 gap of a *target* marker while other markers -- the *donors* -- stay visible.  This module
-only fits and evaluates the predictor; gap finding, the windows and the residual spline
-that joins the prediction to the data belong to :mod:`fuzzygait.mocap.gaps`.
+only fits and evaluates the predictor; gap finding and the windows belong to
+:mod:`fuzzygait.mocap.gap_plan`, the residual spline that joins the prediction to the data
+to :mod:`fuzzygait.mocap.pattern_gaps`.
 
 The model, for one gap:
 
@@ -27,7 +28,7 @@ The prediction is a linear (affine) function of the donor positions in the same 
 it follows the gap's fast movement (the swing of a foot) that a spline through the
 target's own samples cannot know about.  Its error is a smooth function of time when the
 relation between target and donors drifts slowly; the residual spline in
-:mod:`~fuzzygait.mocap.gaps` removes the part of it seen at the gap edges.
+:mod:`~fuzzygait.mocap.pattern_gaps` removes the part of it seen at the gap edges.
 
 How the constants were chosen (``benchmarks/preprocess.py``, protocol "one marker at a
 time": gaps of 1-10 frames cut into one complete marker of the Vicon trials

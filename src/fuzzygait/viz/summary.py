@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import Counter
 
 from fuzzygait.core.trial import Trial
-from fuzzygait.mocap.gaps import find_gaps
+from fuzzygait.mocap.gap_plan import find_gaps
 
 _MAX_LISTED = 12  # markers listed by name before "... and N more"
 
