@@ -41,7 +41,8 @@ from fuzzygait.kinematics.marker_names import canonical_labels
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
 from fuzzygait.mocap.gaps import Gap, Method
-from fuzzygait.mocap.sanity import check_trial, moved_markers
+from fuzzygait.mocap.marker_placement import moved_markers
+from fuzzygait.mocap.sanity import check_trial
 from fuzzygait.workflows.crosscheck import CrossCheck, check_run, recover_flat_foot
 from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
     MARKER_DIAMETER_RANGE,

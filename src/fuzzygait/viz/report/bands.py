@@ -21,7 +21,7 @@ from fuzzygait.gait.cycles import GaitCycle, gait_cycles, normalise_cycles, perc
 from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.analysis import undetermined_levels
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
-from fuzzygait.mocap.sanity import moved_angles, moved_segments
+from fuzzygait.mocap.marker_placement import moved_angles, moved_segments
 from fuzzygait.viz.layout import ANGLE_ROWS, SIDE_STYLE
 
 if TYPE_CHECKING:
@@ -464,7 +464,7 @@ class TrialEntry:
     @property
     def data_warnings(self) -> list[str]:
         """Warnings about the trial's data for the index and session pages: the segments
-        whose markers moved since the static trial (:func:`~fuzzygait.mocap.sanity.moved_markers`),
+        whose markers moved since the static trial (:func:`~fuzzygait.mocap.marker_placement.moved_markers`),
         then the angle run's own warnings (``AnglesRun.warnings``)."""
         if not self.moved:
             return list(self.run_warnings)

@@ -15,7 +15,7 @@ from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, componen
 from fuzzygait.markererror.result import ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.mocap.sanity import moved_angles
+from fuzzygait.mocap.marker_placement import moved_angles
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
 from fuzzygait.viz.report.bands import (
     DeltaPhiTable,
