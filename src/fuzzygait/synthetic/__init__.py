@@ -4,7 +4,8 @@
   gait phase, degrees);
 * :mod:`~fuzzygait.synthetic.leg_model` -- kinematic chain, sign conventions, Davis hip
   joint centre, marker placement;
-* :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the ``sample_data`` folder;
+* :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the text of their files;
+* :mod:`~fuzzygait.synthetic.sample_data` -- the ``sample_data`` folder and its README;
 * :mod:`~fuzzygait.synthetic.pig_options` -- opt-in knee alignment device, medial
   malleoli, misplaced wands and tibial torsion with known values;
 * :mod:`~fuzzygait.synthetic.cgm24` -- CGM 2.4 sessions (thigh/shank clusters, medial
@@ -45,7 +46,6 @@ from fuzzygait.synthetic.generate import (
     make_static_trial,
     make_walking_trial,
     walking_state,
-    write_sample_data,
 )
 from fuzzygait.synthetic.leg_model import (
     DYNAMIC_LABELS,
@@ -61,6 +61,7 @@ from fuzzygait.synthetic.leg_model import (
     static_offsets,
 )
 from fuzzygait.synthetic.pig_options import LegOffsets, PigOptions
+from fuzzygait.synthetic.sample_data import write_sample_data
 
 __all__ = [
     "CGM24_DYNAMIC_LABELS",

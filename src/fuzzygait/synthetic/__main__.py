@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from fuzzygait.synthetic.generate import write_sample_data
+from fuzzygait.synthetic.sample_data import write_sample_data
 
 
 def main(argv: list[str] | None = None) -> int:
