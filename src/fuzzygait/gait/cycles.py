@@ -38,7 +38,7 @@ from scipy.interpolate import CubicSpline
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Event, Trial
-from fuzzygait.gait.events import SIDE_CONTEXTS, GaitEvent, GaitEventKind, gait_events
+from fuzzygait.gait.event_labels import SIDE_CONTEXTS, GaitEvent, GaitEventKind, gait_events
 
 #: Extra visible samples used on either side of a cycle by the interpolating spline.
 SPLINE_MARGIN = 3
@@ -142,7 +142,7 @@ def gait_cycles(trial: Trial, events: Sequence[Event | GaitEvent], side: str) ->
         trial: gives the rate and the sample index of each event time.
         events: e.g. ``trial.events`` or the first element of
             :func:`fuzzygait.gait.events.trial_gait_events`; their labels are read
-            once (:func:`fuzzygait.gait.events.gait_events`: Nexus' ``Foot Strike`` /
+            once (:func:`fuzzygait.gait.event_labels.gait_events`: Nexus' ``Foot Strike`` /
             ``Foot Off`` with context ``Left``/``Right``, lower case, Visual3D's ``LHS``
             ...), or typed values of it, used as they are; only the side's foot strikes
             and foot offs are used.

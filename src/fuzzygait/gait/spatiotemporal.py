@@ -67,13 +67,8 @@ from fuzzygait.core.errors import EventError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.trial import Event, Trial
 from fuzzygait.gait.cycles import gait_cycles, side_code
-from fuzzygait.gait.events import (
-    SIDE_CONTEXTS,
-    GaitEvent,
-    GaitEventKind,
-    gait_events,
-    trial_gait_events_typed,
-)
+from fuzzygait.gait.event_labels import SIDE_CONTEXTS, GaitEvent, GaitEventKind, gait_events
+from fuzzygait.gait.events import trial_gait_events_typed
 
 #: The parameters in Nexus' order, with the unit Nexus writes.
 PARAMETERS: tuple[tuple[str, str], ...] = (
@@ -263,7 +258,7 @@ def side_parameters(trial: Trial, events: Sequence[Event | GaitEvent], side: str
         trial: markers in mm; needs ``L``/``R`` + ``foot_marker`` for the lengths (NaN
             without them).
         events: foot strike / foot off events of both sides (times in s), in any
-            spelling :func:`fuzzygait.gait.events.gait_events` reads (labels read once
+            spelling :func:`fuzzygait.gait.event_labels.gait_events` reads (labels read once
             here), or its typed values.
         side: ``"L"``/``"Left"`` or ``"R"``/``"Right"``.
         foot_marker: marker (without the side letter) whose positions at the strikes give
@@ -283,7 +278,7 @@ def spatiotemporal_parameters(trial: Trial, events: Sequence[Event | GaitEvent] 
     """Both sides' spatio-temporal parameters of a trial.
 
     Args:
-        events: the gait events (any spelling :func:`~fuzzygait.gait.events.gait_events`
+        events: the gait events (any spelling :func:`~fuzzygait.gait.event_labels.gait_events`
             reads; labels read once here); ``None`` takes the file's, in any such
             spelling, or detects them (:func:`~fuzzygait.gait.events.trial_gait_events`;
             the source, ``"file"`` or the detection method, is
