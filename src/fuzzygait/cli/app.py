@@ -51,6 +51,7 @@ from fuzzygait.cli.interrupts import (  # noqa: E402
 )
 from fuzzygait.cli.usage import usage_line  # noqa: E402
 from fuzzygait.core.errors import FuzzyGaitError  # noqa: E402
+from fuzzygait.core.options import use_command_line_names  # noqa: E402
 
 EXIT_USER_ERROR = 1
 EXIT_INTERNAL_ERROR = 3
@@ -252,6 +253,7 @@ def _main(
     ] = False,
 ) -> None:
     _state["debug"] = debug
+    use_command_line_names()  # messages name settings as this command's options (--static)
     if not debug:  # data-quality warnings as one plain line each, not Python's two-line form
         warnings.showwarning = _show_warning
 

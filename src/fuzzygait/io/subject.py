@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Option
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.qtm_session import is_qtm_session, qtm_foot_flat, qtm_session_values
 from fuzzygait.io.tomlfile import TomlData, load_toml, toml_text
@@ -231,7 +232,7 @@ def subject_from_processing(values: Mapping[str, float], source: str = "") -> Su
         where = f"{source}: " if source else ""
         raise ParameterError(
             f"{where}missing subject parameters {', '.join(missing)}; "
-            "give them in a subject file (--subject SUBJECT.toml or .vsk)"
+            f"give them in a subject file ({Option.SUBJECT} SUBJECT.toml or .vsk)"
         )
 
     def side(prefix: str) -> SideParameters:

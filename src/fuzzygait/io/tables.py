@@ -17,6 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Option
 from fuzzygait.io.atomic import atomic_output
 
 TABLE_SUFFIXES = (".csv", ".parquet")
@@ -24,7 +25,7 @@ TABLE_SUFFIXES = (".csv", ".parquet")
 METADATA_PREFIX = "fuzzygait."
 
 
-def check_table_path(path: str | os.PathLike[str], option: str = "--out") -> Path:
+def check_table_path(path: str | os.PathLike[str], option: Option | str = Option.OUT) -> Path:
     """``path`` if its suffix is a table format, else a clear error naming ``option``."""
     path = Path(path)
     if path.suffix.lower() not in TABLE_SUFFIXES:

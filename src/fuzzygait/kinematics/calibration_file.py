@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Advice, Option
 from fuzzygait.io.calibration_table import read_calibration_table
 from fuzzygait.io.tomlfile import TomlData
 from fuzzygait.kinematics.clusters import ClusterCalibration, SegmentCluster, ShankTorsion
@@ -45,7 +46,7 @@ from fuzzygait.kinematics.rigid import MIN_MARKERS
 #: Segment names of a cluster calibration and their spelling in the file.
 SEGMENT_NAMES = {"thigh": "Thigh", "tibia": "Tibia", "forefoot": "Forefoot"}
 #: What a malformed calibration table's error says to do.
-AGAIN = "; recalibrate with fuzzygait calibrate STATIC.c3d --out FILE"
+AGAIN = Advice("; recalibrate with fuzzygait calibrate STATIC.c3d {out} FILE", out=Option.OUT)
 #: Segments every cluster calibration has, per side.
 REQUIRED_SEGMENTS = ("thigh", "tibia")
 

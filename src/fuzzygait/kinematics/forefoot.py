@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.rigid import MIN_MARKERS
 from fuzzygait.kinematics.segments import side_sign
@@ -118,7 +119,7 @@ def calibrate_forefoot(
     if missing:
         raise MarkerError(
             f"{static.name}: the CGM 2.4 forefoot calibration needs {', '.join(labels)}; "
-            f"{', '.join(missing)} missing (label them, or use --model cgm2.3)"
+            f"{', '.join(missing)} missing (label them, or use {Option.MODEL} cgm2.3)"
         )
     toe, fmh, smh, vmh = (static.marker(m) for m in labels)
     construction = forefoot_construction(toe, fmh, smh, vmh, side, marker_diameter)

@@ -16,6 +16,7 @@ import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
@@ -145,7 +146,7 @@ def model_chain(
     if clusters is None:
         raise ParameterError(
             f"{version.name} tracks the thigh and shank clusters calibrated on a static trial; "
-            "give the static trial (--static) or its cluster calibration"
+            f"give the static trial ({Option.STATIC}) or its cluster calibration"
         )
     if version.forefoot and not clusters.has_forefoot:
         raise ParameterError(

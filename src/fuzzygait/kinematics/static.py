@@ -45,6 +45,7 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError, ParameterError
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
@@ -169,7 +170,7 @@ def static_calibration(
     rule = knee_ankle_rule(static, knee_ankle_centres) if version.clusters else "chord"
     if method != "plain" and version.name != "cgm1.0":
         raise ParameterError(
-            f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use --model cgm1.0 "
+            f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use {Option.MODEL} cgm1.0 "
             f"(not {version.name}) or a static trial with KNM/MED"
         )
     labels = calibration_markers(static, method, rule)

@@ -49,6 +49,7 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
@@ -163,8 +164,8 @@ def has_source_bands(fuzzy: xr.Dataset) -> bool:
 
 def _require(fuzzy: xr.Dataset) -> None:
     if not has_source_bands(fuzzy):
-        raise ParameterError(f"{fuzzy.attrs.get('trial', 'the dataset')} has no per-source bands; "
-                             "compute them with per_source_bands (fuzzygait uncertainty --per-source)")  # fmt: skip
+        raise ParameterError(f"{fuzzy.attrs.get('trial', 'the dataset')} has no per-source bands; compute them "
+                             f"with per_source_bands (fuzzygait uncertainty {Option.PER_SOURCE})")  # fmt: skip
 
 
 def source_names(fuzzy: xr.Dataset) -> list[str]:

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Option
 from fuzzygait.gait.spatiotemporal import pooled_parameters
 from fuzzygait.io.atomic import atomic_output, remove_path, replace_path
 from fuzzygait.uncertainty.execution import Evaluator
@@ -239,7 +240,8 @@ def _facts(session: Session) -> list[tuple[str, str]]:
     statics = "; ".join(f"{s.path.name} (found by {s.rule}: {s.detail})" for s in session.statics) or "none found"
     used = sorted({t.static.name for t in session.trials if t.static is not None})
     subjects = sorted({t.subject_file.name for t in session.trials if t.subject_file is not None})
-    facts = [("Static trial", statics if session.folder is not None else (", ".join(used) or "none (--static)")),
+    given = ", ".join(used) or f"none ({Option.STATIC})"
+    facts = [("Static trial", statics if session.folder is not None else given),
              ("Subject file", ", ".join(subjects) or "none: the trials' PROCESSING groups")]  # fmt: skip
     facts.append(("Folder", str(session.folder) if session.folder is not None else "files given directly"))
     names = sorted({t.subject for t in session.trials if t.subject})
@@ -342,7 +344,7 @@ def write_batch_report(
     """
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise FuzzyGaitError(f"{out}: --out must be a folder, not a file")
+        raise FuzzyGaitError(f"{out}: {Option.OUT} must be a folder, not a file")
     sessions = find_sessions(inputs, static, subject_file)
     extra: dict[str, Any] = {}
     if normative is not None:

@@ -18,6 +18,7 @@ from pathlib import Path
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding
+from fuzzygait.core.options import Option
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidecar
 from fuzzygait.io.subject import write_subject
@@ -43,7 +44,7 @@ from fuzzygait.workflows.subject_resolution import (
 SUBJECT_SUFFIXES = (".toml", ".vsk")
 
 
-def check_subject_path(path: Path, option: str) -> None:
+def check_subject_path(path: Path, option: Option | str = Option.OUT) -> None:
     """Refuse an output path that is not ``.toml`` or ``.vsk`` (before any work)."""
     if path.suffix.lower() not in SUBJECT_SUFFIXES:
         raise FuzzyGaitError(f"{path}: {option} must name a .toml or .vsk subject file")
@@ -133,7 +134,7 @@ def calibrate_to_file(
             has them, else the chord).
     """
     out_file = Path(out_file)
-    check_subject_path(out_file, "--out")
+    check_subject_path(out_file)
     trial, relabelled = canonical_labels(static if isinstance(static, Trial) else read_c3d(static))
     diameter = settle_marker_diameter(resolve_subject(trial, subject_file), marker_diameter, (trial,))
     to_calibrate = for_static_calibration(diameter.subject, subject_file)
@@ -146,7 +147,7 @@ def calibrate_to_file(
     static_name = Path(trial.name).name
     title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
     comments = [
-        f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate --model {name}`) "
+        f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate {Option.MODEL.flag} {name}`) "
         f"from {static_name}, measurements from {source}.",
         f"Method {calibration.method}, foot flat {'on' if calibration.flat_foot else 'off'}, "
         f"{calibration.subject.marker_diameter:g} mm markers.",

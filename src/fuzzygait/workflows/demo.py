@@ -37,6 +37,7 @@ from rich.console import Console
 
 from fuzzygait.core.findings import FindingKind
 from fuzzygait.core.names import AngleComponent, angle_names
+from fuzzygait.core.options import Option
 from fuzzygait.io import read_c3d
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics.labels import component_label
@@ -147,7 +148,7 @@ def cgm24_session(data: Path, out_dir: Path) -> list[str]:
         "",
         "## CGM 2.4 session: `cgm24_walking.c3d` with `cgm24_static.c3d`",
         "",
-        f"- model (`--model auto`) {run.result.model}: {why}",
+        f"- model (`{Option.MODEL.flag} auto`) {run.result.model}: {why}",
         f"- {walking.n_frames} frames, {walking.n_markers} markers; clean (no noise, not low-passed), so the angles "
         "should equal the truth up to the C3D's float32 markers",
         f"- joint centres {', '.join(centres)}: max {centre_mm:.5f} mm from the truth",

@@ -14,6 +14,7 @@ import pandas as pd
 
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Option
 from fuzzygait.gait.spatiotemporal import (
     SELECTIONS,
     TrialParameters,
@@ -66,7 +67,7 @@ def gait_parameters_files(
     """
     out_path = check_table_path(out) if out is not None else None
     if selection not in SELECTIONS:
-        raise FuzzyGaitError(f"--cycles must be one of {', '.join(SELECTIONS)}; got {selection!r}")
+        raise FuzzyGaitError(f"{Option.CYCLES} must be one of {', '.join(SELECTIONS)}; got {selection!r}")
     results: list[TrialParameters] = []
     failures: list[str] = []
     for path in paths:

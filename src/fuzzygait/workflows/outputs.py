@@ -8,6 +8,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Option
 
 __all__ = ["check_output_suffixes", "write_all_or_none"]
 
@@ -22,9 +23,9 @@ def check_output_suffixes(out_file: Path, rrd: Path | None, plots: Mapping[str, 
     from fuzzygait.viz.figures import FIGURE_SUFFIXES
 
     if out_file.suffix.lower() not in SUFFIXES:
-        raise FuzzyGaitError(f"{out_file}: --out must end in {' or '.join(SUFFIXES)}")
+        raise FuzzyGaitError(f"{out_file}: {Option.OUT} must end in {' or '.join(SUFFIXES)}")
     if rrd is not None and rrd.suffix.lower() != ".rrd":
-        raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+        raise FuzzyGaitError(f"{rrd}: {Option.RRD} must end in .rrd")
     for option, plot in plots.items():
         if plot is not None and plot.suffix.lower().lstrip(".") not in FIGURE_SUFFIXES:
             raise FuzzyGaitError(f"{plot}: {option} must end in .png, .svg or .pdf")

@@ -35,6 +35,7 @@ from pathlib import Path
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
 from fuzzygait.io.qtm_session import is_qtm_session, qtm_subject_name
@@ -203,7 +204,7 @@ def unmatched_subject_files(subject: str, files: Sequence[Path]) -> str:
     who = f"its subject {subject!r}" if subject else "its subject (the C3D names none)"
     return (f"none of the subject files {seen} is named after {who}: none is used, the trial's PROCESSING group "
             "gives the subject; keep one subject file per session folder, name it after the subject, or give "
-            "--subject")
+            f"{Option.SUBJECT}")
 
 
 def find_session(folder: Path, output: str) -> Session:
@@ -294,7 +295,7 @@ def find_sessions(inputs: Sequence[Path], static: Path | None = None,
         skip = {static.resolve()} if static is not None else set()
         unique = list({p.resolve(): p for p in files if p.resolve() not in skip}.values())
         if not unique:
-            raise FuzzyGaitError("no trials to report (the only input is the --static trial)")
+            raise FuzzyGaitError(f"no trials to report (the only input is the {Option.STATIC} trial)")
         sessions.insert(0, _override(Session("trials", None, "", tuple(SessionTrial(p, None, None) for p in unique)),
                                      static, subject_file, check=subject_file is not None))  # fmt: skip
     return sessions
@@ -317,7 +318,7 @@ def _override(session: Session, static: Path | None, subject_file: Path | None, 
             found += [warning] if warning else []
         trials.append(SessionTrial(t.path, static if static is not None else t.static, new_subject, subject,
                                    tuple(found)))  # fmt: skip
-    given = f"--static {static} / --subject {subject_file} given: used for every trial"
+    given = f"{Option.STATIC} {static} / {Option.SUBJECT} {subject_file} given: used for every trial"
     note = [Finding(FindingKind.SESSION, given)] if session.folder else []
     return Session(session.name, session.folder, session.output, tuple(trials), session.statics,
                    session.subject_files, session.notes + tuple(note))  # fmt: skip

@@ -28,6 +28,7 @@ import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import DEFAULT_MARKER_DIAMETER, SubjectParameters, read_subject, subject_from_processing
 from fuzzygait.kinematics.marker_size import CONTRADICTION_MM, RecoveredDiameter, recover_marker_diameter
@@ -42,7 +43,7 @@ def check_marker_diameter(marker_diameter: float) -> float:
     low, high = MARKER_DIAMETER_RANGE
     if not (math.isfinite(marker_diameter) and low <= marker_diameter <= high):
         raise FuzzyGaitError(f"marker diameter {marker_diameter:g} mm is implausible: give it in mm "
-                             f"({low:g} to {high:g}, e.g. --marker-diameter 14)")  # fmt: skip
+                             f"({low:g} to {high:g}, e.g. {Option.MARKER_DIAMETER} 14)")  # fmt: skip
     return float(marker_diameter)
 
 
@@ -57,7 +58,7 @@ def resolve_subject(
     elif not trial.parameters:
         raise FuzzyGaitError(
             f"{trial.name}: no subject parameters in the file (no PROCESSING group); "
-            "give a subject file with --subject SUBJECT.toml or .vsk"
+            f"give a subject file with {Option.SUBJECT} SUBJECT.toml or .vsk"
         )
     else:
         subject = subject_from_processing(trial.parameters, source=f"{trial.name} PROCESSING group")

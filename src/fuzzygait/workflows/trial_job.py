@@ -29,6 +29,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind
+from fuzzygait.core.options import Option
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
@@ -57,7 +58,7 @@ def mode_settings(mode: str, settings: MarkerErrorSettings = DEFAULT_SETTINGS) -
     """The marker-error settings of an uncertainty mode (None for ``"none"``): ``fast``
     keeps the error model, sources and method of ``settings``."""
     if mode not in UNCERTAINTY_MODES:
-        raise ParameterError(f"--uncertainty {mode!r}: choose one of {', '.join(UNCERTAINTY_MODES)}")
+        raise ParameterError(f"{Option.UNCERTAINTY} {mode!r}: choose one of {', '.join(UNCERTAINTY_MODES)}")
     if mode == "none":
         return None
     if mode == "fast":
@@ -77,7 +78,8 @@ def angles_only(run: AnglesRun) -> MarkerErrorAnalysis:
         coords={"component": np.array([], dtype=str), "alpha": [1.0], "bound": ["lower", "upper"], "frame": frames},
         attrs={"trial": Path(run.trial.name).name, "model": run.model},
     )  # fmt: skip
-    skipped = Finding(FindingKind.UNCERTAINTY, "uncertainty: not computed (--uncertainty none: the angles only)")
+    skipped = Finding(FindingKind.UNCERTAINTY,
+                      f"uncertainty: not computed ({Option.UNCERTAINTY} none: the angles only)")  # fmt: skip
     notes = [*run.notes, skipped]
     return MarkerErrorAnalysis(run, fuzzy, pd.DataFrame(), notes)
 
@@ -143,6 +145,11 @@ class TrialOutcome:
 def _one_line(text: str) -> str:
     lines = [line.strip() for line in str(text).splitlines() if line.strip()]
     return " ".join(lines) if lines else "unknown error"
+
+
+def _internal_error(exc: Exception) -> str:
+    """The one line of a bug met while reporting a trial."""
+    return f"internal error {type(exc).__name__}: {exc} (rerun with {Option.DEBUG} and report it)"
 
 
 def _failed(job: TrialJob, error: str, start: float) -> TrialOutcome:
@@ -222,7 +229,7 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
     except Exception as exc:  # a bug: listed as failed, the batch goes on
         if job.strict:
             raise
-        return _failed(job, f"internal error {type(exc).__name__}: {exc} (rerun with --debug and report it)", start)
+        return _failed(job, _internal_error(exc), start)
     job.out_dir.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{job.name}.", suffix=".tmp", dir=job.out_dir))
     try:
@@ -256,7 +263,7 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
     except Exception as exc:  # a bug while writing: listed as failed, the batch goes on
         if job.strict:
             raise
-        return _failed(job, f"internal error {type(exc).__name__}: {exc} (rerun with --debug and report it)", start)
+        return _failed(job, _internal_error(exc), start)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return TrialOutcome(job.source, job.name, entry, job.warnings, seconds, files=moved)

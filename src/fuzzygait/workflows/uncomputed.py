@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.options import Option
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.marker_names import required_markers
@@ -37,5 +38,5 @@ def refuse_empty(result: CGMResult, trial_name: str) -> None:
     reasons = list(dict.fromkeys(result.unavailable.values()))
     version = model_version(result.model)
     raise MarkerError(f"{trial_name}: no joint angle can be computed by {result.model}: {'; '.join(reasons)}; "
-                      f"{result.model} needs {required_markers(version.clusters, version.forefoot)}; label them "
-                      "in the capture software (the sacrum may also be VSAC) or give another model with --model")
+                      f"{result.model} needs {required_markers(version.clusters, version.forefoot)}; label them in "
+                      f"the capture software (the sacrum may also be VSAC) or give another model with {Option.MODEL}")

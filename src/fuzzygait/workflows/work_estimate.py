@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Option
 
 if TYPE_CHECKING:
     from fuzzygait.uncertainty.frv import FRVSpec, Grid
@@ -61,18 +62,18 @@ def check_alpha_count(levels: Sequence[float]) -> None:
     """One clear error for more than :data:`MAX_ALPHA_LEVELS` α-levels below 1."""
     below = len({float(a) for a in levels if a < 1.0})
     if below > MAX_ALPHA_LEVELS:
-        raise FuzzyGaitError(f"--alphas gives {below} α-levels below 1; at most {MAX_ALPHA_LEVELS} are taken (each "
-                             "one is a whole optimisation more per frame or time node and bound; the thesis uses 2 "
-                             "to 4): give fewer, e.g. 0,0.25,0.5,0.75")  # fmt: skip
+        raise FuzzyGaitError(f"{Option.ALPHAS} gives {below} α-levels below 1; at most {MAX_ALPHA_LEVELS} are taken "
+                             "(each one is a whole optimisation more per frame or time node and bound; the thesis "
+                             "uses 2 to 4): give fewer, e.g. 0,0.25,0.5,0.75")  # fmt: skip
 
 
 def check_frv_samples(samples: int, force: bool) -> None:
     """One clear error for more than :data:`MAX_FRV_SAMPLES` samples without ``force``."""
     if samples > MAX_FRV_SAMPLES and not force:
-        raise FuzzyGaitError(f"--samples {samples}: more than {MAX_FRV_SAMPLES:,} FRV samples in one run (the hulls "
-                             "of every sample are computed and stored: hours and gigabytes); give at most "
-                             f"{MAX_FRV_SAMPLES} and extend the study with further runs, or add --force to run it "
-                             "anyway")  # fmt: skip
+        raise FuzzyGaitError(f"{Option.SAMPLES} {samples}: more than {MAX_FRV_SAMPLES:,} FRV samples in one run "
+                             "(the hulls of every sample are computed and stored: hours and gigabytes); give at most "
+                             f"{MAX_FRV_SAMPLES} and extend the study with further runs, or add {Option.FORCE} to run "
+                             "it anyway")  # fmt: skip
 
 
 def duration_text(seconds: float) -> str:
@@ -221,7 +222,7 @@ def _frv_simulations(specs: Sequence[FRVSpec], disc: int | Sequence[int], sample
     else:
         bins = [g.n_bins for g in _extended_grids(meta, samples)]
     if n_params == 1 and meta is None:
-        return bins[0], EXACTLY, f"one per grouping bin: --disc {bins[0] + 1} points"
+        return bins[0], EXACTLY, f"one per grouping bin: {Option.DISC} {bins[0] + 1} points"
     if n_params == 1:
         before = int(meta["library_rows"])  # type: ignore[index]
         new = max(0, bins[0] - before) if samples else 0
@@ -372,6 +373,6 @@ def report_work(inputs: Sequence[Path], settings: MarkerErrorSettings, *, static
     upto = "up to " if settings.angles is None else ""
     text = (f"{_plural(len(trials), 'trial')}, {_plural(frames, 'frame')} in all: ≈ "
             + work.text("frames", f"{upto}{_plural(work.components, 'angle component')}", " per trial")
-            + ("" if force else "; trials unchanged since the last run on --out are reused"))  # fmt: skip
+            + ("" if force else f"; trials unchanged since the last run on {Option.OUT} are reused"))  # fmt: skip
     return WorkEstimate(work.optimisations, "α-level optimisations", ABOUT, text,
                         {stage: f"≈ {work.optimisations:,} α-level optimisations"})  # fmt: skip

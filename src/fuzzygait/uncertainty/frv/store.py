@@ -25,6 +25,7 @@ import xarray as xr
 import zarr
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Advice, Option
 
 STORE_FORMAT = "fuzzygait-frv-2"
 #: the format before the commit record (its valid rows are inferred from its counts)
@@ -36,7 +37,7 @@ GROUPS: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "samples": ("sample", "n_samples", ("hull", "cut", "bin")),
 }
 _KEYS = ("spec", "seed", "grid", "n_disc", "time_stride", "refine", "chunk", "n_time", "n_samples", "counts")
-FIX = "start a new study (frv-sim: another --out, or --overwrite)"
+FIX = Advice("start a new study (frv-sim: another {out}, or {overwrite})", out=Option.OUT, overwrite=Option.OVERWRITE)
 
 
 class StudyError(FuzzyGaitError):
@@ -120,7 +121,7 @@ def open_group(path: Path, name: str, rows: int) -> xr.Dataset:
         ds = xr.open_dataset(path, engine="zarr", group=name, consolidated=False, chunks=None, cache=False)
     except (ValueError, KeyError, OSError) as exc:
         raise StudyError(f"{path}: its {name} cannot be read ({exc}); opening the study to extend it (frv-sim "
-                         "--samples 0) discards an interrupted write, else " + FIX) from None  # fmt: skip
+                         f"{Option.SAMPLES} 0) discards an interrupted write, else {FIX}") from None  # fmt: skip
     return ds.isel({dim: slice(0, rows)})
 
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fuzzygait.core.options import Option
 from fuzzygait.kinematics.labels import component_label
 from fuzzygait.markererror.allowable import SEGMENTS, allowable_table
 from fuzzygait.viz.report.bands import component_order
@@ -126,8 +127,8 @@ def allowable_summary(fuzzy: xr.Dataset | None) -> AllowableSummary | None:
 def allowable_section(summary: AllowableSummary | None) -> str:
     """The allowable-marker-error table (rows in report order); a note without one."""
     if summary is None:
-        return ("<h2 id=\"allowable\">Allowable marker error</h2><p class=\"small\">Not computed: the "
-                "analysis ran without a tolerance (<span class=\"mono\">--tolerance 0</span>).</p>")  # fmt: skip
+        return ("<h2 id=\"allowable\">Allowable marker error</h2><p class=\"small\">Not computed: the analysis "
+                f"ran without a tolerance (<span class=\"mono\">{Option.TOLERANCE} 0</span>).</p>")  # fmt: skip
     tau, source = f"±{summary.tolerance:g}°", escape(summary.source)
     header = [("Angle", False), ("Max error (mm)", True), (f"% of {source}", True)]
     header += [(f"{escape(s)} (mm)", True) for s in SEGMENTS]

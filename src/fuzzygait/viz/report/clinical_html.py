@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from fuzzygait.core.findings import Finding, FindingKind, of_kind
+from fuzzygait.core.options import Option
 from fuzzygait.gait.normative import GPS_VARIABLES
 from fuzzygait.gait.spatiotemporal import NAMES, UNITS, TrialParameters
 from fuzzygait.io.subject import is_subject_file
@@ -196,7 +197,7 @@ def gait_profile_section(clinical: ClinicalData, figs: str) -> str:
     profile = clinical.profile
     if profile is None:
         return (head + "<p class=\"small\">Not computed: no normative data were given (<span class=\"mono\">"
-                "--normative NORM.csv</span>).</p>")  # fmt: skip
+                f"{Option.NORMATIVE} NORM.csv</span>).</p>")  # fmt: skip
 
     def deg(value: float) -> str:
         return f"{value:.1f}" if math.isfinite(value) else "–"

@@ -18,6 +18,7 @@ import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import Finding
+from fuzzygait.core.options import Option
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.io.atomic import replace_path
@@ -113,7 +114,7 @@ class ReportWriter:
         self._names: set[str] = {"index"}
         self._alphas: set[float] = set()
         if self.out_dir.exists() and not self.out_dir.is_dir():
-            raise FuzzyGaitError(f"{self.out_dir}: --out must be a folder, not a file")
+            raise FuzzyGaitError(f"{self.out_dir}: {Option.OUT} must be a folder, not a file")
         parent = self.out_dir.resolve().parent
         try:
             parent.mkdir(parents=True, exist_ok=True)
