@@ -32,16 +32,15 @@ and the runs cheap.
 from __future__ import annotations
 
 import math
-import time
-from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.core.names import angle_names, angle_of
+from fuzzygait.core.names import angle_of
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
@@ -50,11 +49,10 @@ from fuzzygait.kinematics.labels import component_label
 from fuzzygait.markererror.analysis import (
     ComponentTask,
     FuzzyAngleOptions,
-    component_tasks,
     fuzzy_joint_angles,
-    run_component_task,
 )
 from fuzzygait.markererror.angle_model import AXES, undetermined
+from fuzzygait.markererror.refinement import Progress, component_setups, refine
 from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
 from fuzzygait.markererror.scale_search import ScaleSearch
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
@@ -69,9 +67,6 @@ DEFAULT_RESOLUTION = 0.1
 MAX_EVALUATIONS = 12
 #: Segments in the table's per-segment columns (Table 3.1 order).
 SEGMENTS = tuple(TABLE_3_1)
-
-Progress = Callable[[int, int], None]
-
 
 # ---------------------------------------------------------------------------- excursion
 def band_excursion(fuzzy: xr.Dataset, component: str) -> pd.Series:
@@ -90,29 +85,6 @@ def band_excursion(fuzzy: xr.Dataset, component: str) -> pd.Series:
     largest = sides.max(["side", "frame"], skipna=True).to_numpy().astype(float)
     largest[levels["undetermined"].any("frame").to_numpy()] = np.inf
     return pd.Series(largest, index=hull["alpha"].to_numpy().astype(float), name=component)
-
-
-# ---------------------------------------------------------------------------- GFA runs
-def _tasks(trial: Trial, subject: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
-           components: Sequence[str], clusters: ClusterCalibration | None) -> dict[str, ComponentTask]:  # fmt: skip
-    """The Graph Follower task of each component (as fuzzy_joint_angles builds it)."""
-    names = angle_names(components)
-    tasks, _ = component_tasks(trial, subject, result, options, names, clusters)
-    by_component = {f"{t.name}_{AXES[t.axis]}": t for t in tasks}
-    return {c: by_component[c] for c in components}
-
-
-Run = tuple[str, np.ndarray, np.ndarray, dict[str, int]]
-
-
-def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator: Evaluator,
-              progress: Progress | None = None) -> list[Run]:  # fmt: skip
-    """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
-    deg, deviation norms (2, bound, n_valid, n_markers) mm, counts; ``progress(done, n)``
-    as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it."""
-    runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
-    return evaluator.map(run_component_task, runs, progress)
-
 
 # ---------------------------------------------------------------------------- dataset
 def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict[str, ComponentTask]) -> xr.Dataset:
@@ -361,6 +333,43 @@ def _check_consistent(fuzzy: xr.Dataset, options: FuzzyAngleOptions, sources: Se
                                  f"model's: refine it with the error model it was computed with")  # fmt: skip
 
 
+def _check_limits(tolerance: float, resolution: float) -> None:
+    if not tolerance > 0:
+        raise ParameterError(f"tolerance must be > 0 degrees; got {tolerance}")
+    if not resolution > 0:
+        raise ParameterError(f"resolution must be > 0 mm; got {resolution}")
+
+
+@contextmanager
+def _runner(evaluator: Evaluator | None, workers: int) -> Iterator[Evaluator]:
+    """``evaluator``, or else an evaluator of ``workers`` processes of its own, closed after use."""
+    if evaluator is not None:
+        yield evaluator
+        return
+    own = Evaluator(workers=max(1, int(workers)))
+    try:
+        yield own
+    finally:
+        own.close()
+
+
+def _start_searches(fuzzy: xr.Dataset, setups: dict[str, ComponentTask], tolerance: float,
+                    resolution: float) -> dict[str, ScaleSearch]:  # fmt: skip
+    """Each component's search for its allowable scale, started from the excursions of the
+    plain run's α-levels; its resolution is ``resolution`` mm on the component's largest ball."""
+    searches = {}
+    for c, setup in setups.items():
+        largest = max(setup.radii, default=0.0)
+        excursion = band_excursion(fuzzy, c)
+        points = {
+            round(1.0 - float(a), 9): float(e)  # type: ignore[arg-type]
+            for a, e in excursion.items()
+            if not np.isnan(e)
+        }
+        searches[c] = ScaleSearch(tolerance, resolution / largest if largest > 0 else 1.0, points)
+    return searches
+
+
 def allowable_errors(
     trial: Trial,
     subject: SubjectParameters,
@@ -420,80 +429,22 @@ def allowable_errors(
         ``allowable_source``, ``allowable_seconds`` (refinement wall time),
         ``allowable_runs`` and ``allowable_node_evaluations``.
     """
-    if not tolerance > 0:
-        raise ParameterError(f"tolerance must be > 0 degrees; got {tolerance}")
-    if not resolution > 0:
-        raise ParameterError(f"resolution must be > 0 mm; got {resolution}")
+    _check_limits(tolerance, resolution)
     options = FuzzyAngleOptions() if options is None else options
     sources = parse_sources(options.sources)
-    own = Evaluator(workers=max(1, int(options.workers))) if evaluator is None else None
-    runner = own if own is not None else evaluator
-    assert runner is not None
-    try:
+    with _runner(evaluator, options.workers) as runner:
         if fuzzy is None:
             names = None if angles is None else list(dict.fromkeys(angle_of(a) for a in angles))
             fuzzy = fuzzy_joint_angles(trial, subject, result, options, names, evaluator=runner, clusters=clusters)
         _check_consistent(fuzzy, options, sources)
         components = _components(fuzzy, angles)
-        setups = _tasks(trial, subject, result, options, components, clusters)
-        searches = {}
-        for c in components:
-            largest = max(setups[c].radii, default=0.0)
-            excursion = band_excursion(fuzzy, c)
-            points = {
-                round(1.0 - float(a), 9): float(e)  # type: ignore[arg-type]
-                for a, e in excursion.items()
-                if not np.isnan(e)
-            }
-            searches[c] = ScaleSearch(tolerance, resolution / largest if largest > 0 else 1.0, points)
-        runs: dict[tuple[str, float], tuple] = {}
-        counts = {c: 0 for c in components}
-        start, node_evaluations = time.perf_counter(), 0
-        while True:
-            pending = []
-            for c in components:
-                scale = searches[c].propose() if setups[c].frames.size and counts[c] < max_evaluations else None
-                if scale is not None:
-                    pending.append((c, round(scale, 9)))
-            if not pending:
-                break
-            done = sum(counts.values())
-            expected = done + sum(min(max_evaluations - counts[c], searches[c].remaining())
-                                  for c in components if setups[c].frames.size)  # fmt: skip
-            expected = max(expected, done + len(pending))
-
-            def step(k: int, _n: int, done: int = done, expected: int = expected) -> None:
-                if progress is not None:
-                    progress(done + k, expected)
-
-            step(0, len(pending))
-            outputs = _evaluate([setups[c] for c, _ in pending], [round(1.0 - s, 9) for _, s in pending], runner,
-                                step)  # fmt: skip
-            for (c, scale), output in zip(pending, outputs, strict=True):
-                runs[(c, round(1.0 - scale, 9))] = output
-                counts[c] += 1
-                node_evaluations += output[3]["node_evaluations"]
-                searches[c].record(scale, _run_excursion(output[1], setups[c]))
-        seconds = time.perf_counter() - start
-        if progress is not None:
-            progress(sum(counts.values()), sum(counts.values()))
-    finally:
-        if own is not None:
-            own.close()
+        setups = component_setups(trial, subject, result, options, components, clusters)
+        searches = _start_searches(fuzzy, setups, tolerance, resolution)
+        done = refine(setups, searches, runner, max_evaluations, progress)
     source = options.error_model.source + ("" if set(sources) == set(SOURCES) else f" ({', '.join(sources)})")
-    merged = _store(_merge(fuzzy, runs, setups), searches, setups, counts)
+    merged = _store(_merge(fuzzy, done.runs, setups), searches, setups, done.counts)
     merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_resolution_mm": float(resolution),
-                         "allowable_source": source, "allowable_seconds": round(seconds, 3),
-                         "allowable_runs": int(sum(counts.values())),
-                         "allowable_node_evaluations": int(node_evaluations)})  # fmt: skip
+                         "allowable_source": source, "allowable_seconds": round(done.seconds, 3),
+                         "allowable_runs": int(sum(done.counts.values())),
+                         "allowable_node_evaluations": int(done.node_evaluations)})  # fmt: skip
     return allowable_table(merged), merged
-
-
-def _run_excursion(values: np.ndarray, setup: ComponentTask) -> float:
-    """Excursion (deg) of one refinement run's hull ``(2, bound, n_valid)`` at its α-level."""
-    lower, upper = values[0, 0], values[0, 1]
-    if lower.size == 0:
-        return math.nan
-    if np.any(undetermined(lower, upper, setup.reference)):
-        return math.inf
-    return float(np.max(np.maximum(upper - setup.reference, setup.reference - lower)))
