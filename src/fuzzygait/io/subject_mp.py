@@ -16,9 +16,9 @@ from pathlib import Path
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.io.subject import (
-    _ANGLE_FIELDS,
-    _SIDE_NAMES,
+    ANGLE_FIELDS,
     PROCESSING_NAMES,
+    VICON_SIDE_NAMES,
     SubjectParameters,
     _vicon_name,
     subject_from_processing,
@@ -35,7 +35,7 @@ _MP_NAMES = {"Bodymass", "Height", "InterAsisDistance", "MarkerDiameter"} | {
                                                   "AsisTrocanterDistance")}  # fmt: skip
 
 #: Vicon Nexus ``.mp`` angles (degrees in the file, radians in SubjectParameters).
-_NEXUS_MP_ANGLES = frozenset(side + _SIDE_NAMES[name] for side in "LR" for name in _ANGLE_FIELDS)
+_NEXUS_MP_ANGLES = frozenset(side + VICON_SIDE_NAMES[name] for side in "LR" for name in ANGLE_FIELDS)
 #: Nexus ``.mp`` parameters SubjectParameters has no field for (the Plug-in Gait upper
 #: body, and the circumferences of older Vicon subject files): numbers, read and ignored.
 _NEXUS_MP_IGNORED = frozenset({"HeadOffset"} | {

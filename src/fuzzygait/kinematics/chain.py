@@ -44,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.joint_centres import (
     abducted_joint_centre,
     davis_hjc_local,

@@ -43,8 +43,8 @@ import autograd.numpy as anp
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
 from fuzzygait.kinematics.forefoot import calibrate_forefoot
 from fuzzygait.kinematics.knee_ankle import calibration_chain, knee_ankle_rule

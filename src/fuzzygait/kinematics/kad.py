@@ -54,8 +54,8 @@ from __future__ import annotations
 import numpy as np
 
 from fuzzygait.core.errors import MarkerError
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
 from fuzzygait.kinematics.joint_centres import chord_joint_centre
 from fuzzygait.kinematics.segments import long_bone_frame, side_sign

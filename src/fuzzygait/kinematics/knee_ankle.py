@@ -39,8 +39,8 @@ from typing import Any
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, _memo
 from fuzzygait.kinematics.joint_centres import abducted_joint_centre, rotated_chord_joint_centre
 from fuzzygait.kinematics.segments import side_sign

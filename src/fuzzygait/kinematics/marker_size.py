@@ -37,8 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.joint_centres import DAVIS_BETA, DAVIS_THETA
 
 #: The four estimates (both sides, x and z) must agree within this (mm) to be trusted.

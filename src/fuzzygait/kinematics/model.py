@@ -17,8 +17,8 @@ import numpy as np
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.options import Option
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import virtual_markers as vm
 from fuzzygait.kinematics.angles import joint_angles
 from fuzzygait.kinematics.chain import LowerBodyChain, segment_markers

@@ -46,8 +46,8 @@ import numpy as np
 
 from fuzzygait.core.errors import MarkerError, ParameterError
 from fuzzygait.core.options import Option
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.chain import LowerBodyChain, required_markers
 from fuzzygait.kinematics.clusters import static_tibial_torsion
 from fuzzygait.kinematics.kad import KAD_MARKERS, StaticKneeChain, check_kad, check_medial_malleolus, knee_method

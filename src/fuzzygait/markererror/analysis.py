@@ -46,8 +46,8 @@ import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import AngleComponent
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import ALL_ANGLE_NAMES, CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.angle_model import (

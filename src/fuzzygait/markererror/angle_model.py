@@ -54,8 +54,8 @@ from autograd import make_vjp
 from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import angle_names
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics.angles import ANGLE_TABLE, wrap_degrees
 from fuzzygait.kinematics.chain import pelvis_markers
 from fuzzygait.kinematics.clusters import ClusterCalibration

@@ -50,8 +50,8 @@ import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.options import Option
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task

@@ -19,11 +19,11 @@ import pandas as pd
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import SOURCE_FILE, trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
 from fuzzygait.io.calibration_table import sidecar_path
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics import (
     ALL_ANGLE_NAMES,

@@ -29,8 +29,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import compute_lower_body
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.marker_size import RecoveredDiameter
