@@ -63,17 +63,19 @@ each ring shows its source's colour; undetermined bands hatched as above), and t
 of the widest α = 0 band per source with the source that dominates (a source whose band
 is undetermined somewhere counts as dominating).
 
-Modules: :mod:`~fuzzygait.viz.report.bands` (the numbers: cycle bands, ΔΦ table, summary
-numbers), :mod:`~fuzzygait.viz.report.allowable` (the allowable-error table and its
-HTML), :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.sources` (the
+Modules: :mod:`~fuzzygait.viz.report.normalised_bands` (the cycle bands),
+:mod:`~fuzzygait.viz.report.bands` (the numbers: ΔΦ table, summary numbers),
+:mod:`~fuzzygait.viz.report.allowable` (the allowable-error table and its HTML),
+:mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.sources` (the
 per-source figure, table and sentence), :mod:`~fuzzygait.viz.report.pages` (HTML
 and CSS, :mod:`~fuzzygait.viz.report.markup` its building blocks) and
 :mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
 """
 
 from fuzzygait.kinematics.labels import component_label
-from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry, cycle_bands
+from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry
 from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
+from fuzzygait.viz.report.normalised_bands import cycle_bands
 from fuzzygait.viz.report.writer import ReportItem, ReportWriter, write_report
 
 __all__ = [

@@ -26,15 +26,10 @@ from matplotlib.patches import Patch  # noqa: E402
 from fuzzygait.gait.cycles import percent_points  # noqa: E402
 from fuzzygait.kinematics.labels import SIDE_NAMES  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
-from fuzzygait.viz.report.bands import (  # noqa: E402
-    N_POINTS,
-    TrialData,
-    alpha_text,
-    band_undetermined,
-    cycle_bands,
-)
+from fuzzygait.viz.report.bands import TrialData, alpha_text  # noqa: E402
 from fuzzygait.viz.report.clinical import ClinicalData  # noqa: E402
 from fuzzygait.viz.report.grid import ANGLE_GRID, GridMargins, place_grid  # noqa: E402
+from fuzzygait.viz.report.normalised_bands import N_POINTS, band_undetermined, cycle_bands  # noqa: E402
 
 __all__ = ["cycle_figure", "plot_cycle_bands", "plot_time_series", "time_series_figure"]
 

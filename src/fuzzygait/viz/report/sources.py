@@ -39,11 +39,12 @@ from fuzzygait.markererror.per_source import (
     source_undetermined,
     widest_source_bands,
 )
-from fuzzygait.viz.report.bands import N_POINTS, TrialData, alpha_text, band_undetermined, cycle_bands
+from fuzzygait.viz.report.bands import TrialData, alpha_text
 from fuzzygait.viz.report.clinical_html import footnote
 from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt, time_limits
 from fuzzygait.viz.report.grid import SOURCES_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
+from fuzzygait.viz.report.normalised_bands import N_POINTS, band_undetermined, cycle_bands
 
 if TYPE_CHECKING:
     import xarray as xr
