@@ -69,3 +69,13 @@ def cluster() -> Iterator[LocalCluster]:
         dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
     ) as c:  # fmt: skip
         yield c
+
+
+@pytest.fixture(autouse=True)
+def _library_option_names(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test starts with messages naming options as the library does (``static=``);
+    a command run in this process switches to ``--static`` (fuzzygait.core.options), and
+    this keeps that from reaching the tests after it."""
+    from fuzzygait.core.options import STYLE_VARIABLE
+
+    monkeypatch.delenv(STYLE_VARIABLE, raising=False)

@@ -10,7 +10,9 @@ import pandas as pd
 import pytest
 
 from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
+
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import use_command_line_names
 from fuzzygait.gait.spatiotemporal import NAMES, agreement_tolerance, column_name, nexus_reference
 from fuzzygait.io import read_c3d
 from fuzzygait.workflows.gait_parameters import gait_parameters_files
@@ -78,7 +80,11 @@ def test_every_trial_failing_is_one_line_and_no_output(tmp_path: Path) -> None:
 
 
 def test_bad_output_suffix_or_cycle_selection_before_any_trial_is_read(tmp_path: Path) -> None:
-    with pytest.raises(FuzzyGaitError, match=r"--out must end in \.csv or \.parquet"):
+    # the library names the keywords; the command its options (fuzzygait.core.options)
+    with pytest.raises(FuzzyGaitError, match=r"out= must end in \.csv or \.parquet"):
         gait_parameters_files([tmp_path / "nope.c3d"], tmp_path / "p.txt")
+    with pytest.raises(FuzzyGaitError, match="cycles= must be one of all, nexus, workstation"):
+        gait_parameters_files([tmp_path / "nope.c3d"], tmp_path / "p.csv", "median")
+    use_command_line_names()
     with pytest.raises(FuzzyGaitError, match="--cycles must be one of all, nexus, workstation"):
         gait_parameters_files([tmp_path / "nope.c3d"], tmp_path / "p.csv", "median")

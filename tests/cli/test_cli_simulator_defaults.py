@@ -17,11 +17,11 @@ def test_command_defaults_leave_the_library_presets_and_the_users_values_alone()
     assert SWING.material.damping == 1.0 and STANCE.material.damping == 1.0  # the tables' values
     setup, note = command_setup("swing", 20, None, None, {}, None)
     assert setup.values == {"eta": 1e5} and setup.scheme == "variational"
-    assert note is not None and note.startswith("swing runs with --set eta=100000 by default (Table 4.3's eta = 1 folds")
+    assert note is not None and note.startswith("swing runs with values= eta=100000 by default (Table 4.3's eta = 1 folds")
     setup, note = command_setup("swing", 20, None, None, {"eta": 2.0, "E": 7e5}, None)
     assert setup.values == {"eta": 2.0, "E": 7e5} and note is None
     setup, note = command_setup("stance", 20, None, None, {}, None)
-    assert setup.values == {} and setup.scheme == "energy-momentum" and "--scheme energy-momentum" in (note or "")
+    assert setup.values == {} and setup.scheme == "energy-momentum" and "scheme= energy-momentum" in (note or "")
     assert command_setup("stance", 20, None, None, {}, "variational") == (
         command_setup("stance", 20, None, None, {}, "variational")[0], None)
     assert set(COMMAND_DEFAULTS) == {"swing", "stance"}

@@ -85,7 +85,7 @@ def test_c3d_suffix_renames_the_angles_only_and_changes_no_number(tmp_path: Path
 def test_bad_suffixes_are_refused() -> None:
     assert output_suffix("", "cgm2.3") == "" and output_suffix("model", "cgm2.3") == "_CGM_2.3"
     for bad in ("with space", "_x/y", "_" + "x" * 13):
-        with pytest.raises(FuzzyGaitError, match="--suffix"):
+        with pytest.raises(FuzzyGaitError, match="suffix= "):
             output_suffix(bad, "cgm1.0")
 
 

@@ -112,7 +112,7 @@ def test_a_subject_file_without_clusters_says_what_to_do(tmp_path: Path, cgm24_s
     subject = resolve_subject(read_c3d(walking), None)
     plain = write_subject(subject, tmp_path / "plain.toml")
     with pytest.raises(ParameterError, match=r"plain.toml: no cluster calibration for cgm2.3; give the static "
-                       r"trial \(--static STATIC.c3d\), or calibrate once with `fuzzygait calibrate"):  # fmt: skip
+                       r"trial \(static= STATIC.c3d\), or calibrate once with `fuzzygait calibrate"):  # fmt: skip
         run_angles(walking, subject_file=plain, model="cgm2.3")
     vsk = write_subject(subject, tmp_path / "plain.vsk")
     with pytest.raises(ParameterError, match=r"plain.vsk \(no plain.clusters.toml beside it\): no cluster"):

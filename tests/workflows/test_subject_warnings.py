@@ -96,7 +96,7 @@ def test_several_subject_files_naming_nobody_are_listed(tmp_path: Path) -> None:
     assert trial.warnings == (
         "none of the subject files a.toml (of 'X'), b.toml (names no subject) is named after its subject "
         "'Synthetic': none is used, the trial's PROCESSING group gives the subject; keep one subject file per "
-        "session folder, name it after the subject, or give --subject",
+        "session folder, name it after the subject, or give subject_file=",
     )
     # one of them named after the subject: that one, no warning
     _subject_file(folder, "b.toml", **{"Bodymass": 'Name = "Synthetic"\nBodymass'})

@@ -118,5 +118,5 @@ def test_the_alpha_limit(levels: int) -> None:
     if levels <= 20:
         check_alpha_count(alphas)
     else:
-        with pytest.raises(FuzzyGaitError, match="--alphas gives 21 α-levels below 1; at most 20"):
+        with pytest.raises(FuzzyGaitError, match="alphas= gives 21 α-levels below 1; at most 20"):
             check_alpha_count(alphas)

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Option
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, PARAMETER_UNITS
 from fuzzygait.mechanics.scenarios import LegSimulator
 from fuzzygait.mechanics.solver import SolverSettings
@@ -43,22 +44,22 @@ def parse_fuzzy(specs: Sequence[str]) -> dict[str, float]:
             name, sep, value = item.partition("=")
             name = name.strip()
             if not sep:
-                raise ParameterError(f"--fuzzy {item!r}: write NAME=SPREAD, e.g. E=10%")
+                raise ParameterError(f"{Option.FUZZY} {item!r}: write NAME=SPREAD, e.g. E=10%")
             if name not in LEG_PARAMETERS:
                 known = ", ".join(LEG_PARAMETERS)
-                raise ParameterError(f"--fuzzy {item!r}: unknown parameter {name!r}; known: {known}")
+                raise ParameterError(f"{Option.FUZZY} {item!r}: unknown parameter {name!r}; known: {known}")
             text = value.strip()
             try:
                 spread = float(text[:-1]) / 100 if text.endswith("%") else float(text)
             except ValueError:
-                raise ParameterError(f"--fuzzy {item!r}: {text!r} is not a spread (e.g. 10% or 0.1)") from None
+                raise ParameterError(f"{Option.FUZZY} {item!r}: {text!r} is not a spread (e.g. 10% or 0.1)") from None
             if not 0 < spread < 1:
-                raise ParameterError(f"--fuzzy {item!r}: the spread must lie between 0 and 100 %")
+                raise ParameterError(f"{Option.FUZZY} {item!r}: the spread must lie between 0 and 100 %")
             if name in spreads:
-                raise ParameterError(f"--fuzzy: {name} is given twice")
+                raise ParameterError(f"{Option.FUZZY} {name} is given twice")
             spreads[name] = spread
     if not spreads:
-        raise ParameterError("give at least one fuzzy parameter, e.g. --fuzzy E=10%")
+        raise ParameterError(f"give at least one fuzzy parameter, e.g. {Option.FUZZY} E=10%")
     return spreads
 
 

@@ -25,6 +25,7 @@ from typing import Literal
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Option
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration, euler_tensor_principal
 from fuzzygait.mechanics.beam import BeamSection, add_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, BladeMesh, default_blade
@@ -136,7 +137,7 @@ class LegConfiguration:
         if self.foot not in ("beam", "rigid", "none"):
             raise ParameterError(f"foot must be 'beam', 'rigid' or 'none'; got {self.foot!r}")
         if self.foot == "beam" and self.nodes < 2:
-            raise ParameterError(f"the blade needs at least 2 nodes (--nodes); got {self.nodes}")
+            raise ParameterError(f"the blade needs at least 2 nodes ({Option.NODES}); got {self.nodes}")
         if self.foot == "beam":
             for k in self.anchored_nodes:
                 if not -self.nodes <= k < self.nodes:

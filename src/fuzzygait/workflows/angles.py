@@ -19,6 +19,7 @@ import pandas as pd
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.options import Option
 from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import SOURCE_FILE, trial_gait_events
@@ -378,8 +379,9 @@ def stored_clusters(
     """The subject file's cluster calibration for the cluster model ``model``, or one
     line saying what to give instead."""
     version = model_version(model)
-    make = (f"give the static trial (--static STATIC.c3d), or calibrate once with `fuzzygait calibrate "
-            f"STATIC.c3d --model {version.name} --out CAL.toml` and use --subject CAL.toml")  # fmt: skip
+    make = (f"give the static trial ({Option.STATIC} STATIC.c3d), or calibrate once with `fuzzygait calibrate "
+            f"STATIC.c3d {Option.MODEL.flag} {version.name} {Option.OUT.flag} CAL.toml` and use {Option.SUBJECT} "
+            "CAL.toml")  # fmt: skip
     if subject_file is None:
         raise ParameterError(f"{version.name} tracks the thigh and shank clusters calibrated on a static trial: {make}")
     if stored.clusters is None:
@@ -400,7 +402,7 @@ def output_suffix(suffix: str, model: str) -> str:
         return model_version(model).suffix
     longest = max(map(len, ALL_ANGLE_NAMES))
     if suffix and not (re.fullmatch(r"[A-Za-z0-9_.\-]+", suffix) and len(suffix) <= MAX_LABEL - longest):
-        raise FuzzyGaitError(f"--suffix {suffix!r}: use up to {MAX_LABEL - longest} letters, digits, '_', '.' "
+        raise FuzzyGaitError(f"{Option.SUFFIX} {suffix!r}: use up to {MAX_LABEL - longest} letters, digits, '_', '.' "
                              "or '-' (e.g. _CGM_2.3; C3D labels hold 32 characters), or 'model'")  # fmt: skip
     return suffix
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.options import Advice, Option
 from fuzzygait.mechanics.leg import LEG_PARAMETERS, default_parameters
 from fuzzygait.mechanics.scenarios import SCENARIOS
 from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, time_simulation
@@ -34,7 +35,7 @@ OPTIONS = ("scenario", "frv", "value", "set", "target", "alphas", "distribution"
            "dt", "duration", "scheme")  # fmt: skip
 #: options a study made before they existed is taken to have been made with
 OPTION_DEFAULTS = {"sampling": "random"}
-_NEW_STUDY = "start a new study (another --out, or --overwrite)"
+_NEW_STUDY = Advice("start a new study (another {out}, or {overwrite})", out=Option.OUT, overwrite=Option.OVERWRITE)
 
 
 #: The deterministic value p_det (SI) of an FRV parameter in the thesis' FRV studies, where
@@ -54,12 +55,12 @@ def check_frv_parameter(parameter: str) -> None:
     distinct ones comma-separated)."""
     names = frv_parameters(parameter)
     if not names:
-        raise FuzzyGaitError(f"--frv {parameter!r}: name a leg parameter; known: {', '.join(LEG_PARAMETERS)}")
+        raise FuzzyGaitError(f"{Option.FRV} {parameter!r}: name a leg parameter; known: {', '.join(LEG_PARAMETERS)}")
     for name in names:
         if name not in LEG_PARAMETERS:
-            raise FuzzyGaitError(f"--frv {name!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
+            raise FuzzyGaitError(f"{Option.FRV} {name!r}: unknown parameter; known: {', '.join(LEG_PARAMETERS)}")
     if len(set(names)) != len(names):
-        raise FuzzyGaitError(f"--frv {parameter!r}: a parameter is named twice")
+        raise FuzzyGaitError(f"{Option.FRV} {parameter!r}: a parameter is named twice")
 
 
 def _scenario_values(scenario: str) -> dict[str, float]:
@@ -106,8 +107,8 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
     values = {**_scenario_values(setup.scenario), **{k: float(v) for k, v in setup.values.items()}}
     names = frv_parameters(frv.parameter)
     if len(names) > 1 and frv.value is not None:
-        raise FuzzyGaitError(f"--value applies to one --frv parameter; for {','.join(names)} give each p_det "
-                             "with --set NAME=VALUE")  # fmt: skip
+        raise FuzzyGaitError(f"{Option.VALUE} applies to one {Option.FRV} parameter; for {','.join(names)} give "
+                             f"each p_det with {Option.SET} NAME=VALUE")  # fmt: skip
     for name in names:
         values[name] = (float(frv.value) if frv.value is not None
                         else deterministic_value(setup.scenario, name, setup.values))  # fmt: skip
@@ -162,14 +163,17 @@ def _refuse_other_options(store: Path, made: Mapping[str, Any], asked: Mapping[s
     for key in OPTIONS:
         if made[key] == asked[key]:
             continue
-        option, was, now = f"--{key}", _show(key, made[key]), _show(key, asked[key])
-        if key == "set" or (key == "value" and key not in given):  # p_det given by --set
+        was, now = _show(key, made[key]), _show(key, asked[key])
+        if key == "scenario":
+            named, advice = "SCENARIO", f"give SCENARIO {was}"
+        elif key == "set" or (key == "value" and key not in given):  # p_det given by --set
             pool = frv_parameters(asked["frv"]) if key == "value" else LEG_PARAMETERS
             name = next(n for n in pool if made["set"][n] != asked["set"][n])
             was, now = (f"{name}={_num(record['set'][name])}" for record in (made, asked))
-            option = f"--set {name}"
-        named = "SCENARIO" if key == "scenario" else option.split()[0]
-        advice = f"give SCENARIO {was}" if key == "scenario" else f"leave {option} out"
+            named, advice = f"{Option.SET}", f"leave {Option.SET} {name} out"
+        else:
+            named = f"{Option(key)}"
+            advice = f"leave {named} out"
         raise FuzzyGaitError(f"{store}: this study was made with {named} {was}; given {now}. To extend it, {advice}, "
                              f"or {_NEW_STUDY}")  # fmt: skip
 
@@ -211,7 +215,8 @@ def run_frv_leg(
         setup, frv, target = _as_made(setup, frv, target, made, OPTIONS if given is None else given)
     options = study_options(setup, frv, target)
     if options["target"] not in TARGETS:
-        raise FuzzyGaitError(f"--target {options['target']!r}: unknown target; choose one of {', '.join(TARGETS)}")
+        raise FuzzyGaitError(f"{Option.TARGET} {options['target']!r}: unknown target; choose one of "
+                             f"{', '.join(TARGETS)}")  # fmt: skip
     if extend:
         _refuse_other_options(out_store, made, options, OPTIONS if given is None else given)
     names = frv_parameters(frv.parameter)

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fuzzygait.core.errors import FuzzyGaitError, SimulationError
+from fuzzygait.core.options import Option
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
 from fuzzygait.mechanics.solver import BladeFolded, SolverSettings
 from fuzzygait.workflows.outputs import write_all_or_none
@@ -57,7 +58,7 @@ def check_scheme(scheme: str) -> None:
     from fuzzygait.mechanics.solver import SCHEMES
 
     if scheme not in SCHEMES:
-        raise FuzzyGaitError(f"--scheme must be {' or '.join(SCHEMES)}; got {scheme!r}")
+        raise FuzzyGaitError(f"{Option.SCHEME} must be {' or '.join(SCHEMES)}; got {scheme!r}")
 
 
 def simulation_timing(scenario: str, dt: float | None, duration: float | None) -> tuple[float, float]:
@@ -65,10 +66,10 @@ def simulation_timing(scenario: str, dt: float | None, duration: float | None) -
     preset = SCENARIOS[scenario]
     step = preset.dt if dt is None else dt
     if not (np.isfinite(step) and step > 0):
-        raise FuzzyGaitError(f"--dt must be a time step > 0 s; got {dt:g}")
+        raise FuzzyGaitError(f"{Option.DT} must be a time step > 0 s; got {dt:g}")
     span = preset.duration if duration is None else duration
     if not (np.isfinite(span) and span >= step):
-        raise FuzzyGaitError(f"--duration must be at least the time step ({step:g} s); got {span:g}")
+        raise FuzzyGaitError(f"{Option.DURATION} must be at least the time step ({step:g} s); got {span:g}")
     return step, span
 
 
@@ -116,15 +117,15 @@ def command_setup(scenario: str, nodes: int | None, dt: float | None, duration: 
     step, span = simulation_timing(scenario, dt, duration)
     defaults = COMMAND_DEFAULTS[scenario]
     taken = {k: v for k, v in defaults.values.items() if k not in values}
-    changed = [f"--set {k}={v:g}" for k, v in taken.items()]
+    changed = [f"{Option.SET} {k}={v:g}" for k, v in taken.items()]
     if scheme is None:
         scheme = defaults.scheme
         if scheme != "variational":
-            changed.append(f"--scheme {scheme}")
+            changed.append(f"{Option.SCHEME} {scheme}")
     if nodes is None:
         nodes = defaults.nodes
         if nodes != 20:
-            changed.append(f"--nodes {nodes}")
+            changed.append(f"{Option.NODES} {nodes}")
     note = (f"{scenario} runs with {', '.join(changed)} by default ({defaults.reason}); give the option to change it"
             if changed else None)  # fmt: skip
     solver = defaults.solver(SCENARIOS[scenario]).derive(dt=step, duration=span, scheme=scheme)
@@ -142,13 +143,13 @@ def named_fixes(setup: LegSetup) -> Iterator[None]:
         preset = SCENARIOS[setup.scenario]
         eta = float(setup.values.get("eta", preset.material.damping))
         step = setup.settings.dt
-        fixes = [f"--set eta={max(10 * eta, 1e5):g}"]
+        fixes = [f"{Option.SET.flag} eta={max(10 * eta, 1e5):g}"]  # command-line options, as the message says
         if isinstance(exc, BladeFolded):
-            fixes.append(f"--nodes {2 * setup.nodes}")
+            fixes.append(f"{Option.NODES.flag} {2 * setup.nodes}")
         else:
             if setup.scheme != "energy-momentum":
-                fixes.append("--scheme energy-momentum")
-            fixes.append(f"--dt {step / 2:g}")
+                fixes.append(f"{Option.SCHEME.flag} energy-momentum")
+            fixes.append(f"{Option.DT.flag} {step / 2:g}")
         raise SimulationError(f"{exc}; on the command line: {' or '.join(fixes)}") from None
 
 
@@ -267,7 +268,7 @@ def fuzzy_simulation(
 
     check_scenario(setup.scenario)
     if stride < 1:
-        raise FuzzyGaitError(f"--stride must be ≥ 1; got {stride}")
+        raise FuzzyGaitError(f"{Option.STRIDE} must be ≥ 1; got {stride}")
     _check_target(target)
     sim, base = build_simulator(setup, progress)
     stage = f"{setup.scenario}: α-level optimisations"
