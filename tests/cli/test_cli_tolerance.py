@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzygait.cli.gait import _allowable_text, _delta_phi_text
+from fuzzygait.cli.marker_errors import _allowable_text, _delta_phi_text
 from fuzzygait.cli.options import parse_tolerance
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io import read_c3d, write_c3d

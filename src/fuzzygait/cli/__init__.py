@@ -7,6 +7,7 @@ from fuzzygait.cli.app import app, main
 # The command modules register their commands on import, in this order (that of --help).
 # isort: off
 from fuzzygait.cli import gait  # noqa: F401
+from fuzzygait.cli import marker_errors  # noqa: F401
 from fuzzygait.cli import compare  # noqa: F401
 from fuzzygait.cli import spatiotemporal  # noqa: F401
 from fuzzygait.cli import normative  # noqa: F401
