@@ -26,7 +26,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration, ClusterChain
 from fuzzygait.kinematics.kad import StaticKneeChain, knee_method
 from fuzzygait.kinematics.progression import progression_frame
 from fuzzygait.kinematics.rigid import MIN_MARKERS
-from fuzzygait.kinematics.versions import model_version
+from fuzzygait.kinematics.versions import ModelVersion, model_version
 
 #: The Plug-in Gait lower-body angle outputs, in Vicon's names.
 ANGLE_NAMES: tuple[str, ...] = (
@@ -156,6 +156,10 @@ def model_chain(
     return ClusterChain(trial, subject, clusters, foot_torsion=version.foot_torsion)
 
 
+#: The note of a run with the knee and ankle centres at the medial/lateral midpoints.
+MEDIAL_NOTE = "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"
+
+
 def compute_lower_body(
     trial: Trial,
     subject: SubjectParameters,
@@ -209,8 +213,7 @@ def compute_lower_body(
         chain = StaticKneeChain(trial, subject, static_foot=static_foot)
     result = CGMResult(model=version.name)
     if medial:
-        medial_note = "knee and ankle joint centres at the medial/lateral marker midpoints (CGM 2.x style)"
-        result.notes.append(Finding(FindingKind.KINEMATICS, medial_note))
+        result.notes.append(Finding(FindingKind.KINEMATICS, MEDIAL_NOTE))
 
     missing_pelvis = chain.missing("pelvis")
     if missing_pelvis:
@@ -232,58 +235,74 @@ def compute_lower_body(
                                     "progression angles are NaN", Severity.WARNING))  # fmt: skip
 
     for side in "LR":
-        long = "left" if side == "L" else "right"
-        result.joint_centres[side + "HJC"] = hjc[side]
-        result.angles[side + "PelvisAngles"] = angle_from_chain(chain, side + "PelvisAngles", result.progression)
-        for name, segment in _ANGLE_SEGMENT.items():
-            missing = chain.missing(segment, side)
-            if missing and segment != "pelvis":
-                result.unavailable[side + name + "Angles"] = _missing_reason(missing)
-        if chain.missing("thigh", side):
-            continue
-        if isinstance(chain, ClusterChain):
-            tracked = ("thigh", "tibia") + (("forefoot",) if version.forefoot else ())
-            result.notes += cluster_tracking_notes(chain, side, tracked)
-        kjc, thigh = chain.kjc(side), chain.thigh(side)
-        result.joint_centres[side + "KJC"] = kjc
-        result.segment_frames[long + "_thigh"] = thigh
-        result.virtual_markers.update(vm.thigh_markers(side, hjc[side], kjc, thigh))
-        if isinstance(chain, StaticKneeChain):  # Nexus exports the KAD's virtual knee marker
-            result.virtual_markers[side + "KNE"] = chain.marker(side + "KNE")
-        result.angles[side + "HipAngles"] = angle_from_chain(chain, side + "HipAngles", result.progression)
-        if chain.missing("tibia", side):
-            continue
-        ajc, tibia = chain.ajc(side), chain.tibia(side)
-        result.joint_centres[side + "AJC"] = ajc
-        result.segment_frames[long + "_tibia"] = tibia
-        result.segment_frames[long + "_tibia_torsioned"] = chain.torsioned_tibia(side)
-        knee_width = subject.side(side).knee_width
-        result.virtual_markers.update(vm.tibia_markers(side, kjc, ajc, tibia, knee_width))
-        result.angles[side + "KneeAngles"] = angle_from_chain(chain, side + "KneeAngles", result.progression)
-        if chain.missing("foot", side):
-            continue
-        if static_foot is not None and not trial.has_marker(side + "HEE"):
-            for name in ("AnkleAngles", "FootProgressAngles"):
-                result.unavailable[side + name] = _missing_reason([side + "HEE"]) + " (static-trial foot)"
-            continue
-        foot = chain.foot(side)
-        result.segment_frames[long + "_foot"] = foot
-        for name in ("AnkleAngles", "FootProgressAngles"):
-            result.angles[side + name] = angle_from_chain(chain, side + name, result.progression)
-        if version.forefoot and isinstance(chain, ClusterChain):
-            _add_forefoot(chain, side, result)
-        if trial.has_marker(side + "HEE"):
-            hee, toe = trial.marker(side + "HEE"), trial.marker(side + "TOE")
-            length = vm.foot_bone_length(hee, toe, subject.marker_radius)
-            result.virtual_markers.update(vm.foot_markers(side, ajc, foot, length))
-        else:
-            result.notes.append(Finding(FindingKind.KINEMATICS, f"no {side}HEE marker: {side}FO*/{side}TO* virtual "
-                                        "markers not produced", Severity.WARNING, side=long,
-                                        marker=side + "HEE"))  # fmt: skip
+        _add_side(chain, side, result, hjc[side], version, subject, trial, static_foot)
 
     result.virtual_markers.update(result.joint_centres)
     result.angles = {name: result.angles[name] for name in ALL_ANGLE_NAMES if name in result.angles}
     return result
+
+
+def _add_side(chain: LowerBodyChain, side: str, result: CGMResult, hjc: np.ndarray, version: ModelVersion,
+              subject: SubjectParameters, trial: Trial, static_foot: str | None) -> None:  # fmt: skip
+    """One side's outputs (``side`` ``"L"`` or ``"R"``) into ``result``: its pelvis angles,
+    then as far as its markers allow the thigh (hip angles), the tibia (knee angles) and
+    the foot (:func:`_add_foot`); ``hjc`` is the side's hip joint centre (mm)."""
+    long = "left" if side == "L" else "right"
+    result.joint_centres[side + "HJC"] = hjc
+    result.angles[side + "PelvisAngles"] = angle_from_chain(chain, side + "PelvisAngles", result.progression)
+    for name, segment in _ANGLE_SEGMENT.items():
+        missing = chain.missing(segment, side)
+        if missing and segment != "pelvis":
+            result.unavailable[side + name + "Angles"] = _missing_reason(missing)
+    if chain.missing("thigh", side):
+        return
+    if isinstance(chain, ClusterChain):
+        tracked = ("thigh", "tibia") + (("forefoot",) if version.forefoot else ())
+        result.notes += cluster_tracking_notes(chain, side, tracked)
+    kjc, thigh = chain.kjc(side), chain.thigh(side)
+    result.joint_centres[side + "KJC"] = kjc
+    result.segment_frames[long + "_thigh"] = thigh
+    result.virtual_markers.update(vm.thigh_markers(side, hjc, kjc, thigh))
+    if isinstance(chain, StaticKneeChain):  # Nexus exports the KAD's virtual knee marker
+        result.virtual_markers[side + "KNE"] = chain.marker(side + "KNE")
+    result.angles[side + "HipAngles"] = angle_from_chain(chain, side + "HipAngles", result.progression)
+    if chain.missing("tibia", side):
+        return
+    ajc, tibia = chain.ajc(side), chain.tibia(side)
+    result.joint_centres[side + "AJC"] = ajc
+    result.segment_frames[long + "_tibia"] = tibia
+    result.segment_frames[long + "_tibia_torsioned"] = chain.torsioned_tibia(side)
+    knee_width = subject.side(side).knee_width
+    result.virtual_markers.update(vm.tibia_markers(side, kjc, ajc, tibia, knee_width))
+    result.angles[side + "KneeAngles"] = angle_from_chain(chain, side + "KneeAngles", result.progression)
+    _add_foot(chain, side, result, ajc, version, subject, trial, static_foot)
+
+
+def _add_foot(chain: LowerBodyChain, side: str, result: CGMResult, ajc: np.ndarray, version: ModelVersion,
+              subject: SubjectParameters, trial: Trial, static_foot: str | None) -> None:  # fmt: skip
+    """The foot of one side: ankle and foot progression angles, the CGM 2.4 forefoot and
+    the foot's virtual markers (``ajc``: the side's ankle joint centre, mm)."""
+    long = "left" if side == "L" else "right"
+    if chain.missing("foot", side):
+        return
+    if static_foot is not None and not trial.has_marker(side + "HEE"):
+        for name in ("AnkleAngles", "FootProgressAngles"):
+            result.unavailable[side + name] = _missing_reason([side + "HEE"]) + " (static-trial foot)"
+        return
+    foot = chain.foot(side)
+    result.segment_frames[long + "_foot"] = foot
+    for name in ("AnkleAngles", "FootProgressAngles"):
+        result.angles[side + name] = angle_from_chain(chain, side + name, result.progression)
+    if version.forefoot and isinstance(chain, ClusterChain):
+        _add_forefoot(chain, side, result)
+    if trial.has_marker(side + "HEE"):
+        hee, toe = trial.marker(side + "HEE"), trial.marker(side + "TOE")
+        length = vm.foot_bone_length(hee, toe, subject.marker_radius)
+        result.virtual_markers.update(vm.foot_markers(side, ajc, foot, length))
+    else:
+        result.notes.append(Finding(FindingKind.KINEMATICS, f"no {side}HEE marker: {side}FO*/{side}TO* virtual "
+                                    "markers not produced", Severity.WARNING, side=long,
+                                    marker=side + "HEE"))  # fmt: skip
 
 
 def _frame_ranges(mask: np.ndarray, first_frame: int) -> str:
