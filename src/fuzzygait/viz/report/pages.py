@@ -20,6 +20,7 @@ from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_b
 from fuzzygait.viz.report.bands import (
     DeltaPhiTable,
     Headline,
+    ReportRun,
     TrialAnalysis,
     TrialData,
     TrialEntry,
@@ -45,6 +46,13 @@ from fuzzygait.viz.report.clinical_html import (
 from fuzzygait.viz.report.markup import escape as _esc
 from fuzzygait.viz.report.markup import html_table as _table
 from fuzzygait.viz.report.sources import has_source_bands, sources_section
+from fuzzygait.viz.report.wording import (
+    ALPHA_SENTENCE,
+    CYCLES_ALT,
+    DELTA_PHI_SENTENCE,
+    UNDETERMINED,
+    UNDETERMINED_SENTENCE,
+)
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -67,34 +75,6 @@ def _sources_text(fuzzy: xr.Dataset) -> str:
     return ", ".join(SOURCE_TITLES.get(str(n).strip(), str(n).strip()) for n in names if str(n).strip())
 
 
-ALPHA_SENTENCE = (
-    "Each shaded band shows how far the joint angle could be off if every marker were "
-    "displaced by up to (1 − α) times its assumed maximum error: the lightest, widest "
-    "band (α = 0) is the worst case with all error sources at their maximum, darker "
-    "bands (higher α) assume smaller errors, and the line (α = 1) is the angle as "
-    "measured."
-)
-DELTA_PHI_SENTENCE = (
-    "ΔΦ<sub>α</sub> = max<sub>t</sub>(Φ<sup>u</sup><sub>α</sub>(t) − "
-    "Φ<sup>l</sup><sub>α</sub>(t)) / max<sub>t</sub> |Φ(t)| × 100 %: the widest the "
-    "α-band gets anywhere in the trial, relative to the largest measured magnitude of the "
-    "angle (the magnitude keeps angles that stay negative comparable)." + footnote("delta")
-)
-
-UNDETERMINED_SENTENCE = (
-    "“Undetermined” means that at that α-level the assumed marker errors let a segment's "
-    "coordinate frame flip (a bound lies more than 90° from the measured angle), so the "
-    "angle is not known there at all: such bands are not drawn (a hatched strip along the "
-    "top of the panel marks where), and ΔΦ and band widths are taken over the determined "
-    "frames only."
-)
-#: What the report writes for an undetermined number.
-UNDETERMINED = "undetermined"
-
-_CYCLES_ALT = (
-    "Grid of joint angles (pelvis, hip, knee, ankle, foot progression; sagittal, frontal, "
-    "transverse) over the gait cycle, left and right, with uncertainty bands per alpha-level"
-)
 
 
 def _quality_section(analysis: TrialAnalysis, data: TrialData, clinical: ClinicalData) -> str:
@@ -280,50 +260,13 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     model's markers), assumptions, subject, references.  Without a fuzzy analysis
     (``analysis.fuzzy`` None) the uncertainty sections are left out."""
     run = analysis.run
-    trial = run.trial
     fuzzy = analysis.fuzzy
     if clinical is None:
         clinical = ClinicalData.of(run, data.cycles)
-    last = trial.first_frame + trial.n_frames - 1
-    n_cycles = data.n_cycles()
-    facts = header_facts(run, source, clinical, session) + [
-        ("File", f"<span class=\"mono\">{_esc(source)}</span>"),
-        ("Frames", f"{trial.n_frames} (C3D frames {trial.first_frame}–{last}) at {trial.rate:g} Hz, "
-                   f"{trial.n_frames / trial.rate:.2f} s"),
-        ("Gait cycles", f"left {n_cycles['L']}, right {n_cycles['R']}"),
-        ("Static offsets",
-         f"plantarflexion L {deg_text(run.subject.left.static_plant_flex)}°, "
-         f"R {deg_text(run.subject.right.static_plant_flex)}°; "
-         f"rotation L {deg_text(run.subject.left.static_rot_off)}°, R {deg_text(run.subject.right.static_rot_off)}°"
-         f"<br><span class=\"small\">{_esc(static_text(run))} "
-         "<a href=\"#subject\">All subject parameters</a></span>"),
-    ]  # fmt: skip
-    if len(data.alphas):
-        facts.append(("α-levels", ", ".join(alpha_text(a) for a in data.alphas) + ", 1 (measured)"))
-    if fuzzy is not None and _sources_text(fuzzy):
-        facts.append(("Error sources", _esc(_sources_text(fuzzy))))
-    key = headline_lines(entry.headline)
-    if entry.gps is not None:
-        gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
-        key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
-    moved = entry.moved
-    if moved:  # first: it says how far to trust the numbers below
-        key.insert(0, f"<b>Markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
-                      f"static calibration does not fit them, so the {moved_angles(moved)} are unreliable "
-                      "(<a href=\"#quality\">Data quality</a>).")  # fmt: skip
-    gaps = clinical.model_gaps(run.gaps)
-    filled = sum(g.filled for g in gaps)
-    key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
-               f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
+    facts = _trial_facts(run, source, clinical, session, data)
+    key = _key_lines(entry, clinical, run)
     figs = quote(files)
-    links = [("guide", "How to read"), ("spatiotemporal", "Spatio-temporal"), ("cycles", "Kinematics"),
-             ("gps", "GPS"), ("kinetics", "Kinetics")]  # fmt: skip
-    if fuzzy is not None:
-        links += [("allowable", "Allowable error"), ("delta-phi", "ΔΦ table")]
-        if has_source_bands(fuzzy):
-            links.append(("sources", "Error sources"))
-    links += [("time-series", "Whole trial"), ("quality", "Data quality"), ("subject", "Subject")]
-    nav = " · ".join(f'<a href="#{k}">{_esc(t)}</a>' for k, t in links)
+    nav = _page_nav(fuzzy)
     uncertainty = ""
     if fuzzy is not None:
         uncertainty = (allowable_section(entry.allowable) + _delta_phi_section(table, data)
@@ -363,7 +306,7 @@ mean curve drawn; the stride-to-stride variability is not included. A note such 
 “L: 3 of 4 cycles” means some cycles had missing data there.</p>
 <figure>
 <a href="{figs}/cycles.svg"><img src="{figs}/cycles.png" width="1100" height="{height}"
-alt="{_CYCLES_ALT}"></a>
+alt="{CYCLES_ALT}"></a>
 <figcaption>Mean over gait cycles{cycles_caption}.
 Click for the scalable version (<a href="{figs}/cycles.svg">SVG</a>, <a href="{figs}/cycles.png">PNG</a>).</figcaption>
 </figure>
@@ -387,6 +330,63 @@ alt="Grid of joint angles over time for the whole trial"></a>
 </main>
 {page_footer(run.result.model)}"""
     return page_document(f"{source.name} – fuzzygait report", body)
+
+
+def _trial_facts(run: ReportRun, source: Path, clinical: ClinicalData, session: str | None,
+                 data: TrialData) -> list[tuple[str, str]]:  # fmt: skip
+    """The header table of a trial page: subject, session, model, file, frames, cycles,
+    static offsets (degrees), α-levels and error sources (HTML)."""
+    trial, fuzzy = run.trial, data.fuzzy
+    last = trial.first_frame + trial.n_frames - 1
+    n_cycles = data.n_cycles()
+    facts = header_facts(run, source, clinical, session) + [
+        ("File", f"<span class=\"mono\">{_esc(source)}</span>"),
+        ("Frames", f"{trial.n_frames} (C3D frames {trial.first_frame}–{last}) at {trial.rate:g} Hz, "
+                   f"{trial.n_frames / trial.rate:.2f} s"),
+        ("Gait cycles", f"left {n_cycles['L']}, right {n_cycles['R']}"),
+        ("Static offsets",
+         f"plantarflexion L {deg_text(run.subject.left.static_plant_flex)}°, "
+         f"R {deg_text(run.subject.right.static_plant_flex)}°; "
+         f"rotation L {deg_text(run.subject.left.static_rot_off)}°, R {deg_text(run.subject.right.static_rot_off)}°"
+         f"<br><span class=\"small\">{_esc(static_text(run))} "
+         "<a href=\"#subject\">All subject parameters</a></span>"),
+    ]  # fmt: skip
+    if len(data.alphas):
+        facts.append(("α-levels", ", ".join(alpha_text(a) for a in data.alphas) + ", 1 (measured)"))
+    if fuzzy is not None and _sources_text(fuzzy):
+        facts.append(("Error sources", _esc(_sources_text(fuzzy))))
+    return facts
+
+
+def _key_lines(entry: TrialEntry, clinical: ClinicalData, run: ReportRun) -> list[str]:
+    """The key-numbers box: moved markers first, the GPS, the headline and the gaps (HTML lines)."""
+    key = headline_lines(entry.headline)
+    if entry.gps is not None:
+        gps = f"<b>{_fmt(entry.gps, 1)}°</b>" if np.isfinite(entry.gps) else "not available for both sides"
+        key.insert(0, f"Gait Profile Score: {gps} (<a href=\"#gps\">per joint</a>)")
+    moved = entry.moved
+    if moved:  # first: it says how far to trust the numbers below
+        key.insert(0, f"<b>Markers moved</b> between the static trial and this one ({', '.join(moved)}): the "
+                      f"static calibration does not fit them, so the {moved_angles(moved)} are unreliable "
+                      "(<a href=\"#quality\">Data quality</a>).")  # fmt: skip
+    gaps = clinical.model_gaps(run.gaps)
+    filled = sum(g.filled for g in gaps)
+    key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
+               f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
+    return key
+
+
+def _page_nav(fuzzy: xr.Dataset | None) -> str:
+    """The links along the top of a trial page (its uncertainty sections only with an analysis)."""
+    links = [("guide", "How to read"), ("spatiotemporal", "Spatio-temporal"), ("cycles", "Kinematics"),
+             ("gps", "GPS"), ("kinetics", "Kinetics")]  # fmt: skip
+    if fuzzy is not None:
+        links += [("allowable", "Allowable error"), ("delta-phi", "ΔΦ table")]
+        if has_source_bands(fuzzy):
+            links.append(("sources", "Error sources"))
+    links += [("time-series", "Whole trial"), ("quality", "Data quality"), ("subject", "Subject")]
+    nav = " · ".join(f'<a href="#{k}">{_esc(t)}</a>' for k, t in links)
+    return nav
 
 
 def _index_numbers(head: Headline) -> tuple[str, str, str]:
