@@ -37,7 +37,7 @@ from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
-from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, generate_box_samples  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, MultiStudyOptions, generate_box_samples  # noqa: E402
 
 MODULUS = 59.958e9  # Pa, Table 5.3
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -79,8 +79,9 @@ def study(model, recipe, specs, n, disc, workers, store, timed=None, peak_refine
             timed.inner = evaluator
             evaluator = timed
         start = time.perf_counter()
-        result = FRVMultiStudy.create(model, specs, n, n_disc=disc, seed=0, store=store, evaluator=evaluator,
-                                      overwrite=True, peak_refine=peak_refine)  # fmt: skip
+        result = FRVMultiStudy.create(model, specs, n,
+                                      MultiStudyOptions(n_disc=disc, seed=0, overwrite=True, peak_refine=peak_refine),
+                                      store=store, evaluator=evaluator)  # fmt: skip
         return result, time.perf_counter() - start
 
 

@@ -55,7 +55,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fuzzygait.uncertainty import FunctionModel  # noqa: E402
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, fit_distributions, iter_hull_blocks  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions, fit_distributions, iter_hull_blocks  # noqa: E402
 
 MODULUS = 59.958e9  # Pa, Table 5.3
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -192,8 +192,9 @@ def main() -> None:
     baseline = (_status_kib("VmRSS") or 0) * 1024
     try:
         with phase("create", rows, args.tracemalloc) as row:
-            study = FRVStudy.create(model, spec, args.samples, n_disc=args.disc, seed=0, store=store,
-                                    chunk=args.chunk, overwrite=True)  # fmt: skip
+            study = FRVStudy.create(model, spec, args.samples,
+                                    StudyOptions(n_disc=args.disc, seed=0, chunk=args.chunk, overwrite=True),
+                                    store=store)  # fmt: skip
         counts = study.counts
         row["note"] = (f"{counts['forward_simulations']} forward simulations, {counts['occurring_intervals']} "
                        f"occurring of {counts['possible_intervals']} possible intervals")  # fmt: skip

@@ -31,7 +31,7 @@ from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, fit_distributions, generate_samples  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions, fit_distributions, generate_samples  # noqa: E402
 
 FIGURES = Path(__file__).parent / "figures"
 MODULUS = 59.958e9  # Pa, Table 5.3
@@ -61,8 +61,9 @@ def main() -> None:
     with Evaluator(workers=args.workers) as pool:
         evaluator = pool.batch(recipe, sensitivities=True)
         start = time.perf_counter()
-        study = FRVStudy.create(model, spec, args.samples, n_disc=args.disc, seed=0, store=args.store,
-                                evaluator=evaluator, overwrite=True)  # fmt: skip
+        study = FRVStudy.create(model, spec, args.samples,
+                                StudyOptions(n_disc=args.disc, seed=0, overwrite=True),
+                                store=args.store, evaluator=evaluator)  # fmt: skip
         first = time.perf_counter() - start
         counts = dict(study.counts)
         print(f"\nFRV-GFA, stance, E ~ FRV about {MODULUS:g} Pa, {args.samples} samples, N_p-disc = {args.disc}, "
@@ -100,6 +101,7 @@ def main() -> None:
     fit = fit_distributions(args.store, kind="normal", data="hulls")
     print(f"\nnormal fits per (α, bound, time): {dict(fit.sizes)}")
     if args.figures:
+        from fuzzygait.viz.figures import save_figure
         from fuzzygait.viz.frv import (
             fuzzy_random_output_figure,
             grouping_figure,
@@ -107,7 +109,6 @@ def main() -> None:
             output_distribution_figure,
             temporal_evolution_figure,
         )
-        from fuzzygait.viz.figures import save_figure
 
         FIGURES.mkdir(exist_ok=True)
         node = int(np.argmin(np.abs(times - 1.0)))

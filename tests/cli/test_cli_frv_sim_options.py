@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 from fuzzygait.cli import app
 from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions
 from fuzzygait.workflows.frv_leg import FRVRequest, study_options
 from fuzzygait.workflows.fuzzy_dynamics import LegSetup
 
@@ -35,7 +35,7 @@ def _model() -> FunctionModel:
 
 def _study(path: Path, options: dict | None) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
-    FRVStudy.create(_model(), FRVSpec("E", MODULUS), 30, n_disc=6, store=path, options=options)
+    FRVStudy.create(_model(), FRVSpec("E", MODULUS), 30, StudyOptions(n_disc=6, record=options), store=path)
     return path
 
 
@@ -133,7 +133,7 @@ def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("multi") / "study.zarr"
     specs = [FRVSpec("E", MODULUS, alphas=(0.0, 0.25, 0.5, 0.75, 1.0)),
              FRVSpec("rho", options["set"]["rho"], alphas=(0.0, 0.25, 0.5, 0.75, 1.0))]  # fmt: skip
-    FRVMultiStudy.create(model, specs, 30, n_disc=6, store=path, options=options)
+    FRVMultiStudy.create(model, specs, 30, StudyOptions(n_disc=6, record=options), store=path)
     return path
 
 

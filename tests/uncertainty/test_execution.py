@@ -27,7 +27,7 @@ from fuzzygait.uncertainty import (  # noqa: E402
 )
 from fuzzygait.uncertainty.execution import Evaluator, ParallelEvaluationError, SharedArray  # noqa: E402
 from fuzzygait.uncertainty.execution.workers import Slot, evaluate_rows  # noqa: E402
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions  # noqa: E402
 
 pytestmark = pytest.mark.slow  # starts Dask clusters
 
@@ -227,12 +227,13 @@ def test_frv_study_bit_identical_on_every_evaluator(evaluators, tmp_path) -> Non
     recipe = AnalyticRecipe("sin", n_time=41, t_end=4.0)
     spec = FRVSpec("p", 1.0, alphas=(0.0, 0.5, 1.0))
     model = recipe.build()
-    reference = FRVStudy.create(model, spec, 300, n_disc=12, seed=2, store=tmp_path / "ref.zarr", chunk=64)
+    reference = FRVStudy.create(model, spec, 300, StudyOptions(n_disc=12, seed=2, chunk=64),
+                                store=tmp_path / "ref.zarr")
     expected = reference.hulls()["hull"].to_numpy()
     for name, evaluator in evaluators.items():
         batch = evaluator.batch(recipe, sensitivities=True)
-        study = FRVStudy.create(model, spec, 300, n_disc=12, seed=2, store=tmp_path / f"{name}.zarr", chunk=64,
-                                evaluator=batch)  # fmt: skip
+        study = FRVStudy.create(model, spec, 300, StudyOptions(n_disc=12, seed=2, chunk=64),
+                                store=tmp_path / f"{name}.zarr", evaluator=batch)  # fmt: skip
         assert np.array_equal(study.hulls()["hull"].to_numpy(), expected), name
 
 

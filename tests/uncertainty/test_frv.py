@@ -13,8 +13,18 @@ from scipy import stats
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.uncertainty import FunctionModel, frv
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, Grid, fit_distributions, generate_samples, group
-from fuzzygait.uncertainty.frv import interval_hulls, occurring_intervals, serial_evaluator
+from fuzzygait.uncertainty.frv import (
+    FRVSpec,
+    FRVStudy,
+    Grid,
+    StudyOptions,
+    fit_distributions,
+    generate_samples,
+    group,
+    interval_hulls,
+    occurring_intervals,
+    serial_evaluator,
+)
 from fuzzygait.uncertainty.gfa import optimisation_nodes
 
 ALPHAS5 = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -240,7 +250,8 @@ def hull_size(counts) -> int:
 def test_study_hulls_counts_and_truth(tmp_path) -> None:
     model, spec = sine_model(), FRVSpec("p", 1.0, alphas=ALPHAS5)
     counter = CountingEvaluator(model)
-    study = FRVStudy.create(model, spec, 1500, n_disc=25, seed=1, store=tmp_path / "s.zarr", evaluator=counter, chunk=256)
+    study = FRVStudy.create(model, spec, 1500, StudyOptions(n_disc=25, seed=1, chunk=256),
+                            store=tmp_path / "s.zarr", evaluator=counter)
     counts = study.counts
     bins = study.samples()["bin"].to_numpy()
     np.testing.assert_array_equal(bins, group(generate_samples(spec, 1500, 1), study.grid))
@@ -287,7 +298,8 @@ def test_add_samples_reuses_library_and_intervals(tmp_path, seed: int, new_inter
     they bring no new interval either, with seed 0 exactly one."""
     model, spec = sine_model(), FRVSpec("p", 1.0)
     counter = CountingEvaluator(model)
-    study = FRVStudy.create(model, spec, 2000, n_disc=12, seed=seed, store=tmp_path / "s.zarr", evaluator=counter, chunk=300)
+    study = FRVStudy.create(model, spec, 2000, StudyOptions(n_disc=12, seed=seed, chunk=300),
+                            store=tmp_path / "s.zarr", evaluator=counter)
     before = study.hulls()["hull"].to_numpy()
     counts = dict(study.counts)
     study.add_samples(300)
@@ -306,7 +318,8 @@ def test_add_samples_reuses_library_and_intervals(tmp_path, seed: int, new_inter
 def test_add_samples_extends_the_grid_and_simulates_only_new_bins(tmp_path) -> None:
     model, spec = monotone_model(), FRVSpec("p", 1.0, alphas=ALPHAS5)
     counter = CountingEvaluator(model)
-    study = FRVStudy.create(model, spec, 20, n_disc=8, seed=3, store=tmp_path / "s.zarr", evaluator=counter, chunk=512)
+    study = FRVStudy.create(model, spec, 20, StudyOptions(n_disc=8, seed=3, chunk=512),
+                            store=tmp_path / "s.zarr", evaluator=counter)
     grid0, sims0 = study.grid, study.counts["forward_simulations"]
     assert sims0 == 7 and study.refine is False
     study.add_samples(3000)
@@ -328,8 +341,9 @@ def test_add_samples_extends_the_grid_and_simulates_only_new_bins(tmp_path) -> N
 
 def test_open_from_disk_gives_identical_results(tmp_path) -> None:
     model, spec = sine_model(), FRVSpec("p", 1.0, alphas=ALPHAS5)
-    direct = FRVStudy.create(model, spec, 700, n_disc=20, seed=4, store=tmp_path / "a.zarr", chunk=128).add_samples(500)
-    written = FRVStudy.create(model, spec, 700, n_disc=20, seed=4, store=tmp_path / "b.zarr", chunk=128)
+    direct = FRVStudy.create(model, spec, 700, StudyOptions(n_disc=20, seed=4, chunk=128), store=tmp_path / "a.zarr")
+    direct.add_samples(500)
+    written = FRVStudy.create(model, spec, 700, StudyOptions(n_disc=20, seed=4, chunk=128), store=tmp_path / "b.zarr")
     reopened = FRVStudy.open(tmp_path / "b.zarr", model)
     assert reopened.spec == spec and reopened.grid == written.grid and reopened.n_samples == 700
     assert reopened.counts == written.counts
@@ -357,7 +371,8 @@ def test_hulls_are_written_block_by_block_in_chunks(tmp_path, monkeypatch) -> No
     monkeypatch.setattr(frv.study, "_append", spy)
     times = np.linspace(0.0, 1.0, 400)  # 1000 samples x 5 α x 2 x 400 nodes = 32 MB; blocks of 64
     model = FunctionModel(lambda p: np.cos(p[0] * times), times)
-    study = FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS5), 1000, n_disc=30, store=tmp_path / "s.zarr", chunk=64)
+    study = FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS5), 1000,
+                            StudyOptions(n_disc=30, chunk=64), store=tmp_path / "s.zarr")
     study.add_samples(100)  # starts mid-chunk: the first block only fills the chunk
     output = [n for name, n in writes if name == "samples"]
     assert max(output) == 64 and sum(output) == 1100 and len(output) == 19
@@ -368,8 +383,9 @@ def test_hulls_are_written_block_by_block_in_chunks(tmp_path, monkeypatch) -> No
 
 def test_interrupted_add_is_rolled_back(tmp_path, monkeypatch) -> None:
     model, spec = sine_model(), FRVSpec("p", 1.0)
-    study = FRVStudy.create(model, spec, 300, n_disc=15, seed=5, store=tmp_path / "s.zarr", chunk=64)
-    reference = FRVStudy.create(model, spec, 300, n_disc=15, seed=5, store=tmp_path / "r.zarr", chunk=64).add_samples(200)
+    study = FRVStudy.create(model, spec, 300, StudyOptions(n_disc=15, seed=5, chunk=64), store=tmp_path / "s.zarr")
+    reference = FRVStudy.create(model, spec, 300, StudyOptions(n_disc=15, seed=5, chunk=64), store=tmp_path / "r.zarr")
+    reference.add_samples(200)
     calls = {"n": 0}
     original = FRVStudy._assemble
 
@@ -392,20 +408,20 @@ def test_interrupted_add_is_rolled_back(tmp_path, monkeypatch) -> None:
 
 def test_time_stride_and_study_errors(tmp_path) -> None:
     model, spec = sine_model(), FRVSpec("p", 1.0)
-    study = FRVStudy.create(model, spec, 200, n_disc=10, store=tmp_path / "s.zarr", time_stride=7)
+    study = FRVStudy.create(model, spec, 200, StudyOptions(n_disc=10, time_stride=7), store=tmp_path / "s.zarr")
     nodes = optimisation_nodes(TIMES.size, 7)
     np.testing.assert_array_equal(study.hulls()["time"].to_numpy(), TIMES[nodes])
     assert study.counts["interval_optimisations"] == 2 * study.counts["occurring_proper_intervals"] * nodes.size
     with pytest.raises(ParameterError, match="one FRV parameter"):
         FRVStudy.create(model, [spec, FRVSpec("q", 2.0)], 10, store=tmp_path / "t.zarr")
     with pytest.raises(ParameterError, match="returned none"):
-        FRVStudy.create(sine_model(jacobian=False), spec, 10, store=tmp_path / "u.zarr", refine=True)
+        FRVStudy.create(sine_model(jacobian=False), spec, 10, StudyOptions(refine=True), store=tmp_path / "u.zarr")
 
 
 # ============================================================================ fitting
 def test_fits_equal_the_statistics_of_the_fully_loaded_hulls(tmp_path) -> None:
     model, spec = sine_model(), FRVSpec("p", 1.0, alphas=ALPHAS5)
-    study = FRVStudy.create(model, spec, 900, n_disc=20, seed=6, store=tmp_path / "s.zarr", chunk=128)
+    study = FRVStudy.create(model, spec, 900, StudyOptions(n_disc=20, seed=6, chunk=128), store=tmp_path / "s.zarr")
     hull = study.hulls()["hull"].to_numpy()
     fit = fit_distributions(study)
     np.testing.assert_allclose(fit["mean"].to_numpy(), hull.mean(axis=0), rtol=1e-12, atol=1e-14)
@@ -434,7 +450,8 @@ def test_figures(tmp_path) -> None:
     from fuzzygait.viz import frv as figures
 
     spec = FRVSpec("E", 59.958e9, alphas=ALPHAS5)
-    study = FRVStudy.create(sine_model(), FRVSpec("p", 1.0, alphas=ALPHAS5), 400, n_disc=20, store=tmp_path / "s.zarr")
+    study = FRVStudy.create(sine_model(), FRVSpec("p", 1.0, alphas=ALPHAS5), 400, StudyOptions(n_disc=20),
+                            store=tmp_path / "s.zarr")
     made = [
         figures.input_samples_figure(spec, n_samples=2000),
         figures.grouping_figure(spec, n_samples=2000, n_disc=30),

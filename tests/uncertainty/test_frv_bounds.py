@@ -17,7 +17,15 @@ import zarr
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy, hermite_values, interval_hulls
+from fuzzygait.uncertainty.frv import (
+    FRVMultiStudy,
+    FRVSpec,
+    FRVStudy,
+    MultiStudyOptions,
+    StudyOptions,
+    hermite_values,
+    interval_hulls,
+)
 from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys
 from fuzzygait.uncertainty.protocol import Output
 
@@ -96,7 +104,7 @@ def one_parameter_ranges(study: FRVStudy) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("offset", [0.0, -1e-3])
 def test_one_parameter_hulls_stay_within_the_simulations_and_the_declared_bounds(tmp_path, offset: float) -> None:
     model, spec = energy_model(offset), FRVSpec("p", 1.0, alphas=ALPHAS)
-    study = FRVStudy.create(model, spec, 300, n_disc=8, seed=2, store=tmp_path / "s.zarr", chunk=128)
+    study = FRVStudy.create(model, spec, 300, StudyOptions(n_disc=8, seed=2, chunk=128), store=tmp_path / "s.zarr")
     assert study.refine is True
     lib = study.library()
     values, slopes = lib["value"].to_numpy(), lib["slope"].to_numpy()
@@ -141,8 +149,9 @@ def two_parameter_ranges(study: FRVMultiStudy) -> tuple[np.ndarray, np.ndarray]:
 def test_two_parameter_hulls_stay_within_the_simulations_and_the_declared_bounds(tmp_path) -> None:
     model = energy_model(weights=(1.0, 0.5))
     specs = [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, alphas=ALPHAS)]
-    study = FRVMultiStudy.create(model, specs, 200, n_disc=(7, 5), seed=3, store=tmp_path / "m.zarr", chunk=128,
-                                 peak_refine=(2, 1))  # fmt: skip
+    study = FRVMultiStudy.create(model, specs, 200,
+                                 MultiStudyOptions(n_disc=(7, 5), seed=3, chunk=128, peak_refine=(2, 1)),
+                                 store=tmp_path / "m.zarr")  # fmt: skip
     assert study.refine is True and study.peak_refine == [2, 1]
     hull = study.hulls()["hull"].to_numpy()
     assert_within(hull, *two_parameter_ranges(study))
@@ -168,10 +177,12 @@ def test_a_store_made_before_recomputes_its_hulls_for_new_samples(tmp_path, seve
     if several:
         model = energy_model(weights=(1.0, 0.5))
         specs = [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, alphas=ALPHAS)]
-        FRVMultiStudy.create(model, specs, 100, n_disc=(6, 4), seed=1, store=tmp_path / "o.zarr", peak_refine=1)
+        FRVMultiStudy.create(model, specs, 100, MultiStudyOptions(n_disc=(6, 4), seed=1, peak_refine=1),
+                             store=tmp_path / "o.zarr")
     else:
         model = energy_model()
-        FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS), 100, n_disc=8, seed=1, store=tmp_path / "o.zarr")
+        FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS), 100, StudyOptions(n_disc=8, seed=1),
+                        store=tmp_path / "o.zarr")
     root = zarr.open_group(tmp_path / "o.zarr", mode="r+", zarr_format=2)
     attrs = dict(root.attrs)
     assert attrs.pop("hulls") == "simulated"

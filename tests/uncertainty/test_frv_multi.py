@@ -21,6 +21,8 @@ from fuzzygait.uncertainty.frv import (
     FRVSpec,
     FRVStudy,
     Grid,
+    MultiStudyOptions,
+    StudyOptions,
     box_extrema,
     generate_box_samples,
     generate_samples,
@@ -115,8 +117,8 @@ def test_box_extrema_match_brute_force() -> None:
 # ============================================================================ the study
 def test_study_hulls_are_the_closed_form_box_hulls(tmp_path) -> None:
     model, counter = analytic_model(), CountingEvaluator(analytic_model())
-    study = FRVMultiStudy.create(model, specs(), 800, n_disc=(12, 15), seed=1, store=tmp_path / "s.zarr",
-                                 evaluator=counter, chunk=200)  # fmt: skip
+    study = FRVMultiStudy.create(model, specs(), 800, StudyOptions(n_disc=(12, 15), seed=1, chunk=200),
+                                 store=tmp_path / "s.zarr", evaluator=counter)  # fmt: skip
     counts, grids = study.counts, study.grids
     cuts = study.samples()["cut"].to_numpy()
     bins = study.samples()["bin"].to_numpy()
@@ -149,8 +151,9 @@ def test_study_hulls_are_the_closed_form_box_hulls(tmp_path) -> None:
 def test_one_parameter_equals_the_one_parameter_study(tmp_path) -> None:
     model = FunctionModel(lambda p: np.sin(p[..., :1] * TIMES), TIMES)  # no sensitivities: no refinement
     spec = FRVSpec("p", 1.0, alphas=(0.0, 0.25, 0.5, 0.75, 1.0))
-    single = FRVStudy.create(model, spec, 600, n_disc=20, seed=3, store=tmp_path / "a.zarr", chunk=128)
-    multi = FRVMultiStudy.create(model, [spec], 600, n_disc=20, seed=3, store=tmp_path / "b.zarr", chunk=128)
+    single = FRVStudy.create(model, spec, 600, StudyOptions(n_disc=20, seed=3, chunk=128), store=tmp_path / "a.zarr")
+    multi = FRVMultiStudy.create(model, [spec], 600, StudyOptions(n_disc=20, seed=3, chunk=128),
+                                 store=tmp_path / "b.zarr")
     assert multi.grids == (single.grid,) and single.refine is False
     np.testing.assert_array_equal(multi.hulls()["hull"].to_numpy(), single.hulls()["hull"].to_numpy())
     assert multi.counts["occurring_intervals"] == single.counts["occurring_intervals"]
@@ -159,8 +162,8 @@ def test_one_parameter_equals_the_one_parameter_study(tmp_path) -> None:
 
 def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     model, counter = analytic_model(), CountingEvaluator(analytic_model())
-    grown = FRVMultiStudy.create(model, specs(), 30, n_disc=8, seed=2, store=tmp_path / "g.zarr", evaluator=counter,
-                                 chunk=64)  # fmt: skip
+    grown = FRVMultiStudy.create(model, specs(), 30, StudyOptions(n_disc=8, seed=2, chunk=64),
+                                 store=tmp_path / "g.zarr", evaluator=counter)  # fmt: skip
     grids0, sims0, boxes0 = grown.grids, grown.counts["forward_simulations"], grown.interval_rows
     grown.add_samples(700)
     assert any(g.n_bins > g0.n_bins for g, g0 in zip(grown.grids, grids0, strict=True))  # the grids grew
@@ -169,7 +172,9 @@ def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     assert counter.calls == 2 and counter.rows == grown.counts["forward_simulations"] == grown.library_rows
     assert grown.counts["last_forward_simulations"] == grown.library_rows - sims0 > 0
     assert grown.counts["last_new_intervals"] == grown.interval_rows - boxes0 > 0
-    one_shot = FRVMultiStudy.create(model, specs(), 730, seed=2, store=tmp_path / "o.zarr", chunk=64, grids=grown.grids)
+    one_shot = FRVMultiStudy.create(model, specs(), 730,
+                                    MultiStudyOptions(seed=2, chunk=64, grids=grown.grids),
+                                    store=tmp_path / "o.zarr")
     for name in ("hull",):
         np.testing.assert_array_equal(grown.hulls()[name].to_numpy(), one_shot.hulls()[name].to_numpy())
     for name in ("cut", "bin"):
@@ -180,7 +185,9 @@ def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     again = open_study(tmp_path / "g.zarr", model)
     assert isinstance(again, FRVMultiStudy) and again.counts == grown.counts
     again.add_samples(100)
-    direct = FRVMultiStudy.create(model, specs(), 830, seed=2, store=tmp_path / "d.zarr", chunk=64, grids=again.grids)
+    direct = FRVMultiStudy.create(model, specs(), 830,
+                                  MultiStudyOptions(seed=2, chunk=64, grids=again.grids),
+                                  store=tmp_path / "d.zarr")
     np.testing.assert_array_equal(again.hulls()["hull"].to_numpy(), direct.hulls()["hull"].to_numpy())
     with pytest.raises(FuzzyGaitError, match="several parameters"):
         FRVStudy.open(tmp_path / "g.zarr", model)
@@ -194,7 +201,8 @@ def test_alpha_one_outputs_follow_the_deterministic_model_at_the_peaks(tmp_path)
     """The α = 1 output (the model at the grouped peak) against a Monte Carlo of the
     deterministic model at the same raw peak samples: one distribution (two-sample KS)."""
     model = analytic_model()
-    study = FRVMultiStudy.create(model, specs(), 3000, n_disc=40, seed=5, store=tmp_path / "s.zarr", chunk=1000)
+    study = FRVMultiStudy.create(model, specs(), 3000, StudyOptions(n_disc=40, seed=5, chunk=1000),
+                                 store=tmp_path / "s.zarr")
     peaks = study.samples()["cut"].to_numpy()[:, :, -1, 0]  # (n, 2) raw peaks
     monte_carlo = model.function(peaks)  # (n, n_time), vectorised
     alpha_one = study.hulls()["hull"].to_numpy()[:, -1, 0]
@@ -214,8 +222,9 @@ def test_one_and_two_workers_are_bit_identical(tmp_path) -> None:
     results = []
     for workers in (1, 2):
         with Evaluator(workers=workers) as pool:
-            study = FRVMultiStudy.create(model, s, 400, n_disc=10, seed=6, store=tmp_path / f"w{workers}.zarr",
-                                         evaluator=pool.batch(recipe), chunk=128)  # fmt: skip
+            study = FRVMultiStudy.create(model, s, 400, StudyOptions(n_disc=10, seed=6, chunk=128),
+                                         store=tmp_path / f"w{workers}.zarr",
+                                         evaluator=pool.batch(recipe))  # fmt: skip
             study.add_samples(100)
         results.append((study.hulls()["hull"].to_numpy(), study.library()["value"].to_numpy(), dict(study.counts)))
     np.testing.assert_array_equal(results[0][0], results[1][0])
@@ -249,8 +258,10 @@ def test_latin_hypercube_peaks_fill_every_stratum_once_per_block() -> None:
 def test_a_latin_hypercube_study_extends_bit_for_bit(tmp_path) -> None:
     model = analytic_model()
     s = [FRVSpec(x.name, x.deterministic, x.relative_scale, x.alphas, mean=x.mean, sampling="lhs") for x in specs()]
-    grown = FRVMultiStudy.create(model, s, 200, n_disc=10, seed=3, store=tmp_path / "g.zarr").add_samples(300)
-    one_shot = FRVMultiStudy.create(model, s, 500, seed=3, store=tmp_path / "o.zarr", grids=grown.grids)
+    grown = FRVMultiStudy.create(model, s, 200, StudyOptions(n_disc=10, seed=3), store=tmp_path / "g.zarr")
+    grown.add_samples(300)
+    one_shot = FRVMultiStudy.create(model, s, 500, MultiStudyOptions(seed=3, grids=grown.grids),
+                                    store=tmp_path / "o.zarr")
     np.testing.assert_array_equal(grown.hulls()["hull"].to_numpy(), one_shot.hulls()["hull"].to_numpy())
     assert FRVMultiStudy.open(tmp_path / "g.zarr", model).specs == tuple(s)
 
@@ -258,7 +269,8 @@ def test_a_latin_hypercube_study_extends_bit_for_bit(tmp_path) -> None:
 def test_figures_per_parameter_and_of_the_output(tmp_path) -> None:
     from fuzzygait.viz import frv as figures
 
-    study = FRVMultiStudy.create(analytic_model(), specs(), 300, n_disc=10, seed=2, store=tmp_path / "s.zarr")
+    study = FRVMultiStudy.create(analytic_model(), specs(), 300, StudyOptions(n_disc=10, seed=2),
+                                 store=tmp_path / "s.zarr")
     made = figures.parameter_figures(study.specs, seed=2, n_samples=300, grids=study.grids, units={"p2": "kg/m³"})
     assert made["p2"][0].axes[0].get_xlabel() == "p2 (kg/m³)" and made["p1"][1].axes[1].get_xlabel() == "p1"
     assert list(made) == ["p1", "p2"] and all(len(a.axes) == 4 and len(b.axes) == 2 for a, b in made.values())

@@ -17,6 +17,7 @@ import os
 import shutil
 import signal
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,12 +27,12 @@ import zarr.storage._local as zarr_local
 
 from fuzzygait.io import atomic
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions
 from fuzzygait.uncertainty.frv.store import read_meta
 
 TIMES = np.linspace(0.0, 10.0, 21)
 SPEC = FRVSpec("p", 1.0, alphas=(0.0, 0.5, 1.0))
-SETTINGS = dict(n_disc=8, seed=1, chunk=64)
+SETTINGS = StudyOptions(n_disc=8, seed=1, chunk=64)
 FIRST, MORE = 20, 150  # the first batch's grid is extended by the second: every phase writes
 VOLATILE = ("wall_time", "last_wall_time", "last_forward_simulations", "last_new_intervals")
 
@@ -42,16 +43,16 @@ def model() -> FunctionModel:
 
 
 # ---------------------------------------------------------------- the runs (as frv-sim does them)
-def run_once(store: Path, n: int, seed: int = SETTINGS["seed"]) -> None:
+def run_once(store: Path, n: int, seed: int = SETTINGS.seed) -> None:
     """Create the study with ``n`` samples, or extend an existing one by ``n``."""
     if store.exists():
         FRVStudy.open(store, model()).add_samples(n)
     else:
-        FRVStudy.create(model(), SPEC, n, store=store, **{**SETTINGS, "seed": seed})
+        FRVStudy.create(model(), SPEC, n, replace(SETTINGS, seed=seed), store=store)
 
 
 def overwrite_once(store: Path, n: int) -> None:
-    FRVStudy.create(model(), SPEC, n, store=store, overwrite=True, **{**SETTINGS, "seed": 11})
+    FRVStudy.create(model(), SPEC, n, replace(SETTINGS, seed=11, overwrite=True), store=store)
 
 
 def snapshot(store: Path) -> dict[str, Any]:

@@ -185,7 +185,7 @@ def leg_frv_study(
     """
     from pathlib import Path
 
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, check_specs, open_study
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, StudyOptions, check_specs, open_study
 
     specs = check_specs(spec)
     for one in specs:
@@ -206,14 +206,13 @@ def leg_frv_study(
             study = open_study(path, model, evaluator=evaluator)
             study.add_samples(n_samples)
         elif multi:
-            study = FRVMultiStudy.create(model, specs, n_samples, n_disc=n_disc, seed=seed, store=path,
-                                         evaluator=evaluator, chunk=chunk, overwrite=overwrite,
-                                         options=options)  # fmt: skip
+            made = StudyOptions(n_disc=n_disc, seed=seed, chunk=chunk, overwrite=overwrite, record=options)
+            study = FRVMultiStudy.create(model, specs, n_samples, made, store=path, evaluator=evaluator)
         else:
             if not isinstance(n_disc, int):
                 if len(n_disc) != 1:
                     raise ParameterError(f"n_disc: one FRV parameter takes one grid size; got {list(n_disc)}")
                 n_disc = int(n_disc[0])
-            study = FRVStudy.create(model, specs[0], n_samples, n_disc=n_disc, seed=seed, store=path,
-                                    evaluator=evaluator, chunk=chunk, overwrite=overwrite, options=options)  # fmt: skip
+            made = StudyOptions(n_disc=n_disc, seed=seed, chunk=chunk, overwrite=overwrite, record=options)
+            study = FRVStudy.create(model, specs[0], n_samples, made, store=path, evaluator=evaluator)
     return study

@@ -39,7 +39,8 @@ refinement); :class:`FRVMultiStudy` several independent ones (boxes of per-param
 intervals on tensor grids, :func:`generate_box_samples`, :func:`occurring_boxes`,
 :func:`possible_boxes`, :func:`box_extrema`, and with sensitivities α = 1 at each
 sample's own peak by :func:`hermite_values`);
-:func:`open_study` opens either.
+:func:`open_study` opens either; a new study's settings are a :class:`StudyOptions`
+(:class:`MultiStudyOptions`: with the grids and the α = 1 lattice of several).
 """
 
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, serial_evaluator
@@ -65,6 +66,7 @@ from fuzzygait.uncertainty.frv.hulls import (
     range_extrema,
 )
 from fuzzygait.uncertainty.frv.multi import FRVMultiStudy, is_multi_store, open_study
+from fuzzygait.uncertainty.frv.options import MultiStudyOptions, StudyOptions
 from fuzzygait.uncertainty.frv.samples import (
     BLOCK,
     DISTRIBUTIONS,
@@ -90,6 +92,8 @@ __all__ = [
     "FRVSpec",
     "FRVStudy",
     "Grid",
+    "MultiStudyOptions",
+    "StudyOptions",
     "box_extrema",
     "box_rows",
     "check_specs",

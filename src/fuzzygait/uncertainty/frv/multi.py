@@ -52,7 +52,6 @@ parameter)``, with ``refine`` also ``slope (bin, time, parameter)`` = ∂value/�
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from collections.abc import Mapping, Sequence
@@ -68,10 +67,9 @@ from fuzzygait.io.atomic import tidy_beside
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, box_rows, group, possible_boxes
 from fuzzygait.uncertainty.frv.hulls import HULLS, box_extrema
+from fuzzygait.uncertainty.frv.options import PEAK_FACTORS, PEAK_TOLERANCE, MultiStudyOptions, StudyOptions
 from fuzzygait.uncertainty.frv.peaks import (
     PEAK_CHECKS,
-    PEAK_FACTORS,
-    PEAK_TOLERANCE,
     RESOLUTION,
     PeakLattice,
     _peak_factors,
@@ -157,12 +155,8 @@ class FRVMultiStudy(PeakLattice, StudyState):
     # ------------------------------------------------------------------ create / open
     @classmethod
     def create(cls, model: FuzzyModel, specs: Sequence[FRVSpec], n_samples: int,
-               n_disc: int | Sequence[int] = 30, seed: int = 0, store: str | os.PathLike[str] | None = None,
-               evaluator: BatchFunction | None = None, time_stride: int = 1, chunk: int = 256,
-               overwrite: bool = False, options: Mapping[str, Any] | None = None,
-               grids: Sequence[Grid] | None = None, refine: bool | None = None,
-               peak_refine: int | Sequence[int] | None = None,
-               peak_tolerance: float = PEAK_TOLERANCE) -> FRVMultiStudy:  # fmt: skip
+               options: StudyOptions | None = None, *, store: str | os.PathLike[str] | None = None,
+               evaluator: BatchFunction | None = None) -> FRVMultiStudy:  # fmt: skip
         """Run the FRV-GFA of several FRV parameters for ``n_samples`` samples into a new
         store (built beside it and moved into place when complete, as for one parameter).
 
@@ -170,45 +164,32 @@ class FRVMultiStudy(PeakLattice, StudyState):
             model: a model of ``len(specs)`` parameters (``p`` in ``specs`` order, SI).
             specs: one :class:`FRVSpec` per parameter, all with the same α-levels.
             n_samples: ``N_s``.
-            n_disc: ``N_p-disc`` grid points per parameter over the first batch's range
-                (one number for all, or one per parameter).
-            seed: seed of the sample streams (parameter ``k`` is stream ``k``).
+            options: the study's :class:`~fuzzygait.uncertainty.frv.MultiStudyOptions`
+                (a :class:`~fuzzygait.uncertainty.frv.StudyOptions` takes their defaults):
+                ``n_disc`` grid points per parameter over the first batch's range (one
+                number for all or one per parameter, default 30), seed (parameter ``k``
+                is stream ``k``), time stride, refinement, chunk, overwrite, ``record``,
+                and the ``grids`` to group on, the α = 1 lattice ``peak_refine`` (None:
+                chosen on the first batch, module docstring) and ``peak_tolerance``.
             store: the zarr directory to create.
             evaluator: batch evaluator ``P (k, n_params) -> (k, n_time)`` or ``(F, J (k,
                 n_time, n_params))``; default :func:`serial_evaluator`.
-            time_stride: keep every ``time_stride``-th time node (and the last).
-            chunk: samples per zarr chunk and per processing block.
-            overwrite: replace an existing store once the new one is complete.
-            options: JSON-compatible record of what the study is made with.
-            grids: the grids to group on (one per parameter) instead of the first
-                batch's ranges, e.g. another study's, to compare two studies bin by bin.
-            refine: α = 1 by the Hermite interpolant of the values and sensitivities at
-                each sample's own peak (within its cell's corner values); default: when
-                the evaluator returns sensitivities.
-            peak_refine: the α = 1 lattice per parameter (one factor for all or one
-                each, from :data:`PEAK_FACTORS`: 1 = the grouping grid, 2 = half its
-                spacing, ...); None: chosen on the first batch (module docstring).
-            peak_tolerance: the largest α = 1 interpolation error, as a fraction of the
-                output's spread, when the lattice is chosen (default 1 %).
         """
         t0 = time.perf_counter()
         spec_tuple = check_specs(specs)
         n_params = len(spec_tuple)
         n_samples = _whole(n_samples, "n_samples", 1)
-        seed, chunk = _whole(seed, "seed"), _whole(chunk, "chunk", 1)
-        time_stride = _whole(time_stride, "time_stride", 1)
-        discs = [n_disc] * n_params if isinstance(n_disc, (int, np.integer)) else list(n_disc)
-        if len(discs) != n_params:
-            raise ParameterError(f"n_disc: give one number or one per parameter ({n_params}); got {discs}")
-        discs = [_whole(n, "n_disc", 2) for n in discs]
+        if options is not None and not isinstance(options, StudyOptions):
+            raise ParameterError(f"options: give a MultiStudyOptions; got {type(options).__name__}")
+        options = MultiStudyOptions.of(options)
+        seed, chunk, time_stride, grids = options.seed, options.chunk, options.time_stride, options.grids
+        discs = options.discs(n_params, 30)
+        peak_refine, peak_tolerance = options.peak_refine, options.peak_tolerance
         factors = None if peak_refine is None else _peak_factors(peak_refine, n_params)
-        if not (math.isfinite(peak_tolerance) and 0.0 < peak_tolerance < 1.0):
-            raise ParameterError(f"peak_tolerance must lie between 0 and 1 (a fraction of the output's spread); "
-                                 f"got {peak_tolerance}")  # fmt: skip
         if store is None:
             raise ParameterError("store: give the path of the zarr directory to create")
         path = Path(store)
-        if path.exists() and not overwrite:
+        if path.exists() and not options.overwrite:
             raise FuzzyGaitError(f"{path}: already exists; open it with FRVMultiStudy.open or pass overwrite=True")
         if not path.parent.exists():
             raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
@@ -222,10 +203,10 @@ class FRVMultiStudy(PeakLattice, StudyState):
                 raise ParameterError(f"grids: give one Grid per parameter ({n_params})")
             discs = [g.n_points for g in grid_list]
         meta: dict[str, Any] = {"seed": seed, "grid": [g.to_dict() for g in grid_list], "n_disc": discs,
-                "time_stride": time_stride, "refine": refine, "hulls": HULLS, "peak_refine": factors,
+                "time_stride": time_stride, "refine": options.refine, "hulls": HULLS, "peak_refine": factors,
                 "peak_tolerance": float(peak_tolerance), "chunk": chunk, "n_time": n_time,
                 "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
-                "options": dict(options or {})}  # fmt: skip
+                "options": dict(options.record or {})}  # fmt: skip
         record = {"spec": [s.to_dict() for s in spec_tuple], **meta}
         return cls._build(path, record, lambda folder: cls(folder, model, spec_tuple, meta, evaluator), n_samples,
                           t0)  # fmt: skip

@@ -29,17 +29,14 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid
 from fuzzygait.uncertainty.frv.hulls import hermite_cells, hermite_values
+from fuzzygait.uncertainty.frv.options import PEAK_FACTORS
 from fuzzygait.uncertainty.frv.samples import FRVSpec, generate_box_samples
 from fuzzygait.uncertainty.frv.study import _blocks
 
 #: Finest lattice: ``h / RESOLUTION`` (a power of two; the refinement factors are its divisors).
 RESOLUTION = 8
-#: Default largest α = 1 interpolation error, as a fraction of the output's spread.
-PEAK_TOLERANCE = 0.01
 #: Test peaks per parameter and lattice level when the α = 1 lattice is chosen.
 PEAK_CHECKS = 16
-#: The α = 1 lattice refinement factors a parameter can have (divisors of RESOLUTION).
-PEAK_FACTORS = (1, 2, 4, 8)
 
 
 def lattice(grids: Sequence[Grid], factors: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, Self
 
@@ -21,6 +21,7 @@ from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator, declared_bounds, serial_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid, _decode, _encode, _interval_keys, group
 from fuzzygait.uncertainty.frv.hulls import HULLS, _hermite_rows, interval_hulls
+from fuzzygait.uncertainty.frv.options import StudyOptions
 from fuzzygait.uncertainty.frv.samples import BLOCK, FRVSpec, _whole, generate_samples
 from fuzzygait.uncertainty.frv.store import STORE_FORMAT, check, commit, new_store, open_group, read_meta
 from fuzzygait.uncertainty.frv.store import append as _append
@@ -191,10 +192,9 @@ class FRVStudy(StudyState):
 
     # ------------------------------------------------------------------ create / open
     @classmethod
-    def create(cls, model: FuzzyModel, spec: FRVSpec | Sequence[FRVSpec], n_samples: int, n_disc: int = 100,
-               seed: int = 0, store: str | os.PathLike[str] | None = None, evaluator: BatchFunction | None = None,
-               time_stride: int = 1, refine: bool | None = None, chunk: int = 256,
-               overwrite: bool = False, options: Mapping[str, Any] | None = None) -> FRVStudy:  # fmt: skip
+    def create(cls, model: FuzzyModel, spec: FRVSpec | Sequence[FRVSpec], n_samples: int,
+               options: StudyOptions | None = None, *, store: str | os.PathLike[str] | None = None,
+               evaluator: BatchFunction | None = None) -> FRVStudy:  # fmt: skip
         """Run the FRV-GFA for ``n_samples`` samples into a new store.
 
         Args:
@@ -202,21 +202,12 @@ class FRVStudy(StudyState):
                 parameter (``p`` of shape ``(1,)``); sensitivities used when declared.
             spec: the FRV parameter (one; a sequence of several raises ParameterError).
             n_samples: ``N_s``.
-            n_disc: ``N_p-disc`` grid points over the first batch's range.
-            seed: seed of the sample streams.
+            options: the study's :class:`~fuzzygait.uncertainty.frv.StudyOptions`
+                (``n_disc`` one number, default 100; seed, time stride, refinement,
+                chunk, overwrite and the ``record`` stored as the ``options`` attribute).
             store: the zarr directory to create.
             evaluator: batch evaluator ``P (k, 1) -> (k, n_time)`` or ``((k, n_time),
                 (k, n_time, 1))`` with sensitivities; default :func:`serial_evaluator`.
-            time_stride: keep every ``time_stride``-th time node (and the last).
-            refine: α = 1 by the Hermite interpolant of the library values and
-                sensitivities at each sample's own peak (within its cell's two values);
-                default: when the evaluator returns sensitivities.
-            chunk: samples per zarr chunk and per processing block.
-            overwrite: replace an existing store (it stays intact until the new one is
-                complete).
-            options: what the study is made with, JSON-compatible (stored as the
-                ``options`` attribute, e.g. for the caller to refuse extending it with
-                other ones).
 
         The study is built in a temporary folder beside ``store`` and moved onto it when
         complete: on any failure (or a kill) nothing is left at ``store``.
@@ -224,21 +215,24 @@ class FRVStudy(StudyState):
         t0 = time.perf_counter()
         spec = _single_spec(spec)
         n_samples = _whole(n_samples, "n_samples", 1)
-        seed, chunk = _whole(seed, "seed"), _whole(chunk, "chunk", 1)
-        time_stride, n_disc = _whole(time_stride, "time_stride", 1), _whole(n_disc, "n_disc", 2)
+        options = StudyOptions() if options is None else options
+        if not isinstance(options, StudyOptions):
+            raise ParameterError(f"options: give a StudyOptions; got {type(options).__name__}")
+        (n_disc,) = options.discs(1, 100)
+        seed, chunk, time_stride = options.seed, options.chunk, options.time_stride
         if store is None:
             raise ParameterError("store: give the path of the zarr directory to create")
         path = Path(store)
-        if path.exists() and not overwrite:
+        if path.exists() and not options.overwrite:
             raise FuzzyGaitError(f"{path}: already exists; open it with FRVStudy.open or pass overwrite=True")
         if not path.parent.exists():
             raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
         n_time = CountedModel(model, scale=np.ones(1)).n_time
         low, high = _sample_range(spec, seed, 0, n_samples, chunk)
         meta: dict[str, Any] = {"seed": seed, "grid": Grid.from_range(low, high, n_disc).to_dict(), "n_disc": n_disc,
-                "time_stride": time_stride, "refine": refine, "hulls": HULLS, "chunk": chunk, "n_time": n_time,
-                "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
-                "options": dict(options or {})}  # fmt: skip
+                "time_stride": time_stride, "refine": options.refine, "hulls": HULLS, "chunk": chunk,
+                "n_time": n_time, "n_samples": 0, "library_rows": 0, "interval_rows": 0, "counts": _new_counts(),
+                "options": dict(options.record or {})}  # fmt: skip
         record = {"spec": spec.to_dict(), **meta}
         return cls._build(path, record, lambda folder: cls(folder, model, spec, meta, evaluator), n_samples, t0)
 
