@@ -21,12 +21,14 @@ the ``dataset.fuzzy`` accessor (:mod:`fuzzygait.core.accessor`), and
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
 import fuzzygait.core.accessor  # noqa: F401 - registers ``dataset.fuzzy`` for every result made here
+from fuzzygait.core.errors import ParameterError
 
 BOUNDS = ("lower", "upper")
 #: Sign that turns each bound's search into a maximisation.
@@ -35,35 +37,71 @@ RESULT_VARIABLES = ("hull", "deterministic", "extremiser")
 REQUIRED_ATTRIBUTES = ("output", "units", "strategy", "forward_simulations", "node_evaluations")
 
 
-def fuzzy_result(
-    *,
-    alphas: NDArray[np.float64],
-    times: NDArray[np.float64],
-    parameter_names: Sequence[str],
-    hull: NDArray[np.float64],
-    deterministic: NDArray[np.float64],
-    extremiser: NDArray[np.float64],
-    output: str,
-    units: str,
-    strategy: str,
-    forward_simulations: int,
-    node_evaluations: int,
-    attrs: Mapping[str, object] | None = None,
-) -> xr.Dataset:
-    """Build a fuzzy result (see the module docstring for the layout)."""
+@dataclass(frozen=True)
+class HullArrays:
+    """The arrays of a fuzzy result: ascending ``alphas``, the output's ``times``, the
+    fuzzy ``parameter_names``, ``hull (alpha, bound, time)``, ``deterministic (time)``
+    and ``extremiser (alpha, bound, time, parameter)``."""
+
+    alphas: NDArray[np.float64]
+    times: NDArray[np.float64]
+    parameter_names: Sequence[str]
+    hull: NDArray[np.float64]
+    deterministic: NDArray[np.float64]
+    extremiser: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        n_alpha, n_time, n_parameter = len(self.alphas), len(self.times), len(self.parameter_names)
+        expected = {
+            "hull": (n_alpha, len(BOUNDS), n_time),
+            "deterministic": (n_time,),
+            "extremiser": (n_alpha, len(BOUNDS), n_time, n_parameter),
+        }
+        for name, shape in expected.items():
+            if (got := np.shape(getattr(self, name))) != shape:
+                raise ParameterError(f"{name} must have the shape {shape} (alphas {n_alpha}, bounds 2, times "
+                                     f"{n_time}, parameters {n_parameter}); got {got}")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ResultInfo:
+    """What a fuzzy result is: its ``output`` and ``units``, the ``strategy`` name and the
+    model evaluations it took (``forward_simulations``, ``node_evaluations``)."""
+
+    output: str
+    units: str
+    strategy: str
+    forward_simulations: int
+    node_evaluations: int
+
+    def __post_init__(self) -> None:
+        for name in ("output", "units", "strategy"):
+            if not isinstance(getattr(self, name), str):
+                raise ParameterError(f"{name} must be a string; got {getattr(self, name)!r}")
+        for name in ("forward_simulations", "node_evaluations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+                raise ParameterError(f"{name} must be a whole number >= 0; got {value!r}")
+
+
+def fuzzy_result(arrays: HullArrays, info: ResultInfo, *, attrs: Mapping[str, object] | None = None) -> xr.Dataset:
+    """Build a fuzzy result (see the module docstring for the layout) from its arrays,
+    what it is and further attributes (``attrs``: strategy options and counts)."""
+    units = info.units
     return xr.Dataset(
         {
-            "hull": (("alpha", "bound", "time"), hull, {"units": units}),
-            "deterministic": (("time",), deterministic, {"units": units}),
-            "extremiser": (("alpha", "bound", "time", "parameter"), extremiser),
+            "hull": (("alpha", "bound", "time"), arrays.hull, {"units": units}),
+            "deterministic": (("time",), arrays.deterministic, {"units": units}),
+            "extremiser": (("alpha", "bound", "time", "parameter"), arrays.extremiser),
         },
-        coords={"alpha": alphas, "bound": list(BOUNDS), "time": times, "parameter": list(parameter_names)},
+        coords={"alpha": arrays.alphas, "bound": list(BOUNDS), "time": arrays.times,
+                "parameter": list(arrays.parameter_names)},  # fmt: skip
         attrs={
-            "output": output,
+            "output": info.output,
             "units": units,
-            "strategy": strategy,
-            "forward_simulations": int(forward_simulations),
-            "node_evaluations": int(node_evaluations),
+            "strategy": info.strategy,
+            "forward_simulations": int(info.forward_simulations),
+            "node_evaluations": int(info.node_evaluations),
             **dict(attrs or {}),
         },
     )

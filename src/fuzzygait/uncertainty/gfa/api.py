@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.core.schema import fuzzy_result
+from fuzzygait.core.schema import HullArrays, ResultInfo, fuzzy_result
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.fuzzy import FuzzyNumber
 from fuzzygait.uncertainty.gfa.batched import run_batched
@@ -99,17 +99,14 @@ def graph_follower(
         run = run_batched(counted, parameters, levels, strategy, progress)
     else:
         run = run_follower(counted, parameters, levels, strategy, progress)
-    return fuzzy_result(
+    arrays = HullArrays(
         alphas=levels,
         times=np.asarray(fuzzy_model.times, dtype=float),
         parameter_names=parameters.names,
         hull=repair_nesting(run["hull"]),  # type: ignore[arg-type]
         deterministic=run["deterministic"],  # type: ignore[arg-type]
         extremiser=run["extremiser"],  # type: ignore[arg-type]
-        output=fuzzy_model.output.name,
-        units=fuzzy_model.output.units,
-        strategy=strategy.name,
-        forward_simulations=counted.evaluations,
-        node_evaluations=counted.node_evaluations,
-        attrs={**run["attrs"], **strategy.options()},  # type: ignore[dict-item]
     )
+    info = ResultInfo(output=fuzzy_model.output.name, units=fuzzy_model.output.units, strategy=strategy.name,
+                      forward_simulations=counted.evaluations, node_evaluations=counted.node_evaluations)  # fmt: skip
+    return fuzzy_result(arrays, info, attrs={**run["attrs"], **strategy.options()})  # type: ignore[dict-item]
