@@ -11,7 +11,7 @@ import xarray as xr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import AngleComponent
 from fuzzygait.markererror.analysis import relative_envelope_width
-from fuzzygait.markererror.result import fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
 from fuzzygait.testing import ModelCheckError, check_result
 from fuzzygait.uncertainty import FunctionModel, FuzzyVector, graph_follower, load_result, save_result, triangular
 
@@ -30,8 +30,8 @@ def angles_dataset(undetermined: bool = False) -> xr.Dataset:
     flags = {c: np.zeros((ALPHAS.size, frames.size), dtype=bool) for c in hulls}
     if undetermined:
         flags["LKneeAngles_X"][0, 1] = True  # α = 0 at frame 11: the widest band, undetermined
-    return fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=frames, times=(frames - 1) / 100.0, markers=["LKNE"],
-                                ball_radius=[10.0], undetermined=flags)  # fmt: skip
+    axes = AngleAxes(alphas=ALPHAS, frames=frames, times=(frames - 1) / 100.0, markers=["LKNE"], ball_radius=[10.0])
+    return fuzzy_angles_dataset(hulls, axes, undetermined=flags)
 
 
 def test_the_marker_error_layout_read_through_the_accessor() -> None:

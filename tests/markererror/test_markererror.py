@@ -25,16 +25,17 @@ from fuzzygait.markererror.comparison import (
     monte_carlo_envelope,
     random_deviation_curves,
 )
-from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
-from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.markererror.result import (
+    AngleAxes,
     angle_components,
     ball_radius,
     component_deviation,
     component_hull,
     fuzzy_angles_dataset,
 )
+from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
+from fuzzygait.workflows.angles import AnglesRun
 from support import TwoMarkerLine
 
 JOINTS = ("Hip", "Knee", "Ankle")
@@ -263,9 +264,9 @@ def test_relative_envelope_width_by_hand() -> None:
         [phi, phi],
     ])  # fmt: skip
     negative = -hull[:, ::-1]  # mirrored angle: Φ = −10, −40, −20; reference |−40|
-    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": hull, "LHipAngles_Y": negative}, alphas=[0.0, 0.5, 1.0],
+    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": hull, "LHipAngles_Y": negative}, AngleAxes(alphas=[0.0, 0.5, 1.0],
                                  frames=[1, 2, 3, 4], times=[0.0, 0.01, 0.02, 0.03], markers=["LKNE"],
-                                 ball_radius=[32.0])  # fmt: skip
+                                 ball_radius=[32.0]))  # fmt: skip
     table = relative_envelope_width(fuzzy)
     assert list(table.columns) == [0.5, 0.0]
     assert sorted(table.index) == ["LHipAngles_Y", "LKneeAngles_X"]

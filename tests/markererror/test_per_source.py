@@ -32,7 +32,7 @@ from fuzzygait.markererror.per_source import (
     source_undetermined,
     widest_source_bands,
 )
-from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, component_hull, fuzzy_angles_dataset
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, ErrorModel
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.storage import load_result, save_result
@@ -88,8 +88,8 @@ def test_two_markers_per_source_give_arcsin_2r_over_d() -> None:
     total = ErrorModel().radius("LTHI")
     assert total == 32.0
     frames = np.arange(1, model.times.size + 1)
-    main = fuzzy_angles_dataset({"LKneeAngles_X": hull(total)}, alphas=levels, frames=frames, times=model.times,
-                                markers=list(markers), ball_radius=[total, total])  # fmt: skip
+    axes = AngleAxes(alphas=levels, frames=frames, times=model.times, markers=list(markers), ball_radius=[total, total])
+    main = fuzzy_angles_dataset({"LKneeAngles_X": hull(total)}, axes)
     radii = {s: TABLE_3_1["thigh"][s] for s in SOURCES}
     fuzzy = attach_source_hulls(main, {s: {"LKneeAngles_X": hull(r)} for s, r in radii.items()}, levels,
                                 radii={s: [r, r] for s, r in radii.items()})  # fmt: skip

@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from support import SAMPLE_DATA, FakeAnalysis, assert_one_line_error, run, run_here
 
 from fuzzygait.core.findings import Finding, FindingKind
-from fuzzygait.workflows.angles import AnglesRun, run_angles
-from fuzzygait.markererror.result import fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
 from fuzzygait.viz.report import ReportItem, component_label, cycle_bands, write_report
+from fuzzygait.workflows.angles import AnglesRun, run_angles
+from support import SAMPLE_DATA, FakeAnalysis, assert_one_line_error, run, run_here
 
 ALPHAS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
 CHROMIUM = Path("/usr/bin/chromium")
@@ -50,8 +50,8 @@ def fake_analysis(run_: AnglesRun, alphas: np.ndarray = ALPHAS) -> FakeAnalysis:
         width = 2.0 * half[:, 0]
         delta_phi[name] = 100.0 * width / np.nanmax(np.abs(det))
     deviation = np.zeros((alphas.size, 2, run_.trial.n_frames, len(markers)))
-    fuzzy = fuzzy_angles_dataset(hulls, alphas=alphas, frames=run_.trial.frames, times=run_.trial.times,
-                                 markers=markers, ball_radius=np.linspace(7.0, 32.0, len(markers)),
+    fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=alphas, frames=run_.trial.frames, times=run_.trial.times,
+                                 markers=markers, ball_radius=np.linspace(7.0, 32.0, len(markers))),
                                  deviations={name: deviation for name in names},
                                  attrs={"trial": run_.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
     keep = alphas < 1

@@ -22,7 +22,7 @@ import pytest
 
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, attach_source_hulls, widest_source_bands
-from fuzzygait.markererror.result import fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
 from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.sources import _tint, dominant_sentence, source_figure
@@ -50,8 +50,8 @@ def source_analysis(run: AnglesRun, per_source: bool = True) -> FakeAnalysis:
     table = run.angle_table()
     names = [*FLEXION_COMPONENTS, "LKneeAngles_Y"]
     hulls = {n: _hull(table[n].to_numpy(), ALPHAS, ALL_HALF) for n in names}
-    fuzzy = fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
-                                 markers=list(run.trial.marker_labels), ball_radius=np.full(run.trial.n_markers, 32.0),
+    fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
+                                 markers=list(run.trial.marker_labels), ball_radius=np.full(run.trial.n_markers, 32.0)),
                                  attrs={"trial": run.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
     if per_source:
         bands = {s: {n: _hull(table[n].to_numpy(), SOURCE_ALPHAS, h,

@@ -17,12 +17,12 @@ import pytest
 from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.markererror.analysis import relative_envelope_width
-from fuzzygait.markererror.result import fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
 from fuzzygait.viz.report import ReportItem, cycle_bands, write_report
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
 from fuzzygait.workflows.angles import AnglesRun, run_angles
-from support import FakeAnalysis, SAMPLE_DATA
+from support import SAMPLE_DATA, FakeAnalysis
 
 ALPHAS = np.array([0.0, 0.5, 1.0])
 #: α = 0 of left knee flexion is undetermined on these frames (0-based).
@@ -55,9 +55,9 @@ def undetermined_analysis(run: AnglesRun) -> FakeAnalysis:
         half = np.where(flag, FLIP, half)
         hulls[name] = np.stack([measured - half, measured + half], axis=1)
         flags[name] = flag
-    fuzzy = fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
+    fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
                                  markers=list(run.trial.marker_labels),
-                                 ball_radius=np.full(run.trial.n_markers, 20.0),
+                                 ball_radius=np.full(run.trial.n_markers, 20.0)),
                                  attrs={"trial": run.trial.name, "sources": "measurement,placement,sta"},
                                  undetermined=flags)  # fmt: skip
     note = Finding(FindingKind.UNCERTAINTY, "fake undetermined analysis")

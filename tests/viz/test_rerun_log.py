@@ -15,7 +15,7 @@ import pytest
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.kinematics.model import CGMResult
-from fuzzygait.markererror.result import component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, component_hull, fuzzy_angles_dataset
 
 rr = pytest.importorskip("rerun")
 pa = pytest.importorskip("pyarrow")
@@ -38,8 +38,8 @@ def fuzzy(angles_run):
             centre = values[None, :, k]
             hulls[f"{name}_{axis}"] = np.stack([centre - half, centre + half], axis=1)
             deviations[f"{name}_{axis}"] = np.ones((len(ALPHAS), 2, trial.n_frames, trial.n_markers))
-    return fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=trial.frames, times=trial.times,
-                                markers=trial.marker_labels, ball_radius=4.0 + np.arange(trial.n_markers) * 0.5,
+    return fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=trial.frames, times=trial.times,
+                                markers=trial.marker_labels, ball_radius=4.0 + np.arange(trial.n_markers) * 0.5),
                                 deviations=deviations, attrs={"trial": trial.name})  # fmt: skip
 
 
@@ -251,10 +251,10 @@ def test_undetermined_frames(angles_run, tmp_path):
     flag = np.zeros((alphas.size, trial.n_frames), dtype=bool)
     flag[0, 20:30] = True
     half = np.where(flag, 175.0, (1.0 - alphas)[:, None] * 2.0)  # the frame flipped there
-    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": np.stack([knee - half, knee + half], axis=1)}, alphas=alphas,
-                                 frames=trial.frames, times=trial.times, markers=trial.marker_labels,
-                                 ball_radius=np.full(trial.n_markers, 20.0), attrs={"trial": trial.name},
-                                 undetermined={"LKneeAngles_X": flag})  # fmt: skip
+    axes = AngleAxes(alphas=alphas, frames=trial.frames, times=trial.times, markers=trial.marker_labels,
+                     ball_radius=np.full(trial.n_markers, 20.0))  # fmt: skip
+    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": np.stack([knee - half, knee + half], axis=1)}, axes,
+                                 attrs={"trial": trial.name}, undetermined={"LKneeAngles_X": flag})  # fmt: skip
     path = write_recording(tmp_path / "undetermined.rrd", trial, result, fuzzy)
     upper = scalars(temporal_rows(path, "/angles/LKneeAngles/X/alpha_0/upper"))
     assert upper.size == trial.n_frames

@@ -4,15 +4,14 @@ end to end in tests/cli/test_cli_angles.py)."""
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
 from fuzzygait.markererror.analysis import relative_envelope_width
-from fuzzygait.markererror.result import fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.workflows.demo import uncertainty_lines
-from support import FakeAnalysis, SAMPLE_DATA
+from support import SAMPLE_DATA, FakeAnalysis
 
 ALPHAS = np.array([0.0, 0.5, 1.0])
 
@@ -31,8 +30,8 @@ def knee_analysis(run: AnglesRun, undetermined: dict[str, slice]) -> FakeAnalysi
             flag[0, undetermined[name]] = True
         half = np.where(flag, 175.0, (1.0 - ALPHAS)[:, None] * 3.0)
         hulls[name], flags[name] = np.stack([measured - half, measured + half], axis=1), flag
-    fuzzy = fuzzy_angles_dataset(hulls, alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
-                                 markers=list(run.trial.marker_labels), ball_radius=np.full(run.trial.n_markers, 20.0),
+    fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
+                                 markers=list(run.trial.marker_labels), ball_radius=np.full(run.trial.n_markers, 20.0)),
                                  attrs={"trial": run.trial.name}, undetermined=flags)  # fmt: skip
     return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy))
 

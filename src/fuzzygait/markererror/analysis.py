@@ -60,6 +60,7 @@ from fuzzygait.markererror.angle_model import (
     undetermined,
 )
 from fuzzygait.markererror.result import (
+    AngleAxes,
     angle_components,
     component_hull,
     component_undetermined,
@@ -354,11 +355,9 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
     flags = {column: undetermined(hull[:, 0], hull[:, 1], hull[measured_index, 1][None, :])
              for column, hull in hulls.items()}  # fmt: skip
     gimbal_undetermined(hulls, flags, measured_index)
-    return fuzzy_angles_dataset(
-        hulls, alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
-        ball_radius=[options.error_model.radius(m, sources) for m in markers], deviations=deviations, attrs=attrs,
-        undetermined=flags,
-    )  # fmt: skip
+    axes = AngleAxes(alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
+                     ball_radius=[options.error_model.radius(m, sources) for m in markers])  # fmt: skip
+    return fuzzy_angles_dataset(hulls, axes, deviations=deviations, attrs=attrs, undetermined=flags)
 
 
 def undetermined_levels(fuzzy: xr.Dataset) -> pd.DataFrame:

@@ -7,6 +7,7 @@ uses, so the layout is defined in this module only.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -18,14 +19,42 @@ from fuzzygait.core.names import AngleComponent
 from fuzzygait.kinematics.labels import component_label
 
 
+@dataclass(frozen=True)
+class AngleAxes:
+    """The axes of a fuzzy joint-angle dataset besides its components.
+
+    Attributes:
+        alphas: ascending α-levels in [0, 1] (1 included).
+        frames: 1-based C3D frame numbers; ``times`` their times in s (one per frame).
+        markers: marker labels of the ``marker`` dimension.
+        ball_radius: α = 0 ball radius Σ (mm) per marker (finite, ≥ 0).
+    """
+
+    alphas: Sequence[float] | NDArray[np.float64]
+    frames: Sequence[int] | NDArray[np.int_]
+    times: Sequence[float] | NDArray[np.float64]
+    markers: Sequence[str]
+    ball_radius: Sequence[float] | NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        alphas = np.asarray(self.alphas, dtype=float)
+        if alphas.ndim != 1 or alphas.size == 0 or not np.all((alphas >= 0) & (alphas <= 1)) \
+                or np.any(np.diff(alphas) <= 0):
+            raise ParameterError(f"alphas must be ascending α-levels in [0, 1], at least one; got {list(alphas)}")
+        if len(self.times) != len(self.frames):
+            raise ParameterError(f"times must have one value per frame ({len(self.frames)}); got {len(self.times)}")
+        if len(self.ball_radius) != len(self.markers):
+            raise ParameterError(f"ball_radius must have one value per marker ({len(self.markers)}); "
+                                 f"got {len(self.ball_radius)}")  # fmt: skip
+        radius = np.asarray(self.ball_radius, dtype=float)
+        if not np.all(np.isfinite(radius) & (radius >= 0)):
+            raise ParameterError(f"ball_radius must be finite and >= 0 mm; got {list(radius)}")
+
+
 def fuzzy_angles_dataset(
     hulls: Mapping[str, NDArray[np.float64]],
+    axes: AngleAxes,
     *,
-    alphas: Sequence[float] | NDArray[np.float64],
-    frames: Sequence[int] | NDArray[np.int_],
-    times: Sequence[float] | NDArray[np.float64],
-    markers: Sequence[str],
-    ball_radius: Sequence[float] | NDArray[np.float64],
     deviations: Mapping[str, NDArray[np.float64]] | None = None,
     attrs: Mapping[str, object] | None = None,
     undetermined: Mapping[str, NDArray[np.bool_]] | None = None,
@@ -35,16 +64,14 @@ def fuzzy_angles_dataset(
     Args:
         hulls: component name (``"LKneeAngles_X"``) → hull ``(alpha, bound, frame)`` in
             degrees, bounds ordered lower, upper.
-        alphas: ascending α-levels (1 included).
-        frames: 1-based C3D frame numbers; ``times`` their times in s.
-        markers: marker labels of the ``marker`` dimension.
-        ball_radius: α = 0 ball radius Σ (mm) per marker.
+        axes: the α-levels, frames and their times, markers and their ball radii.
         deviations: component → deviation norms ``(alpha, bound, frame, marker)`` in mm
             (NaN for markers the component does not use); None: no ``deviation`` variable.
         attrs: dataset attributes (``units`` is set to ``"deg"``).
         undetermined: component -> ``(alpha, frame)`` True where the band is undetermined;
             None: all False.
     """
+    alphas, frames, times, markers, ball_radius = axes.alphas, axes.frames, axes.times, axes.markers, axes.ball_radius
     components = list(hulls)
     parsed = [AngleComponent.parse(c) for c in components]
     shape = (len(components), len(alphas), len(frames))
