@@ -37,7 +37,7 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from fuzzygait.markererror.allowable import allowable_errors, band_excursion  # noqa: E402
+from fuzzygait.markererror.allowable import AllowableRequest, allowable_errors, band_excursion  # noqa: E402
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles  # noqa: E402
 from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject  # noqa: E402
 from fuzzygait.markererror.comparison import monte_carlo_envelope  # noqa: E402
@@ -93,8 +93,9 @@ def study(title: str, run: AnglesRun, evaluator: Evaluator) -> None:
     plain = fuzzy_joint_angles(trial, run.subject, result, options, ANGLES, evaluator=evaluator, **extra)
     wall = time.perf_counter() - start
     start = time.perf_counter()
-    table, refined = allowable_errors(trial, run.subject, result, options, TOLERANCE, None, RESOLUTION,
-                                      fuzzy=plain, evaluator=evaluator, **extra)  # fmt: skip
+    request = AllowableRequest(options, TOLERANCE, None, RESOLUTION)
+    table, refined = allowable_errors(trial, run.subject, result, request, fuzzy=plain, evaluator=evaluator,
+                                      **extra)  # fmt: skip
     refine_wall = time.perf_counter() - start
     n_frames = int(np.isfinite(trial.markers[:, 0, 0]).sum())
     plain_ev, refine_ev = int(plain.attrs["node_evaluations"]), int(refined.attrs["allowable_node_evaluations"])

@@ -19,6 +19,7 @@ import xarray as xr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.trial import Trial
 from fuzzygait.markererror.allowable import (
+    AllowableRequest,
     ScaleSearch,
     allowable_errors,
     allowable_sentence,
@@ -130,8 +131,8 @@ def plain(angles_run: AnglesRun, sparse_trial: Trial) -> xr.Dataset:
 @pytest.fixture(scope="module")
 def knee(angles_run: AnglesRun, sparse_trial: Trial, plain: xr.Dataset):  # noqa: ANN201
     options = FuzzyAngleOptions(alphas=PLAIN_ALPHAS)
-    return allowable_errors(sparse_trial, angles_run.subject, angles_run.result, options, TOLERANCE, [KNEE],
-                            fuzzy=plain)  # fmt: skip
+    return allowable_errors(sparse_trial, angles_run.subject, angles_run.result,
+                            AllowableRequest(options, TOLERANCE, [KNEE]), fuzzy=plain)  # fmt: skip
 
 
 def test_allowable_knee_flexion_checked_by_monte_carlo(angles_run: AnglesRun, sparse_trial: Trial,
@@ -220,15 +221,16 @@ def test_table_survives_saving(knee, tmp_path) -> None:  # noqa: ANN001
 def test_full_table_passes_and_smallest_fails(angles_run: AnglesRun, sparse_trial: Trial, plain: xr.Dataset) -> None:
     # 2 mm balls (measurement only): knee flexion is within ±2.5° even at α = 0
     options = FuzzyAngleOptions(alphas=(0.0,), sources=("measurement",))
-    table, fuzzy = allowable_errors(sparse_trial, angles_run.subject, angles_run.result, options, TOLERANCE, [KNEE])
+    table, fuzzy = allowable_errors(sparse_trial, angles_run.subject, angles_run.result,
+                                    AllowableRequest(options, TOLERANCE, [KNEE]))  # fmt: skip
     row = table.loc[KNEE]
     assert row["full_table_passes"] and row["allowable_scale"] == 1.0 and row["evaluations"] == 0
     assert "even with the full errors of Table 3.1 (measurement)" in row["text"]
     assert fuzzy.attrs["allowable_runs"] == 0
     # a tolerance no tried scale meets, at a coarse resolution: nothing passes
     options = FuzzyAngleOptions(alphas=PLAIN_ALPHAS)
-    table, _ = allowable_errors(sparse_trial, angles_run.subject, angles_run.result, options, 0.01, [KNEE],
-                                resolution=40.0, fuzzy=plain)  # fmt: skip
+    table, _ = allowable_errors(sparse_trial, angles_run.subject, angles_run.result,
+                                AllowableRequest(options, 0.01, [KNEE], resolution=40.0), fuzzy=plain)  # fmt: skip
     row = table.loc[KNEE]
     assert row["smallest_fails"] and row["allowable_scale"] == 0.0 and row["failing_scale"] == 0.25
     assert "not known within ±0.01° even if every marker stays within 8.00 mm" in row["text"]
@@ -238,13 +240,26 @@ def test_bad_arguments(angles_run: AnglesRun, sparse_trial: Trial, plain: xr.Dat
     args = (sparse_trial, angles_run.subject, angles_run.result)
     options = FuzzyAngleOptions(alphas=PLAIN_ALPHAS)
     with pytest.raises(ParameterError, match="tolerance"):
-        allowable_errors(*args, options, 0.0, fuzzy=plain)
+        allowable_errors(*args, AllowableRequest(options, 0.0), fuzzy=plain)
     with pytest.raises(ParameterError, match="LHipAngles_X"):
-        allowable_errors(*args, options, angles=["LHipAngles_X"], fuzzy=plain)
+        allowable_errors(*args, AllowableRequest(options, angles=["LHipAngles_X"]), fuzzy=plain)
     with pytest.raises(ParameterError, match="sources"):
-        allowable_errors(*args, FuzzyAngleOptions(sources=("measurement",)), fuzzy=plain)
+        allowable_errors(*args, AllowableRequest(FuzzyAngleOptions(sources=("measurement",))), fuzzy=plain)
     with pytest.raises(ParameterError, match="ball radius of LKNE"):
-        allowable_errors(*args, FuzzyAngleOptions(error_model=ErrorModel(marker_radius={"LKNE": 5.0})), fuzzy=plain)
+        wrong = FuzzyAngleOptions(error_model=ErrorModel(marker_radius={"LKNE": 5.0}))
+        allowable_errors(*args, AllowableRequest(wrong), fuzzy=plain)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [("options", None, "options must be FuzzyAngleOptions"), ("tolerance", 0.0, "tolerance must be > 0"),
+     ("tolerance", float("nan"), "tolerance must be > 0"), ("angles", "LKneeAngles", "angles must be a sequence"),
+     ("resolution", -0.1, "resolution must be > 0"), ("max_evaluations", 0, "max_evaluations must be a whole"),
+     ("max_evaluations", 2.5, "max_evaluations must be a whole")],
+)  # fmt: skip
+def test_request_rejects_each_bad_field(field: str, value: object, message: str) -> None:
+    with pytest.raises(ParameterError, match=f"^{message}"):
+        AllowableRequest(**{field: value})  # type: ignore[arg-type]
 
 
 def test_sentence_without_frames() -> None:

@@ -20,7 +20,7 @@ import pytest
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.markererror.allowable import allowable_errors
+from fuzzygait.markererror.allowable import AllowableRequest, allowable_errors
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
 from fuzzygait.markererror.per_source import (
     ALL,
@@ -194,8 +194,8 @@ def test_progress_of_the_per_source_runs(sparse_run: AnglesRun, options: FuzzyAn
 def test_progress_of_the_allowable_refinement(sparse_run: AnglesRun, options: FuzzyAngleOptions,
                                               plain: xr.Dataset) -> None:  # fmt: skip
     calls: list[tuple[int, int]] = []
-    _, refined = allowable_errors(sparse_run.trial, sparse_run.subject, sparse_run.result, options,
-                                  angles=["LKneeAngles_X"], fuzzy=plain,
+    _, refined = allowable_errors(sparse_run.trial, sparse_run.subject, sparse_run.result,
+                                  AllowableRequest(options, angles=["LKneeAngles_X"]), fuzzy=plain,
                                   progress=lambda done, total: calls.append((done, total)))  # fmt: skip
     runs = refined.attrs["allowable_runs"]
     assert runs > 0 and calls[-1] == (runs, runs)

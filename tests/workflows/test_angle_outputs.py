@@ -21,7 +21,8 @@ from fuzzygait.kinematics import ANGLE_NAMES, FOREFOOT_ANGLE_NAMES
 from fuzzygait.uncertainty import load_result
 from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix, run_angles
-from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
+from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
+from fuzzygait.workflows.trial_inputs import TrialInputs
 from support import SAMPLE_DATA
 
 SAMPLE = {"static": SAMPLE_DATA / "static.c3d", "subject_file": SAMPLE_DATA / "subject.toml"}
@@ -137,7 +138,7 @@ def test_uncertainty_dataset_and_report_page_name_the_model(tmp_path: Path) -> N
     short = tmp_path / "short.c3d"
     write_c3d(_first_seconds(read_c3d(SAMPLE_DATA / "walking.c3d"), 1.3), short)
     settings = MarkerErrorSettings(alphas=(0.0,), angles=("LKneeAngles",), workers=1)
-    analysis = analyse_to_files(short, tmp_path / "fuzzy.nc", settings=settings, **SAMPLE)
+    analysis = analyse_to_files(MarkerErrorRequest(TrialInputs(short, **SAMPLE), settings), tmp_path / "fuzzy.nc")
     assert analysis.fuzzy.attrs["model"] == "cgm1.0"
     assert load_result(tmp_path / "fuzzy.nc").attrs["model"] == "cgm1.0"
     write_report([ReportItem(short, analysis)], tmp_path / "report")

@@ -23,6 +23,7 @@ from fuzzygait.workflows.angles import Preprocessing, calibrate_static, model_ou
 from fuzzygait.workflows.compare import compare_trial
 from fuzzygait.workflows.crosscheck import AGREE_DEG, FLAG_DEG, compare_angles, recover_flat_foot, stored_angle_names
 from fuzzygait.workflows.subject_resolution import for_static_calibration, settle_marker_diameter
+from fuzzygait.workflows.trial_inputs import TrialInputs
 from support import SAMPLE_DATA, assert_one_line_error, needs_shared, run_here, shared_file
 
 RAW = Preprocessing(filter=False)
@@ -120,7 +121,7 @@ NEXUS = [("vicon", "Movement_trial.c3d", ()), ("vicon", "Static_trial.c3d", ()),
 def test_every_nexus_file_agrees_within_a_hundredth_of_a_degree(folder: str, name: str, options: tuple) -> None:
     """With the file's own PROCESSING values and nothing given by hand (the FlatFoot
     session's marker size and its static trial's foot flat are recovered)."""
-    comparison = compare_trial(shared_file(folder, name), flat_foot=True if options else None)
+    comparison = compare_trial(TrialInputs(shared_file(folder, name), flat_foot=True if options else None))
     groups = comparison.check.groups
     assert len(groups) == 10 and max(groups.values()) <= 0.01, groups
     assert all(row.frames > 0 for row in comparison.check.rows)
@@ -129,7 +130,8 @@ def test_every_nexus_file_agrees_within_a_hundredth_of_a_degree(folder: str, nam
 
 @needs_shared
 def test_the_flat_foot_static_names_foot_flat_when_given_the_other_way() -> None:
-    comparison = compare_trial(shared_file("pig-options", "PiG_Calibration-FlatFoot-Full.c3d"), flat_foot=False)
+    static = shared_file("pig-options", "PiG_Calibration-FlatFoot-Full.c3d")
+    comparison = compare_trial(TrialInputs(static, flat_foot=False))
     assert set(comparison.check.flagged) <= {"LAnkleAngles", "RAnkleAngles", "LFootProgressAngles",
                                              "RFootProgressAngles"}  # fmt: skip
     assert comparison.check.causes[0] == "foot flat (the file's static outputs were made with foot flat on)"

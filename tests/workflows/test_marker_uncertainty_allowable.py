@@ -20,15 +20,17 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import FindingKind, messages
 from fuzzygait.markererror.allowable import allowable_table, refined_levels
 from fuzzygait.uncertainty.storage import load_result
-from fuzzygait.workflows import marker_uncertainty
+from fuzzygait.workflows import trial_inputs
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.demo import allowable_lines
 from fuzzygait.workflows.marker_uncertainty import (
     MarkerErrorAnalysis,
+    MarkerErrorRequest,
     MarkerErrorSettings,
     analyse_run,
     analyse_to_files,
 )
+from fuzzygait.workflows.trial_inputs import TrialInputs
 from support import sparse_angles_run
 
 N_FRAMES = 6
@@ -76,10 +78,10 @@ def test_saved_dataset_is_the_refined_one(sparse_run: AnglesRun, tmp_path: Path,
                                           monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
     """analyse_to_files saves the refined dataset: the table read back from the file is
     the one in memory (the sparse run stands in for the pipeline)."""
-    monkeypatch.setattr(marker_uncertainty, "run_angles", lambda *args, **kwargs: sparse_run)
+    monkeypatch.setattr(trial_inputs, "run_angles", lambda *args, **kwargs: sparse_run)
     settings = dataclasses.replace(SETTINGS, allowable_angles=("LKneeAngles_X",))
     out = tmp_path / "fuzzy.nc"
-    analysis = analyse_to_files(sparse_run.trial, out, settings=settings)
+    analysis = analyse_to_files(MarkerErrorRequest(TrialInputs(sparse_run.trial), settings), out)
     assert analysis.allowable is not None and list(analysis.allowable.index) == ["LKneeAngles_X"]
     again = load_result(out)
     pd.testing.assert_frame_equal(allowable_table(again), analysis.allowable, check_dtype=False)

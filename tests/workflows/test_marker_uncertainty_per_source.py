@@ -18,10 +18,16 @@ import pytest
 from fuzzygait.core.findings import messages
 from fuzzygait.markererror.per_source import source_components, source_names, widest_source_bands
 from fuzzygait.uncertainty.storage import load_result
-from fuzzygait.workflows import marker_uncertainty
+from fuzzygait.workflows import trial_inputs
 from fuzzygait.workflows.angles import AnglesRun
-from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run, analyse_to_files
+from fuzzygait.workflows.marker_uncertainty import (
+    MarkerErrorRequest,
+    MarkerErrorSettings,
+    analyse_run,
+    analyse_to_files,
+)
 from fuzzygait.workflows.progress import Prefixed
+from fuzzygait.workflows.trial_inputs import TrialInputs
 from support import sparse_angles_run
 
 N_FRAMES = 6
@@ -97,11 +103,11 @@ def test_per_source_off_or_one_source(sparse_run: AnglesRun) -> None:
 
 def test_saved_with_the_per_source_bands(sparse_run: AnglesRun, tmp_path: Path,
                                          monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
-    monkeypatch.setattr(marker_uncertainty, "run_angles", lambda *args, **kwargs: sparse_run)
+    monkeypatch.setattr(trial_inputs, "run_angles", lambda *args, **kwargs: sparse_run)
     recorder = Recorder()
     out = tmp_path / "fuzzy.nc"
-    analysis = analyse_to_files(sparse_run.trial, out, settings=dataclasses.replace(SETTINGS, tolerance=None),
-                                stages=Prefixed(recorder, "walking.c3d: "))  # fmt: skip
+    request = MarkerErrorRequest(TrialInputs(sparse_run.trial), dataclasses.replace(SETTINGS, tolerance=None))
+    analysis = analyse_to_files(request, out, stages=Prefixed(recorder, "walking.c3d: "))
     assert recorder.stages() == ["walking.c3d: fuzzy angles", "walking.c3d: per-source bands"]
     again = load_result(out)
     np.testing.assert_array_equal(again["source_hull"], analysis.fuzzy["source_hull"])

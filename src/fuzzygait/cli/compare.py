@@ -46,13 +46,14 @@ def compare(
     file's own markers with the same subject parameters; differences over 0.1° flagged
     with their likeliest cause (marker diameter, subject values, static offsets)."""
     from fuzzygait.workflows.compare import compare_trial
+    from fuzzygait.workflows.trial_inputs import TrialInputs
 
     with user_errors():
         check_knee_ankle_centres(knee_ankle_centres)
-        comparison = compare_trial(dynamic, static=static, subject_file=subject,
-                                   preprocessing=preprocessing.preprocessing(), flat_foot=flat_foot,
-                                   marker_diameter=marker_diameter, model=model,
-                                   knee_ankle_centres=knee_ankle_centres, out_table=out_table)  # fmt: skip
+        inputs = TrialInputs(dynamic, static=static, subject_file=subject, preprocessing=preprocessing.preprocessing(),
+                             flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
+                             knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+        comparison = compare_trial(inputs, out_table)
     run, check = comparison.run, comparison.check
     for warning in run.warnings:
         err.print(f"fuzzygait: warning: {warning}", markup=False)

@@ -57,7 +57,8 @@ def uncertainty(
     allowable marker error of each (--tolerance; its refined α-levels saved too) and the
     flexion bands of each error source alone (--per-source, the default)."""
     from fuzzygait.uncertainty.storage import SUFFIXES
-    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_to_files
+    from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
+    from fuzzygait.workflows.trial_inputs import TrialInputs
 
     with user_errors():
         if out_file.suffix.lower() not in SUFFIXES:
@@ -72,14 +73,13 @@ def uncertainty(
                                               method=method, workers=workers,
                                               tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
+        inputs = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
+                             preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
+                             marker_diameter=calibration.marker_diameter, model=model)  # fmt: skip
         with progress_bars() as bars:
             bar = estimated_stages(bars)
             bar.stage("joint angles")
-            analysis = analyse_to_files(
-                dynamic, out_file, rrd=rrd, static=calibration.static, subject_file=calibration.subject,
-                marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                preprocessing=preprocessing.preprocessing(), model=model, stages=bar,
-            )  # fmt: skip
+            analysis = analyse_to_files(MarkerErrorRequest(inputs, settings), out_file, rrd=rrd, stages=bar)
     print_run_summary(analysis.run)
     for note in analysis.notes[len(analysis.run.notes) :]:
         out.print(f"  note: {note.message}", markup=False)

@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -333,11 +334,39 @@ def _check_consistent(fuzzy: xr.Dataset, options: FuzzyAngleOptions, sources: Se
                                  f"model's: refine it with the error model it was computed with")  # fmt: skip
 
 
-def _check_limits(tolerance: float, resolution: float) -> None:
-    if not tolerance > 0:
-        raise ParameterError(f"tolerance must be > 0 degrees; got {tolerance}")
-    if not resolution > 0:
-        raise ParameterError(f"resolution must be > 0 mm; got {resolution}")
+@dataclass(frozen=True)
+class AllowableRequest:
+    """What :func:`allowable_errors` refines and how.
+
+    Attributes:
+        options: α-levels of the plain run (the starting bracket), error sources and model,
+            optimiser settings, workers.
+        tolerance: τ in degrees (> 0), either side of the measured angle.
+        angles: angle names (``"LKneeAngles"``: its three components) or components
+            (``"LKneeAngles_X"``); None: every component of the fuzzy result.
+        resolution: mm (> 0); the search stops when the allowable error of the component's
+            largest ball is bracketed this closely.
+        max_evaluations: refinement runs per component at most (≥ 1).
+    """
+
+    options: FuzzyAngleOptions = field(default_factory=FuzzyAngleOptions)
+    tolerance: float = DEFAULT_TOLERANCE
+    angles: Sequence[str] | None = None
+    resolution: float = DEFAULT_RESOLUTION
+    max_evaluations: int = MAX_EVALUATIONS
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.options, FuzzyAngleOptions):
+            raise ParameterError(f"options must be FuzzyAngleOptions; got {type(self.options).__name__}")
+        if not self.tolerance > 0:
+            raise ParameterError(f"tolerance must be > 0 degrees; got {self.tolerance}")
+        if isinstance(self.angles, str):
+            raise ParameterError(f"angles must be a sequence of names, not the string {self.angles!r}")
+        if not self.resolution > 0:
+            raise ParameterError(f"resolution must be > 0 mm; got {self.resolution}")
+        if isinstance(self.max_evaluations, bool) or not isinstance(self.max_evaluations, int) \
+                or self.max_evaluations < 1:
+            raise ParameterError(f"max_evaluations must be a whole number >= 1; got {self.max_evaluations!r}")
 
 
 @contextmanager
@@ -374,36 +403,26 @@ def allowable_errors(
     trial: Trial,
     subject: SubjectParameters,
     result: CGMResult,
-    options: FuzzyAngleOptions | None = None,
-    tolerance: float = DEFAULT_TOLERANCE,
-    angles: Sequence[str] | None = None,
-    resolution: float = DEFAULT_RESOLUTION,
+    request: AllowableRequest = AllowableRequest(),
     *,
     fuzzy: xr.Dataset | None = None,
     evaluator: Evaluator | None = None,
     clusters: ClusterCalibration | None = None,
-    max_evaluations: int = MAX_EVALUATIONS,
     progress: Progress | None = None,
 ) -> tuple[pd.DataFrame, xr.Dataset]:
-    """The largest marker error for which each angle component stays within ``tolerance``.
+    """The largest marker error for which each angle component stays within ``request.tolerance``.
 
     Args:
         trial, subject, result: as for :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`.
-        options: α-levels of the plain run (the starting bracket), error sources and model,
-            optimiser settings, workers (default :class:`FuzzyAngleOptions()`).
-        tolerance: τ in degrees, either side of the measured angle.
-        angles: angle names (``"LKneeAngles"``: its three components) or components
-            (``"LKneeAngles_X"``); default every component of the fuzzy result.
-        resolution: mm; the search stops when the allowable error of the component's
-            largest ball is bracketed this closely.
-        fuzzy: the plain run's dataset (computed with ``options``); None: computed here.
-        evaluator: where the Graph Follower runs (default: ``options.workers`` processes).
+        request: the plain run's options, the tolerance, the angles, the resolution and the
+            runs per component at most (:class:`AllowableRequest`).
+        fuzzy: the plain run's dataset (computed with ``request.options``); None: computed here.
+        evaluator: where the Graph Follower runs (default: ``request.options.workers`` processes).
         clusters: the static cluster calibration (cluster models, as for
             :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`).
-        max_evaluations: refinement runs per component at most.
         progress: called as ``progress(done, total)`` over the refinement runs (at least
             once per round of runs); ``total`` is the runs done plus those still expected
-            (:meth:`ScaleSearch.remaining`, at most ``max_evaluations`` per component), so
+            (:meth:`ScaleSearch.remaining`, at most ``request.max_evaluations`` per component), so
             it can shrink as the searches converge; a last ``progress(n, n)`` at the end.
 
     Returns:
@@ -429,8 +448,7 @@ def allowable_errors(
         ``allowable_source``, ``allowable_seconds`` (refinement wall time),
         ``allowable_runs`` and ``allowable_node_evaluations``.
     """
-    _check_limits(tolerance, resolution)
-    options = FuzzyAngleOptions() if options is None else options
+    options, tolerance, angles, resolution = request.options, request.tolerance, request.angles, request.resolution
     sources = parse_sources(options.sources)
     with _runner(evaluator, options.workers) as runner:
         if fuzzy is None:
@@ -440,7 +458,7 @@ def allowable_errors(
         components = _components(fuzzy, angles)
         setups = component_setups(trial, subject, result, options, components, clusters)
         searches = _start_searches(fuzzy, setups, tolerance, resolution)
-        done = refine(setups, searches, runner, max_evaluations, progress)
+        done = refine(setups, searches, runner, request.max_evaluations, progress)
     source = options.error_model.source + ("" if set(sources) == set(SOURCES) else f" ({', '.join(sources)})")
     merged = _store(_merge(fuzzy, done.runs, setups), searches, setups, done.counts)
     merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_resolution_mm": float(resolution),

@@ -9,10 +9,10 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.core.trial import Trial
 from fuzzygait.io.tables import write_table
-from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles, table_metadata
+from fuzzygait.workflows.angles import AnglesRun, table_metadata
 from fuzzygait.workflows.crosscheck import FLAG_DEG, CrossCheck
+from fuzzygait.workflows.trial_inputs import TrialInputs
 
 
 @dataclass(frozen=True)
@@ -31,28 +31,15 @@ class Comparison:
         return pd.DataFrame([asdict(row) for row in self.check.rows])
 
 
-def compare_trial(
-    dynamic: str | os.PathLike[str] | Trial,
-    *,
-    static: str | os.PathLike[str] | Trial | None = None,
-    subject_file: str | os.PathLike[str] | None = None,
-    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    flat_foot: bool | None = None,
-    marker_diameter: float | None = None,
-    model: str = "auto",
-    knee_ankle_centres: str | None = None,
-    out_table: str | os.PathLike[str] | None = None,
-) -> Comparison:
-    """Run the angle pipeline (:func:`~fuzzygait.workflows.angles.run_angles`, same
-    arguments) and compare with the angles the trial stores; ``out_table`` (.csv or
-    .parquet) receives the per-component table.
+def compare_trial(inputs: TrialInputs, out_table: str | os.PathLike[str] | None = None) -> Comparison:
+    """Run the angle pipeline on ``inputs`` (:func:`~fuzzygait.workflows.angles.run_angles`)
+    and compare with the angles the trial stores; ``out_table`` (.csv or .parquet)
+    receives the per-component table.
 
     Raises:
         FuzzyGaitError: the trial stores no angle outputs of the names ours have.
     """
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
-                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+    run = inputs.run()
     if run.crosscheck is None:
         names = ", ".join(sorted(run.result.angles)[:3])
         raise FuzzyGaitError(f"{run.raw.name}: holds no stored angles to compare with (none of {names}, ... nor "

@@ -3,8 +3,8 @@
 :func:`analyse_run` takes a joint-angle run that is already computed
 (:func:`fuzzygait.workflows.angles.run_angles`), so a caller that needs both the
 deterministic angles and their uncertainty reads and processes the trial once;
-:func:`analyse_trial` does both from the files.  The analysis itself (arrays in, dataset
-out) is :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`.
+:func:`analyse_trial` does both from the files of a :class:`MarkerErrorRequest`.  The
+analysis itself (arrays in, dataset out) is :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`.
 """
 
 from __future__ import annotations
@@ -21,8 +21,7 @@ import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import Finding, FindingKind
-from fuzzygait.core.trial import Trial
-from fuzzygait.markererror.allowable import DEFAULT_TOLERANCE, allowable_errors
+from fuzzygait.markererror.allowable import DEFAULT_TOLERANCE, AllowableRequest, allowable_errors
 from fuzzygait.markererror.analysis import (
     DEFAULT_ALPHAS,
     FuzzyAngleOptions,
@@ -33,8 +32,9 @@ from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, per_source_band
 from fuzzygait.markererror.result import angle_components
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty.execution import Evaluator
-from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
+from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
+from fuzzygait.workflows.trial_inputs import TrialInputs
 
 if TYPE_CHECKING:
     from fuzzygait.workflows.work_estimate import WorkEstimate
@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_SETTINGS",
     "MarkerErrorAnalysis",
+    "MarkerErrorRequest",
     "MarkerErrorSettings",
     "analyse_run",
     "analyse_to_files",
@@ -65,7 +66,7 @@ class MarkerErrorAnalysis:
 
 
 class SettingsArguments(TypedDict, total=False):
-    """Arguments of :meth:`MarkerErrorSettings.create` (and :func:`analyse_trial`)."""
+    """Arguments of :meth:`MarkerErrorSettings.create`."""
 
     errors_file: str | os.PathLike[str] | None
     sources: Sequence[str]
@@ -139,6 +140,21 @@ class MarkerErrorSettings:
 DEFAULT_SETTINGS = MarkerErrorSettings()
 
 
+@dataclass(frozen=True)
+class MarkerErrorRequest:
+    """A marker-error analysis of one trial: its inputs and angle options (``trial``) and
+    what the analysis assumes and computes (``settings``)."""
+
+    trial: TrialInputs
+    settings: MarkerErrorSettings = DEFAULT_SETTINGS
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.trial, TrialInputs):
+            raise ParameterError(f"trial must be TrialInputs; got {type(self.trial).__name__}")
+        if not isinstance(self.settings, MarkerErrorSettings):
+            raise ParameterError(f"settings must be MarkerErrorSettings; got {type(self.settings).__name__}")
+
+
 def analyse_run(
     run: AnglesRun,
     settings: MarkerErrorSettings = DEFAULT_SETTINGS,
@@ -180,9 +196,10 @@ def analyse_run(
                                    evaluator=evaluator, clusters=run.clusters)  # fmt: skip
         if settings.tolerance is not None:
             stages.stage("allowable marker error")
-            allowable, fuzzy = allowable_errors(run.trial, run.subject, run.result, options, settings.tolerance,
-                                                settings.allowable_angles, fuzzy=fuzzy, evaluator=evaluator,
-                                                clusters=run.clusters, progress=stages.update)  # fmt: skip
+            request = AllowableRequest(options, settings.tolerance, settings.allowable_angles)
+            allowable, fuzzy = allowable_errors(run.trial, run.subject, run.result, request, fuzzy=fuzzy,
+                                                evaluator=evaluator, clusters=run.clusters,
+                                                progress=stages.update)  # fmt: skip
         if settings.per_source:
             flexion = [c for c in FLEXION_COMPONENTS if c in angle_components(fuzzy)]
             if len(options.sources) < 2:
@@ -244,54 +261,31 @@ def _per_source_note(fuzzy: xr.Dataset, n_components: int) -> str:
 
 
 def analyse_trial(
-    dynamic: str | os.PathLike[str] | Trial,
-    *,
-    static: str | os.PathLike[str] | Trial | None = None,
-    subject_file: str | os.PathLike[str] | None = None,
-    marker_diameter: float | None = None,
-    flat_foot: bool | None = None,
-    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    model: str = "auto",
-    progress: Progress | None = None,
-    stages: StageProgress = SILENT,
-    **settings: Unpack[SettingsArguments],
+    request: MarkerErrorRequest, progress: Progress | None = None, *, stages: StageProgress = SILENT
 ) -> MarkerErrorAnalysis:
-    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` (``model``: a model
-    version or ``"auto"``, as there) followed by the fuzzy marker-error analysis of every
-    computed angle (or ``angles``) by the same version; ``settings`` are the arguments of
-    :meth:`MarkerErrorSettings.create` (``errors_file``, ``sources``, ``alphas``,
-    ``angles``, ``method``, ``workers``, ``tolerance``, ``allowable_angles``,
-    ``per_source``); ``progress`` and ``stages`` as for :func:`analyse_run`."""
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
-    return analyse_run(run, MarkerErrorSettings.create(**settings), progress, stages=stages)
+    """The pipeline of :func:`fuzzygait.workflows.angles.run_angles` on ``request.trial``
+    (its model version or ``"auto"``, as there) followed by the fuzzy marker-error analysis
+    of every computed angle (or ``request.settings.angles``) by the same version, with
+    ``request.settings``; ``progress`` and ``stages`` as for :func:`analyse_run`."""
+    return analyse_run(request.trial.run(), request.settings, progress, stages=stages)
 
 
 def analyse_to_files(
-    dynamic: str | os.PathLike[str] | Trial,
+    request: MarkerErrorRequest,
     out_file: Path,
     *,
     rrd: Path | None = None,
-    static: str | os.PathLike[str] | Trial | None = None,
-    subject_file: str | os.PathLike[str] | None = None,
-    marker_diameter: float | None = None,
-    flat_foot: bool | None = None,
-    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    settings: MarkerErrorSettings = DEFAULT_SETTINGS,
-    model: str = "auto",
     progress: Progress | None = None,
     stages: StageProgress = SILENT,
 ) -> MarkerErrorAnalysis:
-    """Run the pipeline (``model``: a model version or ``"auto"``, see
-    :func:`~fuzzygait.workflows.angles.run_angles`) and the marker-error analysis of one
-    trial by that version, save the fuzzy angles to ``out_file`` (.nc or .zarr) and,
+    """Run the pipeline and the marker-error analysis of one trial as
+    :func:`analyse_trial`, save the fuzzy angles to ``out_file`` (.nc or .zarr) and,
     with ``rrd``, a Rerun recording of the trial with its bands (folders created);
     ``progress`` and ``stages`` as for :func:`analyse_run`."""
     from fuzzygait.uncertainty.storage import save_result
 
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     marker_diameter=marker_diameter, flat_foot=flat_foot, model=model)  # fmt: skip
-    analysis = analyse_run(run, settings, progress, stages=stages)
+    run = request.trial.run()
+    analysis = analyse_run(run, request.settings, progress, stages=stages)
     out_file.parent.mkdir(parents=True, exist_ok=True)
     save_result(analysis.fuzzy, out_file)
     if rrd is not None:
