@@ -31,7 +31,12 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from fuzzygait.mechanics.fuzzy_dynamics import ELEVEN_PARAMETERS, dense_reference, fuzzy_forward_dynamics  # noqa: E402
+from fuzzygait.mechanics.fuzzy_dynamics import (  # noqa: E402
+    ELEVEN_PARAMETERS,
+    LegTarget,
+    dense_reference,
+    fuzzy_forward_dynamics,
+)
 from fuzzygait.mechanics.leg import LEG_PARAMETERS  # noqa: E402
 from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
@@ -64,7 +69,8 @@ def _evaluator(model: LegTargetModel, scenario: str, workers: int):
 def swing_one_parameter(duration: float, workers: int) -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
-    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, settings=SolverSettings(duration=duration))
+    target = LegTarget(base=base, settings=SolverSettings(duration=duration))
+    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, target=target)
     e = base[0]
     model = LegTargetModel(sim, "total_deformation_energy", ("E",), base=base,
                            settings=SolverSettings(duration=duration))
@@ -97,9 +103,9 @@ def swing_one_parameter(duration: float, workers: int) -> None:
 def swing_eleven_parameters(duration: float) -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
-    result = fuzzy_forward_dynamics(sim, {n: 0.1 for n in ELEVEN_PARAMETERS}, base=base,
-                                    settings=SolverSettings(duration=duration))
-    one = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base, settings=SolverSettings(duration=duration))
+    target = LegTarget(base=base, settings=SolverSettings(duration=duration))
+    result = fuzzy_forward_dynamics(sim, {n: 0.1 for n in ELEVEN_PARAMETERS}, target=target)
+    one = fuzzy_forward_dynamics(sim, {"E": 0.1}, target=target)
     print(f"\n2. swing, 11 fuzzy parameters ±10 %, {duration:g} s")
     for label, r in (("11 parameters", result), ("1 parameter", one)):
         print(f"   {label}: {r.attrs['wall_time_s']:.1f} s wall, {r.attrs['forward_simulations']} forward simulations, "
@@ -125,8 +131,8 @@ def swing_eleven_parameters(duration: float) -> None:
 def stance_one_parameter(duration: float) -> None:
     sim = LegSimulator("stance")
     base = sim.parameters(E=STANCE_MODULUS)
-    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, base=base,
-                                    settings=SolverSettings(duration=duration, scheme="energy-momentum"))
+    result = fuzzy_forward_dynamics(sim, {"E": 0.1}, target=LegTarget(
+        base=base, settings=SolverSettings(duration=duration, scheme="energy-momentum")))
     print(f"\n3. stance, fuzzy E ±10 % about {STANCE_MODULUS:g} Pa (Table 5.3), max element energy, "
           f"{duration:g} s (energy-momentum)")
     print(f"   GFA: {result.attrs['wall_time_s']:.1f} s wall, "

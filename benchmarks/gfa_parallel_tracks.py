@@ -19,7 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_STRATEGY, ELEVEN_PARAMETERS, fuzzy_forward_dynamics
+from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_STRATEGY, ELEVEN_PARAMETERS, LegTarget, fuzzy_forward_dynamics
 from fuzzygait.mechanics.scenarios import LegSimulator
 from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.uncertainty.execution import Evaluator
@@ -37,7 +37,7 @@ def main() -> None:
     sim = LegSimulator("swing")
     base = sim.parameters(eta=SWING_DAMPING)
     spreads = {name: 0.1 for name in ELEVEN_PARAMETERS}
-    common = dict(base=base, settings=SolverSettings(duration=args.duration), alphas=(0.0, 0.5, 1.0))
+    common = dict(target=LegTarget(base=base, settings=SolverSettings(duration=args.duration)), alphas=(0.0, 0.5, 1.0))
     side_by_side = replace(DEFAULT_STRATEGY, tracks="side-by-side")
     runs = {}
     if not args.skip_baseline:

@@ -42,7 +42,7 @@ def _study(path: Path, options: dict | None) -> Path:
 @pytest.fixture(scope="module")
 def store(tmp_path_factory: pytest.TempPathFactory) -> Path:
     setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
-    options = study_options(setup, FRVRequest(disc=6), None)
+    options = study_options(setup, FRVRequest(disc=6))
     assert options["set"]["eta"] == 1.0 and options["dt"] == 0.001  # the scenario's, resolved
     return _study(tmp_path_factory.mktemp("options") / "study.zarr", options)
 
@@ -98,8 +98,8 @@ def test_options_given_as_made_pass_the_check(store: Path, monkeypatch: pytest.M
     for args in (("stance",), MADE, ("stance", "--set", "eta=1", "--scheme", "energy-momentum", "--frv", "E")):
         result = runner.invoke(app, ["frv-sim", *args, "--samples", "0", "--workers", "1", "--out", str(store)])
         assert result.exit_code == 0, result.output
-    assert len(seen) == 3 and all(k["options"] == seen[0]["options"] for k in seen)
-    assert seen[0]["options"] == FRVStudy.open(store, _model()).options
+    assert len(seen) == 3 and all(k["study"].record == seen[0]["study"].record for k in seen)
+    assert seen[0]["study"].record == FRVStudy.open(store, _model()).options
 
 
 def test_the_scenario_is_checked_too(store: Path) -> None:
@@ -126,7 +126,7 @@ def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from fuzzygait.uncertainty.frv import FRVMultiStudy
 
     setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
-    options = study_options(setup, FRVRequest("E,rho", disc=6), None)
+    options = study_options(setup, FRVRequest("E,rho", disc=6))
     assert options["frv"] == "E,rho" and options["value"] == [MODULUS, options["set"]["rho"]]
     times = np.linspace(0.0, 1.0, 5)
     model = FunctionModel(lambda p: np.sin(p[..., :1] * 1e-10 * times) + p[..., 1:2] * 1e-4 * times, times)
@@ -163,7 +163,7 @@ def test_several_frvs_take_no_value_and_unknown_or_repeated_names_are_refused(tm
 
 def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: Path) -> None:
     setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
-    options = study_options(setup, FRVRequest(disc=6), None)
+    options = study_options(setup, FRVRequest(disc=6))
     del options["sampling"]  # as recorded before --sampling existed
     old = _study(tmp_path / "old" / "study.zarr", options)
     assert "made with --sampling random; given lhs." in _refusal(old, "stance", "--sampling", "lhs")

@@ -3,13 +3,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
-from support import assert_one_line_error, run
 
-from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
+from fuzzygait.mechanics.fuzzy_dynamics import LegStudyModel, leg_frv_study
 from fuzzygait.mechanics.solver import SolverSettings
-from fuzzygait.uncertainty.frv import FRVSpec
+from fuzzygait.uncertainty.frv import FRVSpec, StudyOptions
+from support import assert_one_line_error, run
 
 distributed = pytest.importorskip("distributed")
 
@@ -17,7 +19,7 @@ pytestmark = pytest.mark.slow  # leg simulations on a Dask cluster and through t
 
 MODULUS = 59.958e9  # Pa, Table 5.3
 SETTINGS = SolverSettings(duration=0.03, scheme="energy-momentum")  # the study's default scheme
-SMALL = dict(nodes=6, settings=SETTINGS, n_disc=8, base_overrides={"E": MODULUS})
+SMALL = dict(leg=LegStudyModel(base_overrides={"E": MODULUS}, nodes=6, settings=SETTINGS), study=StudyOptions(n_disc=8))
 
 
 def test_one_and_two_workers_give_bit_identical_hulls(tmp_path, cluster):
@@ -54,7 +56,7 @@ def test_two_frvs_one_and_two_workers_bit_identical_and_the_command(tmp_path, cl
 
     alphas = (0.0, 0.5, 1.0)
     specs = [FRVSpec("E", MODULUS, alphas=alphas), FRVSpec("rho", 8550.0, alphas=alphas)]
-    small = {**SMALL, "n_disc": 4, "settings": SETTINGS.derive(duration=0.02)}
+    small = dict(leg=replace(SMALL["leg"], settings=SETTINGS.derive(duration=0.02)), study=StudyOptions(n_disc=4))
     serial = leg_frv_study("stance", specs, 40, tmp_path / "one.zarr", workers=1, **small)
     parallel = leg_frv_study("stance", specs, 40, tmp_path / "two.zarr", scheduler=cluster.scheduler_address, **small)
     assert isinstance(serial, FRVMultiStudy) and serial.counts["possible_intervals"] == 6 * 6

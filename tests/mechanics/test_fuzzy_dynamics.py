@@ -10,13 +10,20 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from support import assert_one_line_error, run
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_STRATEGY, dense_reference, fuzzy_forward_dynamics, parse_fuzzy
+from fuzzygait.mechanics.fuzzy_dynamics import (
+    DEFAULT_STRATEGY,
+    LegStudyModel,
+    LegTarget,
+    dense_reference,
+    fuzzy_forward_dynamics,
+    parse_fuzzy,
+)
 from fuzzygait.mechanics.scenarios import LegSimulator
 from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.targets import LegTargetModel
+from support import assert_one_line_error, run
 
 DURATION = 0.15
 
@@ -29,8 +36,8 @@ def swing() -> LegSimulator:
 @pytest.fixture(scope="module")
 def result(swing):
     base = swing.parameters(eta=1e5)  # the soft Table 4.3 blade needs damping (README)
-    return fuzzy_forward_dynamics(swing, {"E": 0.1}, base=base, settings=SolverSettings(duration=DURATION),
-                                  strategy=replace(DEFAULT_STRATEGY, stride=25)), base
+    target = LegTarget(base=base, settings=SolverSettings(duration=DURATION))
+    return fuzzy_forward_dynamics(swing, {"E": 0.1}, target=target, strategy=replace(DEFAULT_STRATEGY, stride=25)), base
 
 
 @pytest.mark.slow
@@ -100,3 +107,37 @@ def test_fuzzy_sim_command(tmp_path):
     bad = run("fuzzy-sim", "swing", "--fuzzy", "nu=abc", "--out", tmp_path / "bad.zarr")
     assert_one_line_error(bad, "nu=abc")
     assert not (tmp_path / "bad.zarr").exists()
+
+
+@pytest.mark.parametrize("fields, said", [
+    ({"name": "energy"}, "unknown target 'energy'; choose one of"),
+    ({"base": np.ones(3)}, "base: give the 12 finite leg parameters"),
+    ({"base": np.full(12, np.nan)}, "base: give the 12 finite leg parameters"),
+    ({"settings": {"dt": 1e-3}}, "settings: give a SolverSettings; got dict"),
+])  # fmt: skip
+def test_a_bad_leg_target_field_is_refused_in_one_line(fields, said) -> None:
+    with pytest.raises(ParameterError, match=f"^{said}") as caught:
+        LegTarget(**fields)
+    assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("fields, said", [
+    ({"target": "energy"}, "unknown target 'energy'; choose one of"),
+    ({"base_overrides": [("E", 1.0)]}, "base_overrides: give a mapping NAME -> value"),
+    ({"base_overrides": {"Young": 1.0}}, "base_overrides: 'Young' is not a leg parameter"),
+    ({"nodes": 1}, "nodes must be a whole number >= 2"),
+    ({"nodes": 6.0}, "nodes must be a whole number >= 2"),
+    ({"settings": "fast"}, "settings: give a SolverSettings; got str"),
+    ({"sensitivities": "yes"}, "sensitivities must be True or False"),
+])  # fmt: skip
+def test_a_bad_leg_study_model_field_is_refused_in_one_line(fields, said) -> None:
+    with pytest.raises(ParameterError, match=f"^{said}") as caught:
+        LegStudyModel(**fields)
+    assert "\n" not in str(caught.value)
+
+
+def test_leg_model_defaults_are_the_scenarios() -> None:
+    assert LegTarget().name is None and LegTarget().base is None and LegTarget().settings is None
+    model = LegStudyModel()
+    assert (model.target, dict(model.base_overrides), model.nodes, model.settings, model.sensitivities) == (
+        None, {}, 20, None, True)  # fmt: skip

@@ -14,7 +14,13 @@ import pytest
 
 from fuzzygait.uncertainty.frv import FRVSpec
 from fuzzygait.workflows.angles import AnglesRun
-from fuzzygait.workflows.fuzzy_dynamics import FuzzySimOutputs, command_setup, fuzzy_simulation
+from fuzzygait.workflows.fuzzy_dynamics import (
+    FuzzySimOutputs,
+    FuzzySimRequest,
+    command_setup,
+    command_strategy,
+    fuzzy_simulation,
+)
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 from fuzzygait.workflows.progress import SILENT, Announced, Prefixed, announce, takes_estimates
 from fuzzygait.workflows.work_estimate import (
@@ -96,7 +102,8 @@ def test_fuzzy_simulation_labels_its_bar_and_keeps_to_its_bound(tmp_path: Path) 
     setup, _ = command_setup("swing", 6, None, 0.1, {}, None)
     said: list[str] = []
     recorder = Recorder()
-    result, _ = fuzzy_simulation(setup, {"E": 0.1, "rho": 0.05}, FuzzySimOutputs(tmp_path / "f.nc"), stride=20,
+    request = FuzzySimRequest({"E": 0.1, "rho": 0.05}, strategy=command_strategy(20, 1e-4))
+    result, _ = fuzzy_simulation(setup, request, FuzzySimOutputs(tmp_path / "f.nc"),
                                  progress=Announced(recorder, said.append))  # fmt: skip
     (line,) = said
     assert line.startswith("estimate: at most 97 forward simulations of the swing (24 α-level optimisations")
@@ -105,7 +112,8 @@ def test_fuzzy_simulation_labels_its_bar_and_keeps_to_its_bound(tmp_path: Path) 
     assert recorder.stages[-1] == ("swing: α-level optimisations (≤ 97 forward simulations)", 24)
     assert result.attrs["optimisations"] == 24 and result.attrs["forward_simulations"] <= 97
     plain = Recorder()  # a progress without estimates: nothing timed
-    fuzzy_simulation(setup, {"E": 0.1}, FuzzySimOutputs(tmp_path / "g.nc"), stride=20, progress=plain)
+    fuzzy_simulation(setup, FuzzySimRequest({"E": 0.1}, strategy=command_strategy(20, 1e-4)),
+                     FuzzySimOutputs(tmp_path / "g.nc"), progress=plain)
     assert [d for d, _ in plain.stages] == ["swing: building the model", "swing: α-level optimisations"]
 
 

@@ -136,8 +136,10 @@ def fuzzy_sim(
     from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
     from fuzzygait.workflows.fuzzy_dynamics import (
         FuzzySimOutputs,
+        FuzzySimRequest,
         check_scenario,
         command_setup,
+        command_strategy,
         fuzzy_simulation,
     )
     from fuzzygait.workflows.outputs import check_output_suffixes
@@ -150,12 +152,11 @@ def fuzzy_sim(
         setup, note = command_setup(scenario, nodes, dt, duration, parse_overrides(overrides or []), scheme)
         if note:
             out.print(f"note: {note}", markup=False)
+        request = FuzzySimRequest(spreads, target, levels, command_strategy(stride, novelty))
         with progress_bars() as bars:
             result, written = fuzzy_simulation(
-                setup, spreads,
-                FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
-                target=target, alphas=levels, stride=stride, novelty=novelty, workers=workers, scheduler=scheduler,
-                progress=estimated_stages(bars),
+                setup, request, FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
+                workers=workers, scheduler=scheduler, progress=estimated_stages(bars),
             )  # fmt: skip
     out.print(_fuzzy_summary(scenario, spreads, result.attrs), markup=False)
     _print_written(written)
@@ -232,8 +233,8 @@ def frv_sim(
         with progress_bars() as bars:
             study = run_frv_leg(
                 LegSetup(scenario, nodes, values, solver_settings(scenario, dt, duration, scheme)),
-                FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling), out_store,
-                target=target, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
+                FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling, target),
+                out_store, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
                 progress=estimated_stages(bars),
             )  # fmt: skip
     out.print(_frv_summary(scenario, study.counts), markup=False)

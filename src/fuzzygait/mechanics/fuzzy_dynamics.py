@@ -10,8 +10,11 @@ for comparison.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
@@ -24,6 +27,10 @@ from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.targets import TARGETS, LegModelRecipe, LegTargetModel
 from fuzzygait.uncertainty import FuzzyVector, Linearised, graph_follower, triangular_relative
 from fuzzygait.uncertainty.execution import Evaluator
+from fuzzygait.uncertainty.frv.options import StudyOptions
+
+if TYPE_CHECKING:
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy
 
 DEFAULT_TARGET = {"swing": "total_deformation_energy", "stance": "max_element_energy"}
 ELEVEN_PARAMETERS: tuple[str, ...] = tuple(n for n in LEG_PARAMETERS if n != "eta")  # §5.3
@@ -63,13 +70,49 @@ def parse_fuzzy(specs: Sequence[str]) -> dict[str, float]:
     return spreads
 
 
+@dataclass(frozen=True, eq=False)
+class LegTarget:
+    """The output a leg scenario's fuzzy analysis follows and the model it is computed with.
+
+    Attributes:
+        name: one of :data:`~fuzzygait.mechanics.targets.TARGETS` (None: total
+            deformation energy for swing, maximum element energy for stance).
+        base: the full parameter vector, :data:`~fuzzygait.mechanics.leg.LEG_PARAMETERS`
+            order, SI (None: the scenario's).
+        settings: the simulations' solver settings (None: the scenario's,
+            :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`).
+    """
+
+    name: str | None = None
+    base: np.ndarray | None = None
+    settings: SolverSettings | None = None
+
+    def __post_init__(self) -> None:
+        _check_target_name(self.name)
+        if self.base is not None:
+            base = np.asarray(self.base)
+            if base.shape != (len(LEG_PARAMETERS),) or not np.issubdtype(base.dtype, np.number) \
+                    or not np.all(np.isfinite(base)):  # fmt: skip
+                raise ParameterError(f"base: give the {len(LEG_PARAMETERS)} finite leg parameters "
+                                     f"({', '.join(LEG_PARAMETERS)}); got shape {base.shape}")  # fmt: skip
+        _check_settings(self.settings)
+
+
+def _check_target_name(target: object) -> None:
+    if target is not None and target not in TARGETS:
+        raise ParameterError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+
+
+def _check_settings(settings: object) -> None:
+    if settings is not None and not isinstance(settings, SolverSettings):
+        raise ParameterError(f"settings: give a SolverSettings; got {type(settings).__name__}")
+
+
 def fuzzy_forward_dynamics(
     simulator: LegSimulator,
     spreads: Mapping[str, float],
     *,
-    target: str | None = None,
-    base: np.ndarray | None = None,
-    settings: SolverSettings | None = None,
+    target: LegTarget | None = None,
     alphas: Sequence[float] = (0.0, 0.5, 1.0),
     strategy: Linearised = DEFAULT_STRATEGY,
     progress: Callable[[int, int], None] | None = None,
@@ -81,11 +124,8 @@ def fuzzy_forward_dynamics(
         simulator: the scenario.
         spreads: parameter name → relative half-width of its symmetric triangular fuzzy
             number about the base value (0.1 = ±10 %).
-        target: one of :data:`~fuzzygait.mechanics.targets.TARGETS` (default: total
-            deformation energy for swing, maximum element energy for stance).
-        base: full parameter vector (default: the scenario's).
-        settings: the simulations' solver settings (default: the scenario's,
-            :attr:`~fuzzygait.mechanics.presets.ScenarioPreset.solver`).
+        target: the :class:`LegTarget` (output name, base parameters, solver settings;
+            default: the scenario's target, parameters and settings).
         alphas: the α-levels.
         strategy: the Graph Follower's :class:`~fuzzygait.uncertainty.Linearised` settings
             (default :data:`DEFAULT_STRATEGY`: stride 100, novelty tolerance 1e-4, 4
@@ -100,19 +140,18 @@ def fuzzy_forward_dynamics(
         ``extremiser``) with the fuzzy parameters' names, units and base values, the scenario
         settings and the wall time in the attributes.
     """
-    target = target or DEFAULT_TARGET[simulator.scenario]
-    if target not in TARGETS:
-        raise ParameterError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    leg = LegTarget() if target is None else target
+    target_name = leg.name or DEFAULT_TARGET[simulator.scenario]
     names = tuple(spreads)
-    model = LegTargetModel(simulator, target, names, base=base, settings=settings)
+    model = LegTargetModel(simulator, target_name, names, base=leg.base, settings=leg.settings)
     numbers = [triangular_relative(model.base[LEG_PARAMETERS.index(n)], spreads[n], n) for n in names]
     start = time.perf_counter()
     engine_model = model if evaluator is None else evaluator.model(_recipe_of(model), sensitivities=True)
     result = graph_follower(engine_model, FuzzyVector(numbers), alphas, strategy=strategy, progress=progress)
     result.attrs.update(
         scenario=simulator.scenario,
-        target=target,
-        target_units="m" if target.startswith("last_node") else "J",
+        target=target_name,
+        target_units="m" if target_name.startswith("last_node") else "J",
         fuzzy_parameters=list(names),
         fuzzy_spreads=[float(spreads[n]) for n in names],
         fuzzy_units=[PARAMETER_UNITS[n] for n in names],
@@ -147,72 +186,97 @@ def dense_reference(model: LegTargetModel, low: float, high: float, count: int =
     return np.array([model.evaluate(p).values for p in grid])
 
 
+@dataclass(frozen=True)
+class LegStudyModel:
+    """The leg model of an FRV study (:func:`leg_frv_study`).
+
+    Attributes:
+        target: one of :data:`~fuzzygait.mechanics.targets.TARGETS` (None: the scenario's).
+        base_overrides: leg parameter values (SI) laid over the scenario's.
+        nodes: blade nodes (default 20, as in the thesis).
+        settings: the solver settings (None: the scenario's with the energy-momentum scheme).
+        sensitivities: the forward simulations return the sensitivities (the study refines
+            α = 1 with them).
+    """
+
+    target: str | None = None
+    base_overrides: Mapping[str, float] = field(default_factory=dict)
+    nodes: int = 20
+    settings: SolverSettings | None = None
+    sensitivities: bool = True
+
+    def __post_init__(self) -> None:
+        _check_target_name(self.target)
+        if not isinstance(self.base_overrides, Mapping):
+            raise ParameterError(f"base_overrides: give a mapping NAME -> value; got {self.base_overrides!r}")
+        unknown = [n for n in self.base_overrides if n not in LEG_PARAMETERS]
+        if unknown:
+            raise ParameterError(f"base_overrides: {unknown[0]!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
+        if isinstance(self.nodes, bool) or not isinstance(self.nodes, (int, np.integer)) or self.nodes < 2:
+            raise ParameterError(f"nodes must be a whole number >= 2; got {self.nodes!r}")
+        _check_settings(self.settings)
+        if not isinstance(self.sensitivities, (bool, np.bool_)):
+            raise ParameterError(f"sensitivities must be True or False; got {self.sensitivities!r}")
+
+
 def leg_frv_study(
     scenario: str,
-    spec,
+    spec: FRVSpec | Sequence[FRVSpec],
     n_samples: int,
-    store,
+    store: str | os.PathLike[str],
     *,
-    target: str | None = None,
-    base_overrides: Mapping[str, float] | None = None,
-    n_disc: int | Sequence[int] = 100,
-    seed: int = 0,
-    nodes: int = 20,
-    settings: SolverSettings | None = None,
+    leg: LegStudyModel | None = None,
+    study: StudyOptions | None = None,
     workers: int = 1,
     scheduler: str | None = None,
-    sensitivities: bool = True,
-    chunk: int = 256,
-    overwrite: bool = False,
-    options: Mapping[str, object] | None = None,
-):
+) -> FRVStudy | FRVMultiStudy:
     """Run (or extend) the FRV-GFA of a leg scenario (thesis §5.7) into a zarr ``store``.
 
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
     parameter, or a sequence of several (independent FRVs, one α-level set: an
-    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`; ``n_disc`` one grid size for all
-    or one per parameter; refined with the sensitivities as one parameter is); the other
-    parameters are the scenario's with ``base_overrides``; ``settings``: the solver
-    settings (default: the scenario's with the energy-momentum scheme).  Forward
-    simulations run on an :class:`~fuzzygait.uncertainty.execution.Evaluator`
-    (``workers`` local processes, or the Dask cluster at ``scheduler``); each worker loads the
-    compiled simulator library from the on-disk cache.  An existing store is extended with
-    ``n_samples`` more samples (every stored library trajectory and interval hull reused)
-    unless ``overwrite``; a new study records ``options`` (what it was made with, for the
-    caller to compare before extending it).  Returns the
+    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`; ``study.n_disc`` one grid size for
+    all or one per parameter, default 100; refined with the sensitivities as one parameter
+    is); the other parameters are the scenario's with ``leg.base_overrides``; the
+    :class:`LegStudyModel` ``leg`` also gives the target, blade nodes, solver settings
+    (default: the scenario's with the energy-momentum scheme) and whether the simulations
+    return sensitivities.  Forward simulations run on an
+    :class:`~fuzzygait.uncertainty.execution.Evaluator` (``workers`` local processes, or
+    the Dask cluster at ``scheduler``); each worker loads the compiled simulator library
+    from the on-disk cache.  An existing store is extended with ``n_samples`` more samples
+    (every stored library trajectory and interval hull reused) unless
+    ``study.overwrite``; a new study is made with the
+    :class:`~fuzzygait.uncertainty.frv.StudyOptions` ``study`` and records its ``record``
+    (what it was made with, for the caller to compare before extending it).  Returns the
     :class:`~fuzzygait.uncertainty.frv.FRVStudy` (one parameter) or the
     :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` (several).
     """
     from pathlib import Path
 
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, StudyOptions, check_specs, open_study
+    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, check_specs, open_study
 
     specs = check_specs(spec)
     for one in specs:
         if one.name not in LEG_PARAMETERS:
             raise ParameterError(f"FRV parameter {one.name!r} is not a leg parameter ({', '.join(LEG_PARAMETERS)})")
-    simulator = LegSimulator(scenario, nodes=nodes)
-    base = simulator.parameters(**dict(base_overrides or {}))
-    target = target or DEFAULT_TARGET[scenario]
+    leg = LegStudyModel() if leg is None else leg
+    study_options = StudyOptions(n_disc=100) if study is None else study
+    if study_options.n_disc is None:
+        study_options = replace(study_options, n_disc=100)
+    simulator = LegSimulator(scenario, nodes=leg.nodes)
+    base = simulator.parameters(**dict(leg.base_overrides))
+    target = leg.target or DEFAULT_TARGET[scenario]
     names = tuple(one.name for one in specs)
-    settings = simulator.preset.solver.derive(scheme="energy-momentum") if settings is None else settings
+    settings = simulator.preset.solver.derive(scheme="energy-momentum") if leg.settings is None else leg.settings
     model = LegTargetModel(simulator, target, names, base=base, settings=settings)
     path = Path(store)
-    multi = len(specs) > 1
-    study: FRVStudy | FRVMultiStudy
+    result: FRVStudy | FRVMultiStudy
     with Evaluator(workers=workers, scheduler=scheduler) as pool:
-        evaluator = pool.batch(_recipe_of(model), sensitivities=sensitivities)
-        if path.exists() and not overwrite:
-            study = open_study(path, model, evaluator=evaluator)
-            study.add_samples(n_samples)
-        elif multi:
-            made = StudyOptions(n_disc=n_disc, seed=seed, chunk=chunk, overwrite=overwrite, record=options)
-            study = FRVMultiStudy.create(model, specs, n_samples, made, store=path, evaluator=evaluator)
+        evaluator = pool.batch(_recipe_of(model), sensitivities=leg.sensitivities)
+        if path.exists() and not study_options.overwrite:
+            result = open_study(path, model, evaluator=evaluator)
+            result.add_samples(n_samples)
+        elif len(specs) > 1:
+            result = FRVMultiStudy.create(model, specs, n_samples, study_options, store=path, evaluator=evaluator)
         else:
-            if not isinstance(n_disc, int):
-                if len(n_disc) != 1:
-                    raise ParameterError(f"n_disc: one FRV parameter takes one grid size; got {list(n_disc)}")
-                n_disc = int(n_disc[0])
-            made = StudyOptions(n_disc=n_disc, seed=seed, chunk=chunk, overwrite=overwrite, record=options)
-            study = FRVStudy.create(model, specs[0], n_samples, made, store=path, evaluator=evaluator)
-    return study
+            result = FRVStudy.create(model, specs[0], n_samples, study_options, store=path, evaluator=evaluator)
+    return result

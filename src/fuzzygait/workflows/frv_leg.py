@@ -86,7 +86,8 @@ class FRVRequest:
     existing study), ``disc`` grouping grid points (one count for every parameter, or one
     per parameter), the α-levels, the
     increments' ``distribution``, the peaks' ``sampling`` (``"random"`` or ``"lhs"``:
-    Latin-hypercube per block of samples) and the ``seed`` of the sample streams."""
+    Latin-hypercube per block of samples), the ``seed`` of the sample streams and the
+    ``target`` output (None: the scenario's)."""
 
     parameter: str = "E"
     value: float | None = None
@@ -96,9 +97,10 @@ class FRVRequest:
     distribution: str = "normal"
     seed: int = 0
     sampling: str = "random"
+    target: str | None = None
 
 
-def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[str, Any]:
+def study_options(setup: LegSetup, frv: FRVRequest) -> dict[str, Any]:
     """What a study of ``frv`` on ``setup`` is made with, resolved (the scenario's values
     filled in) and JSON-compatible: the record a study keeps and an extension must match."""
     from fuzzygait.mechanics.fuzzy_dynamics import DEFAULT_TARGET
@@ -114,7 +116,7 @@ def study_options(setup: LegSetup, frv: FRVRequest, target: str | None) -> dict[
                         else deterministic_value(setup.scenario, name, setup.values))  # fmt: skip
     value: float | list[float] = values[names[0]] if len(names) == 1 else [values[n] for n in names]
     return {"scenario": setup.scenario, "frv": ",".join(names), "value": value, "set": values,
-            "target": target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
+            "target": frv.target or DEFAULT_TARGET[setup.scenario], "alphas": [float(a) for a in frv.alphas],
             "distribution": frv.distribution, "sampling": frv.sampling, "seed": int(frv.seed),
             "disc": _disc_record(frv.disc), "nodes": int(setup.nodes), "dt": float(settings.dt),
             "duration": float(settings.steps * settings.dt if settings.duration is None else settings.duration),
@@ -129,18 +131,19 @@ def _disc_record(disc: int | Sequence[int]) -> int | list[int]:
     return counts[0] if len(set(counts)) == 1 else counts
 
 
-def _as_made(setup: LegSetup, frv: FRVRequest, target: str | None, stored: Mapping[str, Any],
-             given: Collection[str]) -> tuple[LegSetup, FRVRequest, str | None]:  # fmt: skip
+def _as_made(setup: LegSetup, frv: FRVRequest, stored: Mapping[str, Any],
+             given: Collection[str]) -> tuple[LegSetup, FRVRequest]:  # fmt: skip
     """The request with every option not ``given`` taken from the ``stored`` record; the
     given ``--set`` values are laid over the stored ones."""
     values = {**stored["set"], **setup.values}
     solver = setup.settings.derive(**{k: stored[k] for k in ("dt", "duration", "scheme") if k not in given})
     setup = replace(setup, values=values, solver=solver, nodes=setup.nodes if "nodes" in given else stored["nodes"])
     taken: dict[str, Any] = {"parameter": stored["frv"]} if "frv" not in given else {}
-    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "sampling", "seed") if k not in given})
+    taken.update({k: stored[k] for k in ("disc", "alphas", "distribution", "sampling", "seed", "target")
+                  if k not in given})  # fmt: skip
     if "value" not in given:
         taken["value"] = None  # p_det: the --set value, else the stored one
-    return setup, replace(frv, **taken), (stored["target"] if "target" not in given else target)
+    return setup, replace(frv, **taken)
 
 
 def _num(value: float) -> str:
@@ -183,7 +186,6 @@ def run_frv_leg(
     frv: FRVRequest,
     out_store: Path,
     *,
-    target: str | None = None,
     workers: int = 2,
     scheduler: str | None = None,
     overwrite: bool = False,
@@ -200,9 +202,9 @@ def run_frv_leg(
     :class:`FuzzyGaitError` naming it. A failed new study leaves nothing at ``out_store``
     (nor the folders made for it); a failed extension leaves the study as it was.
     """
-    from fuzzygait.mechanics.fuzzy_dynamics import leg_frv_study
+    from fuzzygait.mechanics.fuzzy_dynamics import LegStudyModel, leg_frv_study
     from fuzzygait.mechanics.targets import TARGETS
-    from fuzzygait.uncertainty.frv import FRVSpec
+    from fuzzygait.uncertainty.frv import FRVSpec, StudyOptions
     from fuzzygait.uncertainty.frv.store import read_meta
 
     extend = out_store.exists() and not overwrite
@@ -212,8 +214,8 @@ def run_frv_leg(
         if not all(key in made for key in OPTIONS):
             raise FuzzyGaitError(f"{out_store}: the study does not record the options it was made with (an older "
                                  f"version or the library made it): it cannot be extended; {_NEW_STUDY}")  # fmt: skip
-        setup, frv, target = _as_made(setup, frv, target, made, OPTIONS if given is None else given)
-    options = study_options(setup, frv, target)
+        setup, frv = _as_made(setup, frv, made, OPTIONS if given is None else given)
+    options = study_options(setup, frv)
     if options["target"] not in TARGETS:
         raise FuzzyGaitError(f"{Option.TARGET} {options['target']!r}: unknown target; choose one of "
                              f"{', '.join(TARGETS)}")  # fmt: skip
@@ -231,10 +233,10 @@ def run_frv_leg(
     try:
         with named_fixes(setup):
             spec = specs[0] if len(specs) == 1 else specs
-            return leg_frv_study(setup.scenario, spec, frv.samples, out_store, target=options["target"],
-                                 base_overrides=options["set"], n_disc=frv.disc, seed=frv.seed, nodes=setup.nodes,
-                                 settings=setup.settings, workers=workers, scheduler=scheduler, overwrite=overwrite,
-                                 options=options)  # fmt: skip
+            leg = LegStudyModel(options["target"], options["set"], setup.nodes, setup.settings)
+            made_with = StudyOptions(n_disc=frv.disc, seed=frv.seed, overwrite=overwrite, record=options)
+            return leg_frv_study(setup.scenario, spec, frv.samples, out_store, leg=leg, study=made_with,
+                                 workers=workers, scheduler=scheduler)  # fmt: skip
     except BaseException:
         for folder in made_folders:  # innermost first; only if still empty
             try:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fuzzygait.core.errors import FuzzyGaitError, SimulationError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError, SimulationError
 from fuzzygait.core.options import Option
 from fuzzygait.mechanics.scenarios import SCENARIOS, LegSimulator
 from fuzzygait.mechanics.solver import BladeFolded, SolverSettings
@@ -23,6 +23,7 @@ from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_
 if TYPE_CHECKING:
     import xarray as xr
 
+    from fuzzygait.uncertainty import Linearised
     from fuzzygait.workflows.work_estimate import SimulationTiming, WorkEstimate
 
 #: Linearised steps per α-level optimisation at most (fuzzy-sim; the engine's default).
@@ -239,48 +240,91 @@ class FuzzySimOutputs:
     rrd: Path | None = None
 
 
+@dataclass(frozen=True)
+class FuzzySimRequest:
+    """What a fuzzy simulation computes: the hulls of ``target`` (None: the scenario's,
+    :data:`~fuzzygait.mechanics.fuzzy_dynamics.DEFAULT_TARGET`) for triangular fuzzy
+    parameters of relative half-widths ``spreads`` (name → spread in (0, 1)) at the
+    ``alphas``, by the Graph Follower's linearised ``strategy`` (None: an optimisation every
+    100th time node, novelty tolerance 1e-4, :data:`MAX_ITERATIONS` steps, the (α, bound)
+    tracks side by side; :func:`command_strategy` builds one from the command's options)."""
+
+    spreads: Mapping[str, float]
+    target: str | None = None
+    alphas: Sequence[float] = (0.0, 0.5, 1.0)
+    strategy: Linearised | None = None
+
+    def __post_init__(self) -> None:
+        from fuzzygait.uncertainty import Linearised
+
+        if not isinstance(self.spreads, Mapping) or not self.spreads:
+            raise ParameterError(f"spreads: give at least one fuzzy parameter NAME -> spread; got {self.spreads!r}")
+        for name, spread in self.spreads.items():
+            if isinstance(spread, bool) or not isinstance(spread, (int, float, np.floating)) or not 0 < spread < 1:
+                raise ParameterError(f"spreads: {name}'s spread must lie between 0 and 1 (0.1 = ±10 %); got {spread!r}")
+        _check_target(self.target)
+        if isinstance(self.alphas, str) or not isinstance(self.alphas, Sequence) or not self.alphas or not all(
+                not isinstance(a, bool) and isinstance(a, (int, float, np.floating)) and 0 <= a <= 1
+                for a in self.alphas):  # fmt: skip
+            raise ParameterError(f"alphas: give α-levels between 0 and 1; got {self.alphas!r}")
+        if self.strategy is not None and not isinstance(self.strategy, Linearised):
+            raise ParameterError(f"strategy: give a Linearised strategy; got {type(self.strategy).__name__}")
+
+    @property
+    def linearised(self) -> Linearised:
+        """The strategy, the default filled in."""
+        from fuzzygait.uncertainty import Linearised
+
+        if self.strategy is not None:
+            return self.strategy
+        return Linearised(stride=100, novelty_tol=1e-4, max_iterations=MAX_ITERATIONS, tracks="side-by-side")
+
+
+def command_strategy(stride: int, novelty: float, tracks: str = "side-by-side") -> Linearised:
+    """The Graph Follower strategy of the fuzzy-sim command: an optimisation every ``stride``-th
+    time node, novelty tolerance ``novelty``, :data:`MAX_ITERATIONS` steps (a bad ``--stride``:
+    a :class:`FuzzyGaitError` naming the option)."""
+    from fuzzygait.uncertainty import Linearised
+
+    if stride < 1:
+        raise FuzzyGaitError(f"{Option.STRIDE} must be ≥ 1; got {stride}")
+    return Linearised(stride=stride, novelty_tol=novelty, max_iterations=MAX_ITERATIONS, tracks=tracks)
+
+
 def fuzzy_simulation(
     setup: LegSetup,
-    spreads: Mapping[str, float],
+    request: FuzzySimRequest,
     outputs: FuzzySimOutputs,
     *,
-    target: str | None = None,
-    alphas: Sequence[float] = (0.0, 0.5, 1.0),
-    stride: int = 100,
-    novelty: float = 1e-4,
     workers: int = 1,
     scheduler: str | None = None,
-    tracks: str = "side-by-side",
     progress: StageProgress = SILENT,
 ) -> tuple[xr.Dataset, list[Path]]:
-    """Fuzzy forward dynamics of a scenario (hulls of ``target`` for triangular fuzzy
-    parameters with relative ``spreads``) and its outputs (all or none). The forward
+    """Fuzzy forward dynamics of a scenario (the :class:`FuzzySimRequest`: hulls of its
+    target for triangular fuzzy parameters) and its outputs (all or none). The forward
     simulations run on ``workers`` local processes (1: this one) or the Dask
-    ``scheduler``; with ``tracks="side-by-side"`` (the Graph Follower's (α, bound) tracks
-    at once) those of a round run in parallel, and the hulls do not depend on the
-    number of workers."""
-    from fuzzygait.mechanics.fuzzy_dynamics import fuzzy_forward_dynamics
-    from fuzzygait.uncertainty import Linearised
+    ``scheduler``; with the strategy's ``tracks="side-by-side"`` (the Graph Follower's (α,
+    bound) tracks at once) those of a round run in parallel, and the hulls do not depend
+    on the number of workers."""
+    from fuzzygait.mechanics.fuzzy_dynamics import LegTarget, fuzzy_forward_dynamics
     from fuzzygait.uncertainty.execution import Evaluator
     from fuzzygait.uncertainty.storage import save_result
     from fuzzygait.viz.figures import save_figure
     from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
 
     check_scenario(setup.scenario)
-    if stride < 1:
-        raise FuzzyGaitError(f"{Option.STRIDE} must be ≥ 1; got {stride}")
-    _check_target(target)
+    strategy, alphas = request.linearised, request.alphas
     sim, base = build_simulator(setup, progress)
     stage = f"{setup.scenario}: α-level optimisations"
-    work, optimisations = _fuzzy_work(sim, base, setup, stage, alphas, stride,
+    work, optimisations = _fuzzy_work(sim, base, setup, stage, alphas, strategy.stride,
                                       None if scheduler is not None else workers, progress)  # fmt: skip
     announce(progress, work)
     progress.stage(stage, optimisations)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"), named_fixes(setup), \
             Evaluator(workers=workers, scheduler=scheduler) as evaluator:  # fmt: skip
-        strategy = Linearised(stride=stride, novelty_tol=novelty, max_iterations=MAX_ITERATIONS, tracks=tracks)
+        target = LegTarget(request.target, base=base, settings=setup.settings)
         result = fuzzy_forward_dynamics(
-            sim, spreads, target=target, base=base, settings=setup.settings, alphas=alphas, strategy=strategy,
+            sim, request.spreads, target=target, alphas=alphas, strategy=strategy,
             progress=progress.update, evaluator=None if evaluator.serial else evaluator,
         )  # fmt: skip
     result.attrs["workers"] = workers if scheduler is None else f"scheduler {scheduler}"
