@@ -236,6 +236,72 @@ def _blueprint(rrb: Any, has_blade: bool) -> Any:
     return rrb.Blueprint(rrb.Horizontal(world, plots, column_shares=[3, 2]), rrb.TimePanel(timeline="time"))
 
 
+def _log_leg(rec: Any, rr: Any, segments: dict[str, tuple[np.ndarray, np.ndarray]], rows: np.ndarray,
+             sampled: list[Any]) -> None:  # fmt: skip
+    """The thigh and shank as strips and the hip, knee and ankle as labelled points (m),
+    at the sampled ``rows``."""
+    from fuzzygait.viz.rerun_log import _send_instances
+
+    joints: list[np.ndarray] = []
+    labels: list[str] = []
+    for name, (proximal, distal) in segments.items():
+        strips = np.stack([proximal[rows], distal[rows]], axis=1)
+        _log_strips(rec, rr, f"world/leg/{name}", sampled, strips, _SEGMENT_COLOURS[name],
+                    _SEGMENT_RADIUS_M)  # fmt: skip
+        if not joints:
+            joints.append(proximal[rows])
+            labels.append("hip")
+        joints.append(distal[rows])
+        labels.append({"thigh": "knee", "shank": "ankle"}[name])
+    if joints:
+        points = np.stack(joints, axis=1)
+        rec.log("world/leg/joints", rr.Points3D.from_fields(radii=[_JOINT_RADIUS_M], colors=[(90, 90, 90)]),
+                static=True, strict=True)  # fmt: skip
+        names = np.broadcast_to(np.array(labels, dtype=object), points.shape[:2])
+        _send_instances(rec, "world/leg/joints", sampled, rr.Points3D.columns,
+                        {"positions": points, "labels": names}, np.all(np.isfinite(points), axis=2))  # fmt: skip
+
+
+def _log_blade(rec: Any, rr: Any, sampled: list[Any], nodes: np.ndarray, frames: np.ndarray,
+               director_length: float) -> None:  # fmt: skip
+    """The blade's centreline (m) and its directors as arrows of ``director_length`` (m)."""
+    from fuzzygait.viz.rerun_log import _send_instances
+
+    _log_strips(rec, rr, "world/blade/centreline", sampled, nodes, _BLADE_COLOUR, _BLADE_RADIUS_M)
+    ok = np.all(np.isfinite(nodes), axis=2) & np.all(np.isfinite(frames), axis=(2, 3))
+    for k, director in enumerate(("d1", "d2", "d3")):
+        entity = f"world/blade/directors/{director}"
+        rec.log(entity, rr.Arrows3D.from_fields(radii=[_ARROW_RADIUS_M],
+                colors=[_DIRECTOR_COLOURS[director]]), static=True, strict=True)  # fmt: skip
+        _send_instances(rec, entity, sampled, rr.Arrows3D.columns,
+                        {"origins": nodes, "vectors": director_length * frames[:, :, k]}, ok)  # fmt: skip
+
+
+def _log_energies(rec: Any, rr: Any, ds: xr.Dataset, all_steps: list[Any]) -> None:
+    """The energies (J), the energy balance, its relative drift and the hip and knee
+    flexion (deg) as time series over every step."""
+    from fuzzygait.viz.rerun_log import _log_series
+
+    series = {
+        "kinetic": ds.get("kinetic_energy"), "gravitational": ds.get("gravitational_energy"),
+        "internal": ds.get("internal_energy"), "dissipated": ds["dissipated_energy"],
+        "total": ds["total_energy"],
+    }  # fmt: skip
+    for key, values in series.items():
+        if values is not None:
+            _log_series(rec, rr, f"energy_J/{key}", all_steps, values.values, f"{key} (J)",
+                        _SERIES_COLOURS[key], 1.5)  # fmt: skip
+    balance = ds["total_energy"].values + ds["dissipated_energy"].values
+    _log_series(rec, rr, "energy_J/total_plus_dissipated", all_steps, balance,
+                "total + dissipated (J)", _SERIES_COLOURS["total_plus_dissipated"], 1.5)  # fmt: skip
+    _log_series(rec, rr, "energy_drift/relative", all_steps, energy_drift(ds),
+                "(total + dissipated − initial) / |initial|", (148, 103, 189), 1.5)  # fmt: skip
+    for key, colour in (("hip_flexion", (70, 130, 200)), ("knee_flexion", (230, 140, 40))):
+        if key in ds:
+            _log_series(rec, rr, f"angles_deg/{key}", all_steps, np.degrees(ds[key].values),
+                        f"{key.replace('_', ' ')} (deg)", colour, 1.5)  # fmt: skip
+
+
 def write_simulation_recording(
     ds: xr.Dataset,
     path: str | os.PathLike[str],
@@ -264,7 +330,7 @@ def write_simulation_recording(
         ParameterError: a bad ``path`` suffix or ``stride``, or ``ds`` is not a simulation.
         FuzzyGaitError: the file cannot be written, Rerun is disabled or not installed.
     """
-    from fuzzygait.viz.rerun_log import _log_series, _send_instances, recording_file
+    from fuzzygait.viz.rerun_log import recording_file
 
     path = Path(path)
     if path.suffix.lower() != ".rrd":
@@ -292,49 +358,8 @@ def write_simulation_recording(
         all_steps = [rr.TimeColumn("time", duration=times)]
         sampled = [rr.TimeColumn("time", duration=times[rows])]
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True, strict=True)
-        joints: list[np.ndarray] = []
-        labels: list[str] = []
-        for name, (proximal, distal) in segments.items():
-            strips = np.stack([proximal[rows], distal[rows]], axis=1)
-            _log_strips(rec, rr, f"world/leg/{name}", sampled, strips, _SEGMENT_COLOURS[name],
-                        _SEGMENT_RADIUS_M)  # fmt: skip
-            if not joints:
-                joints.append(proximal[rows])
-                labels.append("hip")
-            joints.append(distal[rows])
-            labels.append({"thigh": "knee", "shank": "ankle"}[name])
-        if joints:
-            points = np.stack(joints, axis=1)
-            rec.log("world/leg/joints", rr.Points3D.from_fields(radii=[_JOINT_RADIUS_M], colors=[(90, 90, 90)]),
-                    static=True, strict=True)  # fmt: skip
-            names = np.broadcast_to(np.array(labels, dtype=object), points.shape[:2])
-            _send_instances(rec, "world/leg/joints", sampled, rr.Points3D.columns,
-                            {"positions": points, "labels": names}, np.all(np.isfinite(points), axis=2))  # fmt: skip
+        _log_leg(rec, rr, segments, rows, sampled)
         if blade:
-            _log_strips(rec, rr, "world/blade/centreline", sampled, nodes, _BLADE_COLOUR, _BLADE_RADIUS_M)
-            ok = np.all(np.isfinite(nodes), axis=2) & np.all(np.isfinite(frames), axis=(2, 3))
-            for k, director in enumerate(("d1", "d2", "d3")):
-                entity = f"world/blade/directors/{director}"
-                rec.log(entity, rr.Arrows3D.from_fields(radii=[_ARROW_RADIUS_M],
-                        colors=[_DIRECTOR_COLOURS[director]]), static=True, strict=True)  # fmt: skip
-                _send_instances(rec, entity, sampled, rr.Arrows3D.columns,
-                                {"origins": nodes, "vectors": director_length * frames[:, :, k]}, ok)  # fmt: skip
-        series = {
-            "kinetic": ds.get("kinetic_energy"), "gravitational": ds.get("gravitational_energy"),
-            "internal": ds.get("internal_energy"), "dissipated": ds["dissipated_energy"],
-            "total": ds["total_energy"],
-        }  # fmt: skip
-        for key, values in series.items():
-            if values is not None:
-                _log_series(rec, rr, f"energy_J/{key}", all_steps, values.values, f"{key} (J)",
-                            _SERIES_COLOURS[key], 1.5)  # fmt: skip
-        balance = ds["total_energy"].values + ds["dissipated_energy"].values
-        _log_series(rec, rr, "energy_J/total_plus_dissipated", all_steps, balance,
-                    "total + dissipated (J)", _SERIES_COLOURS["total_plus_dissipated"], 1.5)  # fmt: skip
-        _log_series(rec, rr, "energy_drift/relative", all_steps, energy_drift(ds),
-                    "(total + dissipated − initial) / |initial|", (148, 103, 189), 1.5)  # fmt: skip
-        for key, colour in (("hip_flexion", (70, 130, 200)), ("knee_flexion", (230, 140, 40))):
-            if key in ds:
-                _log_series(rec, rr, f"angles_deg/{key}", all_steps, np.degrees(ds[key].values),
-                            f"{key.replace('_', ' ')} (deg)", colour, 1.5)  # fmt: skip
+            _log_blade(rec, rr, sampled, nodes, frames, float(director_length or 0.0))
+        _log_energies(rec, rr, ds, all_steps)
     return path
