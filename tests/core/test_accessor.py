@@ -124,12 +124,12 @@ def test_undetermined_frames_are_not_held_to_nesting() -> None:
 
 
 def test_an_frv_study_keeps_the_schema(tmp_path) -> None:
-    from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
+    from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, StudyOptions
 
     times = np.linspace(0.0, 2.0, 15)
     model = FunctionModel(lambda p: np.sin(p[..., :1] * times), times,
                           lambda p: (times * np.cos(p[0] * times))[:, None])  # fmt: skip
-    study = FRVStudy.create(model, FRVSpec("p", 1.0), 200, n_disc=12, seed=3, store=tmp_path / "s.zarr")
+    study = FRVStudy.create(model, FRVSpec("p", 1.0), 200, StudyOptions(n_disc=12, seed=3), store=tmp_path / "s.zarr")
     hulls = study.hulls()
     assert hulls.fuzzy.axis == "time" and hulls["hull"].dims[0] == "sample"
     assert check_result(hulls)["values"] > 0
