@@ -96,6 +96,21 @@ class CalibrationFile:
     warnings: list[str] = field(default_factory=list)
 
 
+def _file_comments(calibration: StaticCalibration, name: str, static_name: str,
+                   subject_file: str | os.PathLike[str] | None, trial_name: str) -> list[str]:  # fmt: skip
+    """The comments heading a calibrated subject file: who calibrated it how, from what."""
+    source = Path(subject_file).name if subject_file is not None else f"{trial_name} PROCESSING group"
+    title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
+    return [
+        f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate {Option.MODEL.flag} {name}`) "
+        f"from {static_name}, measurements from {source}.",
+        f"Method {calibration.method}, foot flat {'on' if calibration.flat_foot else 'off'}, "
+        f"{calibration.subject.marker_diameter:g} mm markers.",
+        "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
+        *(f"Static trial note: {note.message}" for note in calibration.notes),
+    ]
+
+
 def calibrate_to_file(
     static: str | os.PathLike[str] | Trial,
     out_file: str | os.PathLike[str],
@@ -143,17 +158,8 @@ def calibrate_to_file(
                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     notes = [*relabelled, diameter.note,
              *inter_asis_notes(diameter.subject, to_calibrate, calibration.subject, trial.name)]  # fmt: skip
-    source = Path(subject_file).name if subject_file is not None else f"{trial.name} PROCESSING group"
     static_name = Path(trial.name).name
-    title = "Plug-in Gait" if name == "cgm1.0" else name.upper().replace("CGM", "CGM ")
-    comments = [
-        f"{title} subject calibrated by fuzzygait {__version__} (`fuzzygait calibrate {Option.MODEL.flag} {name}`) "
-        f"from {static_name}, measurements from {source}.",
-        f"Method {calibration.method}, foot flat {'on' if calibration.flat_foot else 'off'}, "
-        f"{calibration.subject.marker_diameter:g} mm markers.",
-        "Vicon PROCESSING names; lengths in mm, angles in rad, mass in kg.",
-        *(f"Static trial note: {note.message}" for note in calibration.notes),
-    ]
+    comments = _file_comments(calibration, name, static_name, subject_file, trial.name)
     metadata: dict[str, TomlData] = {"model": name, "static": static_name, "method": calibration.method,
                                      "flat_foot": calibration.flat_foot, "fuzzygait": __version__}  # fmt: skip
     clusters = cluster_table(calibration.clusters) if calibration.clusters is not None else None
