@@ -79,3 +79,30 @@ def _library_option_names(monkeypatch: pytest.MonkeyPatch) -> None:
     from fuzzygait.core.options import STYLE_VARIABLE
 
     monkeypatch.delenv(STYLE_VARIABLE, raising=False)
+
+
+@pytest.fixture(autouse=True)
+def _signals_left_as_found() -> Iterator[None]:
+    """A test leaves this process's SIGINT/SIGTERM handlers and its main thread's signal
+    mask as it found them (restored, and reported as an error of that test): a handler
+    or a blocked SIGINT left behind made later interrupt tests in the same process, and
+    the fresh interpreters they start, deaf to SIGINT."""
+    import signal
+    import threading
+
+    watched = (signal.SIGINT, signal.SIGTERM)
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handlers = {s: signal.getsignal(s) for s in watched}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    yield
+    now = {s: signal.getsignal(s) for s in watched}
+    now_mask = signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+    for s, handler in handlers.items():
+        signal.signal(s, handler)
+    changed = [f"{signal.Signals(s).name} handler {handlers[s]!r} -> {now[s]!r}" for s in watched
+               if now[s] is not handlers[s]]  # fmt: skip
+    if now_mask != mask:
+        changed.append(f"blocked signals {sorted(mask)} -> {sorted(now_mask)}")
+    assert not changed, "the test left the signal state changed: " + "; ".join(changed)
