@@ -82,8 +82,6 @@ _KEYWORDS = {
     Option.SET: "values",
     Option.FRV: "parameters",
     Option.VALUE: "deterministic_value",
-    Option.UNCERTAINTY: "uncertainty",
-    Option.OUT: "out",
     Option.DEBUG: "strict",
 }
 
