@@ -9,43 +9,35 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from fuzzygait.cli.app import StageBars, app, out, progress_bars, user_errors
-from fuzzygait.cli.options import SchedulerOption, estimated_stages, parse_alphas, parse_disc, parse_overrides
+from fuzzygait.cli.leg_options import (
+    DEFAULT_FRV,
+    DEFAULT_FRV_LEG,
+    DEFAULT_FUZZY_OUTPUTS,
+    DEFAULT_GFA,
+    DEFAULT_LEG,
+    DEFAULT_POOL,
+    FRVLegOptions,
+    FRVOptions,
+    FuzzyOutputOptions,
+    GFAOptions,
+    LegOptions,
+    PoolOptions,
+)
+from fuzzygait.cli.options import estimated_stages, parse_alphas, parse_disc, parse_overrides, with_option_groups
 from fuzzygait.core.errors import FuzzyGaitError
 
 if TYPE_CHECKING:
     import xarray as xr
 
-NodesOption = Annotated[
-    int | None, typer.Option(help="Beam nodes of the prosthesis blade; default: the scenario's (swing 20, stance 40).")
-]
-FixedValuesOption = Annotated[
-    list[str] | None, typer.Option("--set", metavar="NAME=VALUE,...", help="Fixed parameter values (SI units).")
-]
-
-
 @app.command()
+@with_option_groups
 def simulate(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Simulation results, .nc or .zarr.")],
-    nodes: NodesOption = None,
-    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's, 0.001.")] = None,
-    duration: Annotated[
-        float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's, 2.")
-    ] = None,
-    overrides: Annotated[
-        list[str] | None,
-        typer.Option("--set", metavar="NAME=VALUE,...", help="Parameter values in SI units, comma-separated "
-                     "or repeated, e.g. E=6e5,eta=2 (names: E, nu, rho, eta, thigh_mass, thigh_J1..3, "
-                     "shank_mass, shank_J1..3); default: the scenario's."),
-    ] = None,  # fmt: skip
+    leg: LegOptions = DEFAULT_LEG,
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
     plot: Annotated[
         Path | None, typer.Option("--plot", help="Also plot the energies over time (.png, .svg or .pdf).")
-    ] = None,
-    scheme: Annotated[
-        str | None, typer.Option(help="Time integrator: variational (thesis Eq. 4.26) or energy-momentum "
-                                 "(exact energy balance, more robust for very flexible and stiff blades); "
-                                 "default: the scenario's (swing variational, stance energy-momentum).")
     ] = None,
     sensitivities: Annotated[
         bool, typer.Option("--sensitivities", help="Also integrate dq/dp and the target sensitivities "
@@ -74,11 +66,11 @@ def simulate(
     with user_errors():
         check_scenario(scenario)
         check_output_suffixes(out_file, rrd, {"--plot": plot})
-        if nodes is not None and nodes < 2:
-            raise FuzzyGaitError(f"--nodes must be at least 2; got {nodes}")
-        step, span = simulation_timing(scenario, dt, duration)
-        values = parse_overrides(overrides or [])
-        setup, note = command_setup(scenario, nodes, step, span, values, scheme)
+        if leg.nodes is not None and leg.nodes < 2:
+            raise FuzzyGaitError(f"--nodes must be at least 2; got {leg.nodes}")
+        step, span = simulation_timing(scenario, leg.dt, leg.duration)
+        values = parse_overrides(leg.overrides or [])
+        setup, note = command_setup(scenario, leg.nodes, step, span, values, leg.scheme)
         if note:
             out.print(f"note: {note}", markup=False)
         thesis_note = thesis_setting_note(scenario, setup.values)
@@ -94,6 +86,7 @@ def simulate(
 
 
 @app.command("fuzzy-sim")
+@with_option_groups
 def fuzzy_sim(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
     fuzzy: Annotated[
@@ -101,32 +94,10 @@ def fuzzy_sim(
                                 help="Triangular fuzzy parameters as ± relative spreads, e.g. E=10% (repeatable).")
     ],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy result, .zarr or .nc.")],
-    target: Annotated[
-        str | None, typer.Option(help="total_deformation_energy (swing default), max_element_energy (stance "
-                                 "default), last_node_x|y|z.")
-    ] = None,  # fmt: skip
-    alphas: Annotated[
-        str, typer.Option(help="α-levels, comma-separated (1 is always added; at most 20 below 1).")
-    ] = "0,0.5,1",
-    stride: Annotated[int, typer.Option(help="Optimise every STRIDE-th time node (thesis: 100).")] = 100,
-    novelty: Annotated[float, typer.Option(help="Novelty tolerance, relative (thesis: 0.01 % = 1e-4).")] = 1e-4,
-    nodes: NodesOption = None,
-    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s); default: the scenario's.")] = None,
-    duration: Annotated[
-        float | None, typer.Option("--duration", help="Simulated time (s); default: the scenario's.")
-    ] = None,
-    overrides: FixedValuesOption = None,
-    scheme: Annotated[
-        str | None, typer.Option(help="variational or energy-momentum; default: the scenario's (as simulate).")
-    ] = None,
-    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write the hulls as a Rerun recording.")] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", help="Also plot the hulls (.png, .svg, .pdf).")] = None,
-    parameter_plot: Annotated[
-        Path | None, typer.Option("--parameter-plot", help="Also plot the extremising parameter sets (Fig. 5.6).")
-    ] = None,
-    workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations (1: this "
-                                         "process); the hulls do not depend on it.")] = 2,
-    scheduler: SchedulerOption = None,
+    gfa: GFAOptions = DEFAULT_GFA,
+    leg: LegOptions = DEFAULT_LEG,
+    outputs: FuzzyOutputOptions = DEFAULT_FUZZY_OUTPUTS,
+    pool: PoolOptions = DEFAULT_POOL,
 ) -> None:
     """Fuzzy forward dynamics: hulls of a target output for triangular fuzzy parameters
     (Graph Follower algorithm, linearised with the simulator's sensitivities).
@@ -146,18 +117,19 @@ def fuzzy_sim(
 
     with user_errors():
         check_scenario(scenario)
-        check_output_suffixes(out_file, rrd, {"--plot": plot, "--parameter-plot": parameter_plot})
+        plots = {"--plot": outputs.plot, "--parameter-plot": outputs.parameter_plot}
+        check_output_suffixes(out_file, outputs.rrd, plots)
         spreads = parse_fuzzy(fuzzy)
-        levels = parse_alphas(alphas)
-        setup, note = command_setup(scenario, nodes, dt, duration, parse_overrides(overrides or []), scheme)
+        levels = parse_alphas(gfa.alphas)
+        setup, note = command_setup(scenario, leg.nodes, leg.dt, leg.duration, parse_overrides(leg.overrides or []),
+                                    leg.scheme)  # fmt: skip
         if note:
             out.print(f"note: {note}", markup=False)
-        request = FuzzySimRequest(spreads, target, levels, command_strategy(stride, novelty))
+        request = FuzzySimRequest(spreads, gfa.target, levels, command_strategy(gfa.stride, gfa.novelty))
+        files = FuzzySimOutputs(out_file, plot=outputs.plot, parameter_plot=outputs.parameter_plot, rrd=outputs.rrd)
         with progress_bars() as bars:
-            result, written = fuzzy_simulation(
-                setup, request, FuzzySimOutputs(out_file, plot=plot, parameter_plot=parameter_plot, rrd=rrd),
-                workers=workers, scheduler=scheduler, progress=estimated_stages(bars),
-            )  # fmt: skip
+            result, written = fuzzy_simulation(setup, request, files, workers=pool.workers, scheduler=pool.scheduler,
+                                               progress=estimated_stages(bars))  # fmt: skip
     out.print(_fuzzy_summary(scenario, spreads, result.attrs), markup=False)
     _print_written(written)
 
@@ -169,42 +141,18 @@ _RECORDED = {"parameter": "frv", "value": "value", "disc": "disc", "alphas": "al
 
 
 @app.command("frv-sim")
+@with_option_groups
 def frv_sim(
     ctx: typer.Context,
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="stance (thesis §5.7) or swing.")],
     out_store: Annotated[Path, typer.Option("--out", "-o", help="FRV study, a .zarr directory; an existing "
                                             "study is extended with --samples more samples, with the options it "
                                             "was made with (an option given must match them).")],
-    parameter: Annotated[str, typer.Option("--frv", help="The fuzzy random leg parameter, or several "
-                                           "independent ones comma-separated (E,rho: α-cut boxes on a "
-                                           "grid of --disc points per parameter).")] = "E",
-    value: Annotated[
-        float | None, typer.Option("--value", help="Its deterministic value p_det (SI); default: the thesis' "
-                                    "study's (stance E: 59.958e9 Pa, Table 5.3), else the scenario's. "
-                                    "One --frv parameter only (else --set NAME=VALUE).")
-    ] = None,
-    samples: Annotated[int, typer.Option(help="Samples N_s to draw (or to add); more than 10⁶ in one run only "
-                                         "with --force.")] = 10000,
-    disc: Annotated[str, typer.Option(help="Grouping grid points N_p-disc: one number, or one per --frv "
-                                      "parameter (e.g. 60,30 for E,rho).")] = "100",
-    alphas: Annotated[
-        str, typer.Option(help="α-levels, comma-separated (1 is always added; at most 20 below 1).")
-    ] = "0,0.25,0.5,0.75",
-    distribution: Annotated[str, typer.Option(help="normal (with redraw) or beta increments.")] = "normal",
-    seed: Annotated[int, typer.Option(help="Seed of the sample streams.")] = 0,
-    sampling: Annotated[str, typer.Option(help="Peaks: random (the thesis') or lhs (Latin hypercube per "
-                                          "block of 1024 samples, §2.7.5).")] = "random",
-    target: Annotated[str | None, typer.Option(help="Target output (default: per scenario).")] = None,
-    overrides: FixedValuesOption = None,
-    nodes: Annotated[int, typer.Option(help="Beam nodes of the prosthesis blade.")] = 20,
-    dt: Annotated[float | None, typer.Option("--dt", help="Time step (s).")] = None,
-    duration: Annotated[float | None, typer.Option("--duration", help="Simulated time (s).")] = None,
-    scheme: Annotated[str, typer.Option(help="energy-momentum (default here) or variational.")] = "energy-momentum",
-    workers: Annotated[int, typer.Option(help="Local worker processes for the forward simulations.")] = 2,
-    scheduler: SchedulerOption = None,
+    frv: FRVOptions = DEFAULT_FRV,
+    leg: FRVLegOptions = DEFAULT_FRV_LEG,
+    pool: PoolOptions = DEFAULT_POOL,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Start a new study even if --out exists (the "
                                             "old one is replaced once the new one is complete).")] = False,
-    force: Annotated[bool, typer.Option("--force", help="Draw more than 10⁶ samples in one run.")] = False,
 ) -> None:
     """FRV-GFA (thesis §2.7, §5.7): a leg parameter (or several independent ones) as a
     fuzzy random variable, grouped samples, Graph Follower hulls on the occurring
@@ -222,19 +170,20 @@ def frv_sim(
 
     with user_errors():
         check_scenario(scenario)
-        check_frv_samples(samples, force)
+        check_frv_samples(frv.samples, frv.force)
         if out_store.suffix.lower() != ".zarr":
             raise FuzzyGaitError(f"{out_store}: --out must be a .zarr directory")
-        check_frv_parameter(parameter)
-        values = parse_overrides(overrides or [])
-        levels = parse_alphas(alphas)
-        grid_points = parse_disc(disc, parameter)
+        check_frv_parameter(frv.parameter)
+        values = parse_overrides(leg.overrides or [])
+        levels = parse_alphas(frv.alphas)
+        grid_points = parse_disc(frv.disc, frv.parameter)
         given = {"scenario"} | {k for name, k in _RECORDED.items() if _given(ctx, name)}
+        request = FRVRequest(frv.parameter, frv.value, frv.samples, grid_points, levels, frv.distribution, frv.seed,
+                             frv.sampling, frv.target)  # fmt: skip
         with progress_bars() as bars:
             study = run_frv_leg(
-                LegSetup(scenario, nodes, values, solver_settings(scenario, dt, duration, scheme)),
-                FRVRequest(parameter, value, samples, grid_points, levels, distribution, seed, sampling, target),
-                out_store, workers=workers, scheduler=scheduler, overwrite=overwrite, given=given,
+                LegSetup(scenario, leg.nodes, values, solver_settings(scenario, leg.dt, leg.duration, leg.scheme)),
+                request, out_store, workers=pool.workers, scheduler=pool.scheduler, overwrite=overwrite, given=given,
                 progress=estimated_stages(bars),
             )  # fmt: skip
     out.print(_frv_summary(scenario, study.counts), markup=False)
