@@ -31,6 +31,7 @@ every group stacked (:func:`group_constants`) and the step ``h`` (s):
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -106,98 +107,177 @@ class _Group:
         return ca.horzcat(*columns)
 
 
+INPUT_NAMES = ("x", "q_cur", "q_prev", "v", "p", "c", "gc", "h")
+SENSITIVITY_NAMES = ("S_cur", "S_prev", "S_v")
+
+
+@dataclass(frozen=True)
+class _Symbols:
+    """The inputs of the generated functions (module docstring), as CasADi ``MX`` symbols.
+
+    Attributes:
+        x: the unknowns ``(q_{j+1}, λ_j)`` (n + m).
+        q_cur, q_prev: the known configurations ``q_j``, ``q_{j−1}`` (n, inertial frame).
+        v: the velocity ``v_0`` (``vi1``) or ``v_j`` (``em``) (n, per second).
+        p: the parameters (n_p); c: the global constants; gc: the stacked element constants.
+        h: the time step (s).
+        s_cur, s_prev, s_v: the transposed sensitivities ``dq_j/dp``, ``dq_{j−1}/dp``,
+            ``dv_j/dp`` (each n_p × n).
+    """
+
+    x: ca.MX
+    q_cur: ca.MX
+    q_prev: ca.MX
+    v: ca.MX
+    p: ca.MX
+    c: ca.MX
+    gc: ca.MX
+    h: ca.MX
+    s_cur: ca.MX
+    s_prev: ca.MX
+    s_v: ca.MX
+
+    @classmethod
+    def of(cls, builder: SystemBuilder) -> _Symbols:
+        """The symbols sized for the system of ``builder``."""
+        n, m, n_p = builder.ndof, builder.g.numel(), len(builder.parameter_names)
+        return cls(
+            x=ca.MX.sym("x", n + m), q_cur=ca.MX.sym("q_cur", n), q_prev=ca.MX.sym("q_prev", n), v=ca.MX.sym("v", n),
+            p=ca.MX.sym("p", n_p), c=ca.MX.sym("c", builder.c.numel()),
+            gc=ca.MX.sym("gc", int(group_constants(builder.element_groups).size)), h=ca.MX.sym("h"),
+            s_cur=ca.MX.sym("S_cur", n_p, n), s_prev=ca.MX.sym("S_prev", n_p, n), s_v=ca.MX.sym("S_v", n_p, n),
+        )  # fmt: skip
+
+    @property
+    def inputs(self) -> list[ca.MX]:
+        """The inputs of the residual and Jacobian functions, in the order of :data:`INPUT_NAMES`."""
+        return [self.x, self.q_cur, self.q_prev, self.v, self.p, self.c, self.gc, self.h]
+
+
+class _StepEquations:
+    """The step equations of one system over :class:`_Symbols`: the global terms (mass
+    matrix, linear potential, constraints at ``q_{j+1}``, ``q_j`` and the midpoint), the
+    element sums, and per variant the residual, Jacobian and sensitivity right-hand side
+    (the ``n`` configuration rows; the ``m`` constraint rows are added by :meth:`functions`)."""
+
+    def __init__(self, builder: SystemBuilder, globals_: Callable[[str], ca.Function]) -> None:
+        self.n, self.m, self.n_p = builder.ndof, builder.g.numel(), len(builder.parameter_names)
+        self.globals_ = globals_
+        self.s = s = _Symbols.of(builder)
+        self.parts: list[_Group] = []
+        offset = 0
+        for group in builder.element_groups:
+            self.parts.append(_Group(group, s.gc, offset, self.n))
+            offset += self.parts[-1].size
+        n, p, c = self.n, s.p, s.c
+        self.q_next, self.lam = s.x[:n], s.x[n:]
+        (self.mass,) = globals_("mass").call([p, c])
+        self.grad_linear = globals_("linear").call([ca.MX.zeros(n), p, c])[0]
+        self.g_next, self.jac_next = globals_("constraints").call([self.q_next, c])
+        _, self.jac_cur = globals_("constraints").call([s.q_cur, c])
+        self.mid = 0.5 * (s.q_cur + self.q_next)
+        _, self.jac_mid = globals_("constraints").call([self.mid, c])
+
+    def forces(self, q_a: ca.MX, q_b: ca.MX, em: bool = False) -> ca.MX:
+        """The element forces of the interval ``[q_a, q_b]``, summed over the groups (n)."""
+        total = ca.MX.zeros(self.n)
+        for part in self.parts:
+            total = total + part.force(q_a, q_b, self.s.p, self.s.h, em)
+        return total
+
+    def tangents(self, q_a: ca.MX, q_b: ca.MX, weight: float, em: bool = False, end: str = "b") -> ca.MX:
+        """:meth:`_Group.tangent` summed over the groups (n × n sparse)."""
+        total = ca.MX(self.n, self.n)
+        for part in self.parts:
+            total = total + part.tangent(q_a, q_b, self.s.p, self.s.h, weight, em, end)
+        return total
+
+    def parameter_forces(self, q_a: ca.MX, q_b: ca.MX, weight: float, em: bool = False) -> ca.MX:
+        """:meth:`_Group.parameter_force` summed over the groups (n × n_p)."""
+        total = ca.MX(self.n, self.n_p)
+        for part in self.parts:
+            total = total + part.parameter_force(q_a, q_b, self.s.p, self.s.h, weight, em, self.n_p)
+        return total
+
+    def residuals(self) -> dict[str, ca.MX]:
+        """Per variant the configuration rows of the residual (n): Eq. 4.29, Eq. 4.26 and
+        the energy-momentum step."""
+        s, mass, q_next, lam = self.s, self.mass, self.q_next, self.lam
+        q_cur, q_prev, h = s.q_cur, s.q_prev, s.h
+        return {
+            "vi1": 2.0 * ca.mtimes(mass, q_next - q_cur - h * s.v) / h**2 + self.grad_linear
+            + self.forces(q_cur, q_next) + ca.mtimes(self.jac_cur.T, lam),
+            "vi": ca.mtimes(mass, q_next - 2.0 * q_cur + q_prev) / h**2 + self.grad_linear
+            + 0.5 * (self.forces(q_cur, q_next) + self.forces(q_prev, q_cur)) + ca.mtimes(self.jac_cur.T, lam),
+            "em": 2.0 * ca.mtimes(mass, q_next - q_cur - h * s.v) / h**2 + self.grad_linear
+            + self.forces(q_cur, q_next, em=True) + ca.mtimes(self.jac_mid.T, lam),
+        }  # fmt: skip
+
+    def jacobians(self, hessian_mid: ca.MX) -> dict[str, ca.MX]:
+        """Per variant ``∂R_q/∂q_{j+1}`` (n × n sparse); ``hessian_mid`` is ``∂(Gᵀλ)/∂q`` at
+        the midpoint."""
+        mass, q_cur, q_next, h = self.mass, self.s.q_cur, self.q_next, self.s.h
+        return {
+            "vi1": 2.0 * mass / h**2 + self.tangents(q_cur, q_next, 1.0),
+            "vi": mass / h**2 + self.tangents(q_cur, q_next, 0.5),
+            "em": 2.0 * mass / h**2 + self.tangents(q_cur, q_next, 1.0, em=True) + 0.5 * hessian_mid,
+        }
+
+    def sensitivity_rhs(self, hessian_mid: ca.MX) -> dict[str, ca.MX]:
+        """Per variant the configuration rows of the sensitivity right-hand side (n × n_p),
+        term by term as :meth:`.schemes.StepAssembler.sensitivity_rhs`."""
+        s, mass, q_next, globals_ = self.s, self.mass, self.q_next, self.globals_
+        q_cur, q_prev, h, p, c = s.q_cur, s.q_prev, s.h, s.p, s.c
+        (hessian_cur,) = globals_("constraint_hessian").call([q_cur, self.lam, c])
+        d_grad_dp = globals_("linear").call([ca.MX.zeros(self.n), p, c])[1]
+
+        def mass_sensitivity(acceleration: ca.MX) -> ca.MX:
+            return globals_("mass_sens").call([acceleration, p, c])[0]
+
+        start_acceleration = 2.0 * (q_next - q_cur - h * s.v) / h**2
+        s_cur_t, s_prev_t, s_v_t = s.s_cur.T, s.s_prev.T, s.s_v.T
+        tangents, parameter_forces = self.tangents, self.parameter_forces
+        return {
+            "vi1": mass_sensitivity(start_acceleration) + d_grad_dp + parameter_forces(q_cur, q_next, 1.0),
+            "vi": mass_sensitivity((q_next - 2.0 * q_cur + q_prev) / h**2) + d_grad_dp
+            + parameter_forces(q_cur, q_next, 0.5) + parameter_forces(q_prev, q_cur, 0.5)
+            + ca.mtimes(-2.0 * mass / h**2 + tangents(q_cur, q_next, 0.5, end="a") + tangents(q_prev, q_cur, 0.5)
+                        + hessian_cur, s_cur_t)
+            + ca.mtimes(mass / h**2 + tangents(q_prev, q_cur, 0.5, end="a"), s_prev_t),
+            "em": mass_sensitivity(start_acceleration) + d_grad_dp + parameter_forces(q_cur, q_next, 1.0, em=True)
+            + ca.mtimes(-2.0 * mass / h**2 + tangents(q_cur, q_next, 1.0, em=True, end="a") + 0.5 * hessian_mid,
+                        s_cur_t)
+            - (2.0 / h) * ca.mtimes(mass, s_v_t),
+        }  # fmt: skip
+
+    def functions(self) -> list[ca.Function]:
+        """The nine functions of the module docstring, ``(res, jac, sens)`` per variant."""
+        s, m, n_p = self.s, self.m, self.n_p
+        residual_q = self.residuals()
+        (hessian_mid,) = self.globals_("constraint_hessian").call([self.mid, self.lam, s.c])
+        jacobian_qq = self.jacobians(hessian_mid)
+        constraint_columns = {"vi1": self.jac_cur.T, "vi": self.jac_cur.T, "em": self.jac_mid.T}
+        rhs_q = self.sensitivity_rhs(hessian_mid)
+        inputs, names = s.inputs, list(INPUT_NAMES)
+        out: list[ca.Function] = []
+        for variant in VARIANTS:
+            residual = ca.vertcat(residual_q[variant], self.g_next)
+            jacobian = ca.blockcat([[jacobian_qq[variant], constraint_columns[variant]], [self.jac_next, ca.MX(m, m)]])
+            # (n + m, n_p): the constraints do not depend on p
+            rhs = ca.densify(ca.vertcat(rhs_q[variant], ca.MX(m, n_p)))
+            out += [
+                ca.Function(f"fgs_res_{variant}", inputs, [residual], names, ["residual"]),
+                ca.Function(f"fgs_jac_{variant}", inputs, [jacobian], names, ["jacobian"]),
+                ca.Function(f"fgs_sens_{variant}", [*inputs, s.s_cur, s.s_prev, s.s_v], [rhs.T],
+                            [*names, *SENSITIVITY_NAMES], ["rhs"]),  # fmt: skip
+            ]
+        return out
+
+
 def step_functions(builder: SystemBuilder, globals_: Callable[[str], ca.Function]) -> list[ca.Function]:
     """The nine functions of the module docstring for the system of ``builder``.
 
     ``globals_(name)`` gives the symbolic global function ``name`` (``mass``, ``linear``,
-    ``constraints``, ``constraint_hessian``) of :mod:`.discrete`.
+    ``constraints``, ``constraint_hessian``, ``mass_sens``) of :mod:`.discrete`.
     """
-    n, m, n_p = builder.ndof, builder.g.numel(), len(builder.parameter_names)
-    groups = builder.element_groups
-    x = ca.MX.sym("x", n + m)
-    q_cur, q_prev, v = ca.MX.sym("q_cur", n), ca.MX.sym("q_prev", n), ca.MX.sym("v", n)
-    p, c = ca.MX.sym("p", n_p), ca.MX.sym("c", builder.c.numel())
-    gc = ca.MX.sym("gc", int(group_constants(groups).size))
-    h = ca.MX.sym("h")
-    s_cur, s_prev, s_v = ca.MX.sym("S_cur", n_p, n), ca.MX.sym("S_prev", n_p, n), ca.MX.sym("S_v", n_p, n)
-    parts: list[_Group] = []
-    offset = 0
-    for group in groups:
-        parts.append(_Group(group, gc, offset, n))
-        offset += parts[-1].size
-    q_next, lam = x[:n], x[n:]
-    (mass,) = globals_("mass").call([p, c])
-    grad_linear = globals_("linear").call([ca.MX.zeros(n), p, c])[0]
-    g_next, jac_next = globals_("constraints").call([q_next, c])
-    _, jac_cur = globals_("constraints").call([q_cur, c])
-    mid = 0.5 * (q_cur + q_next)
-    _, jac_mid = globals_("constraints").call([mid, c])
-
-    def forces(q_a: ca.MX, q_b: ca.MX, em: bool = False) -> ca.MX:
-        total = ca.MX.zeros(n)
-        for part in parts:
-            total = total + part.force(q_a, q_b, p, h, em)
-        return total
-
-    def tangents(q_a: ca.MX, q_b: ca.MX, weight: float, em: bool = False, end: str = "b") -> ca.MX:
-        total = ca.MX(n, n)
-        for part in parts:
-            total = total + part.tangent(q_a, q_b, p, h, weight, em, end)
-        return total
-
-    def parameter_forces(q_a: ca.MX, q_b: ca.MX, weight: float, em: bool = False) -> ca.MX:
-        total = ca.MX(n, n_p)
-        for part in parts:
-            total = total + part.parameter_force(q_a, q_b, p, h, weight, em, n_p)
-        return total
-
-    residual_q = {
-        "vi1": 2.0 * ca.mtimes(mass, q_next - q_cur - h * v) / h**2 + grad_linear + forces(q_cur, q_next)
-        + ca.mtimes(jac_cur.T, lam),
-        "vi": ca.mtimes(mass, q_next - 2.0 * q_cur + q_prev) / h**2 + grad_linear
-        + 0.5 * (forces(q_cur, q_next) + forces(q_prev, q_cur)) + ca.mtimes(jac_cur.T, lam),
-        "em": 2.0 * ca.mtimes(mass, q_next - q_cur - h * v) / h**2 + grad_linear + forces(q_cur, q_next, em=True)
-        + ca.mtimes(jac_mid.T, lam),
-    }
-    (hessian_mid,) = globals_("constraint_hessian").call([mid, lam, c])
-    jacobian_qq = {
-        "vi1": 2.0 * mass / h**2 + tangents(q_cur, q_next, 1.0),
-        "vi": mass / h**2 + tangents(q_cur, q_next, 0.5),
-        "em": 2.0 * mass / h**2 + tangents(q_cur, q_next, 1.0, em=True) + 0.5 * hessian_mid,
-    }
-    constraint_columns = {"vi1": jac_cur.T, "vi": jac_cur.T, "em": jac_mid.T}
-    # sensitivity right-hand sides, term by term as StepAssembler.sensitivity_rhs
-    (hessian_cur,) = globals_("constraint_hessian").call([q_cur, lam, c])
-    d_grad_dp = globals_("linear").call([ca.MX.zeros(n), p, c])[1]
-
-    def mass_sensitivity(acceleration: ca.MX) -> ca.MX:
-        return globals_("mass_sens").call([acceleration, p, c])[0]
-
-    start_acceleration = 2.0 * (q_next - q_cur - h * v) / h**2
-    s_cur_t, s_prev_t, s_v_t = s_cur.T, s_prev.T, s_v.T
-    rhs_q = {
-        "vi1": mass_sensitivity(start_acceleration) + d_grad_dp + parameter_forces(q_cur, q_next, 1.0),
-        "vi": mass_sensitivity((q_next - 2.0 * q_cur + q_prev) / h**2) + d_grad_dp
-        + parameter_forces(q_cur, q_next, 0.5) + parameter_forces(q_prev, q_cur, 0.5)
-        + ca.mtimes(-2.0 * mass / h**2 + tangents(q_cur, q_next, 0.5, end="a") + tangents(q_prev, q_cur, 0.5)
-                    + hessian_cur, s_cur_t)
-        + ca.mtimes(mass / h**2 + tangents(q_prev, q_cur, 0.5, end="a"), s_prev_t),
-        "em": mass_sensitivity(start_acceleration) + d_grad_dp + parameter_forces(q_cur, q_next, 1.0, em=True)
-        + ca.mtimes(-2.0 * mass / h**2 + tangents(q_cur, q_next, 1.0, em=True, end="a") + 0.5 * hessian_mid,
-                    s_cur_t)
-        - (2.0 / h) * ca.mtimes(mass, s_v_t),
-    }
-    inputs = [x, q_cur, q_prev, v, p, c, gc, h]
-    names = ["x", "q_cur", "q_prev", "v", "p", "c", "gc", "h"]
-    out: list[ca.Function] = []
-    for variant in VARIANTS:
-        residual = ca.vertcat(residual_q[variant], g_next)
-        jacobian = ca.blockcat([[jacobian_qq[variant], constraint_columns[variant]], [jac_next, ca.MX(m, m)]])
-        rhs = ca.densify(ca.vertcat(rhs_q[variant], ca.MX(m, n_p)))  # (n + m, n_p): the constraints do not depend on p
-        out += [
-            ca.Function(f"fgs_res_{variant}", inputs, [residual], names, ["residual"]),
-            ca.Function(f"fgs_jac_{variant}", inputs, [jacobian], names, ["jacobian"]),
-            ca.Function(f"fgs_sens_{variant}", [*inputs, s_cur, s_prev, s_v], [rhs.T],
-                        [*names, "S_cur", "S_prev", "S_v"], ["rhs"]),  # fmt: skip
-        ]
-    return out
+    return _StepEquations(builder, globals_).functions()
