@@ -10,13 +10,11 @@ from rich.table import Table
 
 from fuzzygait.cli.app import app, err, out, user_errors
 from fuzzygait.cli.options import (
+    DEFAULT_CALIBRATION,
     DEFAULT_PREPROCESSING,
-    FlatFootOption,
+    CalibrationOptions,
     KneeAnkleCentresOption,
-    MarkerDiameterOption,
     PreprocessingOptions,
-    StaticOption,
-    SubjectOption,
     check_knee_ankle_centres,
     with_option_groups,
 )
@@ -28,11 +26,8 @@ _PLANES = {"X": "sagittal", "Y": "frontal", "Z": "transverse"}
 @with_option_groups
 def compare(
     dynamic: Annotated[Path, typer.Argument(metavar="TRIAL.c3d", help="A trial holding another tool's angles.")],
-    static: StaticOption = None,
-    subject: SubjectOption = None,
+    calibration: CalibrationOptions = DEFAULT_CALIBRATION,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
-    flat_foot: FlatFootOption = None,
-    marker_diameter: MarkerDiameterOption = None,
     model: Annotated[
         str, typer.Option("--model", help="Model version to compare (as for `angles`; default auto).")
     ] = "auto",
@@ -50,8 +45,9 @@ def compare(
 
     with user_errors():
         check_knee_ankle_centres(knee_ankle_centres)
-        inputs = TrialInputs(dynamic, static=static, subject_file=subject, preprocessing=preprocessing.preprocessing(),
-                             flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
+        inputs = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
+                             preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
+                             marker_diameter=calibration.marker_diameter, model=model,
                              knee_ankle_centres=knee_ankle_centres)  # fmt: skip
         comparison = compare_trial(inputs, out_table)
     run, check = comparison.run, comparison.check
