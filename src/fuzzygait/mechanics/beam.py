@@ -27,6 +27,7 @@ import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import Body, ElementGroup, SystemBuilder, dot3
+from fuzzygait.mechanics.homogenisation import SectionStiffness
 
 
 def element_strains(qa, qb, length):
@@ -144,37 +145,81 @@ def _beam_kernels(law: str = "homogeneous") -> dict[str, ca.Function]:
     }
 
 
-def add_beam(
-    builder: SystemBuilder,
-    label: str,
-    nodes: Sequence[Body],
-    reference: np.ndarray,
-    element_length: np.ndarray,
-    section: BeamSection,
-    *,
-    modulus: str = "E",
-    poisson: str = "nu",
-    density: str = "rho",
-    damping: str = "eta",
-    stiffness=None,
-    reference_modulus: float | None = None,
-) -> None:
-    """Add a beam's elements, inertia and gravity to ``builder``.
+@dataclass(frozen=True)
+class BeamParameterNames:
+    """Names of the beam's material parameters in the builder's parameter vector.
 
-    Args:
-        nodes: the node bodies in order along the beam.
-        reference: (n_nodes, 12) reference (unstressed) configuration, inertial frame.
-        element_length: (n_nodes − 1,) reference element lengths (m).
-        section: per-element cross-section data.
-        modulus, poisson, density, damping: names of the parameters E (Pa), ν, ρ (kg/m³) and
-            η (Pa·s) in the builder's parameter vector.
-        stiffness: optional effective section stiffnesses per element (a
-            :class:`~fuzzygait.mechanics.homogenisation.SectionStiffness`, e.g. the standard or
-            coupled homogenisation of the three-layer blade) used as ``D^Γ``/``D^K`` instead of
-            the homogeneous formulas; they are scaled by ``E / reference_modulus``.
+    Attributes:
+        modulus: Young's modulus E (Pa).
+        poisson: Poisson ratio ν (dimensionless).
+        density: density ρ (kg/m³).
+        damping: Kelvin–Voigt viscosity η (Pa·s).
     """
-    n_el = len(nodes) - 1
-    element_length = np.asarray(element_length, float)
+
+    modulus: str = "E"
+    poisson: str = "nu"
+    density: str = "rho"
+    damping: str = "eta"
+
+    def element_indices(self, parameter_names: Sequence[str]) -> tuple[int, int, int]:
+        """Positions of E, ν and η in ``parameter_names`` (the element kernels' ``pe``);
+        :class:`ParameterError` when one of the four names is not among them."""
+        names = list(parameter_names)
+        for field_name in ("modulus", "poisson", "density", "damping"):
+            name = getattr(self, field_name)
+            if name not in names:
+                raise ParameterError(f"beam {field_name} parameter {name!r} is not a parameter of the model; "
+                                     f"choose one of {', '.join(names)}")  # fmt: skip
+        return names.index(self.modulus), names.index(self.poisson), names.index(self.damping)
+
+
+@dataclass(frozen=True)
+class GivenStiffness:
+    """Effective section stiffnesses used as ``D^Γ``/``D^K`` instead of the homogeneous
+    formulas (the "given" law of the element kernels).
+
+    Attributes:
+        stiffness: the stiffnesses per element or for all elements, e.g. the standard or coupled
+            homogenisation of the three-layer blade: shear ``A₁``, ``A₂`` and axial ``A₃`` (N),
+            bending ``C₁``, ``C₂`` and torsion ``C₃`` (N m²), in the section frame (d1, d2, d3).
+        reference_modulus: the modulus E_ref (Pa) they were computed for; in the model they are
+            scaled by ``E / E_ref`` with the beam's parameter E.
+    """
+
+    stiffness: SectionStiffness
+    reference_modulus: float
+
+    def __post_init__(self) -> None:
+        _check_reference_modulus(self.reference_modulus)
+
+    @classmethod
+    def optional(cls, stiffness: SectionStiffness | None, reference_modulus: float | None) -> GivenStiffness | None:
+        """None without ``stiffness`` (the homogeneous law), else the given stiffness;
+        :class:`ParameterError` when ``reference_modulus`` is missing or not > 0."""
+        return None if stiffness is None else cls(stiffness, _check_reference_modulus(reference_modulus))
+
+    def values(self, n_el: int) -> np.ndarray:
+        """The element constants of the given law: ``(n_el, 7)``, the six stiffnesses then E_ref."""
+        values = np.column_stack(
+            [np.broadcast_to(np.asarray(getattr(self.stiffness, name), float), n_el) for name in
+             ("shear_1", "shear_2", "axial", "bending_1", "bending_2", "torsion")]
+        )  # fmt: skip
+        return np.column_stack([values, np.full(n_el, float(self.reference_modulus))])
+
+
+def _check_reference_modulus(value: float | None) -> float:
+    """``value`` when it is a finite modulus > 0 (Pa), else :class:`ParameterError`."""
+    if value is None or not (np.isfinite(value) and value > 0):
+        raise ParameterError(f"given section stiffnesses need reference_modulus > 0 Pa (the E they were computed "
+                             f"for); got {value}")  # fmt: skip
+    return value
+
+
+def _element_constants(reference: np.ndarray, element_length: np.ndarray, section: BeamSection,
+                       given: GivenStiffness | None) -> np.ndarray:  # fmt: skip
+    """The ``(n_el, k)`` element constants of the kernels (``N_ELEMENT_CONSTANTS``): L, A,
+    I_1, I_2, J, κ, the six reference strains and, with ``given``, its stiffnesses and E_ref."""
+    n_el = len(element_length)
     reference_strains = np.array(
         [element_strains(reference[e], reference[e + 1], element_length[e]) for e in range(n_el)]
     )
@@ -189,31 +234,16 @@ def add_beam(
             reference_strains,
         ]
     )
-    law = "homogeneous"
-    if stiffness is not None:
-        if reference_modulus is None or reference_modulus <= 0:
-            raise ParameterError("given section stiffnesses need reference_modulus > 0 (the E they were computed for)")
-        law = "given"
-        values = np.column_stack(
-            [np.broadcast_to(np.asarray(getattr(stiffness, name), float), n_el) for name in
-             ("shear_1", "shear_2", "axial", "bending_1", "bending_2", "torsion")]
-        )
-        constants = np.column_stack([constants, values, np.full(n_el, float(reference_modulus))])
-    kernels = _beam_kernels(law)
-    names = list(builder.parameter_names)
-    builder.add_element_group(
-        ElementGroup(
-            name=label,
-            kernel_name=f"{BEAM_KERNEL}:{law}",
-            kernels=kernels,
-            node_offsets=np.array([[nodes[e].offset, nodes[e + 1].offset] for e in range(n_el)]),
-            constants=constants,
-            parameter_indices=(names.index(modulus), names.index(poisson), names.index(damping)),
-        )
-    )
+    return constants if given is None else np.column_stack([constants, given.values(n_el)])
+
+
+def _add_inertia_and_gravity(builder: SystemBuilder, label: str, nodes: Sequence[Body], constants: np.ndarray,
+                             density: str) -> None:  # fmt: skip
+    """The consistent mass of every element (φ and directors) and the gravity energy of ρA."""
+    n_el = len(nodes) - 1
     rho = builder.parameter(density)
     q = builder.q
-    lengths = builder.constant(f"{label}_length", element_length)
+    lengths = builder.constant(f"{label}_length", constants[:, 0])
     area = builder.constant(f"{label}_area", constants[:, 1])
     i1 = builder.constant(f"{label}_I1", constants[:, 2])
     i2 = builder.constant(f"{label}_I2", constants[:, 3])
@@ -226,3 +256,50 @@ def add_beam(
         for block, line_density in ((0, rho * A), (1, rho * pick(i2, e)), (2, rho * pick(i1, e))):
             builder.add_coupled_inertia(a, b, block, line_density * length / 3, line_density * length / 6)
         builder.add_gravity_energy(rho * A * length * builder.gravity * 0.5 * (a.position(q)[2] + b.position(q)[2]))
+
+
+def add_beam(
+    builder: SystemBuilder,
+    label: str,
+    nodes: Sequence[Body],
+    reference: np.ndarray,
+    element_length: np.ndarray,
+    section: BeamSection,
+    names: BeamParameterNames = BeamParameterNames(),
+    given: GivenStiffness | None = None,
+) -> None:
+    """Add a beam's elements, inertia and gravity to ``builder``.
+
+    Args:
+        label: the beam's name (its element group and constants).
+        nodes: the node bodies in order along the beam (at least 2).
+        reference: (n_nodes, 12) reference (unstressed) configuration, inertial frame.
+        element_length: (n_nodes − 1,) reference element lengths (m), each > 0.
+        section: per-element cross-section data.
+        names: the names of E, ν, ρ and η in the builder's parameter vector.
+        given: optional effective section stiffnesses used instead of the homogeneous
+            formulas (scaled by ``E / E_ref``).
+    """
+    n_el = len(nodes) - 1
+    element_length = np.asarray(element_length, float)
+    reference = np.asarray(reference, float)
+    if n_el < 1 or element_length.shape != (n_el,) or reference.shape != (n_el + 1, 12):
+        raise ParameterError(f"beam {label!r} needs ≥ 2 nodes, (n_nodes, 12) reference coordinates and n_nodes − 1 "
+                             f"element lengths; got {n_el + 1} nodes, reference {reference.shape}, lengths "
+                             f"{element_length.shape}")  # fmt: skip
+    if not np.all(np.isfinite(element_length) & (element_length > 0)):
+        raise ParameterError(f"beam {label!r} element lengths must be finite and > 0 m; got {element_length}")
+    indices = names.element_indices(builder.parameter_names)
+    constants = _element_constants(reference, element_length, section, given)
+    law = "homogeneous" if given is None else "given"
+    builder.add_element_group(
+        ElementGroup(
+            name=label,
+            kernel_name=f"{BEAM_KERNEL}:{law}",
+            kernels=_beam_kernels(law),
+            node_offsets=np.array([[nodes[e].offset, nodes[e + 1].offset] for e in range(n_el)]),
+            constants=constants,
+            parameter_indices=indices,
+        )
+    )
+    _add_inertia_and_gravity(builder, label, nodes, constants, names.density)

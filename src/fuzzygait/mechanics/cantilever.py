@@ -16,7 +16,7 @@ import numpy as np
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration
-from fuzzygait.mechanics.beam import BeamSection, add_beam
+from fuzzygait.mechanics.beam import BeamSection, GivenStiffness, add_beam
 from fuzzygait.mechanics.discrete import DiscreteModel
 from fuzzygait.mechanics.geometry import BladeMesh, straight_beam
 from fuzzygait.mechanics.integrator import integrate
@@ -93,7 +93,7 @@ def build_clamped_beam(
         builder, "beam", bodies, reference, mesh.element_length,
         BeamSection(section.area, section.second_moment_1, section.second_moment_2,
                     section.torsion_constant, SHEAR_CORRECTION_RECTANGLE),
-        stiffness=stiffness, reference_modulus=reference_modulus,
+        given=GivenStiffness.optional(stiffness, reference_modulus),
     )
     builder.add_clamp("clamp", bodies[0], mesh.positions[0], mesh.directors[0])
     force = builder.constant("tip_force", tip_force)

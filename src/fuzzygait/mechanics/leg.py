@@ -27,7 +27,7 @@ import numpy as np
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.options import Option
 from fuzzygait.mechanics.assembly import SystemBuilder, director_configuration, euler_tensor_principal
-from fuzzygait.mechanics.beam import BeamSection, add_beam
+from fuzzygait.mechanics.beam import BeamSection, GivenStiffness, add_beam
 from fuzzygait.mechanics.geometry import BladeGeometry, BladeMesh, default_blade
 from fuzzygait.mechanics.homogenisation import LayerMaterials, coupled_stiffness, standard_stiffness
 from fuzzygait.mechanics.presets import SHANK, THIGH, Material, SegmentData
@@ -219,8 +219,7 @@ def build_leg(configuration: LegConfiguration, rigid_foot_density: float = 8.55e
             b, "blade", nodes, reference, mesh.element_length,
             BeamSection(section.area, section.second_moment_1, section.second_moment_2,
                         section.torsion_constant, SHEAR_CORRECTION_RECTANGLE),
-            stiffness=stiffness,
-            reference_modulus=cfg.layers.face_modulus if cfg.layers is not None else None,
+            given=GivenStiffness.optional(stiffness, cfg.layers.face_modulus if cfg.layers is not None else None),
         )
         relative = frames[0] @ shank_frame.T  # relative[i, k] = d_i(node 0) · d_k(shank)
         b.add_rigid("ankle", shank, ankle_arm, nodes[0], (0.0, 0.0, 0.0), relative)
