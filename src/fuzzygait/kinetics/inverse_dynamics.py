@@ -1,0 +1,148 @@
+"""Newton–Euler inverse dynamics of a chain of rigid segments, vectorised over frames.
+
+Conventions (SI units, laboratory frame):
+
+* a :class:`Load` is a force (N) and a moment (N·m) about a point (m), acting **on** the
+  segment being solved;
+* the ground load on the foot is the ground's reaction on the body (force and free
+  moment about the centre of pressure, or equivalently force and moment about any
+  point);
+* the load at a joint is the load of the proximal segment on the distal one, about the
+  joint centre (the "internal" joint load); the distal segment gets its reaction.
+
+Each segment obeys ``F_p + F_d + m g = m a`` and, about its centre of mass ``c``,
+``M_p + (p - c) x F_p + M_d + (d - c) x F_d = I α + ω x (I ω)`` with ``I`` the principal
+inertia in the segment's frame.  Derivatives are the five-point central differences of
+:func:`derivative` (Nexus' Plug-in Gait loses the same four frames at each end: two for
+the velocity, two more for the acceleration).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fuzzygait.kinetics.segments import Segment
+
+#: Gravity (m/s²) along the laboratory's vertical (z up): Plug-in Gait's 9.81.
+GRAVITY: NDArray[np.float64] = np.array([0.0, 0.0, -9.81])
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Load:
+    """A force and a moment acting on a segment, laboratory frame.
+
+    Attributes:
+        point: ``(n, 3)`` m, where the moment is taken.
+        force: ``(n, 3)`` N.
+        moment: ``(n, 3)`` N·m about ``point``.
+    """
+
+    point: Array
+    force: Array
+    moment: Array
+
+    def reaction(self) -> Load:
+        """The equal and opposite load (on the other segment of a joint)."""
+        return Load(self.point, -self.force, -self.moment)
+
+    def moved_to(self, point: Array) -> Load:
+        """The same load with its moment about ``point`` (``(n, 3)`` m)."""
+        return Load(point, self.force, self.moment + np.cross(self.point - point, self.force))
+
+
+@dataclass(frozen=True)
+class SegmentMotion:
+    """A segment's derivatives, laboratory frame.
+
+    Attributes:
+        acceleration: ``(n, 3)`` m/s², of the centre of mass.
+        omega: ``(n, 3)`` rad/s, angular velocity.
+        alpha: ``(n, 3)`` rad/s², angular acceleration.
+    """
+
+    acceleration: Array
+    omega: Array
+    alpha: Array
+
+
+def derivative(x: Array, rate: float) -> Array:
+    """Time derivative along axis 0 of samples at ``rate`` Hz: the five-point central
+    difference ``(x[i-2] - 8 x[i-1] + 8 x[i+1] - x[i+2]) / (12 dt)``; NaN on the first
+    and last two samples (and fewer than five samples: all NaN)."""
+    out = np.full(x.shape, np.nan)
+    if len(x) >= 5:
+        out[2:-2] = (x[:-4] - 8.0 * x[1:-3] + 8.0 * x[3:-1] - x[4:]) * (rate / 12.0)
+    return out
+
+
+def angular_velocity(frames: Array, rate: float) -> Array:
+    """``(n, 3)`` rad/s, laboratory frame: the axial vector of ``dR/dt Rᵀ`` (its
+    antisymmetric part) of the ``(n, 3, 3)`` rotations ``frames``."""
+    w = derivative(frames, rate) @ np.swapaxes(frames, 1, 2)
+    return 0.5 * np.stack([w[:, 2, 1] - w[:, 1, 2], w[:, 0, 2] - w[:, 2, 0], w[:, 1, 0] - w[:, 0, 1]], axis=1)
+
+
+def segment_motion(segment: Segment, rate: float) -> SegmentMotion:
+    """Centre-of-mass acceleration, angular velocity and acceleration of ``segment``."""
+    omega = angular_velocity(segment.frame, rate)
+    return SegmentMotion(derivative(derivative(segment.com, rate), rate), omega, derivative(omega, rate))
+
+
+def _local(frame: Array, v: Array) -> Array:
+    return np.einsum("nji,nj->ni", frame, v)
+
+
+def _lab(frame: Array, v: Array) -> Array:
+    return np.einsum("nij,nj->ni", frame, v)
+
+
+def newton_euler(segment: Segment, motion: SegmentMotion, distal: Load, proximal: Array,
+                 gravity: Array = GRAVITY) -> Load:  # fmt: skip
+    """The load on ``segment`` at its proximal joint centre (``proximal``, ``(n, 3)`` m)
+    that, with the ``distal`` load and gravity, gives the segment its ``motion``."""
+    force = segment.mass * (motion.acceleration - gravity) - distal.force
+    w_local, a_local = _local(segment.frame, motion.omega), _local(segment.frame, motion.alpha)
+    inertia = segment.inertia
+    h_dot = _lab(segment.frame, inertia * a_local + np.cross(w_local, inertia * w_local))
+    com = segment.com
+    moment = h_dot - distal.moment - np.cross(distal.point - com, distal.force) - np.cross(proximal - com, force)
+    return Load(proximal, force, moment)
+
+
+def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, ...], ground: Load, rate: float,
+                           gravity: Array = GRAVITY) -> tuple[list[Load], list[SegmentMotion]]:  # fmt: skip
+    """Inverse dynamics from the distal end up.
+
+    Args:
+        segments: distal first (foot, tibia, femur).
+        joints: the proximal joint centre of each segment, ``(n, 3)`` m (AJC, KJC, HJC).
+        ground: the external load on the first segment (zero force when it is off the
+            ground).
+        rate: frames per second.
+        gravity: ``(3,)`` m/s².
+
+    Returns:
+        The load at each joint (of the proximal segment on the distal one, about the
+        joint centre) and each segment's motion, in the order of ``segments``.
+    """
+    loads: list[Load] = []
+    motions: list[SegmentMotion] = []
+    distal = ground
+    for segment, joint in zip(segments, joints, strict=True):
+        motion = segment_motion(segment, rate)
+        load = newton_euler(segment, motion, distal, joint, gravity)
+        loads.append(load)
+        motions.append(motion)
+        distal = load.reaction()
+    return loads, motions
+
+
+def joint_power(load: Load, omega_distal: Array, omega_proximal: Array) -> Array:
+    """``(n,)`` W: the power of the joint moment, ``M · (ω_distal - ω_proximal)`` (positive:
+    the muscles generate energy)."""
+    return np.einsum("ni,ni->n", load.moment, omega_distal - omega_proximal)
