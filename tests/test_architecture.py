@@ -19,6 +19,7 @@ LAYERS = {
     "kinematics": 2,
     "uncertainty": 2,
     "mechanics": 3,  # models for the engine: may import uncertainty
+    "kinetics": 3,  # force plates and inverse dynamics: may import mocap (filtering)
     "gait": 4,
     "markererror": 4,
     "synthetic": 4,

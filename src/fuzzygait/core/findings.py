@@ -70,6 +70,17 @@ class FindingKind(enum.Enum):
     ALLOWABLE_ERROR = "allowable_error"
     #: What the discovery of a session folder could not decide.
     SESSION = "session"
+    #: A force plate's reading: its offsets removed, its type or parameters
+    #: (:mod:`fuzzygait.io.force_plates`).
+    FORCE_PLATE = "force_plate"
+    #: A force plate that cannot be used: no or zero calibration, missing channels.
+    FORCE_PLATE_CALIBRATION = "force_plate_calibration"
+    #: A force-plate channel at its converter's limit (the forces there are wrong).
+    FORCE_PLATE_SATURATED = "force_plate_saturated"
+    #: A force plate that carries no load during the trial.
+    FORCE_PLATE_UNLOADED = "force_plate_unloaded"
+    #: A force plate's channel units read otherwise than labelled.
+    FORCE_PLATE_UNITS = "force_plate_units"
 
 
 class Severity(enum.Enum):
