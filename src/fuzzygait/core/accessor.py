@@ -5,7 +5,8 @@ an output at each α-level (ascending, α = 1 the deterministic or measured valu
 ``AXIS`` — ``time`` (the Graph Follower's results, s) or ``frame`` (the marker-error
 analysis' joint angles, with ``time`` as a coordinate on it) — with optional leading
 dimensions that stack several results (``component`` for angle components, ``sample``
-for the FRV-GFA's samples). The accessor answers the questions a reader asks of any of
+for the FRV-GFA's samples, ``source`` for the marker-error analysis' bands of each error
+source alone). The accessor answers the questions a reader asks of any of
 them in the result's own units::
 
     import fuzzygait.core.schema  # registers the accessor (every result-making module does)
@@ -30,7 +31,7 @@ from fuzzygait.core.names import AngleComponent
 #: The dimensions a hull may run along.
 AXES = ("time", "frame")
 #: Leading dimensions that stack results.
-STACKING = ("component", "sample")
+STACKING = ("source", "component", "sample")
 BOUND_NAMES = ("lower", "upper")
 
 

@@ -19,10 +19,27 @@ search (:func:`allowable_errors`) brackets the allowable scale between the datas
 alone — interpolation of the excursion (quadratic through the nearest evaluated levels,
 else the chord), with a bisection step whenever the bracket has not halved in two steps
 — until the bracket is narrower than ``resolution`` mm on the component's largest ball.
-Every α-level evaluated is kept in the returned dataset (``refined_*`` variables, one
-block per component; :func:`refined_levels`), and the hulls of each component are made
-nested over all its levels (an optimum over a ball cannot be worse than over a smaller
-one; the Graph Follower's are local optima, so this only widens them).
+The hulls of each component are made nested over all its levels (an optimum over a ball
+cannot be worse than over a smaller one; the Graph Follower's are local optima, so this
+only widens them).
+
+Layout of the refinement (:attr:`MarkerErrorResult.allowable
+<fuzzygait.markererror.result.MarkerErrorResult>`, the group ``allowable`` of a saved
+result), over the bands' ``component``, ``bound``, ``frame`` (with ``time``) and
+``marker`` and a dimension ``refinement`` (each component's evaluated levels, ascending,
+NaN-padded: every component refines at its own levels, so a shared α axis would be
+mostly NaN; :func:`refined_levels` merges one component's levels with the bands along
+``alpha``):
+
+* ``alpha (component, refinement)``: the α-level evaluated; ``hull (component, refinement,
+  bound, frame)`` deg; ``undetermined (component, refinement, frame)``; ``deviation
+  (component, refinement, bound, frame, marker)`` mm (when the bands have one);
+* the outcome per component (NaN / "" where not analysed): ``scale`` (fraction of Σ),
+  ``mm`` (on the component's largest ball), ``failing_scale``, ``excursion`` deg,
+  ``evaluations``, ``status`` (:data:`STATUSES`) and ``segment_radius (component,
+  segment)`` mm (the largest Σ of the segment's markers the component uses);
+* attributes ``tolerance_deg``, ``resolution_mm``, ``source`` (what Σ is), ``seconds``
+  (refinement wall time), ``runs`` and ``node_evaluations``.
 
 Cost: each refinement step is one Graph Follower run of one component at one α-level
 (the components of a step side by side on the evaluator); near α = 1 the balls are small
@@ -54,7 +71,12 @@ from fuzzygait.markererror.analysis import (
 )
 from fuzzygait.markererror.angle_model import AXES, undetermined
 from fuzzygait.markererror.refinement import Progress, component_setups, refine
-from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
+from fuzzygait.markererror.result import (
+    MarkerErrorResult,
+    angle_components,
+    component_hull,
+    component_undetermined,
+)
 from fuzzygait.markererror.scale_search import ScaleSearch
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
 from fuzzygait.uncertainty.execution import Evaluator
@@ -70,10 +92,11 @@ MAX_EVALUATIONS = 12
 SEGMENTS = tuple(TABLE_3_1)
 
 # ---------------------------------------------------------------------------- excursion
-def band_excursion(fuzzy: xr.Dataset, component: str) -> pd.Series:
+def band_excursion(fuzzy: MarkerErrorResult | xr.Dataset, component: str) -> pd.Series:
     """Largest distance (degrees) of the band of ``component`` from the measured angle over
     the trial, per α-level (index, ascending; refined levels included,
-    :func:`refined_levels`): ``max_t max(upper − Φ, Φ − lower)``.
+    :func:`refined_levels`; ``fuzzy``: a result or its bands alone):
+    ``max_t max(upper − Φ, Φ − lower)``.
 
     ``inf`` where the band is undetermined at some frame (the segment frame can flip: no
     tolerance holds); NaN where the level was not evaluated for this component (or the
@@ -88,15 +111,11 @@ def band_excursion(fuzzy: xr.Dataset, component: str) -> pd.Series:
     return pd.Series(largest, index=hull["alpha"].to_numpy().astype(float), name=component)
 
 # ---------------------------------------------------------------------------- dataset
-def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict[str, ComponentTask]) -> xr.Dataset:
-    """The dataset with the refinement's levels in a block of their own (dim
-    ``refinement``: each component's evaluated levels, ascending, NaN-padded), the hulls of
-    each component nested over all its levels (plain and refined), undetermined updated.
-
-    Not along ``alpha``: every component refines at its own levels, so a shared ``alpha``
-    would be mostly NaN (and the deviation norms, ``(component, alpha, bound, frame,
-    marker)``, ten times the size); :func:`refined_levels` merges one component's levels
-    along ``alpha``."""
+def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple],
+           setups: dict[str, ComponentTask]) -> tuple[xr.Dataset, xr.Dataset]:  # fmt: skip
+    """The bands with each component's hulls nested over all its levels (plain and
+    refined) and undetermined updated, and the refinement's levels as a dataset of their
+    own (layout in the module docstring; the outcome is added by :func:`_store`)."""
     alphas = fuzzy["alpha"].to_numpy().astype(float)
     components = angle_components(fuzzy)
     markers = [str(m) for m in fuzzy["marker"].to_numpy()]
@@ -134,51 +153,53 @@ def _merge(fuzzy: xr.Dataset, runs: dict[tuple[str, float], tuple], setups: dict
         hull[c], refined_hull[c, : len(levels[component])] = unsorted[: alphas.size], unsorted[alphas.size :]
         flags[c] |= undetermined(hull[c, :, 0], hull[c, :, 1], measured)
         refined_flags[c] = undetermined(refined_hull[c, :, 0], refined_hull[c, :, 1], measured)
-    merged = fuzzy.copy()
-    merged["hull"] = fuzzy["hull"].copy(data=hull)
-    merged["undetermined"] = fuzzy["undetermined"].copy(data=flags)
-    merged["refined_alpha"] = (
-        ("component", "refinement"),
-        refined_alpha,
-        {"units": "1", "long_name": "α-level evaluated by the allowable-error refinement"},
-    )
-    merged["refined_hull"] = (
-        ("component", "refinement", "bound", "frame"),
-        refined_hull,
-        {"units": "deg", "long_name": "joint angle bounds at the refined α-level"},
-    )
-    merged["refined_undetermined"] = (
-        ("component", "refinement", "frame"),
-        refined_flags,
-        {"long_name": "band undetermined at the refined α-level"},
-    )
+    bands = fuzzy.copy()
+    bands["hull"] = fuzzy["hull"].copy(data=hull)
+    bands["undetermined"] = fuzzy["undetermined"].copy(data=flags)
+    data: dict[str, tuple] = {
+        "alpha": (("component", "refinement"), refined_alpha,
+                  {"units": "1", "long_name": "α-level evaluated by the allowable-error refinement"}),
+        "hull": (("component", "refinement", "bound", "frame"), refined_hull,
+                 {"units": "deg", "long_name": "joint angle bounds at the refined α-level"}),
+        "undetermined": (("component", "refinement", "frame"), refined_flags,
+                         {"long_name": "band undetermined at the refined α-level"}),
+    }  # fmt: skip
     if refined_deviation is not None:
-        merged["refined_deviation"] = (
-            ("component", "refinement", "bound", "frame", "marker"),
-            refined_deviation,
-            {"units": "mm", "long_name": "marker deviation norm at the bound"},
-        )
-    return merged
+        data["deviation"] = (("component", "refinement", "bound", "frame", "marker"), refined_deviation,
+                             {"units": "mm", "long_name": "marker deviation norm at the bound"})  # fmt: skip
+    coords = {name: (fuzzy[name].dims, fuzzy[name].to_numpy(), fuzzy[name].attrs)
+              for name in ("component", "bound", "frame", "time", "marker")}  # fmt: skip
+    return bands, xr.Dataset(data, coords=coords)
 
 
-def refined_levels(fuzzy: xr.Dataset, component: str) -> xr.Dataset:
+def refined_components(result: MarkerErrorResult) -> list[str]:
+    """The components the refinement analysed (a ``status``), in dataset order; [] without one."""
+    if result.allowable is None:
+        return []
+    return [str(c) for c, status in zip(result.allowable["component"].to_numpy(),
+                                        result.allowable["status"].to_numpy(), strict=True) if str(status)]  # fmt: skip
+
+
+def refined_levels(fuzzy: MarkerErrorResult | xr.Dataset, component: str) -> xr.Dataset:
     """One component's plain and refined α-levels merged along ``alpha`` (ascending):
     ``hull (alpha, bound, frame)`` deg, ``undetermined (alpha, frame)`` and the coordinate
-    ``refined (alpha)``; the plain levels only for a dataset without refinement."""
-    hull = component_hull(fuzzy, component)
-    flags = component_undetermined(fuzzy, component)
+    ``refined (alpha)``; the plain levels only for bands (or a result) without refinement."""
+    result = fuzzy if isinstance(fuzzy, MarkerErrorResult) else MarkerErrorResult(fuzzy)
+    hull = component_hull(result.bands, component)
+    flags = component_undetermined(result.bands, component)
     plain = xr.Dataset({"hull": hull, "undetermined": flags}).assign_coords(
         refined=("alpha", np.zeros(hull.sizes["alpha"], dtype=bool))
     )
-    if "refined_alpha" not in fuzzy.data_vars:
+    if result.allowable is None:
         return plain
-    alphas = fuzzy["refined_alpha"].sel(component=component, drop=True).to_numpy()
+    levels = result.allowable.sel(component=component, drop=True)
+    alphas = levels["alpha"].to_numpy()
     keep = np.flatnonzero(np.isfinite(alphas))
     extra = (
         xr.Dataset(
             {
-                "hull": fuzzy["refined_hull"].sel(component=component, drop=True).isel(refinement=keep),
-                "undetermined": fuzzy["refined_undetermined"].sel(component=component, drop=True).isel(refinement=keep),
+                "hull": levels["hull"].isel(refinement=keep),
+                "undetermined": levels["undetermined"].isel(refinement=keep),
             }
         )
         .rename({"refinement": "alpha"})
@@ -229,15 +250,16 @@ def allowable_sentence(label: str, tolerance: float, scale: float, segments: dic
             f"of where it was measured ({100 * scale:.0f} % of {source}: {parts} mm).")  # fmt: skip
 
 
-#: ``allowable_status`` values: bracketed, α = 0 passes, no scale tried passes, no frame.
+#: ``status`` values: bracketed, α = 0 passes, no scale tried passes, no frame.
 STATUSES = ("within", "full table passes", "smallest fails", "no data")
 
 
 def _store(merged: xr.Dataset, searches: dict[str, ScaleSearch], setups: dict[str, ComponentTask],
            counts: dict[str, int]) -> xr.Dataset:  # fmt: skip
-    """Each search's outcome as ``allowable_* (component)`` variables and the segments'
-    Σ as ``segment_radius (component, segment)`` (NaN / "" for components not analysed)."""
-    every = angle_components(merged)
+    """The refinement's levels ``merged`` with each search's outcome added as ``(component)``
+    variables and the segments' Σ as ``segment_radius (component, segment)`` (NaN / ""
+    for components not analysed)."""
+    every = [str(c) for c in merged["component"].to_numpy()]
     radii = {c: _segment_radii(setups[c].markers, setups[c].radii) for c in searches}
     segments = list(SEGMENTS) + sorted({k for r in radii.values() for k in r} - set(SEGMENTS))
     n = len(every)
@@ -258,13 +280,12 @@ def _store(merged: xr.Dataset, searches: dict[str, ScaleSearch], setups: dict[st
             radius[i, segments.index(segment)] = value
     largest = np.nanmax(np.where(np.isnan(radius), 0.0, radius), axis=1)
     variables = {
-        "allowable_scale": (scale, "1", "allowable error scale (fraction of Σ)"),
-        "allowable_alpha": (1.0 - scale, "1", "α-level of the allowable error"),
-        "allowable_mm": (scale * largest, "mm", "allowable error on the component's largest ball"),
-        "allowable_failing_scale": (failing, "1", "smallest error scale found outside the tolerance"),
-        "allowable_excursion": (excursion, "deg", "largest distance of the band from the measured angle there"),
-        "allowable_evaluations": (evaluations, "1", "refinement runs"),
-        "allowable_status": (status.astype(str), "", "one of " + ", ".join(STATUSES)),
+        "scale": (scale, "1", "allowable error scale (fraction of Σ)"),
+        "mm": (scale * largest, "mm", "allowable error on the component's largest ball"),
+        "failing_scale": (failing, "1", "smallest error scale found outside the tolerance"),
+        "excursion": (excursion, "deg", "largest distance of the band from the measured angle there"),
+        "evaluations": (evaluations, "1", "refinement runs"),
+        "status": (status.astype(str), "", "one of " + ", ".join(STATUSES)),
     }
     for name, (values, units, long_name) in variables.items():
         merged[name] = (("component",), values, {"long_name": long_name, **({"units": units} if units else {})})
@@ -276,22 +297,21 @@ def _store(merged: xr.Dataset, searches: dict[str, ScaleSearch], setups: dict[st
     return merged.assign_coords(segment=segments)  # fmt: skip
 
 
-def allowable_table(fuzzy: xr.Dataset) -> pd.DataFrame:
-    """The allowable-error table of a refined dataset (the one :func:`allowable_errors`
-    returns, also after saving and loading it); columns described there."""
-    if "allowable_status" not in fuzzy.data_vars:
-        raise ParameterError(f"{fuzzy.attrs.get('trial', 'the dataset')} has no allowable-error refinement; "
+def allowable_table(result: MarkerErrorResult) -> pd.DataFrame:
+    """The allowable-error table of a refined result (the one :func:`allowable_errors`
+    returns, also after saving and reading it); columns described there."""
+    refinement = result.allowable
+    if refinement is None:
+        raise ParameterError(f"{result.bands.attrs.get('trial', 'the result')} has no allowable-error refinement; "
                              "compute it with allowable_errors")  # fmt: skip
-    tolerance, source = float(fuzzy.attrs["tolerance_deg"]), str(fuzzy.attrs["allowable_source"])
-    step_mm = float(fuzzy.attrs["allowable_resolution_mm"])
+    tolerance, source = float(refinement.attrs["tolerance_deg"]), str(refinement.attrs["source"])
+    step_mm = float(refinement.attrs["resolution_mm"])
     rows = {}
-    for c in angle_components(fuzzy):
-        status = str(fuzzy["allowable_status"].sel(component=c).item())
-        if not status:
-            continue
-        keys = ("scale", "mm", "alpha", "failing_scale", "excursion")
-        value = {k: float(fuzzy[f"allowable_{k}"].sel(component=c)) for k in keys}
-        radii = fuzzy["segment_radius"].sel(component=c)
+    for c in refined_components(result):
+        status = str(refinement["status"].sel(component=c).item())
+        value = {k: float(refinement[k].sel(component=c)) for k in ("scale", "mm", "failing_scale", "excursion")}
+        value["alpha"] = 1.0 - value["scale"]
+        radii = refinement["segment_radius"].sel(component=c)
         pairs = zip(radii["segment"].to_numpy(), radii.to_numpy().astype(float))
         segments = {str(k): float(v) for k, v in pairs if np.isfinite(v)}
         label = component_label(c)
@@ -300,7 +320,7 @@ def allowable_table(fuzzy: xr.Dataset) -> pd.DataFrame:
             "label": label, "tolerance_deg": tolerance, "allowable_scale": value["scale"],
             "allowable_mm": value["mm"], "alpha": value["alpha"], "excursion_deg": value["excursion"],
             "failing_scale": value["failing_scale"], "full_table_passes": full, "smallest_fails": smallest,
-            "evaluations": int(fuzzy["allowable_evaluations"].sel(component=c)),
+            "evaluations": int(refinement["evaluations"].sel(component=c)),
         }  # fmt: skip
         for segment in SEGMENTS:
             row[f"{segment}_mm"] = value["scale"] * segments[segment] if segment in segments else math.nan
@@ -409,7 +429,7 @@ def allowable_errors(
     evaluator: Evaluator | None = None,
     clusters: ClusterCalibration | None = None,
     progress: Progress | None = None,
-) -> tuple[pd.DataFrame, xr.Dataset]:
+) -> tuple[pd.DataFrame, MarkerErrorResult]:
     """The largest marker error for which each angle component stays within ``request.tolerance``.
 
     Args:
@@ -426,7 +446,7 @@ def allowable_errors(
             it can shrink as the searches converge; a last ``progress(n, n)`` at the end.
 
     Returns:
-        ``(table, dataset)``. ``table`` has one row per component (index ``component``):
+        ``(table, result)``. ``table`` has one row per component (index ``component``):
         ``label``; ``tolerance_deg``; ``allowable_scale`` (fraction of Σ, Table 3.1 with
         the selected sources: the largest scale found within the tolerance, 0 if none);
         ``allowable_mm`` (that scale on the component's largest Σ, mm); ``alpha``
@@ -436,17 +456,10 @@ def allowable_errors(
         error is at least Table 3.1's); ``smallest_fails`` (even the smallest scale tried
         fails); ``evaluations`` (refinement runs); ``<segment>_mm`` (the allowable error of
         each segment the component uses, NaN otherwise); ``text`` (a sentence for the
-        report). ``dataset`` is the fuzzy result with every refinement level kept —
-        ``refined_alpha (component, refinement)`` (NaN-padded), ``refined_hull
-        (component, refinement, bound, frame)`` deg, ``refined_undetermined``,
-        ``refined_deviation`` mm (:func:`refined_levels` merges one component's levels
-        along ``alpha``) — the hulls nested over all levels, the outcome per component
-        (``allowable_scale``, ``_alpha``, ``_mm``, ``_failing_scale``, ``_excursion`` deg,
-        ``_evaluations``, ``_status`` (:data:`STATUSES`; "" where not analysed),
-        ``segment_radius (component, segment)`` mm; :func:`allowable_table` rebuilds the
-        table from them) and the attributes ``tolerance_deg``, ``allowable_resolution_mm``,
-        ``allowable_source``, ``allowable_seconds`` (refinement wall time),
-        ``allowable_runs`` and ``allowable_node_evaluations``.
+        report). ``result`` holds the bands (the hulls nested over all levels) and the
+        refinement (:attr:`MarkerErrorResult.allowable`: every level evaluated and the
+        outcome per component; layout in the module docstring; :func:`allowable_table`
+        rebuilds the table from it).
     """
     options, tolerance, angles, resolution = request.options, request.tolerance, request.angles, request.resolution
     sources = parse_sources(options.sources)
@@ -460,9 +473,10 @@ def allowable_errors(
         searches = _start_searches(fuzzy, setups, tolerance, resolution)
         done = refine(setups, searches, runner, request.max_evaluations, progress)
     source = options.error_model.source + ("" if set(sources) == set(SOURCES) else f" ({', '.join(sources)})")
-    merged = _store(_merge(fuzzy, done.runs, setups), searches, setups, done.counts)
-    merged.attrs.update({"tolerance_deg": float(tolerance), "allowable_resolution_mm": float(resolution),
-                         "allowable_source": source, "allowable_seconds": round(done.seconds, 3),
-                         "allowable_runs": int(sum(done.counts.values())),
-                         "allowable_node_evaluations": int(done.node_evaluations)})  # fmt: skip
-    return allowable_table(merged), merged
+    bands, levels = _merge(fuzzy, done.runs, setups)
+    refinement = _store(levels, searches, setups, done.counts)
+    refinement.attrs.update({"tolerance_deg": float(tolerance), "resolution_mm": float(resolution), "source": source,
+                             "seconds": round(done.seconds, 3), "runs": int(sum(done.counts.values())),
+                             "node_evaluations": int(done.node_evaluations)})  # fmt: skip
+    refined = MarkerErrorResult(bands, refinement)
+    return allowable_table(refined), refined

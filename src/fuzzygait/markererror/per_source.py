@@ -7,27 +7,28 @@ beside the band of all sources together, so a reader sees which one dominates.
 :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles` (the same
 :func:`~fuzzygait.markererror.analysis.component_tasks`, the same optimiser settings) once
 per source, with ``FuzzyAngleOptions(sources=(s,))``, for the hip/knee/ankle flexion
-components of an existing fuzzy result, on the same evaluator, and attaches the hulls to
-that result. "All sources together" is the result's own ``hull``.
+components of an existing fuzzy result, on the same evaluator, and returns their bands as
+a dataset of their own (:attr:`MarkerErrorResult.sources
+<fuzzygait.markererror.result.MarkerErrorResult>`, the group ``sources`` of a saved
+result). "All sources together" is the bands' own ``hull``.
 
-Layout (variables added to the fuzzy joint-angle dataset; dims of their own, so every
-existing consumer of ``hull``/``alpha``/``component`` is unaffected):
+Layout (the fuzzy-result schema of :mod:`fuzzygait.core.accessor`, stacked by source):
 
 * dims ``source`` (``measurement``, ``placement``, ``sta``: the sources run alone),
-  ``source_component`` (``LKneeAngles_X`` …: the flexion components analysed),
-  ``source_alpha`` (ascending, 1 included), and the dataset's ``bound`` and ``frame``;
-* ``source_hull (source, source_component, source_alpha, bound, frame)`` deg: the band of
-  the source alone (continuous branch through the measured angle, NaN where the angle is
-  not computed);
-* ``source_undetermined (source, source_component, source_alpha, frame)``: a bound more
-  than 90° from the measured angle (as ``undetermined``);
-* ``source_ball_radius (source, marker)`` mm: each marker's α = 0 radius with that source
-  alone (a marker with a fixed total radius in the errors file keeps it for every source);
-* attributes ``source_alphas``, ``source_seconds`` (wall time), ``source_runs``,
-  ``source_node_evaluations`` and ``source_nesting_excess_deg``: how far (deg) a source's
-  band reaches beyond the all-sources band at the same α on frames where both are
-  determined (0 when nested, as the balls are: each source's ball lies inside the sum's;
-  a positive value means the all-sources optimum is a local one there).
+  ``component`` (``LKneeAngles_X`` …: the flexion components analysed), ``alpha`` (the
+  per-source α-levels, ascending, 1 included), ``bound``, ``frame`` (with ``time``) and
+  ``marker`` as the bands';
+* ``hull (source, component, alpha, bound, frame)`` deg: the band of the source alone
+  (continuous branch through the measured angle, NaN where the angle is not computed);
+* ``undetermined (source, component, alpha, frame)``: a bound more than 90° from the
+  measured angle (as the bands' ``undetermined``);
+* ``ball_radius (source, marker)`` mm: each marker's α = 0 radius with that source alone
+  (a marker with a fixed total radius in the errors file keeps it for every source);
+* attributes ``units`` (deg), ``seconds`` (wall time), ``runs``, ``forward_simulations``,
+  ``node_evaluations`` and ``nesting_excess_deg``: how far (deg) a source's band reaches
+  beyond the all-sources band at the same α on frames where both are determined (0 when
+  nested, as the balls are: each source's ball lies inside the sum's; a positive value
+  means the all-sources optimum is a local one there).
 
 Cost: one Graph Follower run per source and flexion component at the per-source α-levels;
 by default only the smallest α-level of the result (α = 0: what the figure and the table
@@ -41,8 +42,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -56,17 +58,23 @@ from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task
 from fuzzygait.markererror.angle_model import undetermined
-from fuzzygait.markererror.result import angle_components, component_hull, component_undetermined
+from fuzzygait.markererror.result import (
+    MarkerErrorResult,
+    angle_components,
+    component_hull,
+    component_undetermined,
+)
 from fuzzygait.markererror.sources import SOURCE_TITLES, SOURCES, parse_sources
 from fuzzygait.uncertainty.execution import Evaluator
 
 __all__ = [
     "ALL",
     "FLEXION_COMPONENTS",
+    "PerSourceRequest",
     "SourceWidths",
-    "attach_source_hulls",
     "has_source_bands",
     "per_source_bands",
+    "source_bands_dataset",
     "source_components",
     "source_hull",
     "source_names",
@@ -79,14 +87,14 @@ Progress = Callable[[int, int], None]
 
 #: The components Fig. 5.9 shows: hip, knee and ankle flexion, left and right.
 FLEXION_COMPONENTS = tuple(f"{side}{joint}Angles_X" for joint in ("Hip", "Knee", "Ankle") for side in "LR")
-#: The name of "all sources together" (the dataset's own ``hull``) in the accessors and tables.
+#: The name of "all sources together" (the bands' own ``hull``) in the accessors and tables.
 ALL = "all"
 #: α-levels closer to each other than this are the same level.
 _SAME_ALPHA = 1e-9
 
 
 # ---------------------------------------------------------------------------- dataset
-def attach_source_hulls(
+def source_bands_dataset(
     fuzzy: xr.Dataset,
     hulls: Mapping[str, Mapping[str, np.ndarray]],
     alphas: Sequence[float] | np.ndarray,
@@ -94,20 +102,20 @@ def attach_source_hulls(
     radii: Mapping[str, Sequence[float] | np.ndarray] | None = None,
     attrs: Mapping[str, object] | None = None,
 ) -> xr.Dataset:
-    """``fuzzy`` with the per-source bands added (layout in the module docstring).
+    """The per-source bands as a dataset (layout in the module docstring).
 
     Args:
-        fuzzy: the fuzzy joint-angle result (all sources together).
+        fuzzy: the bands (all sources together): their frames, markers and hulls.
         hulls: source -> component -> hull ``(alpha, bound [lower, upper], frame)`` deg
-            on the dataset's frames; every source must have the same components.
+            on the bands' frames; every source must have the same components.
         alphas: the α-levels of the hulls (ascending, 1 included: its upper bound is the
-            measured angle, the reference of ``source_undetermined``).
+            measured angle, the reference of ``undetermined``).
         radii: source -> α = 0 ball radius (mm) per marker of ``fuzzy``; None: NaN.
-        attrs: attributes to add (``source_alphas`` is set here).
+        attrs: attributes to add (``units`` and ``nesting_excess_deg`` are set here).
 
     Raises:
-        ParameterError: unknown sources, components the result does not hold, shapes
-            that do not fit, or α-levels without 1.
+        ParameterError: unknown sources, components the bands do not hold, shapes that
+            do not fit, or α-levels without 1.
     """
     sources = list(hulls)
     if not sources or [s for s in sources if s not in SOURCES]:
@@ -133,55 +141,47 @@ def attach_source_hulls(
     for i, source in enumerate(sources):
         if radii is not None and source in radii:
             radius[i] = np.asarray(radii[source], dtype=float)
-    out = fuzzy.drop_vars([v for v in fuzzy.variables if str(v).startswith("source_") or v == "source"])
-    out = out.assign_coords(source=("source", sources), source_component=("source_component", components),
-                            source_alpha=("source_alpha", levels))  # fmt: skip
-    out["source_hull"] = (
-        ("source", "source_component", "source_alpha", "bound", "frame"),
-        stacked,
-        {"units": "deg", "long_name": "joint angle bounds of the α-level with one error source alone"},
-    )
-    out["source_undetermined"] = (
-        ("source", "source_component", "source_alpha", "frame"),
-        flags,
-        {"long_name": "band of the source alone undetermined: a bound more than 90 deg from the measured angle"},
-    )
-    out["source_ball_radius"] = (
-        ("source", "marker"),
-        radius,
-        {"units": "mm", "long_name": "marker error ball radius at α = 0 with the source alone"},
-    )
-    out.attrs.update(dict(attrs or {}))
-    out.attrs["source_alphas"] = ",".join(f"{a:g}" for a in levels)
-    out.attrs["source_nesting_excess_deg"] = round(_nesting_excess(out), 6)
+    data = {
+        "hull": (("source", "component", "alpha", "bound", "frame"), stacked,
+                 {"units": "deg", "long_name": "joint angle bounds of the α-level with one error source alone"}),
+        "undetermined": (("source", "component", "alpha", "frame"), flags,
+                         {"long_name": "band of the source alone undetermined: a bound more than 90 deg from "
+                                       "the measured angle"}),
+        "ball_radius": (("source", "marker"), radius,
+                        {"units": "mm", "long_name": "marker error ball radius at α = 0 with the source alone"}),
+    }  # fmt: skip
+    coords: dict[str, tuple] = {name: (fuzzy[name].dims, fuzzy[name].to_numpy(), fuzzy[name].attrs)
+              for name in ("bound", "frame", "time", "marker")}  # fmt: skip
+    coords |= {"source": ("source", sources), "component": ("component", components), "alpha": ("alpha", levels)}
+    out = xr.Dataset(data, coords=coords, attrs={**dict(attrs or {}), "units": "deg"})
+    out.attrs["nesting_excess_deg"] = round(_nesting_excess(MarkerErrorResult(fuzzy, sources=out)), 6)
     return out
 
 
-def has_source_bands(fuzzy: xr.Dataset) -> bool:
-    """Whether ``fuzzy`` holds per-source bands (:func:`per_source_bands`)."""
-    return "source_hull" in fuzzy.data_vars
+def has_source_bands(result: MarkerErrorResult | None) -> bool:
+    """Whether ``result`` holds per-source bands (:func:`per_source_bands`)."""
+    return result is not None and result.sources is not None
 
 
-def _require(fuzzy: xr.Dataset) -> None:
-    if not has_source_bands(fuzzy):
-        raise ParameterError(f"{fuzzy.attrs.get('trial', 'the dataset')} has no per-source bands; compute them "
-                             f"with per_source_bands (fuzzygait uncertainty {Option.PER_SOURCE})")  # fmt: skip
+def _require(result: MarkerErrorResult) -> xr.Dataset:
+    if result.sources is None:
+        raise ParameterError(f"{result.bands.attrs.get('trial', 'the result')} has no per-source bands; compute "
+                             f"them with per_source_bands (fuzzygait uncertainty {Option.PER_SOURCE})")  # fmt: skip
+    return result.sources
 
 
-def source_names(fuzzy: xr.Dataset) -> list[str]:
+def source_names(result: MarkerErrorResult) -> list[str]:
     """The sources run alone, e.g. ``["measurement", "placement", "sta"]``."""
-    _require(fuzzy)
-    return [str(s) for s in fuzzy["source"].to_numpy()]
+    return [str(s) for s in _require(result)["source"].to_numpy()]
 
 
-def source_components(fuzzy: xr.Dataset) -> list[str]:
+def source_components(result: MarkerErrorResult) -> list[str]:
     """The flexion components with per-source bands, in dataset order."""
-    _require(fuzzy)
-    return [str(c) for c in fuzzy["source_component"].to_numpy()]
+    return [str(c) for c in _require(result)["component"].to_numpy()]
 
 
 def _main_levels(fuzzy: xr.Dataset, component: str, alphas: np.ndarray) -> tuple[xr.DataArray, xr.DataArray]:
-    """The all-sources hull and flags of ``component`` at ``alphas`` (dim ``source_alpha``)."""
+    """The all-sources hull and flags of ``component`` at ``alphas`` (dim ``alpha``)."""
     hull, flags = component_hull(fuzzy, component), component_undetermined(fuzzy, component)
     main = hull["alpha"].to_numpy().astype(float)
     index = []
@@ -191,37 +191,36 @@ def _main_levels(fuzzy: xr.Dataset, component: str, alphas: np.ndarray) -> tuple
             raise ParameterError(f"the fuzzy result has no α = {alpha:g} (its levels: "
                                  f"{', '.join(f'{a:g}' for a in main)})")  # fmt: skip
         index.append(int(near[0]))
-    rename = {"alpha": "source_alpha"}
-    hull = hull.isel(alpha=index).rename(rename).assign_coords(source_alpha=alphas)
-    flags = flags.isel(alpha=index).rename(rename).assign_coords(source_alpha=alphas)
+    hull = hull.isel(alpha=index).assign_coords(alpha=alphas)
+    flags = flags.isel(alpha=index).assign_coords(alpha=alphas)
     return hull, flags
 
 
-def source_hull(fuzzy: xr.Dataset, source: str, component: str) -> xr.DataArray:
-    """Band of ``component`` with ``source`` alone (or :data:`ALL`: the dataset's own hull
-    at the same levels), deg, dims ``(source_alpha, bound, frame)``."""
-    _require(fuzzy)
+def source_hull(result: MarkerErrorResult, source: str, component: str) -> xr.DataArray:
+    """Band of ``component`` with ``source`` alone (or :data:`ALL`: the bands' own hull at
+    the same levels), deg, dims ``(alpha, bound, frame)`` (the per-source α-levels)."""
+    sources = _require(result)
     if source == ALL:
-        return _main_levels(fuzzy, component, fuzzy["source_alpha"].to_numpy().astype(float))[0]
-    return fuzzy["source_hull"].sel(source=source, source_component=component, drop=True)
+        return _main_levels(result.bands, component, sources["alpha"].to_numpy().astype(float))[0]
+    return sources["hull"].sel(source=source, component=component, drop=True)
 
 
-def source_undetermined(fuzzy: xr.Dataset, source: str, component: str) -> xr.DataArray:
-    """Where the band of :func:`source_hull` is undetermined, dims ``(source_alpha, frame)``."""
-    _require(fuzzy)
+def source_undetermined(result: MarkerErrorResult, source: str, component: str) -> xr.DataArray:
+    """Where the band of :func:`source_hull` is undetermined, dims ``(alpha, frame)``."""
+    sources = _require(result)
     if source == ALL:
-        return _main_levels(fuzzy, component, fuzzy["source_alpha"].to_numpy().astype(float))[1]
-    return fuzzy["source_undetermined"].sel(source=source, source_component=component, drop=True)
+        return _main_levels(result.bands, component, sources["alpha"].to_numpy().astype(float))[1]
+    return sources["undetermined"].sel(source=source, component=component, drop=True)
 
 
-def _nesting_excess(fuzzy: xr.Dataset) -> float:
+def _nesting_excess(result: MarkerErrorResult) -> float:
     """Largest distance (deg) a source's bound lies outside the all-sources band at the
     same α, over the frames where both are determined (0 when nested)."""
     excess = 0.0
-    for component in source_components(fuzzy):
-        outer, outer_flags = source_hull(fuzzy, ALL, component), source_undetermined(fuzzy, ALL, component)
-        for source in source_names(fuzzy):
-            inner, flags = source_hull(fuzzy, source, component), source_undetermined(fuzzy, source, component)
+    for component in source_components(result):
+        outer, outer_flags = source_hull(result, ALL, component), source_undetermined(result, ALL, component)
+        for source in source_names(result):
+            inner, flags = source_hull(result, source, component), source_undetermined(result, source, component)
             keep = ~(flags | outer_flags)
             beyond = xr.concat([inner.sel(bound="upper") - outer.sel(bound="upper"),
                                 outer.sel(bound="lower") - inner.sel(bound="lower")], "side").where(keep)  # fmt: skip
@@ -231,84 +230,103 @@ def _nesting_excess(fuzzy: xr.Dataset) -> float:
 
 
 # ---------------------------------------------------------------------------- the runs
+@dataclass(frozen=True)
+class PerSourceRequest:
+    """What :func:`per_source_bands` runs.
+
+    Attributes:
+        options: error model and optimiser settings of the bands; their ``sources`` are
+            the ones run alone unless ``sources`` is given.
+        sources: the sources to run alone (None: those of ``options``).
+        components: flexion components (or any components of the bands); None:
+            :data:`FLEXION_COMPONENTS` that the bands hold.
+        alphas: α-levels below 1 of the per-source runs, each one of the bands' levels
+            (None: the bands' smallest, α = 0 normally: what the report draws).
+    """
+
+    options: FuzzyAngleOptions = field(default_factory=FuzzyAngleOptions)
+    sources: Sequence[str] | None = None
+    components: Sequence[str] | None = None
+    alphas: Sequence[float] | None = None
+
+    def chosen(self, fuzzy: xr.Dataset) -> tuple[tuple[str, ...], list[str], np.ndarray]:
+        """The sources, the components and the α-levels (1 included) to run on ``fuzzy``.
+
+        Raises:
+            ParameterError: a source or component ``fuzzy`` does not have (or no flexion
+                component at all), or an α-level ``fuzzy`` does not have.
+        """
+        sources = parse_sources(self.options.sources if self.sources is None else self.sources)
+        available = angle_components(fuzzy)
+        if self.components is None:
+            wanted = [c for c in FLEXION_COMPONENTS if c in available]
+            if not wanted:
+                raise ParameterError(f"{fuzzy.attrs.get('trial', 'the fuzzy result')} has no flexion component "
+                                     f"({', '.join(FLEXION_COMPONENTS)}) to show per source")  # fmt: skip
+        else:
+            wanted = list(dict.fromkeys(self.components))
+            missing = [c for c in wanted if c not in available]
+            if missing or not wanted:
+                raise ParameterError(f"components: the fuzzy result has no {missing or 'components'}; "
+                                     f"it holds {', '.join(available)}")  # fmt: skip
+        main_alphas = fuzzy["alpha"].to_numpy().astype(float)
+        below = main_alphas[main_alphas < 1.0 - _SAME_ALPHA]
+        if self.alphas is None:
+            if below.size == 0:
+                raise ParameterError("the fuzzy result has no α-level below 1 to show per source")
+            return sources, wanted, np.array([float(below.min()), 1.0])
+        levels = np.union1d(np.asarray(self.alphas, dtype=float), [1.0])
+        absent = [a for a in levels if not np.any(np.abs(main_alphas - a) <= _SAME_ALPHA)]
+        if absent:
+            raise ParameterError(f"alphas: the fuzzy result has no α = {', '.join(f'{a:g}' for a in absent)} "
+                                 f"(its levels: {', '.join(f'{a:g}' for a in main_alphas)})")  # fmt: skip
+        return sources, wanted, levels
+
+
 def per_source_bands(
     trial: Trial,
     subject: SubjectParameters,
     result: CGMResult,
     fuzzy: xr.Dataset,
-    options: FuzzyAngleOptions | None = None,
+    request: PerSourceRequest | None = None,
     *,
-    sources: Sequence[str] | None = None,
-    components: Sequence[str] | None = None,
-    alphas: Sequence[float] | None = None,
     evaluator: Evaluator | None = None,
     clusters: ClusterCalibration | None = None,
     progress: Progress | None = None,
 ) -> xr.Dataset:
-    """The fuzzy result ``fuzzy`` with the bands of each error source alone attached
-    (:func:`attach_source_hulls`; layout in the module docstring).
+    """The bands of each error source alone beside the bands ``fuzzy`` (all sources
+    together), as a dataset of their own (:func:`source_bands_dataset`; layout in the
+    module docstring).
 
     Args:
         trial, subject, result, clusters: as for
             :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles` (those ``fuzzy``
             was computed from).
-        fuzzy: the all-sources result (computed with ``options``).
-        options: error model and optimiser settings of ``fuzzy``; their ``sources`` are the
-            ones run alone unless ``sources`` is given (default ``FuzzyAngleOptions()``).
-        sources: the sources to run alone (default: those of ``options``).
-        components: flexion components (or any components of ``fuzzy``); default
-            :data:`FLEXION_COMPONENTS` that ``fuzzy`` holds.
-        alphas: α-levels below 1 of the per-source runs, each one of ``fuzzy``'s levels
-            (default: ``fuzzy``'s smallest, α = 0 normally: what the report draws).
+        fuzzy: the all-sources bands (computed with ``request.options``).
+        request: the options, sources, components and α-levels
+            (:class:`PerSourceRequest`; default ``PerSourceRequest()``).
         evaluator: where the Graph Follower runs (default: ``options.workers`` processes).
         progress: called as ``progress(done, total)`` over the runs (source × component),
             at least once per source.
 
     Raises:
-        ParameterError: a source or component ``fuzzy`` does not have (or no flexion
-            component at all), or an α-level ``fuzzy`` does not have.
+        ParameterError: as :meth:`PerSourceRequest.chosen`, or ``fuzzy`` of other frames
+            than the trial's.
     """
-    options = FuzzyAngleOptions() if options is None else options
-    chosen = parse_sources(options.sources if sources is None else sources)
-    available = angle_components(fuzzy)
-    if components is None:
-        wanted = [c for c in FLEXION_COMPONENTS if c in available]
-        if not wanted:
-            raise ParameterError(f"{fuzzy.attrs.get('trial', 'the fuzzy result')} has no flexion component "
-                                 f"({', '.join(FLEXION_COMPONENTS)}) to show per source")  # fmt: skip
-    else:
-        wanted = list(dict.fromkeys(components))
-        missing = [c for c in wanted if c not in available]
-        if missing or not wanted:
-            raise ParameterError(f"components: the fuzzy result has no {missing or 'components'}; "
-                                 f"it holds {', '.join(available)}")  # fmt: skip
-    main_alphas = fuzzy["alpha"].to_numpy().astype(float)
-    below = main_alphas[main_alphas < 1.0 - _SAME_ALPHA]
-    if alphas is None:
-        if below.size == 0:
-            raise ParameterError("the fuzzy result has no α-level below 1 to show per source")
-        levels = np.array([float(below.min()), 1.0])
-    else:
-        levels = np.union1d(np.asarray(alphas, dtype=float), [1.0])
-        absent = [a for a in levels if not np.any(np.abs(main_alphas - a) <= _SAME_ALPHA)]
-        if absent:
-            raise ParameterError(f"alphas: the fuzzy result has no α = {', '.join(f'{a:g}' for a in absent)} "
-                                 f"(its levels: {', '.join(f'{a:g}' for a in main_alphas)})")  # fmt: skip
+    request = PerSourceRequest() if request is None else request
+    options = request.options
+    chosen, wanted, levels = request.chosen(fuzzy)
     frame_index = {int(f): i for i, f in enumerate(fuzzy["frame"].to_numpy())}
     sample_frames = np.array([frame_index.get(int(f), -1) for f in trial.frames])
     if np.any(sample_frames < 0) or len(frame_index) != trial.n_frames:
         raise ParameterError("fuzzy: its frames are not the trial's; compute it from the same trial")
-
-    own = Evaluator(workers=max(1, int(options.workers))) if evaluator is None else None
-    runner = own if own is not None else evaluator
-    assert runner is not None
     total, done = len(chosen) * len(wanted), 0
     hulls: dict[str, dict[str, np.ndarray]] = {}
     radii: dict[str, np.ndarray] = {}
     counts = {"forward_simulations": 0, "node_evaluations": 0}
     markers = [str(m) for m in fuzzy["marker"].to_numpy()]
     start = time.perf_counter()
-    try:
+    with _runner(evaluator, options.workers) as runner:
         for source in chosen:
             alone = replace(options, sources=(source,), alphas=tuple(float(a) for a in levels))
             run, _ = component_tasks(trial, subject, result, alone, wanted, clusters)
@@ -327,13 +345,18 @@ def per_source_bands(
                 for key in counts:
                     counts[key] += int(work[key])
             radii[source] = np.array([alone.error_model.radius(m, (source,)) for m in markers])
-    finally:
-        if own is not None:
-            own.close()
-    attrs = {"source_seconds": round(time.perf_counter() - start, 3), "source_runs": total,
-             "source_forward_simulations": counts["forward_simulations"],
-             "source_node_evaluations": counts["node_evaluations"]}  # fmt: skip
-    return attach_source_hulls(fuzzy, hulls, levels, radii=radii, attrs=attrs)
+    attrs = {"seconds": round(time.perf_counter() - start, 3), "runs": total, **counts}
+    return source_bands_dataset(fuzzy, hulls, levels, radii=radii, attrs=attrs)
+
+
+@contextmanager
+def _runner(evaluator: Evaluator | None, workers: int) -> Iterator[Evaluator]:
+    """``evaluator``, or else an evaluator of ``workers`` processes of its own, closed after use."""
+    if evaluator is not None:
+        yield evaluator
+        return
+    with Evaluator(workers=max(1, int(workers))) as own:
+        yield own
 
 
 # ---------------------------------------------------------------------------- the table
@@ -379,25 +402,24 @@ class SourceWidths:
         return max(finite, key=lambda s: self.width(component, s)) if finite else None
 
 
-def widest_source_bands(fuzzy: xr.Dataset, alpha: float | None = None) -> SourceWidths:
+def widest_source_bands(result: MarkerErrorResult, alpha: float | None = None) -> SourceWidths:
     """Widest band per source alone and all together (:class:`SourceWidths`) at ``alpha``
     (default: the smallest per-source level, α = 0 normally)."""
-    _require(fuzzy)
-    levels = fuzzy["source_alpha"].to_numpy().astype(float)
+    levels = _require(result)["alpha"].to_numpy().astype(float)
     level = float(levels.min()) if alpha is None else float(alpha)
     if not np.any(np.abs(levels - level) <= _SAME_ALPHA):
         listed = ", ".join(f"{a:g}" for a in levels)
         raise ParameterError(f"alpha: no per-source band at α = {level:g} (levels {listed})")
     at = int(np.argmin(np.abs(levels - level)))
-    columns = [*source_names(fuzzy), ALL]
-    components = source_components(fuzzy)
+    columns = [*source_names(result), ALL]
+    components = source_components(result)
     widths = pd.DataFrame(np.nan, index=components, columns=columns)
     flags = pd.DataFrame(0, index=components, columns=columns)
     n_frames = pd.Series(0, index=components)
     for component in components:
         for source in columns:
-            hull = source_hull(fuzzy, source, component).isel(source_alpha=at)
-            mask = source_undetermined(fuzzy, source, component).isel(source_alpha=at).to_numpy()
+            hull = source_hull(result, source, component).isel(alpha=at)
+            mask = source_undetermined(result, source, component).isel(alpha=at).to_numpy()
             width = (hull.sel(bound="upper") - hull.sel(bound="lower")).to_numpy().astype(float)
             finite = np.isfinite(width)
             good = finite & ~mask

@@ -1,22 +1,27 @@
 """The fuzzy joint-angle dataset (the result of
 :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`, layout described there): one
 builder and the read access every consumer (reports, Rerun recordings, comparisons)
-uses, so the layout is defined in this module only.
+uses, so the layout is defined in this module only; and the whole marker-error result
+(:class:`MarkerErrorResult`: the bands, the allowable-error refinement and the per-source
+bands as three datasets, saved as the root and two groups of one file).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
 import fuzzygait.core.accessor  # noqa: F401 - registers ``dataset.fuzzy``
-from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.names import AngleComponent
 from fuzzygait.kinematics.labels import component_label
+from fuzzygait.uncertainty.storage import load_groups, save_groups
 
 
 @dataclass(frozen=True)
@@ -150,3 +155,88 @@ def ball_radius(fuzzy: xr.Dataset) -> xr.DataArray | None:
     if "ball_radius" in fuzzy.data_vars and "marker" in fuzzy["ball_radius"].dims:
         return fuzzy["ball_radius"]
     return None
+
+
+# ---------------------------------------------------------------------------- the result
+#: Layout version of a saved marker-error result: 1 = one flat dataset, the refinement and
+#: the per-source bands as ``refined_*``/``allowable_*``/``source_*`` variables beside the
+#: bands (before issue 38); 2 = the bands at the root, the refinement in the group
+#: ``allowable`` and the per-source bands in the group ``sources``, each with its own plain
+#: names and dimensions. :func:`read_marker_result` reads both.
+LAYOUT_VERSION = 2
+#: The root attribute naming the layout version (absent in version 1).
+LAYOUT_ATTR = "layout_version"
+
+
+@dataclass(frozen=True)
+class MarkerErrorResult:
+    """The marker-error analysis' result: three datasets, each with plain names.
+
+    Attributes:
+        bands: the fuzzy joint angles (:func:`fuzzy_angles_dataset` layout; the
+            ``dataset.fuzzy`` schema; saved at the root).
+        allowable: the allowable-error refinement (group ``allowable``; layout in
+            :mod:`fuzzygait.markererror.allowable`), None without one.
+        sources: the bands of each error source alone (group ``sources``; layout in
+            :mod:`fuzzygait.markererror.per_source`), None without them.
+    """
+
+    bands: xr.Dataset
+    allowable: xr.Dataset | None = None
+    sources: xr.Dataset | None = None
+
+    def __post_init__(self) -> None:
+        _require_layout(self.bands)
+        known = set(angle_components(self.bands))
+        for name, group in (("allowable", self.allowable), ("sources", self.sources)):
+            if group is not None and not {str(c) for c in group["component"].to_numpy()} <= known:
+                raise ParameterError(f"the {name} group has components the bands do not have")
+
+    def groups(self) -> dict[str, xr.Dataset]:
+        """The datasets as saved: ``"/"`` (the bands, with the layout version), then
+        ``"/allowable"`` and ``"/sources"`` where present."""
+        root = self.bands.copy()
+        root.attrs[LAYOUT_ATTR] = LAYOUT_VERSION
+        out = {"/": root}
+        out.update({f"/{k}": v for k, v in (("allowable", self.allowable), ("sources", self.sources)) if v is not None})
+        return out
+
+    def parts(self) -> dict[str, xr.Dataset]:
+        """Every part in the fuzzy-result schema (for
+        :func:`fuzzygait.testing.check_result`): the bands, the per-source bands and, per
+        refined component, its plain and refined levels merged along ``alpha``."""
+        from fuzzygait.markererror.allowable import refined_components, refined_levels
+
+        out = {"/": self.bands}
+        if self.sources is not None:
+            out["/sources"] = self.sources
+        for component in refined_components(self):
+            out[f"/allowable/{component}"] = refined_levels(self, component).assign_attrs(units="deg")
+        return out
+
+
+def save_marker_result(result: MarkerErrorResult, path: str | os.PathLike[str]) -> Path:
+    """Write ``result`` to ``path`` (.nc or .zarr) as groups (:data:`LAYOUT_VERSION`),
+    atomically (:func:`fuzzygait.uncertainty.storage.save_groups`)."""
+    return save_groups(result.groups(), path)
+
+
+def read_marker_result(path: str | os.PathLike[str]) -> MarkerErrorResult:
+    """Read a result written by :func:`save_marker_result`, or a version-1 file (one flat
+    dataset, converted: :func:`fuzzygait.markererror.legacy.from_flat`).
+
+    Raises:
+        FuzzyGaitError: a file of a newer layout version, or not a marker-error result.
+    """
+    groups = load_groups(path)
+    root = groups["/"]
+    version = int(root.attrs.get(LAYOUT_ATTR, 1))
+    if version > LAYOUT_VERSION:
+        raise FuzzyGaitError(f"{path}: marker-error result layout version {version}; this fuzzygait reads "
+                             f"versions 1 to {LAYOUT_VERSION}: update fuzzygait to read it")  # fmt: skip
+    if version == 1:
+        from fuzzygait.markererror.legacy import from_flat
+
+        return from_flat(root)
+    root.attrs.pop(LAYOUT_ATTR)
+    return MarkerErrorResult(root, groups.get("/allowable"), groups.get("/sources"))

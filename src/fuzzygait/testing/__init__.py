@@ -12,9 +12,9 @@ The seeded C3D fault campaign shared by the fuzz tests and ``benchmarks/fuzz_c3d
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import xarray as xr
@@ -130,8 +130,17 @@ def _check_time_step(model: Any, n_time: int) -> None:
                               f"(from {low:.4g} to {high:.4g} time steps)")  # fmt: skip
 
 
-def check_result(result: xr.Dataset, *, rtol: float = 1e-9) -> dict[str, float]:
-    """Check that ``result`` keeps the fuzzy-result schema (:mod:`fuzzygait.core.accessor`):
+class FuzzyParts(Protocol):
+    """A result of several parts, each in the fuzzy-result schema (e.g.
+    :class:`fuzzygait.markererror.result.MarkerErrorResult`)."""
+
+    def parts(self) -> Mapping[str, xr.Dataset]: ...
+
+
+def check_result(result: xr.Dataset | FuzzyParts, *, rtol: float = 1e-9) -> dict[str, float]:
+    """Check that ``result`` — a dataset, or every part of a result of several
+    (:class:`FuzzyParts`; the figures summed, the largest violation over all, an error
+    naming the part) — keeps the fuzzy-result schema (:mod:`fuzzygait.core.accessor`):
     the layout (``hull (..., alpha, bound, time|frame)``, α ascending to 1, the bounds,
     stated units), and the numbers: lower ≤ upper, α = 1 a single value (lower = upper),
     and the bands nested — the band at a higher α-level lies within the band at a lower
@@ -144,6 +153,19 @@ def check_result(result: xr.Dataset, *, rtol: float = 1e-9) -> dict[str, float]:
     Raises:
         ModelCheckError: naming the first check that failed.
     """
+    if not isinstance(result, xr.Dataset):
+        parts = dict(result.parts())
+        if not parts:
+            raise ModelCheckError("the result has no parts")
+        total = {"values": 0.0, "largest_violation": 0.0}
+        for name, part in parts.items():
+            try:
+                figures = check_result(part, rtol=rtol)
+            except ModelCheckError as error:
+                raise ModelCheckError(f"{name}: {error}") from None
+            total = {"values": total["values"] + figures["values"],
+                     "largest_violation": max(total["largest_violation"], figures["largest_violation"])}  # fmt: skip
+        return total
     problems = result.fuzzy.problems()
     if problems:
         raise ModelCheckError(f"not a fuzzy result: {'; '.join(problems)}")

@@ -1,4 +1,7 @@
-"""Saving and loading fuzzy results (netCDF ``.nc`` or zarr ``.zarr``), atomically.
+"""Saving and loading fuzzy results (netCDF ``.nc`` or zarr ``.zarr``), atomically: one
+dataset (:func:`save_result`, :func:`load_result`) or several as the root and groups of
+one file (:func:`save_groups`, :func:`load_groups`; each group with its own dimensions,
+so not an :class:`xarray.DataTree`, whose groups must align with their parents).
 
 A zarr result is a folder: it is written complete beside its target and then swapped
 into place (:func:`fuzzygait.io.atomic.replace_folder`), so a process killed at any moment
@@ -11,6 +14,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Mapping
 from pathlib import Path
 
 import xarray as xr
@@ -57,3 +61,55 @@ def load_result(path: str | os.PathLike[str]) -> xr.Dataset:
         with xr.open_dataset(path, engine="h5netcdf") as ds:
             return ds.load()
     return xr.open_zarr(path).load()
+
+
+def _write_groups(groups: Mapping[str, xr.Dataset], target: Path, kind: str) -> None:
+    """Write the root (``"/"``) and then each group into ``target`` (a new file or folder)."""
+    for name, dataset in groups.items():
+        group = None if name == "/" else name.strip("/")
+        if kind == ".nc":
+            dataset.to_netcdf(target, engine="h5netcdf", mode="w" if group is None else "a", group=group)
+        else:
+            dataset.to_zarr(target, mode="w" if group is None else "a", group=group, zarr_format=2,
+                            consolidated=False)  # fmt: skip
+    if kind == ".zarr":
+        import zarr
+
+        zarr.consolidate_metadata(str(target))  # widest compatibility, as save_result
+
+
+def save_groups(groups: Mapping[str, xr.Dataset], path: str | os.PathLike[str]) -> Path:
+    """Write ``groups`` (``"/"``: the root, first; ``"/name"``: a group) to ``path``,
+    atomically as :func:`save_result`."""
+    path = Path(path)
+    kind = _kind(path)
+    if next(iter(groups), None) != "/" or any(not k.startswith("/") or k.count("/") != 1 for k in groups):
+        raise FuzzyGaitError(f"{path}: groups must start with the root '/' and be named '/name'; got {list(groups)}")
+    if kind == ".nc":
+        with atomic_output(path) as tmp:
+            _write_groups(groups, tmp, kind)
+        return path
+    if not path.parent.exists():
+        raise FuzzyGaitError(f"{path}: folder {path.parent} does not exist; create it first")
+    tmp = temporary_folder(path)
+    try:
+        _write_groups(groups, tmp, kind)
+        replace_folder(tmp, path)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return path
+
+
+def load_groups(path: str | os.PathLike[str]) -> dict[str, xr.Dataset]:
+    """Read every group of a file written by :func:`save_groups` (or :func:`save_result`:
+    the root only), fully into memory: ``{"/": root, "/name": group, ...}``."""
+    path = Path(path)
+    kind = _kind(path)
+    if not path.exists():
+        raise FuzzyGaitError(f"{path}: no such result; check the path")
+    groups = xr.open_groups(path, engine="h5netcdf" if kind == ".nc" else "zarr")
+    try:
+        return {name: dataset.load() for name, dataset in groups.items()}
+    finally:
+        for dataset in groups.values():
+            dataset.close()

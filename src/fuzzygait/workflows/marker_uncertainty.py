@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict, Unpack
 
@@ -28,8 +28,8 @@ from fuzzygait.markererror.analysis import (
     fuzzy_joint_angles,
     relative_envelope_width,
 )
-from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, per_source_bands
-from fuzzygait.markererror.result import angle_components
+from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, PerSourceRequest, per_source_bands
+from fuzzygait.markererror.result import MarkerErrorResult, angle_components, save_marker_result
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.workflows.angles import AnglesRun
@@ -54,15 +54,24 @@ Progress = Callable[[int, int], None]
 
 @dataclass
 class MarkerErrorAnalysis:
-    """A trial's deterministic run, its fuzzy angles, their ΔΦ table and the
-    allowable-marker-error table (:func:`fuzzygait.markererror.allowable.allowable_table`;
-    None when no tolerance was set)."""
+    """A trial's deterministic run, its fuzzy angles (``fuzzy``, the bands), their ΔΦ
+    table, the allowable-marker-error table
+    (:func:`fuzzygait.markererror.allowable.allowable_table`; None when no tolerance was
+    set) and the whole result (``result``: the bands ``fuzzy``, the refinement and the
+    per-source bands; None given: the bands alone)."""
 
     run: AnglesRun
     fuzzy: xr.Dataset
     delta_phi: pd.DataFrame
     notes: list[Finding]
     allowable: pd.DataFrame | None = None
+    result: MarkerErrorResult | None = None
+
+    def __post_init__(self) -> None:
+        if self.result is None:
+            self.result = MarkerErrorResult(self.fuzzy)
+        elif self.result.bands is not self.fuzzy:
+            raise ParameterError("result: its bands must be the analysis' fuzzy dataset")
 
 
 class SettingsArguments(TypedDict, total=False):
@@ -171,10 +180,10 @@ def analyse_run(
     marker-error model is the run's model version (a cluster model with the run's static
     cluster calibration held fixed).  With ``settings.tolerance`` the allowable-marker-error
     refinement (:func:`~fuzzygait.markererror.allowable.allowable_errors`) follows on the
-    same evaluator, and the dataset is the refined one (its ``refined_*`` levels and
-    ``allowable_*`` outcome; the hulls nested over every level); with
-    ``settings.per_source`` then the per-source bands of the flexion angles
-    (:func:`~fuzzygait.markererror.per_source.per_source_bands`, ``source_*`` variables).
+    same evaluator: the bands are nested over every level and the result holds the
+    refinement (``result.allowable``); with ``settings.per_source`` then the per-source
+    bands of the flexion angles (:func:`~fuzzygait.markererror.per_source.per_source_bands`,
+    ``result.sources``).
     The dataset's ``trial`` attribute is the trial's file name, ``model`` that version; the
     notes are the run's plus one line on the assumed errors (and one each on the
     per-source runs and the refinement's, the latter last, with their runs and time).
@@ -192,14 +201,16 @@ def analyse_run(
         announce(stages, estimate)
     with Evaluator(workers=max(1, int(options.workers))) as evaluator:
         stages.stage("fuzzy angles")
-        fuzzy = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, components,
+        plain = fuzzy_joint_angles(run.trial, run.subject, run.result, options, settings.angles, components,
                                    evaluator=evaluator, clusters=run.clusters)  # fmt: skip
+        result = MarkerErrorResult(plain)
         if settings.tolerance is not None:
             stages.stage("allowable marker error")
             request = AllowableRequest(options, settings.tolerance, settings.allowable_angles)
-            allowable, fuzzy = allowable_errors(run.trial, run.subject, run.result, request, fuzzy=fuzzy,
-                                                evaluator=evaluator, clusters=run.clusters,
-                                                progress=stages.update)  # fmt: skip
+            allowable, result = allowable_errors(run.trial, run.subject, run.result, request, fuzzy=result.bands,
+                                                 evaluator=evaluator, clusters=run.clusters,
+                                                 progress=stages.update)  # fmt: skip
+        fuzzy = result.bands
         if settings.per_source:
             flexion = [c for c in FLEXION_COMPONENTS if c in angle_components(fuzzy)]
             if len(options.sources) < 2:
@@ -208,9 +219,11 @@ def analyse_run(
                 per_source_note = "per-source bands: not computed (no hip/knee/ankle flexion analysed)"
             else:
                 stages.stage("per-source bands", len(options.sources) * len(flexion))
-                fuzzy = per_source_bands(run.trial, run.subject, run.result, fuzzy, options, evaluator=evaluator,
-                                         clusters=run.clusters, progress=stages.update)  # fmt: skip
-                per_source_note = _per_source_note(fuzzy, len(flexion))
+                sources = per_source_bands(run.trial, run.subject, run.result, fuzzy, PerSourceRequest(options),
+                                           evaluator=evaluator, clusters=run.clusters,
+                                           progress=stages.update)  # fmt: skip
+                result = replace(result, sources=sources)
+                per_source_note = _per_source_note(fuzzy, sources, len(flexion))
     fixed = "static cluster calibration, " if run.clusters is not None else ""
     notes = list(run.notes) + [Finding(
         FindingKind.UNCERTAINTY,
@@ -222,12 +235,13 @@ def analyse_run(
         notes.append(Finding(FindingKind.UNCERTAINTY, per_source_note))
     if allowable is not None:
         which = "" if settings.allowable_angles is None else f" ({', '.join(settings.allowable_angles)})"
-        runs, seconds = fuzzy.attrs["allowable_runs"], fuzzy.attrs["allowable_seconds"]
+        assert result.allowable is not None
+        runs, seconds = result.allowable.attrs["runs"], result.allowable.attrs["seconds"]
         notes.append(Finding(FindingKind.ALLOWABLE_ERROR, f"allowable marker error for ±{settings.tolerance:g}°"
                              f"{which}: {runs} refinement runs, {seconds:.1f} s"))  # fmt: skip
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
-    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable)
+    return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable, result)
 
 
 def _estimate(run: AnglesRun, settings: MarkerErrorSettings) -> WorkEstimate | None:
@@ -246,14 +260,15 @@ def _estimate(run: AnglesRun, settings: MarkerErrorSettings) -> WorkEstimate | N
     return marker_error_work({f"{t.name}_{AXES[t.axis]}": int(t.frames.size) for t in tasks}, settings)
 
 
-def _per_source_note(fuzzy: xr.Dataset, n_components: int) -> str:
-    """The notes line of the per-source runs: what, how many, how long, and whether a
-    source's band reaches beyond the all-sources band (it should not: nested balls)."""
-    alphas = str(fuzzy.attrs["source_alphas"]).split(",")
+def _per_source_note(fuzzy: xr.Dataset, sources: xr.Dataset, n_components: int) -> str:
+    """The notes line of the per-source runs (``sources``: their bands beside the bands
+    ``fuzzy``): what, how many, how long, and whether a source's band reaches beyond the
+    all-sources band (it should not: nested balls)."""
+    alpha = float(sources["alpha"].to_numpy()[0])
     text = (f"per-source bands (Fig. 5.9): {str(fuzzy.attrs['sources']).replace(',', ', ')} each alone for "
-            f"{n_components} flexion components at α = {alphas[0]}: {fuzzy.attrs['source_runs']} runs, "
-            f"{float(fuzzy.attrs['source_seconds']):.1f} s")  # fmt: skip
-    excess = float(fuzzy.attrs["source_nesting_excess_deg"])
+            f"{n_components} flexion components at α = {alpha:g}: {sources.attrs['runs']} runs, "
+            f"{float(sources.attrs['seconds']):.1f} s")  # fmt: skip
+    excess = float(sources.attrs["nesting_excess_deg"])
     if excess > 0.01:
         text += (f"; a single source's band reaches up to {excess:.2f}° beyond the all-sources band (the "
                  "all-sources optimum is a local one there)")  # fmt: skip
@@ -279,17 +294,18 @@ def analyse_to_files(
     stages: StageProgress = SILENT,
 ) -> MarkerErrorAnalysis:
     """Run the pipeline and the marker-error analysis of one trial as
-    :func:`analyse_trial`, save the fuzzy angles to ``out_file`` (.nc or .zarr) and,
+    :func:`analyse_trial`, save its result to ``out_file`` (.nc or .zarr; the bands at
+    the root, the refinement and the per-source bands as groups:
+    :func:`~fuzzygait.markererror.result.save_marker_result`) and,
     with ``rrd``, a Rerun recording of the trial with its bands (folders created);
     ``progress`` and ``stages`` as for :func:`analyse_run`."""
-    from fuzzygait.uncertainty.storage import save_result
-
     run = request.trial.run()
     analysis = analyse_run(run, request.settings, progress, stages=stages)
     out_file.parent.mkdir(parents=True, exist_ok=True)
-    save_result(analysis.fuzzy, out_file)
+    assert analysis.result is not None  # set by MarkerErrorAnalysis
+    save_marker_result(analysis.result, out_file)
     if rrd is not None:
-        from fuzzygait.viz.rerun_log import write_recording
+        from fuzzygait.workflows.rerun_recordings import write_recording
 
         rrd.parent.mkdir(parents=True, exist_ok=True)
         write_recording(rrd, run.trial, run.result, analysis.fuzzy)

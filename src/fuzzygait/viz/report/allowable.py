@@ -4,8 +4,8 @@ mm per segment) for which the angle stays within the tolerance, and the sentence
 flexion angles that lead the first screen.
 
 The numbers are those of :func:`fuzzygait.markererror.allowable.allowable_table`, read
-from the refined dataset (also after saving and loading it); a dataset without the
-refinement has no table (:func:`allowable_summary` returns None).
+from the refined result (``result.allowable``, also after saving and reading it); a
+result without the refinement has no table (:func:`allowable_summary` returns None).
 """
 
 from __future__ import annotations
@@ -13,18 +13,16 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fuzzygait.core.options import Option
 from fuzzygait.kinematics.labels import component_label
 from fuzzygait.markererror.allowable import SEGMENTS, allowable_table
+from fuzzygait.markererror.result import MarkerErrorResult
 from fuzzygait.viz.report.bands import component_order
 from fuzzygait.viz.report.markup import escape, html_table
-
-if TYPE_CHECKING:
-    import xarray as xr
 
 __all__ = ["AllowableRow", "AllowableSummary", "allowable_section", "allowable_summary", "index_cell", "lead_box"]
 
@@ -89,21 +87,22 @@ class AllowableSummary:
         return [row.text for row in self.lead_rows()]
 
 
-def allowable_summary(fuzzy: xr.Dataset | None) -> AllowableSummary | None:
-    """The allowable-error table of a refined dataset as text cells, None without one
-    (or without a dataset)."""
-    if fuzzy is None or "allowable_status" not in fuzzy.data_vars:
+def allowable_summary(result: MarkerErrorResult | None) -> AllowableSummary | None:
+    """The allowable-error table of a refined result as text cells, None without the
+    refinement (or without a result)."""
+    if result is None or result.allowable is None:
         return None
-    table = allowable_table(fuzzy)
+    refinement = result.allowable
+    table = allowable_table(result)
     source = str(table.attrs.get("source", "Table 3.1"))
     records: dict[str, dict[Any, Any]] = {str(k): v for k, v in table.to_dict(orient="index").items()}
     rows = []
     for component in sorted(records, key=component_order):
         row = records[component]
-        sigma = fuzzy["segment_radius"].sel(component=component).to_numpy().astype(float)
+        sigma = refinement["segment_radius"].sel(component=component).to_numpy().astype(float)
         largest = float(np.nanmax(sigma)) if np.isfinite(sigma).any() else math.nan
         scale, failing = float(row["allowable_scale"]), float(row["failing_scale"])
-        segment_sigma = {str(s): float(v) for s, v in zip(fuzzy["segment"].to_numpy(), sigma, strict=True)}
+        segment_sigma = {str(s): float(v) for s, v in zip(refinement["segment"].to_numpy(), sigma, strict=True)}
         if not math.isfinite(scale):
             status, mm, percent, note = "no data", NO_DATA, NO_DATA, "no frame with every marker it needs"
             segments = dict.fromkeys(SEGMENTS, "")

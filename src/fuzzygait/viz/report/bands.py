@@ -21,6 +21,7 @@ from fuzzygait.core.names import is_flexion
 from fuzzygait.gait.cycles import GaitCycle, gait_cycles
 from fuzzygait.kinematics.labels import parse_component
 from fuzzygait.markererror.analysis import undetermined_levels
+from fuzzygait.markererror.result import MarkerErrorResult
 from fuzzygait.mocap.marker_placement import moved_angles, moved_segments
 from fuzzygait.viz.layout import ANGLE_ROWS, SIDE_STYLE
 from fuzzygait.viz.report.normalised_bands import ALPHA_ONE, component_levels
@@ -71,6 +72,8 @@ class TrialAnalysis(Protocol):
     def delta_phi(self) -> pd.DataFrame: ...
     @property
     def notes(self) -> list[Finding]: ...
+    @property
+    def result(self) -> MarkerErrorResult | None: ...  # the bands, allowable error and per-source bands
 
 
 # ============================================================================ labels
@@ -102,6 +105,7 @@ class TrialData:
     fuzzy: xr.Dataset | None  # None: angles only, no bands
     alphas: np.ndarray
     cycles: dict[str, list[GaitCycle]]
+    result: MarkerErrorResult | None = None  # the whole result (per-source bands, allowable error)
 
     @classmethod
     def of(cls, analysis: TrialAnalysis) -> TrialData:
@@ -110,7 +114,7 @@ class TrialData:
         alphas = np.zeros(0) if analysis.fuzzy is None else np.asarray(analysis.fuzzy["alpha"].values, dtype=float)
         alphas = np.sort(alphas[alphas < ALPHA_ONE])
         cycles = {side: gait_cycles(run.trial, run.events, side) for side in SIDE_STYLE}
-        return cls(run, analysis.fuzzy, alphas, cycles)
+        return cls(run, analysis.fuzzy, alphas, cycles, analysis.result if analysis.fuzzy is not None else None)
 
     def angle(self, name: str) -> np.ndarray | None:
         """The measured angle component ``name`` (deg), or None when not computed."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from fuzzygait.core.names import angle_names, is_flexion
 from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, SIDE_NAMES, component_label, parse_component
-from fuzzygait.markererror.result import ball_radius
+from fuzzygait.markererror.result import MarkerErrorResult, ball_radius
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.gaps import methods_used
 from fuzzygait.mocap.marker_placement import moved_angles
@@ -266,11 +266,11 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
     facts = _trial_facts(run, source, clinical, session, data)
     key = _key_lines(entry, clinical, run)
     figs = quote(files)
-    nav = _page_nav(fuzzy)
+    nav = _page_nav(fuzzy, analysis.result)
     uncertainty = ""
     if fuzzy is not None:
         uncertainty = (allowable_section(entry.allowable) + _delta_phi_section(table, data)
-                       + sources_section(fuzzy, figs))  # fmt: skip
+                       + sources_section(analysis.result, figs))  # fmt: skip
     bands_text = "<p>No uncertainty bands: the trial was reported without the marker-error analysis.</p>"
     if len(data.alphas):
         bands_text = f"<p>{ALPHA_SENTENCE}{footnote('bands')}</p>"
@@ -376,13 +376,13 @@ def _key_lines(entry: TrialEntry, clinical: ClinicalData, run: ReportRun) -> lis
     return key
 
 
-def _page_nav(fuzzy: xr.Dataset | None) -> str:
+def _page_nav(fuzzy: xr.Dataset | None, result: MarkerErrorResult | None) -> str:
     """The links along the top of a trial page (its uncertainty sections only with an analysis)."""
     links = [("guide", "How to read"), ("spatiotemporal", "Spatio-temporal"), ("cycles", "Kinematics"),
              ("gps", "GPS"), ("kinetics", "Kinetics")]  # fmt: skip
     if fuzzy is not None:
         links += [("allowable", "Allowable error"), ("delta-phi", "ΔΦ table")]
-        if has_source_bands(fuzzy):
+        if has_source_bands(result):
             links.append(("sources", "Error sources"))
     links += [("time-series", "Whole trial"), ("quality", "Data quality"), ("subject", "Subject")]
     nav = " · ".join(f'<a href="#{k}">{_esc(t)}</a>' for k, t in links)

@@ -5,8 +5,8 @@ placement, soft-tissue artefact — and of all together, over the gait cycle (ov
 a side without gait cycles), and the table "widest α = 0 band per source" naming the
 source that dominates.
 
-The bands are read from the dataset's ``source_*`` variables
-(:mod:`fuzzygait.markererror.per_source`); undetermined points are drawn as in the other
+The bands are read from the result's per-source bands (``result.sources``,
+:mod:`fuzzygait.markererror.per_source`); undetermined points are drawn as in the other
 figures (:mod:`~fuzzygait.viz.report.figures`): no band, a hatched strip in the band's
 colour along the top of the panel, the y-limits from the curve and the determined bands
 only.
@@ -15,8 +15,6 @@ only.
 from __future__ import annotations
 
 import math
-from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.artist import Artist
@@ -39,17 +37,15 @@ from fuzzygait.markererror.per_source import (
     source_undetermined,
     widest_source_bands,
 )
+from fuzzygait.markererror.result import MarkerErrorResult
 from fuzzygait.viz.report.bands import TrialData, alpha_text
 from fuzzygait.viz.report.clinical_html import footnote
-from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, _save, plt, time_limits
+from fuzzygait.viz.report.figures import HATCH, _draw_undetermined, _not_computed, plt, time_limits
 from fuzzygait.viz.report.grid import SOURCES_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
 from fuzzygait.viz.report.normalised_bands import N_POINTS, band_undetermined, cycle_bands
 
-if TYPE_CHECKING:
-    import xarray as xr
-
-__all__ = ["SOURCE_STYLE", "plot_source_bands", "source_figure", "sources_section"]
+__all__ = ["SOURCE_STYLE", "source_figure", "sources_section"]
 
 #: Band colour per source (:data:`~fuzzygait.markererror.per_source.ALL`: all together).
 SOURCE_STYLE = {"measurement": "tab:blue", "placement": "tab:orange", "sta": "tab:purple", ALL: "0.55"}
@@ -70,38 +66,38 @@ def _tint(source: str, strength: float = 0.4) -> tuple[float, float, float]:
     return (1 - strength + strength * red, 1 - strength + strength * green, 1 - strength + strength * blue)
 
 
-def _order(fuzzy: xr.Dataset) -> list[str]:
+def _order(result: MarkerErrorResult) -> list[str]:
     """Sources drawn widest first: all together, then the sources alone by their mean
     widest band (the fills are opaque: each narrower band is drawn over the wider ones)."""
-    widths = widest_source_bands(fuzzy)
+    widths = widest_source_bands(result)
 
     def mean_width(source: str) -> float:
         values = widths.widths[source].to_numpy(dtype=float)
         return float(np.nanmean(values)) if np.isfinite(values).any() else math.inf
 
-    return [ALL, *sorted(source_names(fuzzy), key=mean_width, reverse=True)]
+    return [ALL, *sorted(source_names(result), key=mean_width, reverse=True)]
 
 
 def _band(data: TrialData, source: str, component: str) -> tuple[np.ndarray, np.ndarray]:
     """α = 0 (the smallest per-source level) hull ``(1, 2, n_frames)`` deg and undetermined
     mask ``(1, n_frames)`` of ``component`` with ``source`` on the trial's frames."""
     frames = np.asarray(data.run.trial.frames)
-    assert data.fuzzy is not None
-    hull = source_hull(data.fuzzy, source, component).isel(source_alpha=[0]).reindex(frame=frames)
-    flags = source_undetermined(data.fuzzy, source, component).isel(source_alpha=[0])
+    assert data.result is not None
+    hull = source_hull(data.result, source, component).isel(alpha=[0]).reindex(frame=frames)
+    flags = source_undetermined(data.result, source, component).isel(alpha=[0])
     flags = flags.reindex(frame=frames, fill_value=False)
-    values = hull.sel(bound=["lower", "upper"]).transpose("source_alpha", "bound", "frame").to_numpy().astype(float)
-    return values, flags.transpose("source_alpha", "frame").to_numpy().astype(bool)
+    values = hull.sel(bound=["lower", "upper"]).transpose("alpha", "bound", "frame").to_numpy().astype(float)
+    return values, flags.transpose("alpha", "frame").to_numpy().astype(bool)
 
 
 def source_figure(data: TrialData, title: str) -> Figure:
     """The per-source grid: rows hip, knee, ankle flexion; columns left, right (axes
     ``fig.axes`` row-major)."""
-    fuzzy = data.fuzzy
-    assert fuzzy is not None, "the per-source figure needs a fuzzy analysis"
-    order = _order(fuzzy)
-    analysed = set(source_components(fuzzy))
-    alpha = float(fuzzy["source_alpha"].to_numpy().min())
+    result = data.result
+    assert result is not None and result.sources is not None, "the per-source figure needs per-source bands"
+    order = _order(result)
+    analysed = set(source_components(result))
+    alpha = float(result.sources["alpha"].to_numpy().min())
     fig, axes = plt.subplots(len(JOINTS), 2, figsize=FIG_SIZE, squeeze=False)
     fig.suptitle(title, fontsize=13)
     hatched = False
@@ -195,15 +191,11 @@ def _limit(ax: Axes, curve: np.ndarray, bands: dict[str, np.ndarray]) -> None:
                 transform=ax.transAxes, ha="right", va="bottom", fontsize=6.5, color="0.3")  # fmt: skip
 
 
-def plot_source_bands(data: TrialData, stem: Path, title: str) -> None:
-    """The per-source figure (:func:`source_figure`); writes ``stem.png`` and ``stem.svg``."""
-    _save(source_figure(data, title), stem)
-
-
 # ============================================================================ HTML
-def _radius_text(fuzzy: xr.Dataset, source: str) -> str:
+def _radius_text(result: MarkerErrorResult, source: str) -> str:
     """The α = 0 radii of one source alone over the markers, e.g. "2 mm" or "5–15 mm"."""
-    radius = fuzzy["source_ball_radius"].sel(source=source).to_numpy().astype(float)
+    assert result.sources is not None
+    radius = result.sources["ball_radius"].sel(source=source).to_numpy().astype(float)
     radius = radius[np.isfinite(radius)]
     if radius.size == 0:
         return ""
@@ -224,13 +216,14 @@ def _cell(table: SourceWidths, component: str, source: str, strong: bool) -> str
     return text
 
 
-def sources_section(fuzzy: xr.Dataset, files: str | None) -> str:
+def sources_section(result: MarkerErrorResult | None, files: str | None) -> str:
     """The per-source section of the trial page: the figure (``files``: the trial's figure
     folder, href-quoted; None: no figure) and the widest-band table; "" without
-    per-source bands."""
-    if not has_source_bands(fuzzy):
+    per-source bands (or without a result)."""
+    if not has_source_bands(result):
         return ""
-    table = widest_source_bands(fuzzy)
+    assert result is not None
+    table = widest_source_bands(result)
     alpha = alpha_text(table.alpha)
     columns = [*table.sources, ALL]
     header = [("Angle", False)]
@@ -245,7 +238,7 @@ def sources_section(fuzzy: xr.Dataset, files: str | None) -> str:
         cells += [(_cell(table, component, s, s == dominant), True) for s in columns]
         cells.append((escape(source_title(dominant)) if dominant else "–", False))
         rows.append(cells)
-    radii = ", ".join(f"{escape(source_title(s))} {escape(_radius_text(fuzzy, s))}" for s in table.sources)
+    radii = ", ".join(f"{escape(source_title(s))} {escape(_radius_text(result, s))}" for s in table.sources)
     figure = ""
     if files is not None:
         figure = (f'<figure><a href="{files}/sources.svg"><img src="{files}/sources.png" width="1100" height="960" '
@@ -271,14 +264,14 @@ def sources_section(fuzzy: xr.Dataset, files: str | None) -> str:
     )
 
 
-def dominant_sentence(fuzzy: xr.Dataset | None, joint: str = "Knee") -> str | None:
+def dominant_sentence(result: MarkerErrorResult | None, joint: str = "Knee") -> str | None:
     """One sentence naming the source that dominates ``joint`` flexion (left and right),
     e.g. "Knee flexion: soft-tissue artefact dominates (widest α = 0 band alone L 62.1°,
     R 60.3°; measurement system 4.3°/4.2°, marker placement 28.4°/27.9°; all together
-    97.8°/95.0°)."; None without per-source bands for it (or without a dataset)."""
-    if fuzzy is None or not has_source_bands(fuzzy):
+    97.8°/95.0°)."; None without per-source bands for it (or without a result)."""
+    if result is None or not has_source_bands(result):
         return None
-    table = widest_source_bands(fuzzy)
+    table = widest_source_bands(result)
     names = [f"{side}{joint}Angles_X" for side in "LR" if f"{side}{joint}Angles_X" in table.widths.index]
     if not names:
         return None

@@ -1,0 +1,76 @@
+"""Marker-error results of layout version 1 (before issue 38): one flat dataset with the
+allowable-error refinement and the per-source bands as prefixed variables beside the
+bands (``refined_*``, ``allowable_*``, ``segment_radius``; ``source_*`` over the dims
+``source``, ``source_component`` and ``source_alpha``; a comma-joined ``source_alphas``
+attribute). :func:`from_flat` turns one into a :class:`MarkerErrorResult` (layout
+version 2), the numbers unchanged; :data:`ALLOWABLE_NAMES` and :data:`SOURCE_NAMES` are
+the mapping (also what ``benchmarks/compare_outputs.py`` maps an older revision's file
+with).
+"""
+
+from __future__ import annotations
+
+import xarray as xr
+
+from fuzzygait.markererror.result import MarkerErrorResult
+
+__all__ = ["ALLOWABLE_ATTRS", "ALLOWABLE_NAMES", "SOURCE_ATTRS", "SOURCE_DIMS", "SOURCE_NAMES", "from_flat"]
+
+#: Version-1 variable -> its name in the group ``allowable`` (``allowable_alpha``, which
+#: is ``1 − allowable_scale``, is dropped: the table computes it).
+ALLOWABLE_NAMES = {
+    "refined_alpha": "alpha", "refined_hull": "hull", "refined_undetermined": "undetermined",
+    "refined_deviation": "deviation", "allowable_scale": "scale", "allowable_mm": "mm",
+    "allowable_failing_scale": "failing_scale", "allowable_excursion": "excursion",
+    "allowable_evaluations": "evaluations", "allowable_status": "status", "segment_radius": "segment_radius",
+}  # fmt: skip
+#: Version-1 bands attribute -> its name on the group ``allowable``.
+ALLOWABLE_ATTRS = {
+    "tolerance_deg": "tolerance_deg", "allowable_resolution_mm": "resolution_mm", "allowable_source": "source",
+    "allowable_seconds": "seconds", "allowable_runs": "runs", "allowable_node_evaluations": "node_evaluations",
+}  # fmt: skip
+#: Version-1 variable -> its name in the group ``sources``.
+SOURCE_NAMES = {"source_hull": "hull", "source_undetermined": "undetermined", "source_ball_radius": "ball_radius"}
+#: Version-1 dimension -> its name in the group ``sources``.
+SOURCE_DIMS = {"source_component": "component", "source_alpha": "alpha"}
+#: Version-1 bands attribute -> its name on the group ``sources`` (``source_alphas`` is
+#: dropped: the α-levels are the coordinate ``alpha``).
+SOURCE_ATTRS = {
+    "source_seconds": "seconds", "source_runs": "runs", "source_forward_simulations": "forward_simulations",
+    "source_node_evaluations": "node_evaluations", "source_nesting_excess_deg": "nesting_excess_deg",
+}  # fmt: skip
+_DROPPED = ("allowable_alpha", "source_alphas")
+_SHARED = ("bound", "frame", "time", "marker")
+
+
+def _group(flat: xr.Dataset, names: dict[str, str], attrs: dict[str, str], dims: dict[str, str],
+           shared: tuple[str, ...]) -> xr.Dataset | None:  # fmt: skip
+    """The variables ``names`` of ``flat`` renamed, with the coordinates they use."""
+    present = [n for n in names if n in flat.data_vars]
+    if not present:
+        return None
+    used = {d for n in present for d in flat[n].dims}
+    group = flat[present].rename({n: names[n] for n in present}).drop_vars(
+        [c for c in flat.coords if c not in shared and not set(flat[c].dims) <= used], errors="ignore"
+    )
+    group = group.drop_vars([c for c in group.coords if not set(group[c].dims) <= used])
+    group = group.rename({d: new for d, new in dims.items() if d in group.dims})
+    group.attrs = {new: flat.attrs[old] for old, new in attrs.items() if old in flat.attrs}
+    return group
+
+
+def from_flat(flat: xr.Dataset) -> MarkerErrorResult:
+    """A version-1 dataset as a :class:`MarkerErrorResult`: the bands without the prefixed
+    variables and their attributes, the refinement and the per-source bands as datasets
+    with plain names (module docstring); every number as stored."""
+    allowable = _group(flat, ALLOWABLE_NAMES, ALLOWABLE_ATTRS, {}, ("component", *_SHARED))
+    if allowable is not None:
+        allowable = allowable.drop_vars([c for c in ("label", "angle", "axis") if c in allowable.coords])
+    sources = _group(flat, SOURCE_NAMES, SOURCE_ATTRS, SOURCE_DIMS, ("source", *_SHARED))
+    if sources is not None:
+        sources.attrs = {**sources.attrs, "units": "deg"}
+    moved = [n for n in (*ALLOWABLE_NAMES, *SOURCE_NAMES, "allowable_alpha") if n in flat.data_vars]
+    bands = flat.drop_vars(moved).drop_dims([d for d in ("refinement", "segment", "source", *SOURCE_DIMS)
+                                              if d in flat.dims])  # fmt: skip
+    bands.attrs = {k: v for k, v in flat.attrs.items() if k not in {*ALLOWABLE_ATTRS, *SOURCE_ATTRS, *_DROPPED}}
+    return MarkerErrorResult(bands, allowable, sources)
