@@ -7,11 +7,12 @@ frame: the force and its moment about the laboratory origin, ``COP x F + T``.
 
 Nexus' Plug-in Gait takes, for marker frame ``i``, the mean of the analog samples
 centred on that frame's first sample ``i * r`` (``r`` analog samples per frame; samples
-``i r - r//2 ... i r + (r-1)//2``) of the force and of the moment about a fixed point — not
-the mean of the centre of pressure.  Measured on ``Movement_trial.c3d`` (1080 Hz analog,
-120 Hz markers): its stored ``L/RGroundReactionForce`` equal this mean to the stored
-precision, and the ankle moments agree to 1e-3 N·m/kg only with the moment averaged,
-not the centre of pressure (see ``docs/kinetics.md``).
+``i r - r//2 ... i r + r//2``: 9 samples at r = 9, 11 at r = 10) of the force and of the
+moment about a fixed point — not the mean of the centre of pressure.  Measured on
+``Movement_trial.c3d`` (1080 Hz analog, 120 Hz markers) and ``PiGKad_Motion.c3d`` (1000 Hz,
+100 Hz): the stored ``L/RGroundReactionForce`` equal this mean to the stored precision,
+and the ankle moments agree to 1e-3 N·m/kg only with the moment averaged, not the
+centre of pressure (see ``docs/kinetics.md``).
 """
 
 from __future__ import annotations
@@ -59,11 +60,11 @@ def samples_per_frame(plate_rate: float, marker_rate: float) -> int:
 
 
 def frame_means(samples: Array, ratio: int, n_frames: int) -> Array:
-    """``(n_frames, ...)``: the mean of the ``ratio`` samples centred on each frame's first
-    sample (``i*ratio - ratio//2`` to ``i*ratio + (ratio-1)//2``), the window cut at the
-    ends of the record."""
-    starts = np.arange(n_frames) * ratio - ratio // 2
-    index = starts[:, None] + np.arange(ratio)[None, :]
+    """``(n_frames, ...)``: the mean of the samples centred on each frame's first sample,
+    ``i*ratio - ratio//2`` to ``i*ratio + ratio//2`` (``ratio`` samples when it is odd,
+    ``ratio + 1`` when even), the window cut at the ends of the record."""
+    half = ratio // 2
+    index = (np.arange(n_frames) * ratio)[:, None] + np.arange(-half, half + 1)[None, :]
     inside = (index >= 0) & (index < len(samples))
     picked = samples[np.clip(index, 0, len(samples) - 1)]
     weights = inside / np.maximum(inside.sum(axis=1, keepdims=True), 1)

@@ -12,9 +12,14 @@ Conventions (SI units, laboratory frame):
 
 Each segment obeys ``F_p + F_d + m g = m a`` and, about its centre of mass ``c``,
 ``M_p + (p - c) x F_p + M_d + (d - c) x F_d = I α + ω x (I ω)`` with ``I`` the principal
-inertia in the segment's frame.  Derivatives are the five-point central differences of
-:func:`derivative` (Nexus' Plug-in Gait loses the same four frames at each end: two for
-the velocity, two more for the acceleration).
+inertia in the segment's frame.
+
+Derivatives as Nexus' Plug-in Gait takes them (found on the shared Nexus trials, see
+``docs/kinetics.md``): the centre-of-mass acceleration by the five-point central
+difference of :func:`derivative` applied twice; the angular velocity from the
+rotations two frames either side (:func:`angular_velocity`) and the angular
+acceleration by the same two-frame central difference of the angular velocity
+(:func:`wide_difference`).  Both lose four frames at each end, as Nexus does.
 """
 
 from __future__ import annotations
@@ -80,17 +85,27 @@ def derivative(x: Array, rate: float) -> Array:
     return out
 
 
+def wide_difference(x: Array, rate: float) -> Array:
+    """Time derivative along axis 0: the central difference over two frames either side,
+    ``(x[i+2] - x[i-2]) / (4 dt)``; NaN on the first and last two samples."""
+    out = np.full(x.shape, np.nan)
+    if len(x) >= 5:
+        out[2:-2] = (x[4:] - x[:-4]) * (rate / 4.0)
+    return out
+
+
 def angular_velocity(frames: Array, rate: float) -> Array:
     """``(n, 3)`` rad/s, laboratory frame: the axial vector of ``dR/dt Rᵀ`` (its
-    antisymmetric part) of the ``(n, 3, 3)`` rotations ``frames``."""
-    w = derivative(frames, rate) @ np.swapaxes(frames, 1, 2)
+    antisymmetric part) of the ``(n, 3, 3)`` rotations ``frames``, ``dR/dt`` by
+    :func:`wide_difference`."""
+    w = wide_difference(frames, rate) @ np.swapaxes(frames, 1, 2)
     return 0.5 * np.stack([w[:, 2, 1] - w[:, 1, 2], w[:, 0, 2] - w[:, 2, 0], w[:, 1, 0] - w[:, 0, 1]], axis=1)
 
 
 def segment_motion(segment: Segment, rate: float) -> SegmentMotion:
     """Centre-of-mass acceleration, angular velocity and acceleration of ``segment``."""
     omega = angular_velocity(segment.frame, rate)
-    return SegmentMotion(derivative(derivative(segment.com, rate), rate), omega, derivative(omega, rate))
+    return SegmentMotion(derivative(derivative(segment.com, rate), rate), omega, wide_difference(omega, rate))
 
 
 def _local(frame: Array, v: Array) -> Array:
