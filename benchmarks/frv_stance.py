@@ -101,7 +101,7 @@ def main() -> None:
     fit = fit_distributions(args.store, kind="normal", data="hulls")
     print(f"\nnormal fits per (α, bound, time): {dict(fit.sizes)}")
     if args.figures:
-        from fuzzygait.viz.figures import save_figure
+        from fuzzygait.io.figure_files import save_figure
         from fuzzygait.viz.frv import (
             fuzzy_random_output_figure,
             grouping_figure,

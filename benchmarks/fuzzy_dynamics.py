@@ -31,6 +31,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
+from fuzzygait.io.figure_files import save_figure  # noqa: E402
 from fuzzygait.mechanics.fuzzy_dynamics import (  # noqa: E402
     ELEVEN_PARAMETERS,
     LegTarget,
@@ -42,7 +43,6 @@ from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty import FuzzyVector, sufficient_runs, triangular_relative  # noqa: E402
-from fuzzygait.viz.figures import save_figure  # noqa: E402
 from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure  # noqa: E402
 
 FIGURES = Path(__file__).parent / "figures"

@@ -21,8 +21,9 @@ import pytest
 
 from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
-from fuzzygait.viz.report import ReportItem, component_label, cycle_bands, write_report
+from fuzzygait.viz.report import component_label, cycle_bands
 from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 from support import SAMPLE_DATA, FakeAnalysis, assert_one_line_error, run, run_here
 
 ALPHAS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
@@ -209,14 +210,13 @@ def test_failed_item_is_listed_with_its_error(report_dir: Path) -> None:
 def test_rerun_replaces_pages_and_keeps_folder_intact_on_error(
     report_dir: Path, noisy_run: AnglesRun, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from fuzzygait.viz.report import writer as report
+    from fuzzygait.workflows import report_folder as report
 
-    def quick_figure(data: object, stem: Path, title: str) -> None:  # figures are tested above
+    def quick_files(figure: object, stem: Path, dpi: int) -> None:  # figures are tested above
         for suffix in (".png", ".svg"):
             stem.with_suffix(suffix).write_bytes(b"x")
 
-    monkeypatch.setattr(report, "plot_cycle_bands", quick_figure)
-    monkeypatch.setattr(report, "plot_time_series", quick_figure)
+    monkeypatch.setattr(report, "save_figure_files", quick_files)
     out = tmp_path / "out"
     shutil.copytree(report_dir, out)
     before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}

@@ -18,10 +18,10 @@ import pytest
 import xarray as xr
 
 from fuzzygait.markererror.allowable import allowable_table
-from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 from support import SAMPLE_DATA, sparse_knee_analysis
 
 

@@ -15,17 +15,17 @@ import pandas as pd
 import pytest
 from matplotlib.colors import to_rgb
 from matplotlib.patches import Patch
-from support import SAMPLE_DATA, FakeAnalysis, needs_shared, shared_file
-from viz.test_report import check_html, fake_analysis
 
 from fuzzygait.gait.cycles import normalise_cycles
 from fuzzygait.gait.normative import build_normative, normalised_cycles, read_normative, write_normative
 from fuzzygait.viz.layout import SIDE_STYLE
-from fuzzygait.viz.report import ReportItem, ReportWriter, write_report
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.figures import cycle_figure
 from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.report_folder import ReportItem, ReportWriter, write_report
+from support import SAMPLE_DATA, FakeAnalysis, needs_shared, shared_file
+from viz.test_report import check_html, fake_analysis
 
 CHROMIUM = Path("/usr/bin/chromium")
 #: Section ids every trial page with bands and normative data shows.

@@ -7,13 +7,12 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
-from support import FakeAnalysis
-
 from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.viz.report.bands import TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.clinical_html import _processing_text
-from fuzzygait.viz.report.writer import angles_only
 from fuzzygait.workflows.angles import AnglesRun
+from fuzzygait.workflows.report_folder import angles_only
+from support import FakeAnalysis
 
 
 def test_the_entrys_moved_segments_come_from_the_moved_markers_findings(angles_run: AnglesRun) -> None:

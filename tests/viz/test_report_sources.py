@@ -23,11 +23,11 @@ import pytest
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, attach_source_hulls, widest_source_bands
 from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
-from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.sources import _tint, dominant_sentence, source_figure
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.demo import uncertainty_lines
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 from support import SAMPLE_DATA, FakeAnalysis
 
 ALPHAS = np.array([0.0, 0.5, 1.0])

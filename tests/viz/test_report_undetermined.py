@@ -18,10 +18,11 @@ from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
-from fuzzygait.viz.report import ReportItem, cycle_bands, write_report
+from fuzzygait.viz.report import cycle_bands
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
 from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 from support import SAMPLE_DATA, FakeAnalysis
 
 ALPHAS = np.array([0.0, 0.5, 1.0])

@@ -22,7 +22,7 @@ pa = pytest.importorskip("pyarrow")
 xr = pytest.importorskip("xarray")
 
 from fuzzygait.viz import rerun_log  # noqa: E402
-from fuzzygait.viz.rerun_log import write_recording  # noqa: E402
+from fuzzygait.workflows.rerun_recordings import write_recording  # noqa: E402
 
 ALPHAS = np.array([0.0, 0.25, 0.5, 1.0])
 

@@ -19,9 +19,9 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.kinematics import ANGLE_NAMES, FOREFOOT_ANGLE_NAMES
 from fuzzygait.uncertainty import load_result
-from fuzzygait.viz.report import ReportItem, write_report
 from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix, run_angles
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 from fuzzygait.workflows.trial_inputs import TrialInputs
 from support import SAMPLE_DATA
 

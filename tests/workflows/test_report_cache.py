@@ -18,7 +18,8 @@ from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.viz.report import TrialEntry
 from fuzzygait.viz.report.allowable import AllowableRow, AllowableSummary
 from fuzzygait.viz.report.bands import Headline
-from fuzzygait.viz.report.entry_store import (
+from fuzzygait.workflows.batch_report import load_entry, write_batch_report
+from fuzzygait.workflows.report_entries import (
     ENTRY_SCHEMA,
     EntryFormatError,
     entry_from_json,
@@ -26,7 +27,6 @@ from fuzzygait.viz.report.entry_store import (
     read_entry,
     write_entry,
 )
-from fuzzygait.workflows.batch_report import load_entry, write_batch_report
 from support import synthetic_session
 
 

@@ -1,43 +1,39 @@
-"""Matplotlib figures for clinicians: gait-cycle-normalised joint angles."""
+"""Matplotlib figures for clinicians: gait-cycle-normalised joint angles (built here,
+written by :func:`fuzzygait.io.figure_files.save_figure`)."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
-from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")  # files only; never needs a display
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
-from fuzzygait.core.errors import FuzzyGaitError, ParameterError  # noqa: E402
-from fuzzygait.io.atomic import atomic_output  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 
 
-def plot_gait_cycles(
+def gait_cycles_figure(
     stats: pd.DataFrame,
-    path: str | os.PathLike[str],
     *,
     title: str = "",
     rows: Sequence[tuple[str, str]] = ANGLE_ROWS,
-) -> Path:
-    """Write the classic gait-report grid (joints x planes; mean ± 1 SD per side).
+) -> Figure:
+    """The classic gait-report grid (joints x planes; mean ± 1 SD per side); write it
+    with :func:`fuzzygait.io.figure_files.save_figure` (PNG, SVG or PDF by suffix).
 
     Args:
         stats: output of :func:`fuzzygait.gait.cycles.mean_sd_table` (columns
             ``angle`` like ``LKneeAngles_X``, ``percent``, ``mean``, ``sd``,
             ``n_cycles``); degrees.
-        path: PNG, SVG or PDF file, by suffix.
         title: figure title.
         rows: which angles to show.
 
     Returns:
-        The written path.
+        The figure.
     """
-    path = Path(path)
     fig, axes = plt.subplots(len(rows), 3, figsize=(11, 2.3 * len(rows) + 0.8), sharex=True, squeeze=False)
     for r, (angle, row_title) in enumerate(rows):
         for c, (axis, plane, meaning) in enumerate(PLANES):
@@ -66,27 +62,4 @@ def plot_gait_cycles(
         fig.legend(handles, labels, loc="upper right", fontsize=8)
     fig.suptitle(title or "Joint angles over the gait cycle (mean ± 1 SD)")
     fig.tight_layout(rect=(0, 0, 1, 0.97))
-    return save_figure(fig, path)
-
-
-FIGURE_SUFFIXES = ("png", "svg", "pdf")
-
-
-def save_figure(fig, path: str | os.PathLike[str], dpi: int = 110) -> Path:
-    """Write ``fig`` atomically as PNG, SVG or PDF (by the suffix of ``path``) and close it.
-
-    Raises :class:`ParameterError` for another suffix and :class:`FuzzyGaitError` naming
-    ``path`` when it cannot be written; nothing is left at ``path`` then.
-    """
-    path = Path(path)
-    kind = path.suffix.lower().lstrip(".")
-    try:
-        if kind not in FIGURE_SUFFIXES:
-            raise ParameterError(f"{path}: a plot must end in .png, .svg or .pdf")
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=kind)
-    except OSError as exc:
-        raise FuzzyGaitError(f"{path}: cannot write the plot ({exc.strerror or exc})") from exc
-    finally:
-        plt.close(fig)
-    return path
+    return fig

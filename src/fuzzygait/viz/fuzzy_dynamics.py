@@ -3,13 +3,14 @@
 Both take the Dataset of :func:`fuzzygait.mechanics.fuzzy_dynamics.fuzzy_forward_dynamics`
 (``hull (alpha, bound, time)``, ``deterministic (time)``, ``extremiser (alpha, bound,
 time, parameter)``; attributes ``fuzzy_parameters``, ``fuzzy_spreads``, ``target``,
-``target_units``).
+``target_units``).  :func:`log_fuzzy_hulls` logs the hulls into a Rerun recording
+stream; nothing here writes a file (:mod:`fuzzygait.workflows.rerun_recordings`,
+:func:`fuzzygait.io.figure_files.save_figure`).
 """
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -72,27 +73,28 @@ def extremiser_figure(result: xr.Dataset, alpha: float = 0.0) -> Figure:
     return fig
 
 
-def write_fuzzy_recording(result: xr.Dataset, path: str | os.PathLike[str],
-                          recording_name: str = "fuzzygait-fuzzy-dynamics") -> Path:
-    """Write the hulls as Rerun time series (rerun-sdk 0.41): ``<target>/alpha_<α>/lower|upper``
-    and ``<target>/deterministic`` on the timeline ``time`` (s), in the target's unit."""
-    from fuzzygait.core.errors import ParameterError
-    from fuzzygait.viz.rerun_log import _log_series, recording_file
+def fuzzy_title(result: xr.Dataset) -> str:
+    """``"<scenario>: <target> with fuzzy E ±5 %, ..."``: the figures' title and the
+    recording's name."""
+    return _title(result)
 
-    path = Path(path)
-    if path.suffix.lower() != ".rrd":
-        raise ParameterError(f"{path}: a Rerun recording must end in .rrd")
+
+def log_fuzzy_hulls(rec: Any, rr: Any, result: xr.Dataset) -> None:
+    """Log the hulls into the Rerun recording stream ``rec`` (``rr``: the ``rerun``
+    module; rerun-sdk 0.41) as time series ``<target>/alpha_<α>/lower|upper`` and
+    ``<target>/deterministic`` on the timeline ``time`` (s), in the target's unit.
+    Writes no file (the stream's sink does: :func:`fuzzygait.io.rerun_files.recording_file`)."""
+    from fuzzygait.viz.rerun_log import _log_series
+
     target = f"{result.attrs.get('target', 'target')}_{result.attrs.get('target_units', '')}".rstrip("_")
     cmap = plt.get_cmap("Blues")
-    with recording_file(path, recording_name, _title(result)) as (rec, rr):
-        times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
-        for alpha in sorted(float(a) for a in result["alpha"].values if a < 1):
-            red, green, blue = (int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
-            colour = (red, green, blue)
-            for bound in ("lower", "upper"):
-                values = result["hull"].sel(alpha=alpha, bound=bound).values
-                _log_series(rec, rr, f"{target}/alpha_{alpha:g}/{bound}", times, values,
-                            f"α = {alpha:g} {bound}", colour, 1.5)  # fmt: skip
-        _log_series(rec, rr, f"{target}/deterministic", times, result["deterministic"].values,
-                    "deterministic", (0, 0, 0), 2.0)  # fmt: skip
-    return path
+    times = [rr.TimeColumn("time", duration=np.asarray(result["time"].values, float))]
+    for alpha in sorted(float(a) for a in result["alpha"].values if a < 1):
+        red, green, blue = (int(255 * c) for c in cmap(0.4 + 0.5 * alpha)[:3])
+        colour = (red, green, blue)
+        for bound in ("lower", "upper"):
+            values = result["hull"].sel(alpha=alpha, bound=bound).values
+            _log_series(rec, rr, f"{target}/alpha_{alpha:g}/{bound}", times, values,
+                        f"α = {alpha:g} {bound}", colour, 1.5)  # fmt: skip
+    _log_series(rec, rr, f"{target}/deterministic", times, result["deterministic"].values,
+                "deterministic", (0, 0, 0), 2.0)  # fmt: skip

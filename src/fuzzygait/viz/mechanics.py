@@ -5,8 +5,11 @@ Both take the ``xarray.Dataset`` of :meth:`fuzzygait.mechanics.scenarios.LegSimu
 ("thigh", "shank", "blade000", ...), variables ``position`` (m), ``directors``, the
 energies (J) and ``hip_flexion`` / ``knee_flexion`` (rad).
 
-:func:`energy_figure` draws the energy balance; :func:`write_simulation_recording` writes
-a Rerun ``.rrd`` (rerun-sdk 0.41, through the helpers of :mod:`fuzzygait.viz.rerun_log`).
+:func:`energy_figure` draws the energy balance; :func:`log_simulation` logs a simulation
+into a Rerun recording stream (rerun-sdk 0.41, through the helpers of
+:mod:`fuzzygait.viz.rerun_log`).  Nothing here writes a file:
+:mod:`fuzzygait.workflows.rerun_recordings` writes the ``.rrd`` and
+:func:`fuzzygait.io.figure_files.save_figure` the figure.
 
 Recording layout (units: **metres** in ``world``, **joules** under ``energy_J``,
 **degrees** under ``angles_deg``; one timeline ``time`` in seconds)::
@@ -33,9 +36,7 @@ series at every step.  Everything is sent column-wise (``send_columns``), so a
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import matplotlib
@@ -45,7 +46,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fuzzygait.core.errors import ParameterError  # noqa: E402
-from fuzzygait.viz.figures import save_figure  # noqa: E402
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -55,12 +55,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ENERGY_TERMS",
+    "SimulationScene",
     "energy_drift",
     "energy_figure",
+    "log_simulation",
     "segment_geometry",
+    "simulation_blueprint",
+    "simulation_scene",
     "simulation_title",
-    "write_energy_figure",
-    "write_simulation_recording",
 ]
 
 #: Energy variables of a simulation: (variable, label, colour).
@@ -157,11 +159,6 @@ def energy_figure(ds: xr.Dataset) -> Figure:
     fig.suptitle(simulation_title(ds), fontsize=10)
     fig.tight_layout()
     return fig
-
-
-def write_energy_figure(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
-    """:func:`energy_figure` written atomically to a PNG, SVG or PDF file (by suffix)."""
-    return save_figure(energy_figure(ds), path)
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -302,39 +299,50 @@ def _log_energies(rec: Any, rr: Any, ds: xr.Dataset, all_steps: list[Any]) -> No
                         f"{key.replace('_', ' ')} (deg)", colour, 1.5)  # fmt: skip
 
 
-def write_simulation_recording(
+@dataclass(frozen=True)
+class SimulationScene:
+    """What a simulation's recording shows, checked and sampled (:func:`simulation_scene`):
+    the ``times`` of every step (s), the sampled ``rows`` of the 3-D entities, the thigh
+    and shank joint centres (m, :func:`segment_geometry`), the blade's sampled ``nodes``
+    ``(n_rows, n_nodes, 3)`` (m) and director ``frames`` ``(n_rows, n_nodes, 3, 3)`` (None
+    without a blade), the arrows' ``director_length`` (m) and the recording's ``title``."""
+
+    ds: xr.Dataset
+    times: np.ndarray
+    rows: np.ndarray
+    segments: dict[str, tuple[np.ndarray, np.ndarray]]
+    nodes: np.ndarray | None
+    frames: np.ndarray | None
+    director_length: float
+    title: str
+
+    @property
+    def has_blade(self) -> bool:
+        """Whether the simulation has a blade (beam foot)."""
+        return self.nodes is not None
+
+
+def simulation_scene(
     ds: xr.Dataset,
-    path: str | os.PathLike[str],
     *,
     configuration: LegConfiguration | None = None,
     stride: int | None = None,
     director_length: float | None = None,
-    recording_name: str = "fuzzygait-mechanics",
-) -> Path:
-    """Write a simulation as a Rerun ``.rrd`` (layout and units in the module docstring).
+) -> SimulationScene:
+    """The checked contents of a simulation's recording (layout and units in the module
+    docstring), before anything is written.
 
     Args:
         ds: result of :meth:`LegSimulator.run <fuzzygait.mechanics.scenarios.LegSimulator.run>`.
-        path: the ``.rrd`` file (its folder must exist); written atomically.
         configuration: the simulator's leg configuration (``sim.configuration``) for the
             segment lengths; default: thesis Table 4.1.
         stride: log the 3-D entities every ``stride`` time steps (default: every 10 ms).
         director_length: drawn length of the blade director arrows (m); default 40 % of
             the mean node spacing.
-        recording_name: Rerun application id.
-
-    Returns:
-        ``path``.
 
     Raises:
-        ParameterError: a bad ``path`` suffix or ``stride``, or ``ds`` is not a simulation.
-        FuzzyGaitError: the file cannot be written, Rerun is disabled or not installed.
+        ParameterError: a bad ``stride``, or ``ds`` is not a simulation.
     """
-    from fuzzygait.viz.rerun_log import recording_file
-
-    path = Path(path)
-    if path.suffix.lower() != ".rrd":
-        raise ParameterError(f"{path}: a Rerun recording must end in .rrd")
     _require(ds, "position", "directors", "total_energy", "dissipated_energy")
     times = np.asarray(ds["time"].values, dtype=float)
     if stride is None:
@@ -347,19 +355,32 @@ def write_simulation_recording(
         rows = np.append(rows, times.size - 1)  # always show the final state
     segments = segment_geometry(ds, configuration)
     blade = _blade_bodies(ds)
+    nodes = frames = None
     if blade:
         nodes = ds["position"].sel(body=blade).transpose("time", "body", "xyz").values[rows]
         frames = ds["directors"].sel(body=blade).transpose("time", "body", "director", "xyz").values[rows]
         if director_length is None:
             spacing = np.linalg.norm(np.diff(nodes[0], axis=0), axis=1)
             director_length = 0.4 * float(np.mean(spacing)) if spacing.size else 0.02
-    title = simulation_title(ds)
-    with recording_file(path, recording_name, title, lambda rrb: _blueprint(rrb, bool(blade))) as (rec, rr):
-        all_steps = [rr.TimeColumn("time", duration=times)]
-        sampled = [rr.TimeColumn("time", duration=times[rows])]
-        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True, strict=True)
-        _log_leg(rec, rr, segments, rows, sampled)
-        if blade:
-            _log_blade(rec, rr, sampled, nodes, frames, float(director_length or 0.0))
-        _log_energies(rec, rr, ds, all_steps)
-    return path
+    return SimulationScene(ds, times, rows, segments, nodes, frames, float(director_length or 0.0),
+                           simulation_title(ds))  # fmt: skip
+
+
+def simulation_blueprint(rrb: Any, scene: SimulationScene) -> Any:
+    """The default blueprint of a simulation's recording (``rrb``: ``rerun.blueprint``):
+    the leg (and blade) in 3-D beside the energies, the drift and the joint flexion."""
+    return _blueprint(rrb, scene.has_blade)
+
+
+def log_simulation(rec: Any, rr: Any, scene: SimulationScene) -> None:
+    """Log a simulation's ``scene`` (:func:`simulation_scene`) into the Rerun recording
+    stream ``rec`` (``rr``: the ``rerun`` module; layout and units in the module
+    docstring); writes no file (the stream's sink does:
+    :func:`fuzzygait.io.rerun_files.recording_file`)."""
+    all_steps = [rr.TimeColumn("time", duration=scene.times)]
+    sampled = [rr.TimeColumn("time", duration=scene.times[scene.rows])]
+    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True, strict=True)
+    _log_leg(rec, rr, scene.segments, scene.rows, sampled)
+    if scene.nodes is not None and scene.frames is not None:
+        _log_blade(rec, rr, sampled, scene.nodes, scene.frames, scene.director_length)
+    _log_energies(rec, rr, scene.ds, all_steps)

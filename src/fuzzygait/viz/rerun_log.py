@@ -1,9 +1,12 @@
 """Rerun recordings (``.rrd``) of a gait trial: markers, model and joint angles.
 
-:func:`write_recording` writes one trial, its Plug-in Gait model result and optionally
-the fuzzy joint-angle envelopes to a Rerun ``.rrd`` file that opens in the Rerun viewer
-(``rerun trial.rrd``) on a grid of joint-angle plots.  It needs the optional
-``rerun-sdk`` package (written against rerun-sdk 0.41).
+:func:`log_trial` logs one trial, its Plug-in Gait model result and optionally the fuzzy
+joint-angle envelopes into a Rerun recording stream, :func:`trial_blueprint` is the
+viewer's layout (a grid of joint-angle plots); this module writes no file:
+:func:`fuzzygait.workflows.rerun_recordings.write_recording` writes the ``.rrd`` that
+opens in the Rerun viewer (``rerun trial.rrd``), through
+:func:`fuzzygait.io.rerun_files.recording_file`.  It needs the optional ``rerun-sdk``
+package (written against rerun-sdk 0.41).
 
 Units and frames: positions in **millimetres** in the **laboratory frame** of the C3D
 file (Rerun's 3D view works in mm; ``world`` carries
@@ -57,24 +60,20 @@ transverse (Z), each showing left and right with their envelopes; tab "3D" = a 3
 of ``world``.  The time panel starts on the ``frame`` timeline.
 
 The recording is written through a dedicated :class:`rerun.RecordingStream` (never the
-global one) with a file sink only: no viewer is spawned and no network is used.
+global one) with a file sink only (:mod:`fuzzygait.io.rerun_files`): no viewer is
+spawned and no network is used.
 """
 
 from __future__ import annotations
 
-import os
-import uuid
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
-from pathlib import Path
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import AngleComponent
 from fuzzygait.core.trial import Trial
-from fuzzygait.io.atomic import atomic_output
 from fuzzygait.kinematics.model import CGMResult
 from fuzzygait.markererror.result import angle_components, ball_radius, component_hull, component_undetermined
 
@@ -83,7 +82,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "AXIS_LENGTH_MM",
-    "write_recording",
+    "check_recording",
+    "log_trial",
+    "trial_blueprint",
 ]
 
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES  # noqa: E402
@@ -103,18 +104,6 @@ _DETERMINISTIC_WIDTH = 2.5
 _ENVELOPE_WIDTH = 1.0
 _UNDETERMINED_MARKER = "cross"
 _UNDETERMINED_SIZE = 3.0
-
-
-def _import_rerun() -> tuple[Any, Any]:
-    try:
-        import rerun as rr
-        import rerun.blueprint as rrb
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise FuzzyGaitError(
-            "writing Rerun recordings needs the rerun-sdk package; install it with "
-            "`pip install rerun-sdk`"
-        ) from exc
-    return rr, rrb
 
 
 # ----------------------------------------------------------------------------- inputs
@@ -403,62 +392,42 @@ def _blueprint(rrb: Any, result: CGMResult) -> Any:
 
 
 # ----------------------------------------------------------------------------- public
-@contextmanager
-def recording_file(
-    path: Path, recording_name: str, title: str, blueprint: Callable[[Any], Any] | None = None
-) -> Iterator[tuple[Any, Any]]:
-    """Open a Rerun recording stream saving to ``path`` atomically; yields ``(rec, rr)``.
+def check_recording(trial: Trial, result: CGMResult, fuzzy: xr.Dataset | None = None,
+                    alphas_to_show: Iterable[float] | None = None) -> None:  # fmt: skip
+    """Check the inputs of :func:`log_trial` before anything is written.
 
-    ``blueprint(rrb)`` builds the default blueprint.  Raises one :class:`FuzzyGaitError`
-    naming ``path`` when Rerun is disabled (``RERUN=off``), the file cannot be written or
-    Rerun fails; nothing is left at ``path`` then.
+    Raises:
+        ParameterError: the result does not belong to the trial, or ``fuzzy`` lacks a
+            dimension / holds no requested alpha level.
     """
-    rr, rrb = _import_rerun()
-    disabled = FuzzyGaitError(
-        f"{path}: Rerun logging is disabled in this environment (RERUN=off?); unset RERUN to write recordings"
-    )
-    # checked before a stream exists: rerun warns at exit about every disabled stream made
-    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
-        raise disabled
-    rec = rr.RecordingStream(recording_name, recording_id=uuid.uuid4())
-    if not rr.is_enabled(rec):
-        raise disabled
-    try:
-        with atomic_output(path) as tmp:
-            try:
-                rec.save(tmp, default_blueprint=blueprint(rrb) if blueprint is not None else None)
-                rec.send_recording_name(title)
-                yield rec, rr
-                rec.flush()
-            finally:
-                rec.disconnect()  # closes the file sink and writes the footer
-            if tmp.stat().st_size == 0:
-                raise FuzzyGaitError(f"{path}: Rerun wrote nothing; check the free disk space")
-    except FuzzyGaitError:
-        raise
-    except OSError as exc:
-        raise FuzzyGaitError(f"{path}: cannot write the Rerun recording ({exc.strerror or exc})") from exc
-    except (RuntimeError, ValueError) as exc:
-        raise FuzzyGaitError(f"{path}: Rerun could not write the recording ({exc})") from exc
+    _check_shapes(trial, result)
+    if fuzzy is not None:
+        _fuzzy_parts(fuzzy, trial, alphas_to_show)
 
 
-def write_recording(
-    path: str | os.PathLike[str],
+def trial_blueprint(rrb: Any, result: CGMResult) -> Any:
+    """The default blueprint of a trial's recording (module docstring): the joint-angle
+    grid of the angles ``result`` has, and the 3D view of ``world``; ``rrb`` is
+    ``rerun.blueprint``."""
+    return _blueprint(rrb, result)
+
+
+def log_trial(
+    rec: Any,
+    rr: Any,
     trial: Trial,
     result: CGMResult,
     fuzzy: xr.Dataset | None = None,
     *,
     alphas_to_show: Iterable[float] | None = None,
-    recording_name: str = "fuzzygait",
-) -> Path:
-    """Write ``trial``, its model ``result`` and optional fuzzy envelopes as a Rerun ``.rrd``.
+) -> None:
+    """Log ``trial``, its model ``result`` and optional fuzzy envelopes into the Rerun
+    recording stream ``rec`` (``rr``: the ``rerun`` module); writes no file (the stream's
+    sink does: :func:`fuzzygait.io.rerun_files.recording_file`).
 
-    The entity layout, units, timelines and blueprint are described in the module
-    docstring.  The file is written atomically: a temporary file beside ``path`` is
-    renamed onto it once complete; nothing is left behind on error.
+    The entity layout, units and timelines are described in the module docstring.
 
     Args:
-        path: the ``.rrd`` file to write (its folder must exist).
         trial: the (pre-processed) trial the model ran on; markers in mm.
         result: :func:`~fuzzygait.kinematics.compute_lower_body` output for ``trial``.
         fuzzy: fuzzy joint-angle result (:mod:`fuzzygait.markererror.analysis`: hulls in
@@ -468,30 +437,10 @@ def write_recording(
         alphas_to_show: alpha levels of ``fuzzy`` whose envelopes are logged; None for
             every level below 1 (alpha = 1 is the deterministic series, always logged;
             ignored without ``fuzzy``).
-        recording_name: Rerun application id the recording is filed under (the viewer
-            keeps one default blueprint per application id); the recording itself is
-            named after the trial.
-
-    Returns:
-        ``path``.
-
-    Raises:
-        ParameterError: ``path`` does not end in ``.rrd``, the result does not belong to
-            the trial, or ``fuzzy`` lacks a dimension / holds no requested alpha level.
-        FuzzyGaitError: the file cannot be written (names ``path``), Rerun logging is
-            disabled (``RERUN=off``) or rerun-sdk is not installed.
     """
-    path = Path(path)
-    if path.suffix.lower() != ".rrd":
-        raise ParameterError(f"{path}: a Rerun recording must end in .rrd")
-    _check_shapes(trial, result)
-    if fuzzy is not None:
-        _fuzzy_parts(fuzzy, trial, alphas_to_show)  # validate before touching the disk
-    with recording_file(path, recording_name, trial.name, lambda rrb: _blueprint(rrb, result)) as (rec, rr):
-        indexes = [
-            rr.TimeColumn("frame", sequence=trial.frames.astype(np.int64)),
-            rr.TimeColumn("time", duration=np.asarray(trial.times, dtype=float)),
-        ]
-        _log_world(rec, rr, trial, result, fuzzy, indexes)
-        _log_angles(rec, rr, trial, result, fuzzy, alphas_to_show, indexes)
-    return path
+    indexes = [
+        rr.TimeColumn("frame", sequence=trial.frames.astype(np.int64)),
+        rr.TimeColumn("time", duration=np.asarray(trial.times, dtype=float)),
+    ]
+    _log_world(rec, rr, trial, result, fuzzy, indexes)
+    _log_angles(rec, rr, trial, result, fuzzy, alphas_to_show, indexes)

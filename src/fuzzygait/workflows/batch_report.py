@@ -42,19 +42,19 @@ from fuzzygait.gait.spatiotemporal import pooled_parameters
 from fuzzygait.io.atomic import atomic_output, remove_path, replace_path
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.viz.report import TrialEntry
-from fuzzygait.viz.report.entry_store import ENTRY_SCHEMA, EntryFormatError, read_entry
 from fuzzygait.viz.report.pages import index_page
 from fuzzygait.viz.report.session import (
     SessionSummary,
     SummaryTrial,
     cross_session_index,
     cycles_used,
-    plot_session_cycles,
     session_page,
 )
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, Preprocessing
 from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS, MarkerErrorSettings
 from fuzzygait.workflows.progress import SILENT, StageProgress
+from fuzzygait.workflows.report_entries import ENTRY_SCHEMA, EntryFormatError, read_entry
+from fuzzygait.workflows.report_folder import write_session_cycles
 from fuzzygait.workflows.session import Session, find_sessions
 from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, mode_settings, run_trial_job
 
@@ -270,7 +270,7 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
         figures.mkdir()
         title = f"Session {session.name}: joint angles, mean ± SD over all gait cycles"
         cycles = _stacked_cycles(outcomes, folder)
-        drawn = plot_session_cycles(cycles, figures / "cycles", title)
+        drawn = write_session_cycles(cycles, figures / "cycles", title)
         parameters = pooled_parameters(session.name, _stacked_parameters(outcomes, folder), "the trials' events")
         html = session_page(summary, "session_files/cycles" if drawn else None, index_href, cycles_used(cycles),
                             parameters)  # fmt: skip

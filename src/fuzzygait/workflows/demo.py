@@ -39,18 +39,20 @@ from fuzzygait.core.findings import FindingKind
 from fuzzygait.core.names import AngleComponent, angle_names
 from fuzzygait.core.options import Option
 from fuzzygait.io import read_c3d
+from fuzzygait.io.figure_files import save_figure
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics.labels import component_label
 from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import methods_used
-from fuzzygait.viz.figures import plot_gait_cycles
-from fuzzygait.viz.report import ReportItem, TrialAnalysis, write_report
+from fuzzygait.viz.figures import gait_cycles_figure
+from fuzzygait.viz.report import TrialAnalysis
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.sources import dominant_sentence
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.batch_report import write_batch_report
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
+from fuzzygait.workflows.report_folder import ReportItem, write_report
 
 #: The demo's fuzzy analysis: both knees, three α-levels (fast; the CLI does all angles).
 DEMO_FUZZY_ANGLES = ("LKneeAngles", "RKneeAngles")
@@ -252,7 +254,8 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     write_table(run.angle_table(), out_dir / "angles.csv")
     stats = run.cycle_statistics()
     write_table(stats, out_dir / "cycles.csv")
-    plot_gait_cycles(stats, out_dir / "gait_cycles.png", title="Synthetic sample: joint angles (mean ± 1 SD)")
+    save_figure(gait_cycles_figure(stats, title="Synthetic sample: joint angles (mean ± 1 SD)"),
+                out_dir / "gait_cycles.png")  # fmt: skip
     comparison = truth_comparison(run, pd.read_csv(data / "walking_truth_angles.csv"))
     cgm24_lines = cgm24_session(data, out_dir)
     if progress is not None:

@@ -207,8 +207,10 @@ def simulate_leg(
     segment lengths and centre-of-mass distances (``thigh_length_m`` ...) in its
     attributes.  Returns it and the files written.
     """
+    from fuzzygait.io.figure_files import save_figure
     from fuzzygait.uncertainty.storage import save_result
-    from fuzzygait.viz.mechanics import write_energy_figure, write_simulation_recording
+    from fuzzygait.viz.mechanics import energy_figure
+    from fuzzygait.workflows.rerun_recordings import write_simulation_recording
 
     check_scenario(setup.scenario)
     settings = setup.settings
@@ -223,7 +225,7 @@ def simulate_leg(
                      for seg in (config.thigh, config.shank) for key in ("length", "com_from_proximal")})  # fmt: skip
     written = write_all_or_none([
         (outputs.out_file, lambda path: save_result(ds, path)),
-        (outputs.plot, lambda path: write_energy_figure(ds, path)),
+        (outputs.plot, lambda path: save_figure(energy_figure(ds), path)),
         (outputs.rrd, lambda path: write_simulation_recording(ds, path, configuration=config)),
     ])  # fmt: skip
     return ds, written
@@ -306,11 +308,12 @@ def fuzzy_simulation(
     ``scheduler``; with the strategy's ``tracks="side-by-side"`` (the Graph Follower's (α,
     bound) tracks at once) those of a round run in parallel, and the hulls do not depend
     on the number of workers."""
+    from fuzzygait.io.figure_files import save_figure
     from fuzzygait.mechanics.fuzzy_dynamics import LegTarget, fuzzy_forward_dynamics
     from fuzzygait.uncertainty.execution import Evaluator
     from fuzzygait.uncertainty.storage import save_result
-    from fuzzygait.viz.figures import save_figure
-    from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure, write_fuzzy_recording
+    from fuzzygait.viz.fuzzy_dynamics import extremiser_figure, hull_figure
+    from fuzzygait.workflows.rerun_recordings import write_fuzzy_recording
 
     check_scenario(setup.scenario)
     strategy, alphas = request.linearised, request.alphas

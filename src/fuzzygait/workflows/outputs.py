@@ -19,8 +19,8 @@ Writer = tuple[Path | None, Callable[[Path], object]]
 def check_output_suffixes(out_file: Path, rrd: Path | None, plots: Mapping[str, Path | None]) -> None:
     """One clear error, before any work, for an output path with the wrong suffix
     (``plots`` maps the option name to its path)."""
+    from fuzzygait.io.figure_files import FIGURE_SUFFIXES
     from fuzzygait.uncertainty.storage import SUFFIXES
-    from fuzzygait.viz.figures import FIGURE_SUFFIXES
 
     if out_file.suffix.lower() not in SUFFIXES:
         raise FuzzyGaitError(f"{out_file}: {Option.OUT} must end in {' or '.join(SUFFIXES)}")

@@ -4,7 +4,7 @@ batch's :class:`~fuzzygait.uncertainty.execution.Evaluator`.
 :func:`run_trial_job` reads and processes the trial, runs the marker-error analysis the
 job's uncertainty mode asks for (:data:`UNCERTAINTY_MODES`), draws its page, writes the
 page's data (``<name>_files/data.npz``), its index entry (``<name>_files/entry.json``,
-:mod:`~fuzzygait.viz.report.entry_store`) and, with ``pdf``, its PDF, all in a staging
+:mod:`~fuzzygait.workflows.report_entries`) and, with ``pdf``, its PDF, all in a staging
 folder beside the session's pages, then moves them into place and writes
 ``<name>_files/job.json`` (the job's key) last.  A trial killed half-way leaves no file
 in place and no ``job.json``, so the next run recomputes it; a trial whose ``job.json``
@@ -33,8 +33,7 @@ from fuzzygait.core.options import Option
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
-from fuzzygait.viz.report import ReportItem, ReportWriter, TrialEntry
-from fuzzygait.viz.report.entry_store import EntryFormatError, read_entry, write_entry
+from fuzzygait.viz.report import TrialEntry
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.marker_uncertainty import (
     DEFAULT_SETTINGS,
@@ -42,6 +41,8 @@ from fuzzygait.workflows.marker_uncertainty import (
     MarkerErrorSettings,
     analyse_run,
 )
+from fuzzygait.workflows.report_entries import EntryFormatError, read_entry, write_entry
+from fuzzygait.workflows.report_folder import ReportItem, ReportWriter
 
 __all__ = ["UNCERTAINTY_MODES", "TrialJob", "TrialOutcome", "finished_outcome", "mode_settings", "run_trial_job"]
 
@@ -272,7 +273,7 @@ def run_trial_job(job: TrialJob) -> TrialOutcome:
 def finished_outcome(job: TrialJob) -> TrialOutcome | None:
     """The outcome of an earlier run of the same job (same key in ``job.json`` and
     ``entry.json``, every file in place, ``entry.json`` of this schema with every field
-    of its type: :func:`~fuzzygait.viz.report.entry_store.read_entry`), or None: it must
+    of its type: :func:`~fuzzygait.workflows.report_entries.read_entry`), or None: it must
     be computed.  An ``entry.pkl`` of an earlier version is never opened."""
     files = job.out_dir / f"{job.name}_files"
     try:

@@ -67,25 +67,23 @@ Modules: :mod:`~fuzzygait.viz.report.normalised_bands` (the cycle bands),
 :mod:`~fuzzygait.viz.report.bands` (the numbers: ΔΦ table, summary numbers),
 :mod:`~fuzzygait.viz.report.allowable` (the allowable-error table and its HTML),
 :mod:`~fuzzygait.viz.report.figures`, :mod:`~fuzzygait.viz.report.sources` (the
-per-source figure, table and sentence), :mod:`~fuzzygait.viz.report.pages` (HTML
-and CSS, :mod:`~fuzzygait.viz.report.markup` its building blocks) and
-:mod:`~fuzzygait.viz.report.writer` (staged, atomic writing).
+per-source figure, table and sentence) and :mod:`~fuzzygait.viz.report.pages` (HTML
+and CSS, :mod:`~fuzzygait.viz.report.markup` its building blocks).  They build figures
+and page text only; the folder is written by :mod:`fuzzygait.workflows.report_folder`
+(staged, atomic writing: ``ReportWriter``, ``write_report``) and the entries a re-run
+reuses by :mod:`fuzzygait.workflows.report_entries`.
 """
 
 from fuzzygait.kinematics.labels import component_label
 from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry
-from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
+from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
 from fuzzygait.viz.report.normalised_bands import cycle_bands
-from fuzzygait.viz.report.writer import ReportItem, ReportWriter, write_report
 
 __all__ = [
-    "ReportItem",
-    "ReportWriter",
     "TrialAnalysis",
     "TrialEntry",
     "component_label",
     "cycle_bands",
-    "plot_cycle_bands",
-    "plot_time_series",
-    "write_report",
+    "cycle_figure",
+    "time_series_figure",
 ]

@@ -1,10 +1,9 @@
 """The clinical figures of a trial page: kinetics stored in the file (joint moments and
 powers over the gait cycle, mean ± SD per side) and the Movement Analysis Profile (GVS
-bars per variable and side, GPS beside them), as PNG and SVG."""
+bars per variable and side, GPS beside them); written as PNG and SVG by
+:mod:`fuzzygait.workflows.report_folder` (nothing here writes a file)."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 from matplotlib.artist import Artist
@@ -16,10 +15,10 @@ from fuzzygait.gait.cycles import percent_points
 from fuzzygait.gait.normative import GPS_VARIABLES, GaitProfile
 from fuzzygait.viz.layout import SIDE_STYLE
 from fuzzygait.viz.report.clinical import KINETIC_JOINTS, N_POINTS, ClinicalData
-from fuzzygait.viz.report.figures import SIDE_LINE, _add_legend, _right_hatch, _save, foot_off_lines
+from fuzzygait.viz.report.figures import SIDE_LINE, _add_legend, _right_hatch, foot_off_lines
 from fuzzygait.viz.report.grid import KINETICS_GRID
 
-__all__ = ["gait_profile_figure", "kinetics_figure", "plot_gait_profile", "plot_kinetics"]
+__all__ = ["gait_profile_figure", "kinetics_figure"]
 
 #: Columns of the kinetics grid: (kind, axis, title, meaning of positive values).
 KINETIC_COLUMNS = (
@@ -90,11 +89,6 @@ def kinetics_figure(clinical: ClinicalData, title: str) -> Figure:
     return _add_legend(fig, handles, ncol=3, margins=KINETICS_GRID)
 
 
-def plot_kinetics(clinical: ClinicalData, stem: Path, title: str) -> None:
-    """:func:`kinetics_figure` as ``stem.png`` and ``stem.svg``."""
-    _save(kinetics_figure(clinical, title), stem)
-
-
 def gait_profile_figure(profile: GaitProfile, title: str) -> Figure:
     """The Movement Analysis Profile: per variable the GVS of each side (left filled,
     right hatched, in the sides' colours) and the GPS per side and overall, in degrees."""
@@ -126,7 +120,3 @@ def gait_profile_figure(profile: GaitProfile, title: str) -> Figure:
     fig.tight_layout(rect=(0, 0, 1, 0.93))
     return fig
 
-
-def plot_gait_profile(profile: GaitProfile, stem: Path, title: str) -> None:
-    """:func:`gait_profile_figure` as ``stem.png`` and ``stem.svg``."""
-    _save(gait_profile_figure(profile, title), stem)

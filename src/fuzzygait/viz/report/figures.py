@@ -1,5 +1,6 @@
 """The report's figures: the gait-report grid (joints x planes) with fuzzy α-bands, over
-the gait cycle and over the whole trial, as PNG and SVG.
+the gait cycle and over the whole trial (written as PNG and SVG by
+:mod:`fuzzygait.workflows.report_folder`; nothing here writes a file).
 
 Where an α-level's band is undetermined (the segment frame can flip within its balls)
 the band is not drawn; a hatched strip in the side's colour along the top of the panel
@@ -9,7 +10,6 @@ come from the measured curves and the determined bands only."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import matplotlib
 
@@ -31,9 +31,9 @@ from fuzzygait.viz.report.clinical import ClinicalData  # noqa: E402
 from fuzzygait.viz.report.grid import ANGLE_GRID, GridMargins, place_grid  # noqa: E402
 from fuzzygait.viz.report.normalised_bands import N_POINTS, band_undetermined, cycle_bands  # noqa: E402
 
-__all__ = ["cycle_figure", "plot_cycle_bands", "plot_time_series", "time_series_figure"]
+__all__ = ["cycle_figure", "time_series_figure"]
 
-#: Figure resolution; the figures are 11 in wide -> 1100 px PNGs.
+#: Figure resolution (dots per inch) the figures are written at; 11 in wide -> 1100 px PNGs.
 DPI = 100
 FIG_SIZE = (11.0, 12.6)
 
@@ -141,15 +141,6 @@ def _add_legend(fig: Figure, handles: list[Artist], ncol: int = 7, margins: Grid
     return fig
 
 
-def _save(fig: Figure, stem: Path) -> None:
-    """Write ``stem.png`` and ``stem.svg`` and close the figure."""
-    try:
-        for suffix in ("png", "svg"):
-            fig.savefig(stem.with_suffix(f".{suffix}"), dpi=DPI, format=suffix)
-    finally:
-        plt.close(fig)
-
-
 def _draw_bands(ax: Axes, x: np.ndarray, curve: np.ndarray, alphas: np.ndarray, band: np.ndarray | None,
                 colour: str, layer: float, rasterized: bool = False, side: str = "L") -> None:  # fmt: skip
     """α-bands (nested, widest first) in the side's style — left filled in its colour,
@@ -214,20 +205,6 @@ def _not_computed(ax: Axes, text: str = "not computed") -> None:
 
 
 
-def plot_cycle_bands(data: TrialData, stem: Path, title: str, clinical: ClinicalData | None = None) -> dict[str, int]:
-    """The gait-report grid (joints x planes) over the gait cycle with α-bands (and, with
-    ``clinical``, foot-off lines, stride-to-stride SD and the normative band); writes
-    ``stem.png`` and ``stem.svg``.  Returns the number of cycles per side."""
-    _save(cycle_figure(data, title, clinical), stem)
-    return data.n_cycles()
-
-
-def plot_time_series(data: TrialData, stem: Path, title: str, clinical: ClinicalData | None = None) -> None:
-    """The whole trial with α-bands (joints x planes, time in s) and foot strikes as
-    dotted lines; writes ``stem.png`` and ``stem.svg`` (bands rasterised in the SVG)."""
-    _save(time_series_figure(data, title, clinical), stem)
-
-
 def _normative(ax: Axes, x: np.ndarray, clinical: ClinicalData | None, base: str, axis: str) -> bool:
     """The normative mean ± 1 SD band (grey, below everything); per side when the file
     has sided curves (drawn once when both sides share the pooled one)."""
@@ -282,9 +259,10 @@ def clinical_handles(clinical: ClinicalData | None, sd: bool, normative: bool) -
 
 
 def cycle_figure(data: TrialData, title: str, clinical: ClinicalData | None = None) -> Figure:
-    """The gait-cycle grid of :func:`plot_cycle_bands` (axes ``fig.axes``: row-major,
-    rows as :func:`~fuzzygait.viz.report.clinical.grid_rows` — the forefoot last with CGM
-    2.4 —, columns sagittal, frontal, transverse)."""
+    """The gait-report grid (joints x planes) over the gait cycle with α-bands (and, with
+    ``clinical``, foot-off lines, stride-to-stride SD and the normative band).  Axes
+    ``fig.axes``: row-major, rows as :func:`~fuzzygait.viz.report.clinical.grid_rows` (the
+    forefoot last with CGM 2.4), columns sagittal, frontal, transverse."""
     x = percent_points(N_POINTS)
     layer = _band_opacity(len(data.alphas))
     rows = clinical.rows if clinical is not None and clinical.rows else list(ANGLE_ROWS)
@@ -341,7 +319,8 @@ def cycle_figure(data: TrialData, title: str, clinical: ClinicalData | None = No
 
 
 def time_series_figure(data: TrialData, title: str, clinical: ClinicalData | None = None) -> Figure:
-    """The whole-trial grid of :func:`plot_time_series` (axes as :func:`cycle_figure`)."""
+    """The whole trial with α-bands (joints x planes, time in s; bands rasterised in an
+    SVG) and foot strikes as dotted lines (axes as :func:`cycle_figure`)."""
     trial = data.run.trial
     t = trial.times
     layer = _band_opacity(len(data.alphas))

@@ -4,7 +4,8 @@ trial and subject file and how they were found; its trials with links, errors an
 warnings) and one index across sessions.
 
 The figure draws left and right in the sides' colours *and* line styles (left solid,
-right dashed; SD bands hatched differently), so it reads in greyscale too.
+right dashed; SD bands hatched differently), so it reads in greyscale too.  Nothing
+here writes a file (:mod:`fuzzygait.workflows.report_folder` writes the figure).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import datetime as _dt
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import quote
 
 import numpy as np
@@ -26,16 +27,21 @@ from fuzzygait.viz.report.clinical_html import spatiotemporal_table
 from fuzzygait.viz.report.grid import SESSION_GRID, place_grid
 from fuzzygait.viz.report.markup import escape, html_table
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 __all__ = [
     "SessionSummary",
     "SummaryTrial",
     "cross_session_index",
     "cycles_used",
-    "plot_session_cycles",
+    "session_cycles_figure",
     "session_page",
 ]
 
 _LINES = {"L": ("-", "////"), "R": ("--", "\\\\\\\\")}
+#: Resolution (dots per inch) the session figure is written at (11 in wide -> 1100 px).
+SESSION_DPI = 100
 
 
 @dataclass
@@ -77,18 +83,19 @@ class SessionSummary:
         return [f"{t.name}: {w}" for t in self.trials for w in t.warnings]
 
 
-def plot_session_cycles(cycles: Mapping[str, np.ndarray], path: Path, title: str) -> bool:
+def session_cycles_figure(cycles: Mapping[str, np.ndarray], title: str) -> Figure | None:
     """The session's gait-cycle grid (rows pelvis .. foot progression, columns the
     planes): per component mean ± SD over the cycles of ``cycles`` (``"LKneeAngles_X"``
     -> (n_cycles, n_points) deg, every trial's cycles stacked), left and right in one
-    panel.  Writes ``path``.png and .svg; False when there is nothing to draw."""
+    panel; None when there is nothing to draw.  Written at :data:`SESSION_DPI` as PNG
+    and SVG by :func:`fuzzygait.workflows.report_folder.write_session_cycles`."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     if not any(np.isfinite(v).any() for v in cycles.values()):
-        return False
+        return None
     figure, axes = plt.subplots(len(ANGLE_ROWS), len(PLANES), figsize=(11, 12.6), squeeze=False, sharex=True)
     for r, (base, row_title) in enumerate(ANGLE_ROWS):
         for c, (axis, plane, meaning) in enumerate(PLANES):
@@ -121,10 +128,7 @@ def plot_session_cycles(cycles: Mapping[str, np.ndarray], path: Path, title: str
                 ax.legend(fontsize=7, loc="lower right", frameon=False)
     figure.suptitle(title, fontsize=11)
     place_grid(figure, 0.97, SESSION_GRID)
-    for suffix in (".png", ".svg"):
-        figure.savefig(path.with_suffix(suffix), dpi=100)
-    plt.close(figure)
-    return True
+    return figure
 
 
 def _document(title: str, body: str) -> str:

@@ -1,6 +1,10 @@
 """Staged, atomic writing of the report folder: every page and figure goes into a hidden
 staging folder beside ``OUT`` and is moved into place when the report is complete (pages
-first, ``index.html`` last); on an error (or Ctrl-C) ``OUT`` is left as it was."""
+first, ``index.html`` last); on an error (or Ctrl-C) ``OUT`` is left as it was.
+
+The pages and figures are built by :mod:`fuzzygait.viz.report` (which writes nothing);
+this module writes them (figures through :func:`fuzzygait.io.figure_files.save_figure_files`).
+The folder's layout is described in :mod:`fuzzygait.viz.report`."""
 
 from __future__ import annotations
 
@@ -8,12 +12,13 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
@@ -22,15 +27,17 @@ from fuzzygait.core.options import Option
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.io.atomic import replace_path
+from fuzzygait.io.figure_files import save_figure_files
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import ReportRun, TrialAnalysis, TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.clinical import ClinicalData
-from fuzzygait.viz.report.clinical_figures import plot_gait_profile, plot_kinetics
-from fuzzygait.viz.report.figures import plot_cycle_bands, plot_time_series
+from fuzzygait.viz.report.clinical_figures import gait_profile_figure, kinetics_figure
+from fuzzygait.viz.report.figures import DPI, cycle_figure, time_series_figure
 from fuzzygait.viz.report.pages import index_page, trial_page
-from fuzzygait.viz.report.sources import has_source_bands, plot_source_bands
+from fuzzygait.viz.report.session import SESSION_DPI, session_cycles_figure
+from fuzzygait.viz.report.sources import has_source_bands, source_figure
 
-__all__ = ["ReportItem", "ReportWriter", "write_report"]
+__all__ = ["ReportItem", "ReportWriter", "write_report", "write_session_cycles"]
 
 
 @dataclass
@@ -67,6 +74,7 @@ class _AnglesOnly:
     fuzzy: None
     delta_phi: pd.DataFrame
     notes: list[Finding]
+    result: None = None
 
 
 def angles_only(analysis: TrialAnalysis) -> TrialAnalysis:
@@ -186,17 +194,21 @@ class ReportWriter:
         folder = self._staging / files
         folder.mkdir()
         title = f"{source.name}: joint angles" + (" with fuzzy α-bands" if len(data.alphas) else "")
-        plot_cycle_bands(data, folder / "cycles", title + " (mean over gait cycles)", clinical)
-        plot_time_series(data, folder / "time_series", title + " (whole trial)", clinical)
+        save_figure_files(cycle_figure(data, title + " (mean over gait cycles)", clinical), folder / "cycles", dpi=DPI)
+        save_figure_files(time_series_figure(data, title + " (whole trial)", clinical), folder / "time_series",
+                          dpi=DPI)  # fmt: skip
         if clinical.has_kinetics():
-            plot_kinetics(clinical, folder / "kinetics", f"{source.name}: joint moments and powers stored in the file")
+            figure = kinetics_figure(clinical, f"{source.name}: joint moments and powers stored in the file")
+            save_figure_files(figure, folder / "kinetics", dpi=DPI)
         if clinical.profile is not None:
-            plot_gait_profile(clinical.profile, folder / "profile", f"{source.name}: Movement Analysis Profile")
+            figure = gait_profile_figure(clinical.profile, f"{source.name}: Movement Analysis Profile")
+            save_figure_files(figure, folder / "profile", dpi=DPI)
         fuzzy = analysis.fuzzy
-        if fuzzy is not None and has_source_bands(fuzzy):
-            plot_source_bands(data, folder / "sources", f"{source.name}: flexion with the bands of each error source")
+        if fuzzy is not None and has_source_bands(analysis.result):
+            figure = source_figure(data, f"{source.name}: flexion with the bands of each error source")
+            save_figure_files(figure, folder / "sources", dpi=DPI)
         table = delta_phi_table(analysis, data)
-        allowable = allowable_summary(fuzzy)
+        allowable = allowable_summary(analysis.result)
         gps = clinical.profile.overall if clinical.profile is not None else None
         entry = TrialEntry.of(source, f"{name}.html", data, table, allowable, clinical.model_gaps(analysis.run.gaps),
                               gps)  # fmt: skip
@@ -227,6 +239,7 @@ class ReportWriter:
         self._staging = None
         return self.out_dir / "index.html"
 
+
 def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str], *,
                  normative: NormativeData | None = None) -> Path:  # fmt: skip
     """Write the batch report: one page per trial and ``index.html``.
@@ -247,3 +260,15 @@ def write_report(items: Iterable[ReportItem], out_dir: str | os.PathLike[str], *
         for item in items:
             writer.add(item)
         return writer.finish()
+
+
+def write_session_cycles(cycles: Mapping[str, np.ndarray], stem: Path, title: str) -> bool:
+    """The session's gait-cycle figure
+    (:func:`~fuzzygait.viz.report.session.session_cycles_figure`) as ``stem.png`` and
+    ``stem.svg`` (into a staging folder: not atomic itself); False when there is nothing
+    to draw (no file written)."""
+    figure = session_cycles_figure(cycles, title)
+    if figure is None:
+        return False
+    save_figure_files(figure, stem, dpi=SESSION_DPI)
+    return True
