@@ -123,8 +123,6 @@ RHO = 8550.0  # kg/m³, the stance scenario's
 
 @pytest.fixture(scope="module")
 def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from fuzzygait.uncertainty.frv import FRVMultiStudy
-
     setup = LegSetup("stance", nodes=6, values={"E": MODULUS}, solver=SETTINGS)
     options = study_options(setup, FRVRequest("E,rho", disc=6))
     assert options["frv"] == "E,rho" and options["value"] == [MODULUS, options["set"]["rho"]]
@@ -133,7 +131,7 @@ def multi_store(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("multi") / "study.zarr"
     specs = [FRVSpec("E", MODULUS, alphas=(0.0, 0.25, 0.5, 0.75, 1.0)),
              FRVSpec("rho", options["set"]["rho"], alphas=(0.0, 0.25, 0.5, 0.75, 1.0))]  # fmt: skip
-    FRVMultiStudy.create(model, specs, 30, StudyOptions(n_disc=6, record=options), store=path)
+    FRVStudy.create(model, specs, 30, StudyOptions(n_disc=6, record=options), store=path)
     return path
 
 
@@ -174,7 +172,6 @@ def test_a_study_recorded_before_the_sampling_option_counts_as_random(tmp_path: 
 
 
 def test_disc_per_parameter_reaches_the_grids_and_the_record(tmp_path: Path) -> None:
-    from fuzzygait.uncertainty.frv import FRVMultiStudy
     from fuzzygait.uncertainty.frv.store import read_meta
 
     out = tmp_path / "boxes.zarr"
@@ -183,8 +180,9 @@ def test_disc_per_parameter_reaches_the_grids_and_the_record(tmp_path: Path) -> 
     assert result.exit_code == 0, result.output
     meta = read_meta(out)
     assert meta["options"]["disc"] == [5, 4] and meta["n_disc"] == [5, 4]
-    study = FRVMultiStudy.open(out, FunctionModel(lambda p: p, np.linspace(0.0, 0.02, 21)))
-    assert [g.n_points for g in study.grids] == [5, 4] and study.grids[0].spacing != study.grids[1].spacing
+    study = FRVStudy.open(out, FunctionModel(lambda p: p, np.linspace(0.0, 0.02, 21)))
+    assert study.several and [g.n_points for g in study.grids] == [5, 4]
+    assert study.grids[0].spacing != study.grids[1].spacing
     assert study.refine is True  # the leg's sensitivities refine the study
     line = _refusal(out, "stance", "--disc", "5")
     assert line.startswith(f"fuzzygait: error: {out}: this study was made with --disc 5,4; given 5."), line

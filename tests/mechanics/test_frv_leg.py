@@ -52,14 +52,12 @@ def test_frv_sim_command_creates_and_extends(tmp_path):
 def test_two_frvs_one_and_two_workers_bit_identical_and_the_command(tmp_path, cluster):
     """``E`` and ``rho`` as independent FRVs: the box study on 1 worker and on 2 workers
     is bit-identical; ``frv-sim --frv E,rho`` writes and extends such a study."""
-    from fuzzygait.uncertainty.frv import FRVMultiStudy
-
     alphas = (0.0, 0.5, 1.0)
     specs = [FRVSpec("E", MODULUS, alphas=alphas), FRVSpec("rho", 8550.0, alphas=alphas)]
     small = dict(leg=replace(SMALL["leg"], settings=SETTINGS.derive(duration=0.02)), study=StudyOptions(n_disc=4))
     serial = leg_frv_study("stance", specs, 40, tmp_path / "one.zarr", workers=1, **small)
     parallel = leg_frv_study("stance", specs, 40, tmp_path / "two.zarr", scheduler=cluster.scheduler_address, **small)
-    assert isinstance(serial, FRVMultiStudy) and serial.counts["possible_intervals"] == 6 * 6
+    assert serial.several and serial.counts["possible_intervals"] == 6 * 6
     a, b = serial.hulls()["hull"].values, parallel.hulls()["hull"].values
     assert a.shape == (40, 3, 2, a.shape[-1]) and np.isfinite(a).all() and np.array_equal(a, b)
     assert 0 < serial.counts["forward_simulations"] == parallel.counts["forward_simulations"]

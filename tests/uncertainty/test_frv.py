@@ -412,8 +412,8 @@ def test_time_stride_and_study_errors(tmp_path) -> None:
     nodes = optimisation_nodes(TIMES.size, 7)
     np.testing.assert_array_equal(study.hulls()["time"].to_numpy(), TIMES[nodes])
     assert study.counts["interval_optimisations"] == 2 * study.counts["occurring_proper_intervals"] * nodes.size
-    with pytest.raises(ParameterError, match="one FRV parameter"):
-        FRVStudy.create(model, [spec, FRVSpec("q", 2.0)], 10, store=tmp_path / "t.zarr")
+    with pytest.raises(ParameterError, match="distinct names"):
+        FRVStudy.create(model, [spec, FRVSpec("p", 2.0)], 10, store=tmp_path / "t.zarr")
     with pytest.raises(ParameterError, match="returned none"):
         FRVStudy.create(sine_model(jacobian=False), spec, 10, StudyOptions(refine=True), store=tmp_path / "u.zarr")
 

@@ -2,8 +2,8 @@
 value — α < 1 interval and box hulls, α = 1 at a sample's own peak, and what the nesting
 repair moves between levels — lies within the smallest and largest library value (the
 forward simulations) it is made from, and within the bounds the model declares for its
-output (an energy ≥ 0), for one FRV parameter (:class:`FRVStudy`) and two
-(:class:`FRVMultiStudy`), on an "energy" whose cubic Hermite interpolant between the grid
+output (an energy ≥ 0), for an :class:`FRVStudy` of one FRV parameter and of two, on
+an "energy" whose cubic Hermite interpolant between the grid
 points dips below zero (what the stance study's maximum element energy did)."""
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ import zarr
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
 from fuzzygait.uncertainty.frv import (
-    FRVMultiStudy,
     FRVSpec,
     FRVStudy,
     MultiStudyOptions,
@@ -126,7 +125,7 @@ def test_one_parameter_hulls_stay_within_the_simulations_and_the_declared_bounds
 
 
 # ============================================================================ two parameters
-def two_parameter_ranges(study: FRVMultiStudy) -> tuple[np.ndarray, np.ndarray]:
+def two_parameter_ranges(study: FRVStudy) -> tuple[np.ndarray, np.ndarray]:
     """As :func:`one_parameter_ranges` for boxes: the library values at the grid points of
     each α-level's box (which holds the higher ones') and at the α = 1 lattice cell's
     corners."""
@@ -149,23 +148,24 @@ def two_parameter_ranges(study: FRVMultiStudy) -> tuple[np.ndarray, np.ndarray]:
 def test_two_parameter_hulls_stay_within_the_simulations_and_the_declared_bounds(tmp_path) -> None:
     model = energy_model(weights=(1.0, 0.5))
     specs = [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, alphas=ALPHAS)]
-    study = FRVMultiStudy.create(model, specs, 200,
-                                 MultiStudyOptions(n_disc=(7, 5), seed=3, chunk=128, peak_refine=(2, 1)),
-                                 store=tmp_path / "m.zarr")  # fmt: skip
+    study = FRVStudy.create(model, specs, 200,
+                            MultiStudyOptions(n_disc=(7, 5), seed=3, chunk=128, peak_refine=(2, 1)),
+                            store=tmp_path / "m.zarr")  # fmt: skip
     assert study.refine is True and study.peak_refine == [2, 1]
     hull = study.hulls()["hull"].to_numpy()
     assert_within(hull, *two_parameter_ranges(study))
     # α = 1 is the Hermite interpolant at the raw peak within its cell's corner values, which
     # unbounded would dip below zero
     corners, t = cell_keys(study.grids, study.peak_refine, study.samples()["cut"].to_numpy()[:, :, -1, 0])
-    rows = np.array([[study._keys[tuple(c)] for c in cell] for cell in corners.tolist()])
     lib = study.library()
+    row = {tuple(k): i for i, k in enumerate((lib["point"].to_numpy() * RESOLUTION + lib["offset"].to_numpy()).tolist())}
+    rows = np.array([[row[tuple(c)] for c in cell] for cell in corners.tolist()])
     values, slopes = lib["value"].to_numpy()[rows], lib["slope"].to_numpy()[rows]
     spacings = np.array([g.spacing for g in study.grids]) / np.array(study.peak_refine)
     unbounded = hermite_values(values, slopes, spacings, t)
     assert unbounded.min() < -0.05
     np.testing.assert_array_equal(hull[:, -1, 0], np.clip(unbounded, values.min(axis=1), values.max(axis=1)))
-    grown = FRVMultiStudy.open(tmp_path / "m.zarr", model).add_samples(200)
+    grown = FRVStudy.open(tmp_path / "m.zarr", model).add_samples(200)
     assert_within(grown.hulls()["hull"].to_numpy(), *two_parameter_ranges(grown))
 
 
@@ -177,8 +177,8 @@ def test_a_store_made_before_recomputes_its_hulls_for_new_samples(tmp_path, seve
     if several:
         model = energy_model(weights=(1.0, 0.5))
         specs = [FRVSpec("p1", 1.0, alphas=ALPHAS), FRVSpec("p2", 1.0, alphas=ALPHAS)]
-        FRVMultiStudy.create(model, specs, 100, MultiStudyOptions(n_disc=(6, 4), seed=1, peak_refine=1),
-                             store=tmp_path / "o.zarr")
+        FRVStudy.create(model, specs, 100, MultiStudyOptions(n_disc=(6, 4), seed=1, peak_refine=1),
+                        store=tmp_path / "o.zarr")
     else:
         model = energy_model()
         FRVStudy.create(model, FRVSpec("p", 1.0, alphas=ALPHAS), 100, StudyOptions(n_disc=8, seed=1),
@@ -189,7 +189,7 @@ def test_a_store_made_before_recomputes_its_hulls_for_new_samples(tmp_path, seve
     root.attrs.clear()
     root.update_attributes(attrs)
     root["intervals"]["lower"][:] = -1.0
-    kind = FRVMultiStudy if several else FRVStudy
-    grown = kind.open(tmp_path / "o.zarr", model).add_samples(300)
+    grown = FRVStudy.open(tmp_path / "o.zarr", model).add_samples(300)
+    assert grown.several is several
     ranges = two_parameter_ranges(grown) if several else one_parameter_ranges(grown)
     assert_within(grown.hulls()["hull"].to_numpy()[100:], *(r[100:] for r in ranges))

@@ -14,10 +14,9 @@ import pytest
 from scipy import stats
 from test_frv import CountingEvaluator  # the serial evaluator, counting rows and calls
 
-from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
 from fuzzygait.uncertainty.frv import (
-    FRVMultiStudy,
     FRVSpec,
     FRVStudy,
     Grid,
@@ -28,7 +27,6 @@ from fuzzygait.uncertainty.frv import (
     generate_samples,
     group,
     occurring_boxes,
-    open_study,
     possible_boxes,
 )
 
@@ -117,8 +115,8 @@ def test_box_extrema_match_brute_force() -> None:
 # ============================================================================ the study
 def test_study_hulls_are_the_closed_form_box_hulls(tmp_path) -> None:
     model, counter = analytic_model(), CountingEvaluator(analytic_model())
-    study = FRVMultiStudy.create(model, specs(), 800, StudyOptions(n_disc=(12, 15), seed=1, chunk=200),
-                                 store=tmp_path / "s.zarr", evaluator=counter)  # fmt: skip
+    study = FRVStudy.create(model, specs(), 800, StudyOptions(n_disc=(12, 15), seed=1, chunk=200),
+                            store=tmp_path / "s.zarr", evaluator=counter)  # fmt: skip
     counts, grids = study.counts, study.grids
     cuts = study.samples()["cut"].to_numpy()
     bins = study.samples()["bin"].to_numpy()
@@ -152,8 +150,9 @@ def test_one_parameter_equals_the_one_parameter_study(tmp_path) -> None:
     model = FunctionModel(lambda p: np.sin(p[..., :1] * TIMES), TIMES)  # no sensitivities: no refinement
     spec = FRVSpec("p", 1.0, alphas=(0.0, 0.25, 0.5, 0.75, 1.0))
     single = FRVStudy.create(model, spec, 600, StudyOptions(n_disc=20, seed=3, chunk=128), store=tmp_path / "a.zarr")
-    multi = FRVMultiStudy.create(model, [spec], 600, StudyOptions(n_disc=20, seed=3, chunk=128),
-                                 store=tmp_path / "b.zarr")
+    multi = FRVStudy.create(model, [spec], 600, MultiStudyOptions(n_disc=20, seed=3, chunk=128),
+                            store=tmp_path / "b.zarr")  # the several-parameter way, of one parameter
+    assert multi.several and not single.several and multi.n_params == single.n_params == 1
     assert multi.grids == (single.grid,) and single.refine is False
     np.testing.assert_array_equal(multi.hulls()["hull"].to_numpy(), single.hulls()["hull"].to_numpy())
     assert multi.counts["occurring_intervals"] == single.counts["occurring_intervals"]
@@ -162,8 +161,8 @@ def test_one_parameter_equals_the_one_parameter_study(tmp_path) -> None:
 
 def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     model, counter = analytic_model(), CountingEvaluator(analytic_model())
-    grown = FRVMultiStudy.create(model, specs(), 30, StudyOptions(n_disc=8, seed=2, chunk=64),
-                                 store=tmp_path / "g.zarr", evaluator=counter)  # fmt: skip
+    grown = FRVStudy.create(model, specs(), 30, StudyOptions(n_disc=8, seed=2, chunk=64),
+                            store=tmp_path / "g.zarr", evaluator=counter)  # fmt: skip
     grids0, sims0, boxes0 = grown.grids, grown.counts["forward_simulations"], grown.interval_rows
     grown.add_samples(700)
     assert any(g.n_bins > g0.n_bins for g, g0 in zip(grown.grids, grids0, strict=True))  # the grids grew
@@ -172,9 +171,9 @@ def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     assert counter.calls == 2 and counter.rows == grown.counts["forward_simulations"] == grown.library_rows
     assert grown.counts["last_forward_simulations"] == grown.library_rows - sims0 > 0
     assert grown.counts["last_new_intervals"] == grown.interval_rows - boxes0 > 0
-    one_shot = FRVMultiStudy.create(model, specs(), 730,
-                                    MultiStudyOptions(seed=2, chunk=64, grids=grown.grids),
-                                    store=tmp_path / "o.zarr")
+    one_shot = FRVStudy.create(model, specs(), 730,
+                               MultiStudyOptions(seed=2, chunk=64, grids=grown.grids),
+                               store=tmp_path / "o.zarr")
     for name in ("hull",):
         np.testing.assert_array_equal(grown.hulls()[name].to_numpy(), one_shot.hulls()[name].to_numpy())
     for name in ("cut", "bin"):
@@ -182,27 +181,30 @@ def test_add_samples_equals_one_shot_bit_for_bit(tmp_path) -> None:
     for key in ("forward_simulations", "occurring_intervals", "interval_optimisations", "possible_intervals"):
         assert grown.counts[key] == one_shot.counts[key], key
     # reopened from disk and grown again: identical to growing in memory
-    again = open_study(tmp_path / "g.zarr", model)
-    assert isinstance(again, FRVMultiStudy) and again.counts == grown.counts
+    again = FRVStudy.open(tmp_path / "g.zarr", model)
+    assert again.several and again.specs == tuple(specs()) and again.counts == grown.counts
     again.add_samples(100)
-    direct = FRVMultiStudy.create(model, specs(), 830,
-                                  MultiStudyOptions(seed=2, chunk=64, grids=again.grids),
-                                  store=tmp_path / "d.zarr")
+    direct = FRVStudy.create(model, specs(), 830,
+                             MultiStudyOptions(seed=2, chunk=64, grids=again.grids),
+                             store=tmp_path / "d.zarr")
     np.testing.assert_array_equal(again.hulls()["hull"].to_numpy(), direct.hulls()["hull"].to_numpy())
-    with pytest.raises(FuzzyGaitError, match="several parameters"):
-        FRVStudy.open(tmp_path / "g.zarr", model)
-    one = FRVStudy.create(FunctionModel(lambda p: p[..., :1] * TIMES, TIMES), FRVSpec("q", 1.0), 20,
-                          store=tmp_path / "one.zarr")  # fmt: skip
-    with pytest.raises(FuzzyGaitError, match="one-parameter"):
-        FRVMultiStudy.open(one.path, model)
+    with pytest.raises(ParameterError, match=r"2 FRV parameters \(p1, p2\) has one spec each; use specs"):
+        again.spec  # noqa: B018 - the property raises
+    with pytest.raises(ParameterError, match="has one grid each; use grids"):
+        again.grid  # noqa: B018
+    linear = FunctionModel(lambda p: p[..., :1] * TIMES, TIMES)
+    FRVStudy.create(linear, FRVSpec("q", 1.0), 20, store=tmp_path / "one.zarr")
+    one = FRVStudy.open(tmp_path / "one.zarr", linear)  # the same type opens the one-parameter layout
+    assert not one.several and one.spec == FRVSpec("q", 1.0) and one.grids == (one.grid,)
+    assert one.peak_refine == [1] and one.peak_tolerance is None
 
 
 def test_alpha_one_outputs_follow_the_deterministic_model_at_the_peaks(tmp_path) -> None:
     """The α = 1 output (the model at the grouped peak) against a Monte Carlo of the
     deterministic model at the same raw peak samples: one distribution (two-sample KS)."""
     model = analytic_model()
-    study = FRVMultiStudy.create(model, specs(), 3000, StudyOptions(n_disc=40, seed=5, chunk=1000),
-                                 store=tmp_path / "s.zarr")
+    study = FRVStudy.create(model, specs(), 3000, StudyOptions(n_disc=40, seed=5, chunk=1000),
+                            store=tmp_path / "s.zarr")
     peaks = study.samples()["cut"].to_numpy()[:, :, -1, 0]  # (n, 2) raw peaks
     monte_carlo = model.function(peaks)  # (n, n_time), vectorised
     alpha_one = study.hulls()["hull"].to_numpy()[:, -1, 0]
@@ -222,9 +224,9 @@ def test_one_and_two_workers_are_bit_identical(tmp_path) -> None:
     results = []
     for workers in (1, 2):
         with Evaluator(workers=workers) as pool:
-            study = FRVMultiStudy.create(model, s, 400, StudyOptions(n_disc=10, seed=6, chunk=128),
-                                         store=tmp_path / f"w{workers}.zarr",
-                                         evaluator=pool.batch(recipe))  # fmt: skip
+            study = FRVStudy.create(model, s, 400, StudyOptions(n_disc=10, seed=6, chunk=128),
+                                    store=tmp_path / f"w{workers}.zarr",
+                                    evaluator=pool.batch(recipe))  # fmt: skip
             study.add_samples(100)
         results.append((study.hulls()["hull"].to_numpy(), study.library()["value"].to_numpy(), dict(study.counts)))
     np.testing.assert_array_equal(results[0][0], results[1][0])
@@ -258,19 +260,19 @@ def test_latin_hypercube_peaks_fill_every_stratum_once_per_block() -> None:
 def test_a_latin_hypercube_study_extends_bit_for_bit(tmp_path) -> None:
     model = analytic_model()
     s = [FRVSpec(x.name, x.deterministic, x.relative_scale, x.alphas, mean=x.mean, sampling="lhs") for x in specs()]
-    grown = FRVMultiStudy.create(model, s, 200, StudyOptions(n_disc=10, seed=3), store=tmp_path / "g.zarr")
+    grown = FRVStudy.create(model, s, 200, StudyOptions(n_disc=10, seed=3), store=tmp_path / "g.zarr")
     grown.add_samples(300)
-    one_shot = FRVMultiStudy.create(model, s, 500, MultiStudyOptions(seed=3, grids=grown.grids),
-                                    store=tmp_path / "o.zarr")
+    one_shot = FRVStudy.create(model, s, 500, MultiStudyOptions(seed=3, grids=grown.grids),
+                               store=tmp_path / "o.zarr")
     np.testing.assert_array_equal(grown.hulls()["hull"].to_numpy(), one_shot.hulls()["hull"].to_numpy())
-    assert FRVMultiStudy.open(tmp_path / "g.zarr", model).specs == tuple(s)
+    assert FRVStudy.open(tmp_path / "g.zarr", model).specs == tuple(s)
 
 
 def test_figures_per_parameter_and_of_the_output(tmp_path) -> None:
     from fuzzygait.viz import frv as figures
 
-    study = FRVMultiStudy.create(analytic_model(), specs(), 300, StudyOptions(n_disc=10, seed=2),
-                                 store=tmp_path / "s.zarr")
+    study = FRVStudy.create(analytic_model(), specs(), 300, StudyOptions(n_disc=10, seed=2),
+                            store=tmp_path / "s.zarr")
     made = figures.parameter_figures(study.specs, seed=2, n_samples=300, grids=study.grids, units={"p2": "kg/m³"})
     assert made["p2"][0].axes[0].get_xlabel() == "p2 (kg/m³)" and made["p1"][1].axes[1].get_xlabel() == "p1"
     assert list(made) == ["p1", "p2"] and all(len(a.axes) == 4 and len(b.axes) == 2 for a, b in made.values())

@@ -15,7 +15,6 @@ from test_frv_multi import TIMES, A, B, specs  # the two-parameter study of the 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
 from fuzzygait.uncertainty.frv import (
-    FRVMultiStudy,
     FRVSpec,
     FRVStudy,
     MultiStudyOptions,
@@ -139,8 +138,8 @@ def sensitive_model() -> FunctionModel:
 
 def test_a_refined_study_gives_the_model_at_the_raw_peaks_and_the_closed_form_box_hulls(tmp_path) -> None:
     model = sensitive_model()
-    study = FRVMultiStudy.create(model, specs(), 600, StudyOptions(n_disc=(9, 11), seed=4, chunk=128),
-                                 store=tmp_path / "s.zarr")
+    study = FRVStudy.create(model, specs(), 600, StudyOptions(n_disc=(9, 11), seed=4, chunk=128),
+                            store=tmp_path / "s.zarr")
     assert study.refine is True
     peaks = study.samples()["cut"].to_numpy()[:, :, -1, 0]
     hull = study.hulls()["hull"].to_numpy()
@@ -168,10 +167,10 @@ def test_a_refined_study_gives_the_model_at_the_raw_peaks_and_the_closed_form_bo
     # every hull holds its box's closed form and the α = 1 value (nesting repair)
     assert np.all(hull[:, :-1, 0] <= hull[:, -1:, 0] + 1e-12) and np.all(hull[:, :-1, 1] >= hull[:, -1:, 1] - 1e-12)
     # slopes stored, read back, and extension bit-identical to a one-shot run
-    again = FRVMultiStudy.open(tmp_path / "s.zarr", model).add_samples(300)
-    one_shot = FRVMultiStudy.create(model, specs(), 900,
-                                    MultiStudyOptions(seed=4, chunk=128, grids=again.grids),
-                                    store=tmp_path / "o.zarr")  # fmt: skip
+    again = FRVStudy.open(tmp_path / "s.zarr", model).add_samples(300)
+    one_shot = FRVStudy.create(model, specs(), 900,
+                               MultiStudyOptions(seed=4, chunk=128, grids=again.grids),
+                               store=tmp_path / "o.zarr")  # fmt: skip
     np.testing.assert_array_equal(again.hulls()["hull"].to_numpy(), one_shot.hulls()["hull"].to_numpy())
     assert again.counts["forward_simulations"] == one_shot.counts["forward_simulations"]
     assert again.library()["slope"].shape == (again.library_rows, TIMES.size, 2)
@@ -182,8 +181,9 @@ def test_one_refined_parameter_is_the_refined_one_parameter_study(tmp_path) -> N
                           jacobian=lambda p: (3 * TIMES * np.cos(3 * p[0] * TIMES))[:, None])  # fmt: skip
     spec = FRVSpec("p", 1.0, alphas=(0.0, 0.25, 0.5, 0.75, 1.0))
     single = FRVStudy.create(model, spec, 500, StudyOptions(n_disc=15, seed=3, chunk=128), store=tmp_path / "a.zarr")
-    multi = FRVMultiStudy.create(model, [spec], 500, StudyOptions(n_disc=15, seed=3, chunk=128),
-                                 store=tmp_path / "b.zarr")
+    multi = FRVStudy.create(model, [spec], 500, MultiStudyOptions(n_disc=15, seed=3, chunk=128),
+                            store=tmp_path / "b.zarr")  # the several-parameter way (peak lattice), of one
+    assert multi.several and not single.several
     assert single.refine is True and multi.refine is True
     np.testing.assert_allclose(multi.hulls()["hull"].to_numpy(), single.hulls()["hull"].to_numpy(), rtol=1e-12,
                                atol=1e-14)  # fmt: skip
@@ -192,6 +192,6 @@ def test_one_refined_parameter_is_the_refined_one_parameter_study(tmp_path) -> N
 def test_refining_needs_sensitivities(tmp_path) -> None:
     model = FunctionModel(lambda p: p[..., :1] * TIMES + p[..., 1:2], TIMES)
     with pytest.raises(ParameterError, match="sensitivities"):
-        FRVMultiStudy.create(model, specs(), 50, StudyOptions(n_disc=5, refine=True), store=tmp_path / "u.zarr")
+        FRVStudy.create(model, specs(), 50, StudyOptions(n_disc=5, refine=True), store=tmp_path / "u.zarr")
     assert not (tmp_path / "u.zarr").exists()
-    assert FRVMultiStudy.create(model, specs(), 50, StudyOptions(n_disc=5), store=tmp_path / "v.zarr").refine is False
+    assert FRVStudy.create(model, specs(), 50, StudyOptions(n_disc=5), store=tmp_path / "v.zarr").refine is False

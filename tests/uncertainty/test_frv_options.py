@@ -7,7 +7,7 @@ import pytest
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy, Grid, MultiStudyOptions, StudyOptions
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, Grid, MultiStudyOptions, StudyOptions
 
 TIMES = np.linspace(0.0, 1.0, 5)
 
@@ -75,8 +75,8 @@ def test_create_refuses_other_options_and_wrong_disc_counts(tmp_path) -> None:
     specs = [FRVSpec("p", 1.0), FRVSpec("q", 2.0)]
     two = FunctionModel(lambda p: (p[..., :1] + p[..., 1:2]) * TIMES, TIMES)
     with pytest.raises(ParameterError, match=r"n_disc: give one number or one per parameter \(2\)"):
-        FRVMultiStudy.create(two, specs, 10, StudyOptions(n_disc=(8, 9, 10)), store=tmp_path / "c.zarr")
+        FRVStudy.create(two, specs, 10, StudyOptions(n_disc=(8, 9, 10)), store=tmp_path / "c.zarr")
     with pytest.raises(ParameterError, match=r"grids: give one Grid per parameter \(2\)"):
-        FRVMultiStudy.create(two, specs, 10, MultiStudyOptions(grids=[Grid.from_range(0.0, 1.0, 4)]),
-                             store=tmp_path / "d.zarr")  # fmt: skip
+        FRVStudy.create(two, specs, 10, MultiStudyOptions(grids=[Grid.from_range(0.0, 1.0, 4)]),
+                        store=tmp_path / "d.zarr")  # fmt: skip
     assert not any(tmp_path.iterdir())

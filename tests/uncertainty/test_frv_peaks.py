@@ -11,7 +11,7 @@ from test_frv_multi import TIMES, specs  # the two-parameter study of the unrefi
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty import FunctionModel
-from fuzzygait.uncertainty.frv import FRVMultiStudy, MultiStudyOptions, StudyOptions, hermite_cells
+from fuzzygait.uncertainty.frv import FRVStudy, MultiStudyOptions, StudyOptions, hermite_cells
 from fuzzygait.uncertainty.frv.grouping import Grid
 from fuzzygait.uncertainty.frv.peaks import RESOLUTION, cell_keys, interpolation_error, key_centres, lattice
 
@@ -61,7 +61,7 @@ def turning_model() -> FunctionModel:
                                                      axis=1))  # fmt: skip
 
 
-def alpha_one_error(study: FRVMultiStudy, model: FunctionModel) -> float:
+def alpha_one_error(study: FRVStudy, model: FunctionModel) -> float:
     """The α = 1 outputs of every sample against the model at its own peak (closed form),
     as :func:`interpolation_error` measures it."""
     peaks = study.samples()["cut"].to_numpy()[:, :, -1, 0]
@@ -71,11 +71,11 @@ def alpha_one_error(study: FRVMultiStudy, model: FunctionModel) -> float:
 
 def test_the_alpha_one_lattice_is_refined_until_the_peaks_are_met(tmp_path) -> None:
     model = turning_model()
-    auto = FRVMultiStudy.create(model, specs(), 400, StudyOptions(n_disc=6, seed=5, chunk=128),
-                                store=tmp_path / "a.zarr")
-    grid_only = FRVMultiStudy.create(model, specs(), 400,
-                                     MultiStudyOptions(n_disc=6, seed=5, chunk=128, peak_refine=1),
-                                     store=tmp_path / "g.zarr")  # fmt: skip
+    auto = FRVStudy.create(model, specs(), 400, StudyOptions(n_disc=6, seed=5, chunk=128),
+                           store=tmp_path / "a.zarr")
+    grid_only = FRVStudy.create(model, specs(), 400,
+                                MultiStudyOptions(n_disc=6, seed=5, chunk=128, peak_refine=1),
+                                store=tmp_path / "g.zarr")  # fmt: skip
     assert grid_only.peak_refine == [1, 1]
     assert auto.peak_refine == [2, 1]  # measured: the grid misses by 3.7 %, half its spacing by 0.3 %
     checks = auto.counts["peak_checks"]
@@ -91,16 +91,16 @@ def test_the_alpha_one_lattice_is_refined_until_the_peaks_are_met(tmp_path) -> N
     assert auto.counts["occurring_intervals"] == grid_only.counts["occurring_intervals"]
     # the chosen factors given explicitly: the same α = 1 outputs; reopened and extended:
     # a one-shot run with those factors (to rounding: 11 of 32,400 values differ by an ulp)
-    fixed = FRVMultiStudy.create(model, specs(), 400,
-                                 MultiStudyOptions(n_disc=6, seed=5, chunk=128, peak_refine=auto.peak_refine),
-                                 store=tmp_path / "f.zarr")  # fmt: skip
+    fixed = FRVStudy.create(model, specs(), 400,
+                            MultiStudyOptions(n_disc=6, seed=5, chunk=128, peak_refine=auto.peak_refine),
+                            store=tmp_path / "f.zarr")  # fmt: skip
     np.testing.assert_array_equal(fixed.hulls()["hull"].to_numpy(), auto.hulls()["hull"].to_numpy())
-    grown = FRVMultiStudy.open(tmp_path / "f.zarr", model).add_samples(200)
+    grown = FRVStudy.open(tmp_path / "f.zarr", model).add_samples(200)
     assert grown.peak_refine == auto.peak_refine
-    one_shot = FRVMultiStudy.create(model, specs(), 600,
-                                    MultiStudyOptions(seed=5, chunk=128, grids=grown.grids,
-                                                      peak_refine=auto.peak_refine),
-                                    store=tmp_path / "o.zarr")  # fmt: skip
+    one_shot = FRVStudy.create(model, specs(), 600,
+                               MultiStudyOptions(seed=5, chunk=128, grids=grown.grids,
+                                                 peak_refine=auto.peak_refine),
+                               store=tmp_path / "o.zarr")  # fmt: skip
     # ... except a first-batch sample whose peak lies beyond the first grids' outermost
     # lattice points: its α = 1 is extrapolated from the end cell and kept within that cell's
     # values, where the one-shot run's wider grid interpolates between simulations around it
@@ -118,9 +118,9 @@ def test_the_alpha_one_lattice_is_refined_until_the_peaks_are_met(tmp_path) -> N
                                            ((16, 1), "each of 1, 2, 4, 8")])  # fmt: skip
 def test_bad_lattice_factors_are_refused_in_one_line(tmp_path, factors, said) -> None:
     with pytest.raises(ParameterError, match=r"peak_refine: .*" + said.replace("(", r"\(").replace(")", r"\)")):
-        FRVMultiStudy.create(turning_model(), specs(), 20, MultiStudyOptions(n_disc=4, peak_refine=factors),
-                             store=tmp_path / "b.zarr")
+        FRVStudy.create(turning_model(), specs(), 20, MultiStudyOptions(n_disc=4, peak_refine=factors),
+                        store=tmp_path / "b.zarr")
     with pytest.raises(ParameterError, match="peak_tolerance must lie between 0 and 1"):
-        FRVMultiStudy.create(turning_model(), specs(), 20, MultiStudyOptions(n_disc=4, peak_tolerance=1.5),
-                             store=tmp_path / "c.zarr")
+        FRVStudy.create(turning_model(), specs(), 20, MultiStudyOptions(n_disc=4, peak_tolerance=1.5),
+                        store=tmp_path / "c.zarr")
     assert not (tmp_path / "b.zarr").exists() and not (tmp_path / "c.zarr").exists()

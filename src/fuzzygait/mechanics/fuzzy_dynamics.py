@@ -30,7 +30,7 @@ from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.uncertainty.frv.options import StudyOptions
 
 if TYPE_CHECKING:
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy
+    from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
 
 DEFAULT_TARGET = {"swing": "total_deformation_energy", "stance": "max_element_energy"}
 ELEVEN_PARAMETERS: tuple[str, ...] = tuple(n for n in LEG_PARAMETERS if n != "eta")  # §5.3
@@ -229,12 +229,12 @@ def leg_frv_study(
     study: StudyOptions | None = None,
     workers: int = 1,
     scheduler: str | None = None,
-) -> FRVStudy | FRVMultiStudy:
+) -> FRVStudy:
     """Run (or extend) the FRV-GFA of a leg scenario (thesis §5.7) into a zarr ``store``.
 
     ``spec`` is a :class:`~fuzzygait.uncertainty.frv.FRVSpec` whose ``name`` is a leg
-    parameter, or a sequence of several (independent FRVs, one α-level set: an
-    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`; ``study.n_disc`` one grid size for
+    parameter, or a sequence of several (independent FRVs, one α-level set: boxes and an
+    α = 1 lattice, :class:`~fuzzygait.uncertainty.frv.FRVStudy`; ``study.n_disc`` one grid size for
     all or one per parameter, default 100; refined with the sensitivities as one parameter
     is); the other parameters are the scenario's with ``leg.base_overrides``; the
     :class:`LegStudyModel` ``leg`` also gives the target, blade nodes, solver settings
@@ -247,12 +247,11 @@ def leg_frv_study(
     ``study.overwrite``; a new study is made with the
     :class:`~fuzzygait.uncertainty.frv.StudyOptions` ``study`` and records its ``record``
     (what it was made with, for the caller to compare before extending it).  Returns the
-    :class:`~fuzzygait.uncertainty.frv.FRVStudy` (one parameter) or the
-    :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` (several).
+    :class:`~fuzzygait.uncertainty.frv.FRVStudy` (of one parameter or several).
     """
     from pathlib import Path
 
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVStudy, check_specs, open_study
+    from fuzzygait.uncertainty.frv import FRVStudy, check_specs
 
     specs = check_specs(spec)
     for one in specs:
@@ -269,14 +268,12 @@ def leg_frv_study(
     settings = simulator.preset.solver.derive(scheme="energy-momentum") if leg.settings is None else leg.settings
     model = LegTargetModel(simulator, target, names, base=base, settings=settings)
     path = Path(store)
-    result: FRVStudy | FRVMultiStudy
+    result: FRVStudy
     with Evaluator(workers=workers, scheduler=scheduler) as pool:
         evaluator = pool.batch(_recipe_of(model), sensitivities=leg.sensitivities)
         if path.exists() and not study_options.overwrite:
-            result = open_study(path, model, evaluator=evaluator)
+            result = FRVStudy.open(path, model, evaluator=evaluator)
             result.add_samples(n_samples)
-        elif len(specs) > 1:
-            result = FRVMultiStudy.create(model, specs, n_samples, study_options, store=path, evaluator=evaluator)
         else:
-            result = FRVStudy.create(model, specs[0], n_samples, study_options, store=path, evaluator=evaluator)
+            result = FRVStudy.create(model, specs, n_samples, study_options, store=path, evaluator=evaluator)
     return result

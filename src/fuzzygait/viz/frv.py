@@ -8,8 +8,8 @@ Input side (from an :class:`~fuzzygait.uncertainty.frv.FRVSpec`, no study needed
 * :func:`parameter_figures` — both, per parameter of a study of one or several FRVs
   (each from its own sample stream and grid).
 
-Output side (from an :class:`~fuzzygait.uncertainty.frv.FRVStudy`, an
-:class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` or its store path;
+Output side (from an :class:`~fuzzygait.uncertainty.frv.FRVStudy` of one FRV parameter
+or several, or its store path;
 the stored hulls are streamed, never loaded whole):
 
 * :func:`output_distribution_figure` — Figs. 5.16 / 5.17: histogram and fitted pdf of
@@ -35,7 +35,6 @@ from scipy import stats
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.frv import (
-    FRVMultiStudy,
     FRVSpec,
     FRVStudy,
     Grid,
@@ -48,7 +47,7 @@ from fuzzygait.uncertainty.frv import (
     stored_samples,
 )
 
-Store = FRVStudy | FRVMultiStudy | str | os.PathLike[str]
+Store = FRVStudy | str | os.PathLike[str]
 SIDES = (("lower", "left", "tab:green"), ("upper", "right", "tab:blue"))
 
 

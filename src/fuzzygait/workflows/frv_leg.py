@@ -24,7 +24,7 @@ from fuzzygait.workflows.fuzzy_dynamics import LegSetup, named_fixes, time_simul
 from fuzzygait.workflows.progress import SILENT, StageProgress, announce, takes_estimates
 
 if TYPE_CHECKING:
-    from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, FRVStudy
+    from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy
     from fuzzygait.workflows.work_estimate import SimulationTiming, WorkEstimate
 
 __all__ = ["FRVRequest", "check_frv_parameter", "deterministic_value", "frv_parameters", "run_frv_leg",
@@ -191,7 +191,7 @@ def run_frv_leg(
     overwrite: bool = False,
     given: Collection[str] | None = None,
     progress: StageProgress = SILENT,
-) -> FRVStudy | FRVMultiStudy:
+) -> FRVStudy:
     """Run the FRV-GFA of ``frv`` on the leg ``setup`` into ``out_store`` (an existing
     study is extended unless ``overwrite``), the forward simulations on ``workers`` local
     processes or the Dask ``scheduler``.  Returns the study (its ``counts`` say what was

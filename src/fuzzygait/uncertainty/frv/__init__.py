@@ -35,11 +35,12 @@ samples later, simulating only new bin centres and computing only new intervals
 (the extension the thesis describes as "not yet implemented", §2.7.4).
 
 :class:`FRVStudy` takes one FRV parameter (the Table 5.3 case, with the Hermite
-refinement); :class:`FRVMultiStudy` several independent ones (boxes of per-parameter
-intervals on tensor grids, :func:`generate_box_samples`, :func:`occurring_boxes`,
-:func:`possible_boxes`, :func:`box_extrema`, and with sensitivities α = 1 at each
-sample's own peak by :func:`hermite_values`);
-:func:`open_study` opens either; a new study's settings are a :class:`StudyOptions`
+refinement, :mod:`~fuzzygait.uncertainty.frv.single`) or several independent ones
+(boxes of per-parameter intervals on tensor grids, :func:`generate_box_samples`,
+:func:`occurring_boxes`, :func:`possible_boxes`, :func:`box_extrema`, and with
+sensitivities α = 1 at each sample's own peak by :func:`hermite_values` on a lattice,
+:mod:`~fuzzygait.uncertainty.frv.multi`); :meth:`FRVStudy.open` opens a store of
+either kind. A new study's settings are a :class:`StudyOptions`
 (:class:`MultiStudyOptions`: with the grids and the α = 1 lattice of several).
 """
 
@@ -65,7 +66,6 @@ from fuzzygait.uncertainty.frv.hulls import (
     interval_hulls,
     range_extrema,
 )
-from fuzzygait.uncertainty.frv.multi import FRVMultiStudy, is_multi_store, open_study
 from fuzzygait.uncertainty.frv.options import MultiStudyOptions, StudyOptions
 from fuzzygait.uncertainty.frv.samples import (
     BLOCK,
@@ -88,7 +88,6 @@ __all__ = [
     "SAMPLINGS",
     "STORE_FORMAT",
     "BatchFunction",
-    "FRVMultiStudy",
     "FRVSpec",
     "FRVStudy",
     "Grid",
@@ -106,11 +105,9 @@ __all__ = [
     "hermite_segment_extrema",
     "hermite_values",
     "interval_hulls",
-    "is_multi_store",
     "iter_hull_blocks",
     "occurring_boxes",
     "occurring_intervals",
-    "open_study",
     "possible_boxes",
     "range_extrema",
     "sample_increments",

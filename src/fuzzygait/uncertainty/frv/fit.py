@@ -12,17 +12,17 @@ import xarray as xr
 from scipy import stats
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.uncertainty.frv.multi import FRVMultiStudy
+from fuzzygait.uncertainty.frv.method import _blocks
 from fuzzygait.uncertainty.frv.samples import DISTRIBUTIONS, sample_increments
 from fuzzygait.uncertainty.frv.store import read_group, read_meta
-from fuzzygait.uncertainty.frv.study import FRVStudy, _blocks
+from fuzzygait.uncertainty.frv.study import FRVStudy
 
 #: a study of one or several FRVs, or its store path
-StudyOrPath = FRVStudy | FRVMultiStudy | str | os.PathLike[str]
+StudyOrPath = FRVStudy | str | os.PathLike[str]
 
 
 def _store_path(store: StudyOrPath) -> Path:
-    return store.path if isinstance(store, (FRVStudy, FRVMultiStudy)) else Path(store)
+    return store.path if isinstance(store, FRVStudy) else Path(store)
 
 
 def stored_samples(store: StudyOrPath) -> int:

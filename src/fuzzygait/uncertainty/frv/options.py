@@ -1,7 +1,7 @@
 """What an FRV-GFA study is made with, besides its model, parameters and sample count:
-:class:`StudyOptions` (:meth:`FRVStudy.create <fuzzygait.uncertainty.frv.FRVStudy.create>`)
-and :class:`MultiStudyOptions` (:meth:`FRVMultiStudy.create
-<fuzzygait.uncertainty.frv.FRVMultiStudy.create>`), each field checked when it is made
+:class:`StudyOptions` and :class:`MultiStudyOptions` (several parameters, or the
+several-parameter layout of one) for :meth:`FRVStudy.create
+<fuzzygait.uncertainty.frv.FRVStudy.create>`, each field checked when it is made
 (one :class:`~fuzzygait.core.errors.ParameterError` naming the first bad field)."""
 
 from __future__ import annotations
@@ -30,10 +30,9 @@ class StudyOptions:
     """The settings of a new FRV study.
 
     Attributes:
-        n_disc: ``N_p-disc`` grid points over the first batch's range (≥ 2; for an
-            :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` one number for all
-            parameters or one per parameter); None: the study's default (100 for one
-            parameter, 30 per parameter for several).
+        n_disc: ``N_p-disc`` grid points over the first batch's range (≥ 2; for a study
+            of several parameters one number for all or one per parameter); None: the
+            study's default (100 for one parameter, 30 per parameter for several).
         seed: seed of the sample streams (parameter ``k`` is stream ``k``).
         time_stride: keep every ``time_stride``-th time node (and the last).
         refine: α = 1 by the Hermite interpolant of the library values and
@@ -89,7 +88,8 @@ class StudyOptions:
 
 @dataclass(frozen=True)
 class MultiStudyOptions(StudyOptions):
-    """:class:`StudyOptions` of an :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy`, and:
+    """:class:`StudyOptions` of a study of several FRV parameters (given for one, the
+    study is made the several-parameter way: boxes, α = 1 lattice), and:
 
     Attributes:
         grids: the grids to group on (one :class:`~fuzzygait.uncertainty.frv.Grid` per

@@ -13,25 +13,30 @@ for grid centre ``i``), so the points of every level share one dictionary.
 
 How fine: the interpolant's error against the simulated model at test peaks
 (:func:`interpolation_error`) decides whether a parameter's lattice is halved
-(:meth:`fuzzygait.uncertainty.frv.FRVMultiStudy.create`); :class:`PeakLattice` is the part
-of :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` that chooses, fills and interpolates it.
+(:meth:`fuzzygait.uncertainty.frv.FRVStudy.create` of several parameters);
+:class:`PeakLattice` is the part of
+:class:`~fuzzygait.uncertainty.frv.multi.SeveralParameters` that chooses, fills and
+interpolates it.
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.uncertainty.frv.evaluation import BatchFunction, _run_evaluator
+from fuzzygait.uncertainty.frv.evaluation import _run_evaluator
 from fuzzygait.uncertainty.frv.grouping import Grid
 from fuzzygait.uncertainty.frv.hulls import hermite_cells, hermite_values
+from fuzzygait.uncertainty.frv.method import _blocks
 from fuzzygait.uncertainty.frv.options import PEAK_FACTORS
-from fuzzygait.uncertainty.frv.samples import FRVSpec, generate_box_samples
-from fuzzygait.uncertainty.frv.study import _blocks
+from fuzzygait.uncertainty.frv.samples import generate_box_samples
+
+if TYPE_CHECKING:
+    from fuzzygait.uncertainty.frv.study import FRVStudy
 
 #: Finest lattice: ``h / RESOLUTION`` (a power of two; the refinement factors are its divisors).
 RESOLUTION = 8
@@ -97,20 +102,14 @@ def _peak_factors(peak_refine: int | Sequence[int], n_params: int) -> list[int]:
 
 
 class PeakLattice:
-    """The α = 1 lattice of :class:`~fuzzygait.uncertainty.frv.FRVMultiStudy` (a mixin:
-    the attributes below are the study's): which lattice, its cells' corner keys, its
-    choice on the first batch, and the bounded Hermite interpolant on it."""
+    """The α = 1 lattice of a study of several FRV parameters (a mixin of
+    :class:`~fuzzygait.uncertainty.frv.multi.SeveralParameters`, whose attributes are the
+    ones below): which lattice, its cells' corner keys, its choice on the first batch,
+    and the bounded Hermite interpolant on it."""
 
-    specs: tuple[FRVSpec, ...]
-    grids: tuple[Grid, ...]
-    seed: int
-    chunk: int
-    n_time: int
-    nodes: np.ndarray
-    evaluator: BatchFunction
-    counts: dict[str, Any]
+    study: FRVStudy
     peak_refine: list[int] | None
-    peak_tolerance: float
+    peak_tolerance: float | None
     _n_params: int
     _points: dict[tuple[int, ...], int]
     _keys: dict[tuple[int, ...], int]
@@ -120,9 +119,6 @@ class PeakLattice:
     def _extend_library(self, keys: np.ndarray) -> int:
         raise NotImplementedError
 
-    def _write_meta(self) -> None:
-        raise NotImplementedError
-
     def _factors(self) -> list[int]:
         """The α = 1 lattice factors in use (the grid's until chosen)."""
         return self.peak_refine if self.peak_refine is not None else [1] * self._n_params
@@ -130,10 +126,11 @@ class PeakLattice:
     def _peak_corners(self, start: int, stop: int) -> np.ndarray:
         """Lattice keys ``(k, n_params)`` of the Hermite cell corners of the raw peaks of
         samples ``start … stop−1`` on the α = 1 lattice in use."""
+        study = self.study
         corners = np.empty((0, self._n_params), dtype=np.int64)
-        for a, b in _blocks(start, stop, self.chunk):
-            cuts = generate_box_samples(self.specs, b - a, self.seed, a)
-            cells = cell_keys(self.grids, self._factors(), cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
+        for a, b in _blocks(start, stop, study.chunk):
+            cuts = generate_box_samples(study.specs, b - a, study.seed, a)
+            cells = cell_keys(study.grids, self._factors(), cuts[:, :, -1, 0])[0].reshape(-1, self._n_params)
             corners = np.unique(np.concatenate([corners, cells]), axis=0)
         return corners
 
@@ -146,40 +143,42 @@ class PeakLattice:
         those points misses the model by more than ``peak_tolerance`` of the output's
         spread (:func:`~fuzzygait.uncertainty.frv.peaks.interpolation_error`). Returns
         the simulations it ran (the test points' and the new lattice points')."""
+        study = self.study
+        assert self.peak_tolerance is not None  # a lattice to choose has a tolerance
         pick = np.unique(np.linspace(start, stop - 1, min(PEAK_CHECKS, stop - start)).round().astype(np.int64))
-        peaks = np.concatenate([generate_box_samples(self.specs, 1, self.seed, int(i))[:, :, -1, 0] for i in pick])
+        peaks = np.concatenate([generate_box_samples(study.specs, 1, study.seed, int(i))[:, :, -1, 0] for i in pick])
         grid_rows = np.fromiter(self._points.values(), dtype=np.int64, count=len(self._points))
         factors, checks, simulations, tested = [1] * self._n_params, [], 0, 0
-        for d, grid in enumerate(self.grids):
+        for d, grid in enumerate(study.grids):
             if grid.n_bins < 2:
                 continue
-            corners = cell_keys(self.grids, factors, peaks)[0]
-            tests = key_centres(self.grids, corners[:, 0])
+            corners = cell_keys(study.grids, factors, peaks)[0]
+            tests = key_centres(study.grids, corners[:, 0])
             tests[:, d] = peaks[:, d]  # the peak along d, the cell's lower corner in the others
-            exact, _ = _run_evaluator(self.evaluator, tests, self.n_time)
+            exact, _ = _run_evaluator(study.evaluator, tests, study.n_time)
             tested += len(tests)
             while True:
-                corners, t = cell_keys(self.grids, factors, peaks)
+                corners, t = cell_keys(study.grids, factors, peaks)
                 simulations += self._extend_library(corners.reshape(-1, self._n_params))
                 t_along = np.zeros_like(t)
                 t_along[:, d] = t[:, d]
                 predicted = self._hermite(corners, t_along, factors)
-                error = interpolation_error(predicted, exact[:, self.nodes], self._lib_values[grid_rows])
-                checks.append({"parameter": self.specs[d].name, "factor": factors[d], "error": error})
+                error = interpolation_error(predicted, exact[:, study.nodes], self._lib_values[grid_rows])
+                checks.append({"parameter": study.specs[d].name, "factor": factors[d], "error": error})
                 if error <= self.peak_tolerance or factors[d] == PEAK_FACTORS[-1]:
                     break
                 factors[d] *= 2
         self.peak_refine = factors
-        self.counts["peak_checks"] = checks
-        self.counts["peak_refine"] = {spec.name: factor for spec, factor in zip(self.specs, factors, strict=True)}
-        self.counts["forward_simulations"] += tested  # the library's are counted as they are added
-        self._write_meta()
+        study.counts["peak_checks"] = checks
+        study.counts["peak_refine"] = {spec.name: factor for spec, factor in zip(study.specs, factors, strict=True)}
+        study.counts["forward_simulations"] += tested  # the library's are counted as they are added
+        study._write_meta()
         return simulations + tested
 
     def _peak_values(self, peaks: np.ndarray) -> np.ndarray:
         """The model at raw peaks ``(n, n_params)`` by Hermite interpolation of the library
         on the study's α = 1 lattice (within each cell's corner values)."""
-        corners, t = cell_keys(self.grids, self._factors(), peaks)
+        corners, t = cell_keys(self.study.grids, self._factors(), peaks)
         return self._hermite(corners, t, self._factors())
 
     def _hermite(self, corners: np.ndarray, t: np.ndarray, factors: Sequence[int]) -> np.ndarray:
@@ -188,5 +187,5 @@ class PeakLattice:
         cell's corner values."""
         rows = np.array([self._keys[tuple(p)] for p in corners.reshape(-1, self._n_params).tolist()],
                         dtype=np.int64).reshape(corners.shape[:2])  # fmt: skip
-        spacings = np.array([g.spacing for g in self.grids]) / np.asarray(factors)
+        spacings = np.array([g.spacing for g in self.study.grids]) / np.asarray(factors)
         return hermite_values(self._lib_values[rows], self._lib_slopes[rows], spacings, t, bounded=True)
