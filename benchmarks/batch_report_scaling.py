@@ -25,7 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from fuzzygait.io import read_c3d, write_c3d  # noqa: E402
-from fuzzygait.workflows.batch_report import load_page_data, write_batch_report  # noqa: E402
+from fuzzygait.workflows.batch_report import BatchReportRequest, load_page_data, write_batch_report  # noqa: E402
 from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,7 +53,7 @@ def timed(label: str, **kwargs: object) -> float:
     processes of a trial's own analysis (the command passes it in the settings)."""
     settings = dataclasses.replace(DEFAULT_SETTINGS, workers=int(kwargs["workers"]))  # type: ignore[call-overload]
     start = time.perf_counter()
-    result = write_batch_report(settings=settings, **kwargs)  # type: ignore[arg-type]
+    result = write_batch_report(BatchReportRequest(settings=settings, **kwargs))  # type: ignore[arg-type]
     seconds = time.perf_counter() - start
     print(f"{label}: {seconds:.1f} s wall, {result.n_ok} of {len(result.outcomes)} OK, {result.n_skipped} reused, "
           f"trial seconds {np.mean([o.seconds for o in result.outcomes if not o.skipped] or [0]):.2f} mean")

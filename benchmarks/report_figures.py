@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 
 from fuzzygait.viz.report import figures, session, sources
 from fuzzygait.viz.report.grid import GridMargins, place_grid
-from fuzzygait.workflows.batch_report import write_batch_report
+from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
 
 CALLERS = (figures, sources, session)
 
@@ -41,7 +41,7 @@ def use(layout: Callable[..., None]) -> None:
 def timed(folder: Path, out: Path, n_trials: int) -> float:
     shutil.rmtree(out, ignore_errors=True)
     started = time.perf_counter()
-    summary = write_batch_report([folder], out, uncertainty="none", workers=1)
+    summary = write_batch_report(BatchReportRequest([folder], out, uncertainty="none", workers=1))
     elapsed = time.perf_counter() - started
     assert summary.n_ok == n_trials, summary
     return elapsed

@@ -18,7 +18,7 @@ from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.viz.report import TrialEntry
 from fuzzygait.viz.report.allowable import AllowableRow, AllowableSummary
 from fuzzygait.viz.report.bands import Headline
-from fuzzygait.workflows.batch_report import load_entry, write_batch_report
+from fuzzygait.workflows.batch_report import BatchReportRequest, load_entry, write_batch_report
 from fuzzygait.workflows.report_entries import (
     ENTRY_SCHEMA,
     EntryFormatError,
@@ -135,7 +135,7 @@ def _tamper(path: Path, **entry: Any) -> None:
 def test_rerun_reuses_entry_json_and_never_opens_entry_pkl(tmp_path: Path) -> None:
     session = synthetic_session(tmp_path / "visit-1", 140)
     out, marker = tmp_path / "report", tmp_path / "pwned"
-    first = write_batch_report([session], out, uncertainty="none")
+    first = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     pages = out / "visit-1"
     assert first.n_ok == 2 and first.n_skipped == 0
     assert not list(out.rglob("*.pkl")) and (pages / "walk01_files" / "entry.json").is_file()
@@ -143,7 +143,7 @@ def test_rerun_reuses_entry_json_and_never_opens_entry_pkl(tmp_path: Path) -> No
 
     for name in ("walk01", "walk02"):  # planted beside a valid cache: ignored
         (pages / f"{name}_files" / "entry.pkl").write_bytes(pickle.dumps(_Planted(marker)))
-    again = write_batch_report([session], out, uncertainty="none")
+    again = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert [o.skipped for o in again.outcomes] == [True, True] and not marker.exists()
     assert [o.entry for o in again.outcomes] == [o.entry for o in first.outcomes]
 
@@ -153,7 +153,7 @@ def test_rerun_reuses_entry_json_and_never_opens_entry_pkl(tmp_path: Path) -> No
     (pages / "walk02_files" / "entry.json").write_text(json.dumps(content), encoding="utf-8")
     with pytest.raises(FuzzyGaitError, match="not a report entry"):
         load_entry(pages, "walk02")
-    recomputed = write_batch_report([session], out, uncertainty="none")
+    recomputed = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert [o.skipped for o in recomputed.outcomes] == [False, False] and recomputed.n_ok == 2
     assert [o.entry for o in recomputed.outcomes] == [o.entry for o in first.outcomes]
     assert not list(out.rglob("*.pkl")) and not marker.exists()  # the recomputed page folders replaced
@@ -161,6 +161,6 @@ def test_rerun_reuses_entry_json_and_never_opens_entry_pkl(tmp_path: Path) -> No
     # a cache of the version before: entry.pkl and a job.json of the right key, no entry.json
     (pages / "walk01_files" / "entry.json").unlink()
     (pages / "walk01_files" / "entry.pkl").write_bytes(pickle.dumps(_Planted(marker)))
-    old = write_batch_report([session], out, uncertainty="none")
+    old = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert [o.skipped for o in old.outcomes] == [False, True] and not marker.exists()
     assert (pages / "walk01_files" / "entry.json").is_file() and not (pages / "walk01_files" / "entry.pkl").exists()

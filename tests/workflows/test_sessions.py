@@ -14,7 +14,7 @@ import pytest
 from fuzzygait.io import read_c3d
 from fuzzygait.workflows import trial_job
 from fuzzygait.workflows.angles import Preprocessing
-from fuzzygait.workflows.batch_report import load_page_data, write_batch_report
+from fuzzygait.workflows.batch_report import BatchReportRequest, load_page_data, write_batch_report
 from fuzzygait.workflows.session import find_sessions, static_rule
 from support import SAMPLE_DATA, SHARED_DATA, VICON, needs_shared, synthetic_session, trial_window
 
@@ -85,7 +85,7 @@ def _job_files(folder: Path, name: str) -> dict[str, float]:
 @pytest.mark.slow
 def test_skip_unchanged_force_and_changed_options(session: Path, tmp_path: Path) -> None:
     out = tmp_path / "report"
-    first = write_batch_report([session], out, uncertainty="none")
+    first = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert first.n_ok == 2 and first.n_skipped == 0
     pages = out / "visit-1"
     assert (out / "index.html").is_file() and (pages / "index.html").is_file()
@@ -94,17 +94,18 @@ def test_skip_unchanged_force_and_changed_options(session: Path, tmp_path: Path)
     assert "cal01.c3d (found by markers" in (pages / "index.html").read_text(encoding="utf-8")
     before = _job_files(pages, "walk01")
 
-    again = write_batch_report([session], out, uncertainty="none")
+    again = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert again.n_skipped == 2 and _job_files(pages, "walk01") == before
 
     trial_window(SAMPLE_DATA / "walking.c3d", session / "walk02.c3d", 101, 140)  # same name, other content
-    changed = write_batch_report([session], out, uncertainty="none")
+    changed = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert [o.skipped for o in changed.outcomes] == [True, False]
 
-    other = write_batch_report([session], out, uncertainty="none", preprocessing=Preprocessing(cutoff=5.0))
+    other = write_batch_report(BatchReportRequest([session], out, uncertainty="none",
+                                                  preprocessing=Preprocessing(cutoff=5.0)))  # fmt: skip
     assert other.n_skipped == 0
-    forced = write_batch_report([session], out, uncertainty="none", preprocessing=Preprocessing(cutoff=5.0),
-                                force=True)  # fmt: skip
+    forced = write_batch_report(BatchReportRequest([session], out, uncertainty="none",
+                                                   preprocessing=Preprocessing(cutoff=5.0), force=True))  # fmt: skip
     assert forced.n_skipped == 0 and _job_files(pages, "walk01") != before
 
 
@@ -121,7 +122,7 @@ def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: 
 
     monkeypatch.setattr(trial_job, "page_data", killed_on_second)
     with pytest.raises(KeyboardInterrupt):
-        write_batch_report([session], out, uncertainty="none")
+        write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     pages = out / "visit-1"
     assert (pages / "walk01.html").is_file() and (pages / "walk01_files" / "job.json").is_file()
     assert not (pages / "walk02.html").exists() and not (pages / "walk02_files").exists()
@@ -131,7 +132,7 @@ def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: 
     stale = pages / ".walk02.abc123.tmp"  # what a worker killed mid-trial leaves (no finally runs there)
     (stale / "w").mkdir(parents=True)
     monkeypatch.setattr(trial_job, "page_data", real)
-    resumed = write_batch_report([session], out, uncertainty="none")
+    resumed = write_batch_report(BatchReportRequest([session], out, uncertainty="none"))
     assert not stale.exists()
     assert [o.skipped for o in resumed.outcomes] == [True, False] and resumed.n_ok == 2
     assert json.loads((pages / "walk02_files" / "job.json").read_text())["key"]
@@ -141,7 +142,7 @@ def test_killed_run_leaves_no_partial_file_and_resumes(session: Path, tmp_path: 
 def test_failing_trial_is_listed_with_one_line(session: Path, tmp_path: Path) -> None:
     (session / "walk03.c3d").write_bytes(b"not a c3d file")
     failures: list[str] = []
-    result = write_batch_report([session], tmp_path / "r", uncertainty="none",
+    result = write_batch_report(BatchReportRequest([session], tmp_path / "r", uncertainty="none"),
                                 on_failure=lambda path, error: failures.append(error))  # fmt: skip
     assert result.n_ok == 2 and result.n_failed == 1
     assert len(failures) == 1 and "\n" not in failures[0] and "walk03.c3d" in failures[0]
@@ -153,8 +154,8 @@ def test_page_data_identical_with_one_and_two_workers(tmp_path: Path) -> None:
     """--uncertainty fast on a LocalCluster of 2 workers and in-process: the same numbers
     (30-frame trials: the analysis is ~1 s per 10 frames)."""
     session = synthetic_session(tmp_path / "visit-1", 30)
-    one = write_batch_report([session], tmp_path / "one", uncertainty="fast", workers=1)
-    two = write_batch_report([session], tmp_path / "two", uncertainty="fast", workers=2)
+    one = write_batch_report(BatchReportRequest([session], tmp_path / "one", uncertainty="fast", workers=1))
+    two = write_batch_report(BatchReportRequest([session], tmp_path / "two", uncertainty="fast", workers=2))
     assert one.n_ok == two.n_ok == 2
     for name in ("walk01", "walk02"):
         a, b = load_page_data(tmp_path / "one" / "visit-1", name), load_page_data(tmp_path / "two" / "visit-1", name)
@@ -181,5 +182,5 @@ def test_pycgm2_subject_file_of_another_subject_warns(tmp_path: Path) -> None:
     (folder / "Synthetic.mp").write_text(mp, encoding="utf-8")
     (found,) = find_sessions([folder])
     assert all(t.subject_file == folder / "Synthetic.mp" and t.warnings == () for t in found.trials)
-    result = write_batch_report([folder], tmp_path / "r", uncertainty="none")  # the .mp is read
+    result = write_batch_report(BatchReportRequest([folder], tmp_path / "r", uncertainty="none"))  # the .mp is read
     assert result.n_ok == 2

@@ -200,9 +200,8 @@ def report(
     others are still reported; a re-run on the same --out skips unchanged trials (--force recomputes).
     Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
-    from fuzzygait.workflows.batch_report import write_batch_report
+    from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
     from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
-    from fuzzygait.workflows.trial_job import mode_settings
     from fuzzygait.workflows.work_estimate import report_work
 
     def failed(path: Path, error: str) -> None:
@@ -219,19 +218,20 @@ def report(
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=workers, tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
-        analysed = mode_settings(uncertainty, settings)  # one clear line for a bad --uncertainty, before any work
+        # checked when made: one clear line for a bad --uncertainty, --marker-diameter..., before any work
+        request = BatchReportRequest(
+            inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
+            marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot,
+            preprocessing=preprocessing.preprocessing(), settings=settings, uncertainty=uncertainty, model=model,
+            pdf=pdf, workers=workers, scheduler=scheduler, force=force, normative=normative, strict=debugging(),
+        )  # fmt: skip
+        analysed = request.analysis()
         with progress_bars() as bars:
             stages = estimated_stages(bars)
             if analysed is not None:  # the work, before any trial is read
                 stages.estimate(report_work(inputs, analysed, static=calibration.static,
                                             subject_file=calibration.subject, force=force))  # fmt: skip
-            result = write_batch_report(
-                inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
-                marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot, settings=settings,
-                uncertainty=uncertainty, preprocessing=preprocessing.preprocessing(), model=model, pdf=pdf,
-                workers=workers, scheduler=scheduler, force=force, normative=normative, strict=debugging(),
-                trials=stages, on_failure=failed,
-            )  # fmt: skip
+            result = write_batch_report(request, trials=stages, on_failure=failed)
     for summary in result.sessions:
         for warning in summary.warnings:
             err.print(f"fuzzygait: warning: {summary.name}/{warning}", markup=False)

@@ -9,7 +9,7 @@ Layout of the report folder::
     OUT/index.html                       the index across sessions
     OUT/<session>/index.html             the session summary (mean ± SD over every cycle)
     OUT/<session>/session_files/cycles.png|svg
-    OUT/<session>/<trial>.html           one page per trial (+ <trial>.pdf with --pdf)
+    OUT/<session>/<trial>.html           one page per trial (+ <trial>.pdf with ``pdf``)
     OUT/<session>/<trial>_files/         its figures, data.npz (the page's numbers),
                                          entry.json (its index entry), job.json (its key)
 
@@ -50,15 +50,14 @@ from fuzzygait.viz.report.session import (
     cycles_used,
     session_page,
 )
-from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, Preprocessing
-from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS, MarkerErrorSettings
 from fuzzygait.workflows.progress import SILENT, StageProgress
 from fuzzygait.workflows.report_entries import ENTRY_SCHEMA, EntryFormatError, read_entry
 from fuzzygait.workflows.report_folder import write_session_cycles
+from fuzzygait.workflows.report_request import BatchReportRequest
 from fuzzygait.workflows.session import Session, find_sessions
-from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, mode_settings, run_trial_job
+from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, run_trial_job
 
-__all__ = ["BatchReport", "job_key", "remove_stale_staging", "write_batch_report"]
+__all__ = ["BatchReport", "BatchReportRequest", "job_key", "remove_stale_staging", "write_batch_report"]
 
 _CODE_DIGEST: str | None = None
 #: The files of the package that make up the program (not caches or built libraries).
@@ -299,61 +298,26 @@ def _clean_up(out: Path, sessions: Sequence[Session], created: bool) -> None:
         out.rmdir()  # no empty report folder left behind
 
 
-def write_batch_report(
-    inputs: Sequence[Path],
-    out_dir: str | os.PathLike[str],
-    *,
-    static: Path | None = None,
-    subject_file: Path | None = None,
-    marker_diameter: float | None = None,
-    flat_foot: bool | None = None,
-    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    settings: MarkerErrorSettings = DEFAULT_SETTINGS,
-    uncertainty: str = "full",
-    model: str = "auto",
-    pdf: bool = False,
-    workers: int = 1,
-    scheduler: str | None = None,
-    force: bool = False,
-    normative: Path | None = None,
-    strict: bool = False,
-    trials: StageProgress = SILENT,
-    on_failure: Callable[[Path, str], None] | None = None,
-) -> BatchReport:
-    """Find the sessions of ``inputs``, report every trial and write the session pages
-    and the index into ``out_dir`` (see the module docstring).
+def write_batch_report(request: BatchReportRequest, *, trials: StageProgress = SILENT,
+                       on_failure: Callable[[Path, str], None] | None = None) -> BatchReport:  # fmt: skip
+    """Find the sessions of ``request.inputs``, report every trial and write the session
+    pages and the index into ``request.out_dir`` (see the module docstring and
+    :class:`~fuzzygait.workflows.report_request.BatchReportRequest`).
 
     Args:
-        inputs: session folders (or folders of session folders) and C3D files.
-        out_dir: the report folder.
-        static, subject_file: for the files given directly; in session folders they
-            override what was found.
-        marker_diameter, flat_foot, preprocessing, model: as for
-            :func:`~fuzzygait.workflows.angles.run_angles`, the same for every trial.
-        settings: the marker-error analysis of ``uncertainty="full"`` (``"fast"`` keeps
-            its error model, sources and method; ``"none"``: angles only —
-            :func:`~fuzzygait.workflows.trial_job.mode_settings`).
-        pdf: also a PDF of every trial page and session page.
-        workers: processes for the trials (a local Dask pool; 1: in this process).
-        scheduler: address of a running Dask scheduler (``tcp://host:8786``) instead.
-        force: recompute trials whose inputs and options are unchanged.
-        normative: reference curves for the pages (a normative CSV).
-        strict: re-raise a trial's error instead of listing it as failed (debugging).
+        request: what to report and how.
         trials: progress over the trials computed.
         on_failure: called as ``on_failure(path, error)`` for every failed trial.
+
+    Raises:
+        FuzzyGaitError: ``out_dir`` is a file or cannot be created, an input is missing
+            or holds no C3D file (nothing written).
     """
-    out = Path(out_dir)
+    out = request.out_dir
     if out.exists() and not out.is_dir():
         raise FuzzyGaitError(f"{out}: {Option.OUT} must be a folder, not a file")
-    sessions = find_sessions(inputs, static, subject_file)
-    extra: dict[str, Any] = {}
-    if normative is not None:
-        from fuzzygait.gait.normative import read_normative
-
-        extra["normative"] = read_normative(normative)
-    template = TrialJob(Path(), Path(), "", "", marker_diameter=marker_diameter, flat_foot=flat_foot,
-                        preprocessing=preprocessing, model=model, settings=mode_settings(uncertainty, settings),
-                        pdf=pdf, strict=strict, **extra)  # fmt: skip
+    sessions = find_sessions(request.inputs, request.static, request.subject_file)
+    template = _template(request)
     created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -361,12 +325,12 @@ def write_batch_report(
         raise FuzzyGaitError(f"{out}: cannot create the report folder ({exc.strerror})") from None
     for session in sessions:
         remove_stale_staging((out / session.output) if session.output else out)
-    per_session, early = _jobs(sessions, out, template, normative)
+    per_session, early = _jobs(sessions, out, template, request.normative)
     jobs = [job for session_jobs in per_session for job in session_jobs]
-    reused = {job.key: finished_outcome(job) for job in jobs} if not force else {}
+    reused = {job.key: finished_outcome(job) for job in jobs} if not request.force else {}
     todo = [job for job in jobs if reused.get(job.key) is None]
     try:
-        computed = dict(zip([j.key for j in todo], _run(todo, workers, scheduler, trials), strict=True))
+        computed = dict(zip([j.key for j in todo], _run(todo, request.workers, request.scheduler, trials), strict=True))
     except BaseException:  # interrupted, or the pool failed: its processes are gone by now
         _clean_up(out, sessions, created)
         raise
@@ -376,13 +340,32 @@ def write_batch_report(
         by_source[job.source] = outcome
         if not outcome.ok and on_failure is not None:
             on_failure(job.source, outcome.entry.error or "")
+    return _write_pages(sessions, by_source, out, template)
+
+
+def _template(request: BatchReportRequest) -> TrialJob:
+    """The job every trial's is made from: the request's options (paths left empty)."""
+    extra: dict[str, Any] = {}
+    if request.normative is not None:
+        from fuzzygait.gait.normative import read_normative
+
+        extra["normative"] = read_normative(request.normative)
+    return TrialJob(Path(), Path(), "", "", marker_diameter=request.marker_diameter, flat_foot=request.flat_foot,
+                    preprocessing=request.preprocessing, model=request.model, settings=request.analysis(),
+                    pdf=request.pdf, strict=request.strict, **extra)  # fmt: skip
+
+
+def _write_pages(sessions: Sequence[Session], by_source: dict[Path, TrialOutcome], out: Path,
+                 template: TrialJob) -> BatchReport:  # fmt: skip
+    """Every session's summary page, then the index (the trial index when every trial was
+    given as a file, else the index across sessions)."""
     flat_only = all(s.folder is None for s in sessions)
     summaries, pages, outcomes = [], [], []
     for session in sessions:
         found = [by_source.get(t.path.resolve()) or by_source[t.path] for t in session.trials]
         outcomes += found
         summary, page = _write_session(session, found, out, session.folder is None, None if flat_only else
-                                       ("../index.html" if session.output else "index.html"), pdf)  # fmt: skip
+                                       ("../index.html" if session.output else "index.html"), template.pdf)  # fmt: skip
         summaries.append(summary)
         pages.append(page)
     index = out / "index.html"

@@ -50,7 +50,7 @@ from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.sources import dominant_sentence
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
-from fuzzygait.workflows.batch_report import write_batch_report
+from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 from fuzzygait.workflows.report_folder import ReportItem, write_report
 
@@ -267,9 +267,10 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
     if progress is not None:
         progress.print("session report of both walking trials (angles only, about 6 s)...", markup=False)
-    session = write_batch_report([data / "walking.c3d", data / "walking_noisy.c3d"], out_dir / "session",
-                                 static=data / "static.c3d", subject_file=data / "subject.toml",
-                                 uncertainty="none", force=True)  # fmt: skip
+    session = write_batch_report(BatchReportRequest([data / "walking.c3d", data / "walking_noisy.c3d"],
+                                                    out_dir / "session", static=data / "static.c3d",
+                                                    subject_file=data / "subject.toml", uncertainty="none",
+                                                    force=True))  # fmt: skip
 
     n_cycles = {side: int(stats[stats["angle"].str.startswith(side)]["n_cycles"].max())
                 for side in ("L", "R")}  # fmt: skip
