@@ -31,6 +31,7 @@ from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject
 from fuzzygait.markererror.comparison import monte_carlo_envelope
 from fuzzygait.markererror.result import component_hull
 from fuzzygait.markererror.sources import ErrorModel
+from fuzzygait.testing import check_result
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.workflows.angles import AnglesRun
 from support import TwoMarkerLine
@@ -185,7 +186,8 @@ def test_table_and_refined_dataset(knee, plain: xr.Dataset) -> None:  # noqa: AN
 
     # every refinement level is kept; the excursion read back from the dataset is the table's
     levels = refined_levels(fuzzy, KNEE)
-    assert int(levels["refined"].sum()) == row["evaluations"] == fuzzy.attrs["allowable_runs"]
+    refinement = fuzzy.allowable
+    assert int(levels["refined"].sum()) == row["evaluations"] == refinement.attrs["runs"]
     excursion = band_excursion(fuzzy, KNEE)
     assert excursion.loc[row["alpha"]] == pytest.approx(row["excursion_deg"]) and row["excursion_deg"] <= TOLERANCE
     assert excursion.loc[1.0 - failing] > TOLERANCE
@@ -194,28 +196,31 @@ def test_table_and_refined_dataset(knee, plain: xr.Dataset) -> None:  # noqa: AN
     assert hull.sizes["frame"] == N_FRAMES  # nested over all levels:
     assert bool((hull.sel(bound="upper").diff("alpha") <= 0).all())
     assert bool((hull.sel(bound="lower").diff("alpha") >= 0).all())
-    assert fuzzy["allowable_scale"].sel(component=KNEE) == scale
-    assert fuzzy.attrs["tolerance_deg"] == TOLERANCE and fuzzy.attrs["allowable_node_evaluations"] > 0
+    assert refinement["scale"].sel(component=KNEE) == scale
+    assert refinement.attrs["tolerance_deg"] == TOLERANCE and refinement.attrs["node_evaluations"] > 0
     # the plain levels are unchanged in layout (other components untouched)
-    assert fuzzy["alpha"].to_numpy().tolist() == plain["alpha"].to_numpy().tolist()
-    xr.testing.assert_identical(component_hull(fuzzy, "LKneeAngles_Z"), component_hull(plain, "LKneeAngles_Z"))
+    assert fuzzy.bands["alpha"].to_numpy().tolist() == plain["alpha"].to_numpy().tolist()
+    xr.testing.assert_identical(component_hull(fuzzy.bands, "LKneeAngles_Z"), component_hull(plain, "LKneeAngles_Z"))
+    # no prefixed names, no comma-joined attributes; every part (the refined levels merged) keeps the schema
+    assert not any(str(v).startswith(("refined_", "allowable_", "source_")) for v in fuzzy.bands.variables)
+    assert not any(k.startswith(("allowable_", "source_")) for k in fuzzy.bands.attrs)
+    assert list(check_result(fuzzy)) == ["values", "largest_violation"] and list(fuzzy.parts()) == ["/", f"/allowable/{KNEE}"]
 
 
 def test_table_survives_saving(knee, tmp_path) -> None:  # noqa: ANN001
     """The table is rebuilt from the saved dataset (the report reads the .nc file)."""
     from fuzzygait.markererror.allowable import allowable_table
-    from fuzzygait.uncertainty.storage import load_result, save_result
+    from fuzzygait.markererror.result import MarkerErrorResult, read_marker_result, save_marker_result
 
     table, fuzzy = knee
-    save_result(fuzzy, tmp_path / "fuzzy.nc")
-    again = load_result(tmp_path / "fuzzy.nc")
+    again = read_marker_result(save_marker_result(fuzzy, tmp_path / "fuzzy.nc"))
     import pandas as pd
 
     pd.testing.assert_frame_equal(allowable_table(again), table, check_dtype=False)
     xr.testing.assert_allclose(refined_levels(again, KNEE)["hull"], refined_levels(fuzzy, KNEE)["hull"])
-    assert fuzzy["allowable_status"].to_numpy().tolist() == ["within", "", ""]  # only X was asked for
+    assert fuzzy.allowable["status"].to_numpy().tolist() == ["within", "", ""]  # only X was asked for
     with pytest.raises(ParameterError, match="no allowable-error refinement"):
-        allowable_table(fuzzy.drop_vars("allowable_status"))
+        allowable_table(MarkerErrorResult(fuzzy.bands))
 
 
 def test_full_table_passes_and_smallest_fails(angles_run: AnglesRun, sparse_trial: Trial, plain: xr.Dataset) -> None:
@@ -226,7 +231,7 @@ def test_full_table_passes_and_smallest_fails(angles_run: AnglesRun, sparse_tria
     row = table.loc[KNEE]
     assert row["full_table_passes"] and row["allowable_scale"] == 1.0 and row["evaluations"] == 0
     assert "even with the full errors of Table 3.1 (measurement)" in row["text"]
-    assert fuzzy.attrs["allowable_runs"] == 0
+    assert fuzzy.allowable.attrs["runs"] == 0
     # a tolerance no tried scale meets, at a coarse resolution: nothing passes
     options = FuzzyAngleOptions(alphas=PLAIN_ALPHAS)
     table, _ = allowable_errors(sparse_trial, angles_run.subject, angles_run.result,

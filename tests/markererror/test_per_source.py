@@ -24,18 +24,27 @@ from fuzzygait.markererror.allowable import AllowableRequest, allowable_errors
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
 from fuzzygait.markererror.per_source import (
     ALL,
-    attach_source_hulls,
+    PerSourceRequest,
     per_source_bands,
+    source_bands_dataset,
     source_components,
     source_hull,
     source_names,
     source_undetermined,
     widest_source_bands,
 )
-from fuzzygait.markererror.result import AngleAxes, component_hull, fuzzy_angles_dataset
+from fuzzygait.markererror.result import (
+    AngleAxes,
+    MarkerErrorResult,
+    component_hull,
+    fuzzy_angles_dataset,
+    read_marker_result,
+    save_marker_result,
+)
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, ErrorModel
+from fuzzygait.testing import check_result
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
-from fuzzygait.uncertainty.storage import load_result, save_result
+from fuzzygait.uncertainty.storage import load_result
 from fuzzygait.workflows.angles import AnglesRun
 from support import TwoMarkerLine, sparse_angles_run
 
@@ -62,13 +71,14 @@ def plain(sparse_run: AnglesRun, options: FuzzyAngleOptions) -> xr.Dataset:
 
 
 @pytest.fixture(scope="module")
-def banded(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> xr.Dataset:
-    return per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options)
+def banded(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> MarkerErrorResult:
+    sources = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, PerSourceRequest(options))
+    return MarkerErrorResult(plain, sources=sources)
 
 
-def _valid(fuzzy: xr.Dataset) -> np.ndarray:
+def _valid(result: MarkerErrorResult) -> np.ndarray:
     """The frames (dataset index) with a band."""
-    hull = component_hull(fuzzy, "LKneeAngles_X").sel(alpha=0.0, bound="upper")
+    hull = component_hull(result.bands, "LKneeAngles_X").sel(alpha=0.0, bound="upper")
     return np.flatnonzero(np.isfinite(hull.to_numpy()))
 
 
@@ -91,38 +101,40 @@ def test_two_markers_per_source_give_arcsin_2r_over_d() -> None:
     axes = AngleAxes(alphas=levels, frames=frames, times=model.times, markers=list(markers), ball_radius=[total, total])
     main = fuzzy_angles_dataset({"LKneeAngles_X": hull(total)}, axes)
     radii = {s: TABLE_3_1["thigh"][s] for s in SOURCES}
-    fuzzy = attach_source_hulls(main, {s: {"LKneeAngles_X": hull(r)} for s, r in radii.items()}, levels,
-                                radii={s: [r, r] for s, r in radii.items()})  # fmt: skip
+    sources = source_bands_dataset(main, {s: {"LKneeAngles_X": hull(r)} for s, r in radii.items()}, levels,
+                                   radii={s: [r, r] for s, r in radii.items()})  # fmt: skip
+    fuzzy = MarkerErrorResult(main, sources=sources)
     table = widest_source_bands(fuzzy)
     assert table.alpha == 0.0 and table.sources == list(SOURCES)
     for source, radius in [*radii.items(), (ALL, total)]:
         exact = np.max(2 * np.arcsin(2 * radius / model.distance))
         assert math.radians(table.width("LKneeAngles_X", source)) == pytest.approx(exact, abs=1e-6), source
         measured = model.evaluate(np.zeros(6)).values
-        band = source_hull(fuzzy, source, "LKneeAngles_X").sel(source_alpha=0.0)
+        band = source_hull(fuzzy, source, "LKneeAngles_X").sel(alpha=0.0)
         np.testing.assert_allclose(np.radians(band.sel(bound="upper") - measured),
                                    np.arcsin(2 * radius / model.distance), atol=1e-6)  # fmt: skip
     assert table.dominant("LKneeAngles_X") == "sta"
-    assert fuzzy.attrs["source_nesting_excess_deg"] <= 1e-6
-    np.testing.assert_array_equal(fuzzy["source_ball_radius"].sel(source="placement"), [10.0, 10.0])
+    assert sources.attrs["nesting_excess_deg"] <= 1e-6
+    np.testing.assert_array_equal(sources["ball_radius"].sel(source="placement"), [10.0, 10.0])
+    assert check_result(fuzzy)["largest_violation"] <= 1e-9
 
 
 # ---------------------------------------------------------------------------- the sample trial
-def test_layout_and_main_result_unaffected(plain: xr.Dataset, banded: xr.Dataset) -> None:
-    assert source_names(banded) == list(SOURCES)
+def test_layout_and_main_result_unaffected(plain: xr.Dataset, banded: MarkerErrorResult) -> None:
+    sources = banded.sources
+    assert sources is not None and source_names(banded) == list(SOURCES)
     assert source_components(banded) == LEFT_FLEXION  # flexion only, no frontal/transverse runs
-    assert banded["source_hull"].dims == ("source", "source_component", "source_alpha", "bound", "frame")
-    assert banded["source_hull"].attrs["units"] == "deg" and banded["source_ball_radius"].attrs["units"] == "mm"
-    assert all("long_name" in banded[v].attrs for v in ("source_hull", "source_undetermined", "source_ball_radius"))
-    np.testing.assert_array_equal(banded["source_alpha"], [0.0, 1.0])  # the smallest level (and 1) only
-    assert banded.attrs["source_runs"] == 9 and banded.attrs["source_alphas"] == "0,1"
-    # the main result's variables and coordinates as they were
-    main = banded[list(plain.data_vars)]
-    main.attrs = {k: v for k, v in main.attrs.items() if not k.startswith("source_")}
-    xr.testing.assert_identical(main, plain)
+    assert sources["hull"].dims == ("source", "component", "alpha", "bound", "frame")
+    assert sources["hull"].attrs["units"] == "deg" and sources["ball_radius"].attrs["units"] == "mm"
+    assert all("long_name" in sources[v].attrs for v in ("hull", "undetermined", "ball_radius"))
+    np.testing.assert_array_equal(sources["alpha"], [0.0, 1.0])  # the smallest level (and 1) only: a coordinate
+    assert sources.attrs["runs"] == 9 and not any(isinstance(v, str) and "," in v for v in sources.attrs.values())
+    assert not any(str(v).startswith(("source_", "refined_")) for v in [*sources.variables, *sources.attrs])
+    assert banded.bands is plain  # the bands untouched
+    check_result(banded)  # the bands and the per-source bands keep the schema
     # the measured curve at α = 1 of every source is the main one's
     for source in SOURCES:
-        np.testing.assert_array_equal(source_hull(banded, source, "LKneeAngles_X").sel(source_alpha=1.0),
+        np.testing.assert_array_equal(source_hull(banded, source, "LKneeAngles_X").sel(alpha=1.0),
                                       component_hull(plain, "LKneeAngles_X").sel(alpha=1.0))  # fmt: skip
 
 
@@ -132,19 +144,20 @@ def test_each_source_band_nests_inside_all_sources(sparse_run: AnglesRun, option
     at the same α (where both are determined; at α = 0 the all-sources ankle band is
     undetermined on every frame, so α = 0.5 too), and the 2 mm measurement band is the
     narrowest."""
-    banded = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options,
-                              alphas=(0.0, 0.5))  # fmt: skip
-    np.testing.assert_array_equal(banded["source_alpha"], [0.0, 0.5, 1.0])
+    sources = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain,
+                               PerSourceRequest(options, alphas=(0.0, 0.5)))  # fmt: skip
+    banded = MarkerErrorResult(plain, sources=sources)
+    np.testing.assert_array_equal(sources["alpha"], [0.0, 0.5, 1.0])
     valid = _valid(banded)
     assert valid.size == N_FRAMES
     for component in LEFT_FLEXION:
         for alpha in (0.0, 0.5):
-            outer = source_hull(banded, ALL, component).sel(source_alpha=alpha).isel(frame=valid)
-            outer_flags = source_undetermined(banded, ALL, component).sel(source_alpha=alpha).isel(frame=valid)
+            outer = source_hull(banded, ALL, component).sel(alpha=alpha).isel(frame=valid)
+            outer_flags = source_undetermined(banded, ALL, component).sel(alpha=alpha).isel(frame=valid)
             widths = {}
             for source in SOURCES:
-                inner = source_hull(banded, source, component).sel(source_alpha=alpha).isel(frame=valid)
-                flags = source_undetermined(banded, source, component).sel(source_alpha=alpha).isel(frame=valid)
+                inner = source_hull(banded, source, component).sel(alpha=alpha).isel(frame=valid)
+                flags = source_undetermined(banded, source, component).sel(alpha=alpha).isel(frame=valid)
                 keep = ~(flags | outer_flags).to_numpy()
                 assert keep.any() or alpha == 0.0, (component, source, alpha)  # the check is not vacuous
                 upper, lower = inner.sel(bound="upper").to_numpy(), inner.sel(bound="lower").to_numpy()
@@ -153,40 +166,43 @@ def test_each_source_band_nests_inside_all_sources(sparse_run: AnglesRun, option
                 widths[source] = upper - lower
             for source in ("placement", "sta"):  # 2 mm on every marker against 5-20 mm
                 assert np.all(widths["measurement"] < widths[source]), (component, source, alpha)
-    assert banded.attrs["source_nesting_excess_deg"] <= 1e-6
+    assert sources.attrs["nesting_excess_deg"] <= 1e-6
     table = widest_source_bands(banded)
     for component in LEFT_FLEXION:
         assert table.width(component, "measurement") < table.width(component, "placement")
         assert table.dominant(component) in ("placement", "sta")
 
 
-def test_the_same_bands_as_fuzzy_joint_angles_with_one_source(sparse_run: AnglesRun, banded: xr.Dataset) -> None:
+def test_the_same_bands_as_fuzzy_joint_angles_with_one_source(sparse_run: AnglesRun,
+                                                              banded: MarkerErrorResult) -> None:  # fmt: skip
     for source in ("measurement", "sta"):
         one = FuzzyAngleOptions(alphas=(0.0,), sources=(source,), workers=1)
         alone = fuzzy_joint_angles(sparse_run.trial, sparse_run.subject, sparse_run.result, one, ["LKneeAngles"])
-        expected = component_hull(alone, "LKneeAngles_X").rename(alpha="source_alpha")
+        expected = component_hull(alone, "LKneeAngles_X")
         np.testing.assert_allclose(source_hull(banded, source, "LKneeAngles_X"), expected, rtol=0, atol=1e-9)
-        np.testing.assert_array_equal(banded["source_ball_radius"].sel(source=source, marker=alone["marker"]),
+        assert banded.sources is not None
+        np.testing.assert_array_equal(banded.sources["ball_radius"].sel(source=source, marker=alone["marker"]),
                                       alone["ball_radius"])  # fmt: skip
 
 
 @pytest.mark.parametrize("suffix", [".nc", ".zarr"])
-def test_round_trip(banded: xr.Dataset, tmp_path, suffix: str) -> None:  # noqa: ANN001
-    loaded = load_result(save_result(banded, tmp_path / f"fuzzy{suffix}"))
-    for name in ("source_hull", "source_undetermined", "source_ball_radius", "hull", "undetermined"):
-        np.testing.assert_array_equal(loaded[name].to_numpy(), banded[name].to_numpy())
-        assert loaded[name].dims == banded[name].dims and loaded[name].attrs == banded[name].attrs
-    assert loaded["source_undetermined"].dtype == bool
+def test_round_trip(banded: MarkerErrorResult, tmp_path, suffix: str) -> None:  # noqa: ANN001
+    path = save_marker_result(banded, tmp_path / f"fuzzy{suffix}")
+    loaded = read_marker_result(path)
+    assert loaded.sources is not None and loaded.allowable is None
+    xr.testing.assert_identical(loaded.sources, banded.sources)
+    xr.testing.assert_identical(loaded.bands, banded.bands)
+    assert loaded.sources["undetermined"].dtype == bool
     assert source_names(loaded) == list(SOURCES) and source_components(loaded) == LEFT_FLEXION
     before, after = widest_source_bands(banded), widest_source_bands(loaded)
     assert after.widths.equals(before.widths) and after.undetermined.equals(before.undetermined)
-    np.testing.assert_array_equal(loaded["alpha"], banded["alpha"])  # the main levels untouched
+    xr.testing.assert_identical(load_result(path).drop_attrs(), banded.bands.drop_attrs())  # the root: the bands
 
 
 def test_progress_of_the_per_source_runs(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> None:
     calls: list[tuple[int, int]] = []
-    per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, options,
-                     components=["LKneeAngles_X"],
+    per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain,
+                     PerSourceRequest(options, components=["LKneeAngles_X"]),
                      progress=lambda done, total: calls.append((done, total)))  # fmt: skip
     assert calls == [(1, 3), (2, 3), (3, 3)]  # serial: per run, one run per source
 
@@ -197,7 +213,8 @@ def test_progress_of_the_allowable_refinement(sparse_run: AnglesRun, options: Fu
     _, refined = allowable_errors(sparse_run.trial, sparse_run.subject, sparse_run.result,
                                   AllowableRequest(options, angles=["LKneeAngles_X"]), fuzzy=plain,
                                   progress=lambda done, total: calls.append((done, total)))  # fmt: skip
-    runs = refined.attrs["allowable_runs"]
+    assert refined.allowable is not None
+    runs = refined.allowable.attrs["runs"]
     assert runs > 0 and calls[-1] == (runs, runs)
     done = [d for d, _ in calls]
     assert done == sorted(done) and all(0 <= d <= t for d, t in calls)
@@ -206,12 +223,12 @@ def test_progress_of_the_allowable_refinement(sparse_run: AnglesRun, options: Fu
 def test_bad_input(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> None:
     run = (sparse_run.trial, sparse_run.subject, sparse_run.result)
     with pytest.raises(ParameterError, match="components"):
-        per_source_bands(*run, plain, options, components=["RKneeAngles_X"])
+        per_source_bands(*run, plain, PerSourceRequest(options, components=["RKneeAngles_X"]))
     with pytest.raises(ParameterError, match="alphas"):
-        per_source_bands(*run, plain, options, alphas=(0.25,))
+        per_source_bands(*run, plain, PerSourceRequest(options, alphas=(0.25,)))
     with pytest.raises(ParameterError, match="no flexion"):
-        per_source_bands(*run, plain.sel(component=["LKneeAngles_Y"]), options)
+        per_source_bands(*run, plain.sel(component=["LKneeAngles_Y"]), PerSourceRequest(options))
     with pytest.raises(ParameterError, match="sources"):
-        per_source_bands(*run, plain, options, sources=("magic",))
+        per_source_bands(*run, plain, PerSourceRequest(options, sources=("magic",)))
     with pytest.raises(ParameterError, match="no per-source bands"):
-        widest_source_bands(plain)
+        widest_source_bands(MarkerErrorResult(plain))

@@ -45,15 +45,14 @@ _SHARED = ("bound", "frame", "time", "marker")
 
 def _group(flat: xr.Dataset, names: dict[str, str], attrs: dict[str, str], dims: dict[str, str],
            shared: tuple[str, ...]) -> xr.Dataset | None:  # fmt: skip
-    """The variables ``names`` of ``flat`` renamed, with the coordinates they use."""
+    """The variables ``names`` of ``flat`` renamed, with the coordinates of their dims
+    (and ``shared`` ones such as ``time`` along them), the dims ``dims`` renamed."""
     present = [n for n in names if n in flat.data_vars]
     if not present:
         return None
     used = {d for n in present for d in flat[n].dims}
-    group = flat[present].rename({n: names[n] for n in present}).drop_vars(
-        [c for c in flat.coords if c not in shared and not set(flat[c].dims) <= used], errors="ignore"
-    )
-    group = group.drop_vars([c for c in group.coords if not set(group[c].dims) <= used])
+    group = flat[present].rename({n: names[n] for n in present})
+    group = group.drop_vars([c for c in group.coords if not set(group[c].dims) <= used or c not in {*used, *shared}])
     group = group.rename({d: new for d, new in dims.items() if d in group.dims})
     group.attrs = {new: flat.attrs[old] for old, new in attrs.items() if old in flat.attrs}
     return group
@@ -63,14 +62,12 @@ def from_flat(flat: xr.Dataset) -> MarkerErrorResult:
     """A version-1 dataset as a :class:`MarkerErrorResult`: the bands without the prefixed
     variables and their attributes, the refinement and the per-source bands as datasets
     with plain names (module docstring); every number as stored."""
-    allowable = _group(flat, ALLOWABLE_NAMES, ALLOWABLE_ATTRS, {}, ("component", *_SHARED))
-    if allowable is not None:
-        allowable = allowable.drop_vars([c for c in ("label", "angle", "axis") if c in allowable.coords])
-    sources = _group(flat, SOURCE_NAMES, SOURCE_ATTRS, SOURCE_DIMS, ("source", *_SHARED))
+    allowable = _group(flat, ALLOWABLE_NAMES, ALLOWABLE_ATTRS, {}, _SHARED)
+    sources = _group(flat, SOURCE_NAMES, SOURCE_ATTRS, SOURCE_DIMS, _SHARED)
     if sources is not None:
         sources.attrs = {**sources.attrs, "units": "deg"}
     moved = [n for n in (*ALLOWABLE_NAMES, *SOURCE_NAMES, "allowable_alpha") if n in flat.data_vars]
-    bands = flat.drop_vars(moved).drop_dims([d for d in ("refinement", "segment", "source", *SOURCE_DIMS)
-                                              if d in flat.dims])  # fmt: skip
+    bands = flat.drop_vars(moved)
+    bands = bands.drop_dims([d for d in ("refinement", "segment", "source", *SOURCE_DIMS) if d in bands.dims])
     bands.attrs = {k: v for k, v in flat.attrs.items() if k not in {*ALLOWABLE_ATTRS, *SOURCE_ATTRS, *_DROPPED}}
     return MarkerErrorResult(bands, allowable, sources)
