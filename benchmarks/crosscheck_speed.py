@@ -36,6 +36,7 @@ from fuzzygait.synthetic.leg_model import SubjectGeometry  # noqa: E402
 from fuzzygait.workflows import angles as angles_module  # noqa: E402
 from fuzzygait.workflows import subject_resolution  # noqa: E402
 from fuzzygait.workflows.angles import AngleOutputs, Preprocessing, angles_to_files, model_output_trial, run_angles  # noqa: E402,E501
+from fuzzygait.workflows.trial_inputs import TrialInputs  # noqa: E402
 
 
 def stored_trial(folder: Path, frames: int) -> Path:
@@ -52,7 +53,7 @@ def stored_trial(folder: Path, frames: int) -> Path:
 
 def timed(path: Path, table: Path) -> float:
     start = time.perf_counter()
-    angles_to_files(path, AngleOutputs(table=table))
+    angles_to_files(TrialInputs(path, model="cgm1.0"), AngleOutputs(table=table))
     return time.perf_counter() - start
 
 

@@ -40,7 +40,8 @@ def _fuzzygait_group(path: Path) -> dict[str, str]:
 
 
 def test_plug_in_gait_outputs_name_cgm10_and_keep_vicon_names(tmp_path: Path) -> None:
-    run, written = angles_to_files(SAMPLE_DATA / "walking.c3d", _outputs(tmp_path, "csv"), **SAMPLE)
+    trial = TrialInputs(SAMPLE_DATA / "walking.c3d", model="cgm1.0", **SAMPLE)  # type: ignore[arg-type]
+    run, written = angles_to_files(trial, _outputs(tmp_path, "csv"))
     assert run.model == "cgm1.0" and len(written) == 3
     assert "model cgm1.0 (given by name)" in messages(run.notes)
     table = pd.read_csv(tmp_path / "angles.csv")  # plain read_csv
@@ -92,7 +93,8 @@ def test_bad_suffixes_are_refused() -> None:
 
 def test_cgm23_outputs_name_cgm23(tmp_path: Path, cgm24_session: tuple[Path, Path]) -> None:
     static, walking = cgm24_session
-    run, _ = angles_to_files(walking, _outputs(tmp_path, "parquet", "model"), static=static, model="cgm2.3")
+    outputs = _outputs(tmp_path, "parquet", "model")
+    run, _ = angles_to_files(TrialInputs(walking, static=static, model="cgm2.3"), outputs)
     assert run.model == "cgm2.3" and "model cgm2.3 (given by name)" in messages(run.notes)
     assert pd.read_parquet(tmp_path / "angles.parquet").attrs["model"] == "cgm2.3"
     assert set(pd.read_parquet(tmp_path / "cycles.parquet")["model"]) == {"cgm2.3"}

@@ -236,6 +236,7 @@ def angles(
     parameter in the C3D."""
     from fuzzygait.io.tables import check_table_path
     from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
+    from fuzzygait.workflows.trial_inputs import TrialInputs
 
     with user_errors():
         for path, option in ((out_table, "--out"), (cycles, "--cycles")):
@@ -245,17 +246,11 @@ def angles(
             raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
         output_suffix(suffix, "cgm1.0")  # checked before any work
         check_knee_ankle_centres(knee_ankle_centres)
-        run, written = angles_to_files(
-            dynamic,
-            AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out, suffix=suffix),
-            static=static,
-            subject_file=subject,
-            preprocessing=preprocessing.preprocessing(),
-            flat_foot=flat_foot,
-            marker_diameter=marker_diameter,
-            model=model,
-            knee_ankle_centres=knee_ankle_centres,
-        )
+        trial = TrialInputs(dynamic, static=static, subject_file=subject, preprocessing=preprocessing.preprocessing(),
+                            flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
+                            knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+        outputs = AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out, suffix=suffix)
+        run, written = angles_to_files(trial, outputs)
     print_run_summary(run)
     for path in written:
         out.print(f"wrote {path}", markup=False)

@@ -10,21 +10,21 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from fuzzygait import __version__
-from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.options import Option
 from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.gait.cycles import mean_sd_table, normalised_angle_table
 from fuzzygait.gait.events import SOURCE_FILE, trial_gait_events
 from fuzzygait.io import Event, Trial, read_c3d, write_c3d
-from fuzzygait.io.calibration_table import sidecar_path
 from fuzzygait.io.tables import write_table
 from fuzzygait.kinematics import (
     ALL_ANGLE_NAMES,
@@ -32,19 +32,25 @@ from fuzzygait.kinematics import (
     FOREFOOT_ANGLE_NAMES,
     CGMResult,
     compute_lower_body,
-    static_calibration,
 )
 from fuzzygait.kinematics.calibration_file import StoredCalibration, read_stored_calibration
-from fuzzygait.kinematics.clusters import ClusterCalibration, calibrate_clusters
-from fuzzygait.kinematics.kad import knee_method
-from fuzzygait.kinematics.knee_ankle import RULE_NAMES, knee_ankle_rule
+from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.marker_names import canonical_labels
 from fuzzygait.kinematics.versions import model_version, supported_version
-from fuzzygait.mocap import fill_trial_gaps, filter_trial, labelled_markers
-from fuzzygait.mocap.gaps import Gap, Method
-from fuzzygait.mocap.marker_placement import moved_markers
+from fuzzygait.mocap.gaps import Gap
 from fuzzygait.mocap.sanity import check_trial
-from fuzzygait.workflows.crosscheck import CrossCheck, check_run, recover_flat_foot
+from fuzzygait.workflows.crosscheck import CrossCheck, check_run
+from fuzzygait.workflows.preprocessing import (  # noqa: F401  (re-exported: the pipeline's options)
+    DEFAULT_PREPROCESSING,
+    Preprocessing,
+    preprocess_file,
+)
+from fuzzygait.workflows.static_calibration import (  # noqa: F401  (calibrate_static, StaticCalibration: re-exported)
+    StaticCalibration,
+    calibrate_run,
+    calibrate_static,
+    stored_calibration,
+)
 from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_subject: re-exported)
     MARKER_DIAMETER_RANGE,
     DiameterChoice,
@@ -56,59 +62,12 @@ from fuzzygait.workflows.subject_resolution import (  # noqa: F401  (resolve_sub
 )
 from fuzzygait.workflows.uncomputed import mark_empty_angles, refuse_empty
 
+if TYPE_CHECKING:
+    from fuzzygait.workflows.trial_inputs import TrialInputs
+
 AXES = ("X", "Y", "Z")
 #: Characters of a C3D point label (Vicon's limit, :func:`fuzzygait.io.write_c3d`).
 MAX_LABEL = 32
-
-
-@dataclass(frozen=True)
-class Preprocessing:
-    """Pre-processing options: gaps up to ``max_gap`` frames filled by ``fill_method``
-    (``"auto"``, ``"spline"`` or ``"pattern"``, see :func:`fuzzygait.mocap.gaps.fill_gaps`),
-    then a zero-lag Butterworth low-pass at ``cutoff`` Hz unless ``filter`` is False.
-
-    With ``labelled_only`` (the default of the model pipelines) unlabelled trajectories
-    (Vicon's ``*127``, :func:`fuzzygait.mocap.gaps.is_unlabelled`) are neither filled nor
-    filtered nor reported: no model reads them, and their many short fragments only filled
-    the gap report and the filter's short-run warnings; ``fuzzygait preprocess`` (a file
-    in, the same file cleaned out) treats every trajectory."""
-
-    max_gap: int = 10
-    cutoff: float = 6.0
-    filter: bool = True
-    fill_method: Method = "auto"
-    labelled_only: bool = True
-
-    def apply(self, trial: Trial) -> tuple[Trial, list[Gap]]:
-        """The pre-processed trial and its gap report."""
-        labelled = labelled_markers(trial.marker_labels) if self.labelled_only else list(trial.marker_labels)
-        markers = None if len(labelled) == trial.n_markers else labelled
-        filled, gaps = fill_trial_gaps(trial, max_gap=self.max_gap, method=self.fill_method, markers=markers)
-        return (filter_trial(filled, cutoff=self.cutoff, markers=markers) if self.filter else filled), gaps
-
-
-#: The default pre-processing (gaps up to 10 frames, auto method; 6 Hz low-pass).
-DEFAULT_PREPROCESSING = Preprocessing()
-
-
-def preprocess_file(
-    input_file: str | os.PathLike[str], out_file: str | os.PathLike[str], preprocessing: Preprocessing = Preprocessing()
-) -> tuple[Trial, list[Gap]]:
-    """Read a C3D file, pre-process it and write the result to ``out_file`` (its folder
-    created); returns the trial as read after the content checks
-    (:func:`fuzzygait.mocap.sanity.check_trial`: implausible samples of the labelled
-    markers blanked, each noted in its ``notes``) and the gap report. The written file
-    carries the input's analog channels, force platforms, events and parameters over
-    (:func:`fuzzygait.io.write_c3d`); what could not be is one more note.
-
-    Raises:
-        C3DError, MarkerError: an absurd rate, a unit mismatch, a marker with too many
-            implausible samples (nothing written)."""
-    raw = check_trial(read_c3d(input_file))
-    cleaned, gaps = preprocessing.apply(raw)
-    Path(out_file).parent.mkdir(parents=True, exist_ok=True)
-    raw.notes.extend(write_c3d(cleaned, out_file, source=input_file))
-    return raw, gaps
 
 
 @dataclass
@@ -187,87 +146,12 @@ class AnglesRun:
         return table
 
 
-@dataclass(frozen=True)
-class StaticCalibration:
-    """A static calibration: the calibrated ``subject``, the knee/ankle ``method``
-    (``"plain"``, ``"KAD"`` or ``"KAD+MED"``, :func:`fuzzygait.kinematics.kad.knee_method`;
-    for a cluster model its name and the knee/ankle centre rule), the cluster
-    calibration (cluster models only),
-    whether foot flat was on, the static trial's name and the content checks' notes on
-    it (:func:`fuzzygait.mocap.sanity.check_trial`: implausible samples blanked)."""
-
-    subject: SubjectParameters
-    method: str
-    flat_foot: bool
-    static: str
-    clusters: ClusterCalibration | None = None
-    notes: tuple[Finding, ...] = ()
-
-    def describe(self) -> str:
-        """``"static offsets calibrated from S.c3d (KAD, foot flat off, 14 mm markers)"``."""
-        return (f"static offsets calibrated from {self.static} ({self.method}, foot flat "
-                f"{'on' if self.flat_foot else 'off'}, {self.subject.marker_diameter:g} mm markers)")  # fmt: skip
-
-
-def calibrate_static(
-    static: str | os.PathLike[str] | Trial,
-    subject: SubjectParameters,
-    *,
-    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
-    flat_foot: bool | None = None,
-    model: str = "cgm1.0",
-    knee_ankle_centres: str | None = None,
-) -> StaticCalibration:
-    """Fill the static trial's gaps as the walking trials' and calibrate ``subject`` on it
-    (:func:`fuzzygait.kinematics.static_calibration`: every offset Nexus stores after a
-    static run, the inter-ASIS distance when ``subject`` has none).
-
-    The static trial is **not** low-pass filtered, whatever ``preprocessing.filter``
-    says: every offset is a mean over the standing frames already, and a Butterworth
-    over a short standing trial only adds its edge transients (measured on Nexus'
-    foot-flat static trial, 6 Hz: StaticPlantFlex 1.3e-4 rad off Nexus' value,
-    unfiltered 1e-8 rad).  ``knee_ankle_centres``: a cluster model's knee/ankle centre
-    rule (:mod:`fuzzygait.kinematics.knee_ankle`; None: KNM/MED when present, else chord).
-    ``flat_foot`` None takes the subject file's own setting (``subject.flat_foot``: a QTM
-    session.xml's "foot normalised to static trial"; noted), else the setting the static
-    trial's own stored Plug-in Gait angles were made with
-    (:func:`~fuzzygait.workflows.crosscheck.recover_flat_foot`; noted), else off.
-
-    The content checks run first (:func:`fuzzygait.mocap.sanity.check_trial`): a trial
-    that moves (a walking trial given as the static one), in the wrong unit or at an
-    absurd rate is refused in one line; implausible samples are blanked and noted.
-    """
-    trial, relabelled = canonical_labels(static if isinstance(static, Trial) else read_c3d(static))
-    checked = check_trial(trial, static=True)
-    clean, _ = replace(preprocessing, filter=False).apply(checked)
-    notes = (*relabelled, *checked.notes[len(trial.notes) :])
-    if flat_foot is None and subject.flat_foot is None and (found := recover_flat_foot(clean, subject)) is not None:
-        flat_foot = found
-        notes += (Finding(FindingKind.STATIC_CALIBRATION, f"foot flat {'on' if found else 'off'}, as the static "
-                          "trial's own stored Plug-in Gait angles were made (reproduced with it, not "
-                          "without)"),)  # fmt: skip
-    if flat_foot is None:
-        flat_foot = bool(subject.flat_foot)
-        if subject.flat_foot is not None:
-            notes += (Finding(FindingKind.STATIC_CALIBRATION, f"foot flat {'on' if flat_foot else 'off'} as "
-                              f"{Path(subject.source).name} sets it (feet {'' if flat_foot else 'not '}normalised to "
-                              f"the static trial); --{'no-' if flat_foot else ''}flat-foot overrides it"),)  # fmt: skip
-    calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
-                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
-    method = knee_method(clean)
-    clusters = None
-    if model_version(model).clusters:
-        clusters = calibrate_clusters(clean, calibrated, knee_ankle_centres, forefoot=model_version(model).forefoot)
-        method = f"{model} clusters, {RULE_NAMES[knee_ankle_rule(clean, knee_ankle_centres)]} knee/ankle centres"
-    return StaticCalibration(calibrated, method, flat_foot, trial.name, clusters, notes)
-
-
 def run_angles(
     dynamic: str | os.PathLike[str] | Trial,
     *,
     static: str | os.PathLike[str] | Trial | None = None,
     subject_file: str | os.PathLike[str] | None = None,
-    preprocessing: Preprocessing = Preprocessing(),
+    preprocessing: Preprocessing = DEFAULT_PREPROCESSING,
     flat_foot: bool | None = None,
     marker_diameter: float | None = None,
     model: str = "cgm1.0",
@@ -283,7 +167,7 @@ def run_angles(
         subject_file: ``.toml`` or ``.vsk``; without it the dynamic trial's PROCESSING
             group.
         preprocessing: gap filling and filter options (the static trial: gap filling
-            only, see :func:`calibrate_static`).
+            only, see :func:`~fuzzygait.workflows.static_calibration.calibrate_static`).
         flat_foot: static calibration with the flat-foot option (uses SoleDelta); None:
             the subject file's own setting when it has one (QTM session.xml), else off.
         marker_diameter: mm, in place of the subject parameters' (see :func:`resolve_subject`).
@@ -305,46 +189,30 @@ def run_angles(
     static_trial = None if static is None else static if isinstance(static, Trial) else read_c3d(static)
     static_trial = None if static_trial is None else canonical_labels(static_trial)[0]
     diameter = settle_marker_diameter(resolve_subject(raw, subject_file), marker_diameter, (raw, static_trial))
-    subject = diameter.subject
-    notes = list(trial.notes)
     warnings = ([diameter.warning] if diameter.warning else []) + subject_warnings(raw, subject_file, static_trial,
-                                                                                   subject)  # fmt: skip
+                                                                                   diameter.subject)  # fmt: skip
     stored = StoredCalibration()
     if static_trial is None and subject_file is not None:
         stored = read_stored_calibration(subject_file)
     model, why = choose_model(model, raw, static_trial, stored)
-    notes += [*relabelled, Finding(FindingKind.MODEL, f"model {model} ({why})"), diameter.note]
-    clusters, moved = None, []
     if static_trial is not None:
-        to_calibrate = for_static_calibration(subject, subject_file)
-        calibration = calibrate_static(static_trial, to_calibrate, preprocessing=preprocessing, flat_foot=flat_foot,
-                                       model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
-        notes += inter_asis_notes(subject, to_calibrate, calibration.subject, calibration.static)
-        subject, clusters = calibration.subject, calibration.clusters
-        notes.append(Finding(FindingKind.STATIC_CALIBRATION, calibration.describe()))
-        notes += [Finding(FindingKind.STATIC_TRIAL, f"static trial {calibration.static}: {note.message}", note.severity)
-                  for note in calibration.notes]  # fmt: skip
-        moved = moved_markers(static_trial, trial)
-        notes += moved
+        calibration = calibrate_run(static_trial, trial, diameter.subject, subject_file,
+                                    preprocessing=preprocessing, flat_foot=flat_foot, model=model,
+                                    knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     else:
-        if model_version(model).clusters:
-            clusters = stored_clusters(stored, subject_file, model)
-            notes.append(Finding(FindingKind.SUBJECT, f"cluster calibration from "
-                                 f"{stored.source.name if stored.source else subject_file}"
-                                 + (f" (static trial {stored.static})" if stored.static else "")))  # fmt: skip
-        if stored.model is not None and stored.model != model:
-            notes.append(Finding(FindingKind.SUBJECT, f"{Path(subject_file or '').name} was calibrated for "
-                                 f"{stored.model}; its offsets are used by {model} as they are",
-                                 Severity.WARNING))  # fmt: skip
+        calibration = stored_calibration(stored, diameter.subject, subject_file, model)
+    subject, clusters = calibration.subject, calibration.clusters
+    notes = [*trial.notes, *relabelled, Finding(FindingKind.MODEL, f"model {model} ({why})"), diameter.note,
+             *calibration.notes]  # fmt: skip
     result = compute_lower_body(trial, subject, model=model, clusters=clusters)
     mark_empty_angles(result, raw)
     refuse_empty(result, raw.name)
-    notes += result.notes
     check = check_run(checked, result.angles, raw, subject, diameter.recovered, model=model, clusters=clusters,
                       flat_foot=flat_foot if flat_foot is not None else subject.flat_foot)  # fmt: skip
-    if check is not None and moved:
-        check = check.with_cause(f"markers moved between the static trial and this one ({len(moved)} segments)")
-    notes += check.notes() if check is not None else []
+    if check is not None and calibration.moved:
+        check = check.with_cause(f"markers moved between the static trial and this one "
+                                 f"({len(calibration.moved)} segments)")  # fmt: skip
+    notes += [*result.notes, *(check.notes() if check is not None else [])]
     notes += [Finding(FindingKind.ANGLE_NOT_COMPUTED, f"{name} not computed: {why}", Severity.WARNING)
               for name, why in result.unavailable.items()]  # fmt: skip
     events, source = trial_gait_events(trial)
@@ -371,28 +239,6 @@ def choose_model(
         return model_version(name).name, f"the model of the cluster calibration in {where}"
     version, why = supported_version(dynamic, static)
     return version.name, why
-
-
-def stored_clusters(
-    stored: StoredCalibration, subject_file: str | os.PathLike[str] | None, model: str
-) -> ClusterCalibration:
-    """The subject file's cluster calibration for the cluster model ``model``, or one
-    line saying what to give instead."""
-    version = model_version(model)
-    make = (f"give the static trial ({Option.STATIC} STATIC.c3d), or calibrate once with `fuzzygait calibrate "
-            f"STATIC.c3d {Option.MODEL.flag} {version.name} {Option.OUT.flag} CAL.toml` and use {Option.SUBJECT} "
-            "CAL.toml")  # fmt: skip
-    if subject_file is None:
-        raise ParameterError(f"{version.name} tracks the thigh and shank clusters calibrated on a static trial: {make}")
-    if stored.clusters is None:
-        where = str(subject_file)
-        if Path(subject_file).suffix.lower() == ".vsk":
-            where += f" (no {sidecar_path(subject_file).name} beside it)"
-        raise ParameterError(f"{where}: no cluster calibration for {version.name}; {make}")
-    if version.forefoot and not stored.has_forefoot():
-        raise ParameterError(f"{stored.source}: its cluster calibration ({stored.model or 'cgm2.3'}) has no "
-                             f"forefoot for {version.name}; {make}")  # fmt: skip
-    return stored.clusters
 
 
 def output_suffix(suffix: str, model: str) -> str:
@@ -478,20 +324,9 @@ class AngleOutputs:
         return written
 
 
-def angles_to_files(
-    dynamic: str | os.PathLike[str] | Trial,
-    outputs: AngleOutputs,
-    *,
-    static: str | os.PathLike[str] | Trial | None = None,
-    subject_file: str | os.PathLike[str] | None = None,
-    preprocessing: Preprocessing = Preprocessing(),
-    flat_foot: bool | None = None,
-    marker_diameter: float | None = None,
-    model: str = "cgm1.0",
-    knee_ankle_centres: str | None = None,
-) -> tuple[AnglesRun, list[Path]]:
-    """:func:`run_angles` and then ``outputs.write``: the run and the files written."""
-    run = run_angles(dynamic, static=static, subject_file=subject_file, preprocessing=preprocessing,
-                     flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
-                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
+def angles_to_files(trial: TrialInputs, outputs: AngleOutputs) -> tuple[AnglesRun, list[Path]]:
+    """The joint-angle run of ``trial`` (:meth:`TrialInputs.run
+    <fuzzygait.workflows.trial_inputs.TrialInputs.run>`, :func:`run_angles`) and then
+    ``outputs.write``: the run and the files written."""
+    run = trial.run()
     return run, outputs.write(run)
