@@ -31,8 +31,12 @@ Array = NDArray[np.float64]
 
 class PlateSignals(Protocol):
     """What the kinetics read of a force plate (a :class:`fuzzygait.io.force_plates.ForcePlate`
-    has it): ``rate`` Hz; ``force`` ``(m, 3)`` N, ``cop`` ``(m, 3)`` mm (NaN without
-    contact), ``free_moment`` ``(m, 3)`` N·mm, ``contact`` ``(m,)`` bool; laboratory frame."""
+    has it): its 1-based ``number``, ``rate`` Hz; ``force`` ``(m, 3)`` N, ``cop`` ``(m, 3)``
+    mm (NaN without contact), ``free_moment`` ``(m, 3)`` N·mm, ``contact`` ``(m,)`` bool;
+    laboratory frame."""
+
+    @property
+    def number(self) -> int: ...
 
     @property
     def rate(self) -> float: ...

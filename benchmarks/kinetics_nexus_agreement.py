@@ -1,0 +1,126 @@
+"""Agreement of fuzzygait's Plug-in Gait kinetics with the kinetics Vicon Nexus stored.
+
+Run:  .venv/bin/python benchmarks/kinetics_nexus_agreement.py
+
+For each shared Nexus trial with stored kinetics and a body mass: the model on the
+file's own ``PROCESSING`` parameters (its angles then equal Nexus'), the plates read by
+:func:`fuzzygait.kinetics.plates.read_force_plates` at the analog rate, and on each foot
+the plate Nexus put there frame by frame (:func:`fuzzygait.kinetics.assignment.stored_assignment`).
+Two ground loads:
+
+* ``all samples``: every analog sample of the assigned plate (threshold 0 N), as Nexus;
+* ``contact``: only the samples above the reader's contact threshold (10 N), as the
+  pipeline will run.
+
+Prints per trial, output and component the RMS and max difference over the frames where
+Nexus has an output (moments N·m/kg, powers W/kg, GRF % body weight), and the RMS without
+Nexus' first and last three output frames (``inner``).  ``gait-pig.c3d`` is listed but not
+compared: it stores no body mass, and its moments are per kilogram.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from _setup import VICON, one_thread
+
+one_thread()
+
+import numpy as np  # noqa: E402
+
+from fuzzygait.core.names import Side  # noqa: E402
+from fuzzygait.io import read_c3d  # noqa: E402
+from fuzzygait.io.subject import subject_from_processing  # noqa: E402
+from fuzzygait.kinematics import compute_lower_body  # noqa: E402
+from fuzzygait.kinetics.assignment import assigned_ground, stored_assignment  # noqa: E402
+from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
+from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics  # noqa: E402
+
+DATA = VICON.parent
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    path: str
+    marker_diameter: float | None = None
+
+
+CASES = (
+    Case("Movement_trial (Nexus 1.8)", "vicon/Movement_trial.c3d"),
+    Case("PiGKad (Nexus 2.3)", "pig-options/PiGKad_Motion.c3d"),
+    Case("PiGKadMed (Nexus 2.3)", "pig-options/PiGKadMed_Motion.c3d"),
+    Case("FlatFoot (Nexus 1.4, 16 mm)", "pig-options/PiG_Motion-FlatFoot-Full.c3d", 16.0),
+)
+#: output suffix -> (unit, factor from Nexus' unit, components compared)
+QUANTITIES = {"Moment": ("N·m/kg", 1e-3, (0, 1, 2)), "Power": ("W/kg", 1.0, (2,)), "Force": ("N/kg", 1.0, (0, 1, 2))}
+EDGE = 3  # Nexus output frames left out at each end for the "inner" column
+
+
+def kinetics(case: Case, threshold_n: float) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], str]:
+    """Our outputs, Nexus', and a note on the plates used."""
+    path = DATA / case.path
+    trial = read_c3d(path)
+    subject = subject_from_processing(trial.parameters)
+    if case.marker_diameter is not None:
+        subject = replace(subject, marker_diameter=case.marker_diameter)
+    result = compute_lower_body(trial, subject)
+    every_sample = read_force_plates(path, threshold_n=0.0)
+    plates = read_force_plates(path, threshold_n=threshold_n)
+    ground, notes = {}, []
+    for side in Side:
+        assigned = stored_assignment(every_sample, trial.outputs, side, subject.body_mass, trial.rate)
+        ground[side] = assigned_ground(plates, assigned.plate, trial.rate)
+        used = sorted(set(assigned.plate[assigned.plate > 0].tolist()))
+        unmatched = f", {int(assigned.unmatched.sum())} unmatched" if assigned.unmatched.any() else ""
+        frames = int((assigned.plate > 0).sum())
+        notes.append(f"{side.value}: plate {'+'.join(map(str, used))}, {frames} frames{unmatched}")
+    ours = plug_in_gait_kinetics(result, trial, subject, ground).outputs
+    return ours, trial.outputs, "; ".join(notes)
+
+
+def stats(ours: np.ndarray, nexus: np.ndarray) -> tuple[float, float, float]:
+    """RMS, max over the frames Nexus has; RMS without its EDGE first and last frames."""
+    frames = np.flatnonzero(np.isfinite(nexus))
+    diff = ours[frames] - nexus[frames]
+    inner = diff[(frames >= frames[0] + EDGE) & (frames <= frames[-1] - EDGE)]
+    return float(np.sqrt(np.mean(diff**2))), float(np.abs(diff).max()), float(np.sqrt(np.mean(inner**2)))
+
+
+def table(case: Case) -> None:
+    runs = {label: kinetics(case, threshold) for label, threshold in
+            (("all samples", 0.0), (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N))}  # fmt: skip
+    print(f"## {case.name}: {case.path}")
+    print("plates (from Nexus' stored GRF): " + next(iter(runs.values()))[2])
+    print()
+    head = " | ".join(f"{label} RMS | max | inner RMS" for label in runs)
+    print(f"| output | unit | axis | {head} |")
+    print("|---|---|---|" + "---|---|---|" * len(runs))
+    for side in "LR":
+        rows = [(f"{side}{joint}{q}", unit, factor, axes) for q, (unit, factor, axes) in QUANTITIES.items()
+                for joint in JOINTS]  # fmt: skip
+        rows.append((f"{side}NormalisedGRF", "% BW", 1.0, (0, 1, 2)))
+        for name, unit, factor, axes in rows:
+            for axis in axes:
+                cells = []
+                for ours, nexus, _ in runs.values():
+                    if name not in nexus:
+                        cells.append("- | - | -")
+                        continue
+                    rms, worst, inner = stats(ours[name][:, axis] * factor, nexus[name][:, axis] * factor)
+                    cells.append(f"{rms:.4f} | {worst:.4f} | {inner:.4f}")
+                print(f"| {name} | {unit} | {'XYZ'[axis]} | {' | '.join(cells)} |")
+    print()
+
+
+def main() -> None:
+    if not DATA.is_dir():
+        print(f"reference data {DATA} absent")
+        return
+    for case in CASES:
+        table(case)
+    print("gait-pig.c3d: not compared (no Bodymass stored; its kinetics are per kilogram).")
+
+
+if __name__ == "__main__":
+    main()
