@@ -10,6 +10,7 @@ come from the measured curves and the determined bands only."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import matplotlib
 
@@ -141,22 +142,37 @@ def _add_legend(fig: Figure, handles: list[Artist], ncol: int = 7, margins: Grid
     return fig
 
 
+@dataclass(frozen=True)
+class _BandStyle:
+    """How one side's curve and α-bands are drawn: its ``colour``, the opacity of one
+    filled band layer (``layer``, :func:`_band_opacity`), the ``side`` (``"L"`` filled
+    and solid, ``"R"`` hatched and dashed) and whether the bands are ``rasterized`` (the
+    whole-trial grid: thousands of frames)."""
+
+    colour: str
+    layer: float
+    side: str = "L"
+    rasterized: bool = False
+
+
 def _draw_bands(ax: Axes, x: np.ndarray, curve: np.ndarray, alphas: np.ndarray, band: np.ndarray | None,
-                colour: str, layer: float, rasterized: bool = False, side: str = "L") -> None:  # fmt: skip
+                style: _BandStyle) -> None:  # fmt: skip
     """α-bands (nested, widest first) in the side's style — left filled in its colour,
     right hatched in its colour (so overlapping bands never mix into a third colour and
     stay apart in greyscale) — the widest band's edges as thin lines, and the curve on top
     (left solid, right dashed).  NaN bounds (undetermined or missing) leave the band out
     there."""
-    line = SIDE_LINE.get(side, "-")
+    colour, rasterized = style.colour, style.rasterized
+    line = SIDE_LINE.get(style.side, "-")
     if band is not None and len(alphas):
         for k in range(len(alphas)):
-            if side == "R":
+            if style.side == "R":
                 hatched = ax.fill_between(x, band[k, 0], band[k, 1], facecolor="none", edgecolor=colour,
                                           hatch=_right_hatch(k), lw=0, rasterized=rasterized)  # fmt: skip
                 hatched.set_hatch_linewidth(HATCH_WIDTH)
             else:
-                ax.fill_between(x, band[k, 0], band[k, 1], color=colour, alpha=layer, lw=0, rasterized=rasterized)
+                ax.fill_between(x, band[k, 0], band[k, 1], color=colour, alpha=style.layer, lw=0,
+                                rasterized=rasterized)  # fmt: skip
         for bound in (0, 1):
             ax.plot(x, band[0, bound], color=colour, lw=0.6, ls=line, alpha=0.9, rasterized=rasterized)
     ax.plot(x, curve, color=colour, lw=1.5, ls=line)
@@ -293,7 +309,7 @@ def cycle_figure(data: TrialData, title: str, clinical: ClinicalData | None = No
                     curve, band, used = cycle_bands(signal, hull, cycles, undetermined=data.undetermined(name))
                 if not np.isfinite(curve).any():
                     continue
-                _draw_bands(ax, x, curve, data.alphas, band, colour, layer, side=side)
+                _draw_bands(ax, x, curve, data.alphas, band, _BandStyle(colour, layer, side))
                 any_sd = _stride_sd(ax, x, clinical, name, colour) or any_sd
                 flags = band_undetermined(curve, band)
                 if flags is not None and flags.any():
@@ -342,8 +358,8 @@ def time_series_figure(data: TrialData, title: str, clinical: ClinicalData | Non
                 signal = data.angle(name)
                 if signal is None:
                     continue
-                _draw_bands(ax, t, signal, data.alphas, data.determined_hull(name), colour, layer, rasterized=True,
-                            side=side)  # fmt: skip
+                _draw_bands(ax, t, signal, data.alphas, data.determined_hull(name),
+                            _BandStyle(colour, layer, side, rasterized=True))  # fmt: skip
                 drawn = True
                 flags = data.undetermined(name)
                 if flags is not None and flags.any():
