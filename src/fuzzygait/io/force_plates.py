@@ -296,7 +296,13 @@ def _plate(
         findings.append(Finding(FindingKind.FORCE_PLATE,
                                 f"force plate {setup.number}: its channels give the force on the plate (the normal "
                                 "force points into it); negated to the reaction on the body"))  # fmt: skip
-    if not np.any(np.abs(force[:, 2]) > threshold_n):
+    normal = np.abs(force[:, 2])
+    if n and normal.min() > threshold_n:
+        findings.append(Finding(FindingKind.FORCE_PLATE,
+                                f"force plate {setup.number}: the normal force never falls below {threshold_n:g} N "
+                                f"(least {normal.min():.0f} N): an offset not removed? Contact is found throughout",
+                                Severity.WARNING))  # fmt: skip
+    if not np.any(normal > threshold_n):
         findings.append(Finding(FindingKind.FORCE_PLATE_UNLOADED,
                                 f"force plate {setup.number} carries no load (normal force below {threshold_n:g} N "
                                 "throughout)"))  # fmt: skip
@@ -310,9 +316,12 @@ def _saturation(analog: AnalogData, setup: PlateSetup) -> list[Finding]:
     low, high = analog.count_range
     counts = analog.counts[:, list(setup.channels)]
     finite = np.isfinite(counts)
-    if not finite.any() or np.nanmin(counts) < low - 0.5 or np.nanmax(counts) > high + 0.5:
-        return []  # the stored numbers are not counts of this converter: no check
-    at_limit = finite & ((counts <= low + 0.5) | (counts >= high - 0.5))
+    with np.errstate(invalid="ignore"):
+        # a channel whose stored numbers leave the range is not counts of this converter
+        # (Vicon's float files in N with BITS 12): not checked
+        inside = (np.nanmin(counts, axis=0) >= low - 0.5) & (np.nanmax(counts, axis=0) <= high + 0.5)
+        counts_of_adc = finite.all(axis=0) & inside
+    at_limit = finite & counts_of_adc & ((counts <= low + 0.5) | (counts >= high - 0.5))
     out = []
     for j in np.flatnonzero(at_limit.any(axis=0)):
         samples = np.flatnonzero(at_limit[:, j])
