@@ -33,7 +33,7 @@ from fuzzygait.viz.report.bands import ReportRun, TrialAnalysis, TrialData, Tria
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.clinical_figures import gait_profile_figure, kinetics_figure
 from fuzzygait.viz.report.figures import DPI, cycle_figure, time_series_figure
-from fuzzygait.viz.report.pages import index_page, trial_page
+from fuzzygait.viz.report.pages import PageSource, index_page, trial_page
 from fuzzygait.viz.report.session import SESSION_DPI, session_cycles_figure
 from fuzzygait.viz.report.sources import has_source_bands, source_figure
 
@@ -213,8 +213,8 @@ class ReportWriter:
         entry = TrialEntry.of(source, f"{name}.html", data, table, allowable, clinical.model_gaps(analysis.run.gaps),
                               gps)  # fmt: skip
         warnings = list(dict.fromkeys([*item.warnings, *analysis.run.warnings]))  # the run's may repeat the job's
-        page = trial_page(analysis, data, entry, table, files, source, clinical=clinical,
-                          session=item.session, warnings=warnings)  # fmt: skip
+        page = trial_page(analysis, data, entry, table, PageSource(source, files, item.session, warnings),
+                          clinical=clinical)  # fmt: skip
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
 

@@ -4,6 +4,7 @@ resources), one per trial and the index of the batch."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import quote
@@ -57,7 +58,7 @@ from fuzzygait.viz.report.wording import (
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["index_page", "trial_page"]
+__all__ = ["PageSource", "index_page", "trial_page"]
 
 
 def _fmt(value: float | None, digits: int = 1) -> str:
@@ -251,14 +252,26 @@ def headline_lines(head: Headline) -> list[str]:
     return lines
 
 
-def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, table: DeltaPhiTable, files: str,
-               source: Path, *, clinical: ClinicalData | None = None, session: str | None = None,
-               warnings: Sequence[str] = ()) -> str:  # fmt: skip
+@dataclass(frozen=True)
+class PageSource:
+    """Where a trial page's trial comes from: its file (``source``; the page's title), its
+    figures' folder beside the page (``files``, relative), its session's name (None: the
+    files were given directly) and the warnings shown at the top."""
+
+    source: Path
+    files: str
+    session: str | None = None
+    warnings: Sequence[str] = ()
+
+
+def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, table: DeltaPhiTable, page: PageSource,
+               *, clinical: ClinicalData | None = None) -> str:  # fmt: skip
     """The page of one trial: how to read it, the header (subject, session, model, markers,
     processing), spatio-temporal parameters, the kinematics grid, GPS/MAP, kinetics, the
     allowable marker error, ΔΦ table, per-source bands, whole trial, data quality (the
     model's markers), assumptions, subject, references.  Without a fuzzy analysis
     (``analysis.fuzzy`` None) the uncertainty sections are left out."""
+    source, files, session, warnings = page.source, page.files, page.session, page.warnings
     run = analysis.run
     fuzzy = analysis.fuzzy
     if clinical is None:
