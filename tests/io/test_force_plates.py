@@ -181,13 +181,40 @@ def test_uncalibrated_plate_is_unusable(tmp_path: Path) -> None:
     alone, one error line."""
     t = pf.truth(23)
     good = pf.Plate(2, pf.yaw(1.0, 0.0), np.zeros(3), (600, 600), DEPTH, pf.type2_channels(t, DEPTH))
-    bad = pf.Plate(4, pf.yaw(1.0, 0.0), np.array([600.0, 0, 0]), (600, 600), DEPTH, pf.type2_channels(t, DEPTH))
+    bad = pf.Plate(4, pf.yaw(1.0, 0.0), np.array([600.0, 0, 0]), (600, 600), DEPTH, pf.type2_channels(t, DEPTH),
+                   units=["V"] * 6)  # fmt: skip
     first, second = read_force_plates(pf.write(tmp_path / "uncalibrated.c3d", [good, bad]))
     assert np.isfinite(first.force).all() and np.isnan(second.force).all() and not second.contact.any()
     assert "uncalibrated" in of_kind(second.findings, FindingKind.FORCE_PLATE_CALIBRATION)[0].message
     with pytest.raises(ForcePlateError, match=r"no force plate can be used \(force plate 1: type 4 needs") as info:
         read_force_plates(pf.write(tmp_path / "alone.c3d", [bad]))
     assert "\n" not in str(info.value)
+
+
+def test_type4_without_matrix_in_newtons_is_read_as_calibrated(tmp_path: Path) -> None:
+    """Motion Analysis writes type 4 plates without CAL_MATRIX, channels in N and N·mm."""
+    t = pf.truth(37)
+    plate = pf.Plate(4, pf.yaw(0.6, 0.8), np.zeros(3), (600, 600), DEPTH, pf.type2_channels(t, DEPTH))
+    got = read_force_plates(pf.write(tmp_path / "motion_analysis.c3d", [plate]))[0]
+    _close(got.cop, pf.expected_lab(plate, t)["cop"])
+
+
+def test_type5_eight_channels_through_a_6x8_matrix(tmp_path: Path) -> None:
+    """Type 5 (QTM's Kistler plates): outputs = CAL_MATRIX (6 x 8) @ the 8 channels, then
+    as type 2 (ezc3d does not read type 5)."""
+    t = pf.truth(41)
+    extra = np.array([[1.0, 0.0], [0.0, 2.0], [4.0, 0.0], [0.0, 0.0], [8.0, -8.0], [0.0, 16.0]]) * 256.0
+    cal = np.column_stack([pf.CAL, extra])
+    rng = np.random.default_rng(41)
+    last = rng.integers(-50, 51, (pf.N, 2)).astype(float)
+    first = np.linalg.solve(pf.CAL, (pf.type2_channels(t, DEPTH) - last @ extra.T).T).T
+    plate = pf.Plate(5, pf.yaw(-0.8, 0.6), np.array([10.0, 20.0, 0.0]), (600, 400), -DEPTH,
+                     np.column_stack([first, last]), calibration=cal, units=["V"] * 8)  # fmt: skip
+    got = read_force_plates(pf.write(tmp_path / "type5.c3d", [plate]))[0]
+    expected = pf.expected_lab(plate, t)
+    assert got.kind == 5
+    for name in ("force", "cop", "free_moment"):
+        _close(getattr(got, name), expected[name])
 
 
 def test_zero_scale_is_uncalibrated(tmp_path: Path) -> None:

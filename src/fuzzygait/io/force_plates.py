@@ -49,7 +49,7 @@ from fuzzygait.core.errors import C3DError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.io.analog import AnalogData, read_analog
 from fuzzygait.io.c3d import LENGTH_UNITS_TO_MM
-from fuzzygait.io.plate_setup import PlateSetup, plate_setups
+from fuzzygait.io.plate_setup import FORCE_UNITS, MOMENT_UNITS, PlateSetup, factor, plate_setups
 
 Array = NDArray[np.float64]
 
@@ -119,16 +119,6 @@ class PlateLoads:
         return bool(np.isfinite(self.force).any())
 
 
-#: Factors to N and N·mm of the analog units force and moment channels carry.
-FORCE_UNITS = {"n": 1.0, "nt": 1.0, "newton": 1.0, "kn": 1000.0}
-MOMENT_UNITS = {"nmm": 1.0, "ntmm": 1.0, "n.mm": 1.0, "n*mm": 1.0, "n·mm": 1.0, "nm": 1000.0, "n.m": 1000.0,
-                "n*m": 1000.0, "n·m": 1000.0, "ntm": 1000.0, "knmm": 1000.0}  # fmt: skip
-
-
-def _factor(unit: str, table: dict[str, float]) -> float | None:
-    return table.get(unit.strip().lower().replace(" ", ""))
-
-
 def _channel_data(analog: AnalogData, setup: PlateSetup) -> NDArray[np.float64]:
     """``(n, k)`` the plate's channels in their physical units."""
     return analog.values[:, list(setup.channels)]
@@ -142,8 +132,8 @@ def _six(analog: AnalogData, setup: PlateSetup, channels: Array) -> tuple[Array,
         data = channels @ setup.calibration.T
         return data[:, :3], data[:, 3:6], findings  # calibrated outputs: N and N·mm
     units = [analog.units[c] for c in setup.channels]
-    force_factor = np.array([_factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
-    moment_factor = np.array([_factor(u, MOMENT_UNITS) or 1.0 for u in units[3:6]])
+    force_factor = np.array([factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
+    moment_factor = np.array([factor(u, MOMENT_UNITS) or 1.0 for u in units[3:6]])
     return channels[:, :3] * force_factor, channels[:, 3:6] * moment_factor, findings
 
 
@@ -167,10 +157,10 @@ def _loads(analog: AnalogData, setup: PlateSetup) -> tuple[NDArray[np.float64], 
     if setup.kind == 1:
         units = [analog.units[c].strip().lower() for c in setup.channels]
         cop_factor = np.array([LENGTH_UNITS_TO_MM.get(u, 1.0) for u in units[3:5]])
-        force = ch[:, :3] * np.array([_factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
+        force = ch[:, :3] * np.array([factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
         cop = np.zeros_like(force)
         cop[:, :2] = ch[:, 3:5] * cop_factor
-        torque = ch[:, 5] * (_factor(units[5], MOMENT_UNITS) or 1.0)
+        torque = ch[:, 5] * (factor(units[5], MOMENT_UNITS) or 1.0)
         moment = np.cross(cop, force)
         moment[:, 2] += torque
         return force, moment, findings
@@ -191,7 +181,7 @@ def _moment_unit_check(
     if setup.kind not in (2, 4) or setup.calibration is not None:
         return moment, []
     units = [analog.units[c] for c in setup.channels[3:6]]
-    if not all(_factor(u, MOMENT_UNITS) == 1000.0 for u in units):
+    if not all(factor(u, MOMENT_UNITS) == 1000.0 for u in units):
         return moment, []
     normal = np.abs(force[:, 2])
     loaded = normal > max(threshold_n, 0.2 * float(np.nanmax(normal, initial=0.0)))

@@ -16,6 +16,15 @@ __all__ = ["PlateSetup", "plate_frame", "plate_setups"]
 
 #: Channels per plate type; types 4 and 5 need ``CAL_MATRIX`` (6 x channels).
 CHANNELS = {1: 6, 2: 6, 3: 8, 4: 6, 5: 8}
+#: Factors to N and N·mm of the analog units force and moment channels carry.
+FORCE_UNITS = {"n": 1.0, "nt": 1.0, "newton": 1.0, "kn": 1000.0}
+MOMENT_UNITS = {"nmm": 1.0, "ntmm": 1.0, "n.mm": 1.0, "n*mm": 1.0, "n·mm": 1.0, "nm": 1000.0, "n.m": 1000.0,
+                "n*m": 1000.0, "n·m": 1000.0, "ntm": 1000.0, "knmm": 1000.0}  # fmt: skip
+
+
+def factor(unit: str, table: dict[str, float]) -> float | None:
+    """The factor of ``unit`` in ``table`` (case, spaces ignored), None if unknown."""
+    return table.get(unit.strip().lower().replace(" ", ""))
 
 
 @dataclass(frozen=True)
@@ -80,11 +89,18 @@ def _column(values: NDArray[np.float64] | None, rows: int, index: int) -> NDArra
     return np.asarray(values.reshape(-1, order="F")[rows * index : rows * (index + 1)], dtype=float)
 
 
-def _calibration(get: Any, kind: int, index: int, n: int) -> tuple[NDArray[np.float64] | None, str | None]:
-    """The plate's 6 x ``n`` matrix for types 4 and 5 (None otherwise) or the problem."""
+def _calibration(get: Any, kind: int, index: int, units: list[str]) -> tuple[NDArray[np.float64] | None, str | None]:
+    """The plate's 6 x ``n`` matrix for types 4 and 5 (None otherwise) or the problem.
+    A type 4 plate without a matrix whose channels are labelled N and N·mm (Motion
+    Analysis writes such files) is read with the identity, as ezc3d does."""
     if kind not in (4, 5):
         return None, None
+    n = CHANNELS[kind]
     cal = _array(get, "CAL_MATRIX")
+    loads = len(units) == 6 and all(factor(u, FORCE_UNITS) == 1.0 for u in units[:3]) and all(
+        factor(u, MOMENT_UNITS) == 1.0 for u in units[3:])  # fmt: skip
+    if kind == 4 and loads and (cal is None or cal.size == 0):
+        return np.eye(6), None
     if cal is None or cal.ndim < 2 or cal.shape[0] != 6 or cal.shape[1] < n:
         return None, f"type {kind} needs a 6 x {n} FORCE_PLATFORM:CAL_MATRIX, the file has none (uncalibrated)"
     plates = cal.reshape(6, cal.shape[1], -1, order="F")
@@ -118,7 +134,8 @@ def _one(analog: AnalogData, index: int, unit: float) -> tuple[PlateSetup, str |
     zero = (0, 0)
     if zero_values is not None and zero_values.size >= 2:
         zero = (int(zero_values.ravel()[0]), int(zero_values.ravel()[1]))
-    calibration, problem = _calibration(get, kind, index, n)
+    units = [analog.units[c] for c in channels if 0 <= c < len(analog.units)]
+    calibration, problem = _calibration(get, kind, index, units)
     depth, offsets = _depth(kind, np.zeros(3) if origin is None else origin * unit)
     try:
         rotation = plate_frame(corners)
