@@ -1,0 +1,124 @@
+"""Plug-in Gait kinetics against the kinetics Vicon Nexus stored in the shared trials.
+
+The model runs on each file's own PROCESSING parameters (its angles then equal Nexus');
+each foot gets the plate Nexus put under it, read back from Nexus' stored ground reaction
+(:func:`~fuzzygait.kinetics.assignment.stored_assignment`), every analog sample used as
+Nexus does.  Bounds: the measured RMS differences of benchmarks/RESULTS.md, rounded up
+(the acceptance of issue 39 is 0.02 N·m/kg, 0.05 W/kg, 0.5 % body weight).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import Side
+from fuzzygait.io import read_c3d
+from fuzzygait.io.subject import subject_from_processing
+from fuzzygait.kinematics import compute_lower_body
+from fuzzygait.kinetics.assignment import assigned_ground, stored_assignment
+from fuzzygait.kinetics.plates import read_force_plates
+from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait_kinetics
+from support import shared_file
+
+
+def nexus_run(*parts: str, marker_diameter: float | None = None) -> tuple[KineticsResult, dict[str, np.ndarray]]:
+    path = shared_file(*parts)
+    trial = read_c3d(path)
+    subject = subject_from_processing(trial.parameters)
+    if marker_diameter is not None:
+        subject = replace(subject, marker_diameter=marker_diameter)
+    plates = read_force_plates(path, threshold_n=0.0)
+    ground = {}
+    for side in Side:
+        assigned = stored_assignment(plates, trial.outputs, side, subject.body_mass, trial.rate)
+        ground[side] = assigned_ground(plates, assigned.plate, trial.rate)
+    return plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, ground), trial.outputs
+
+
+def rms(ours: np.ndarray, nexus: np.ndarray, edge: int = 0) -> np.ndarray:
+    """Per component, over the frames Nexus has (without ``edge`` frames at each end)."""
+    frames = np.flatnonzero(np.all(np.isfinite(nexus), axis=1))
+    frames = frames[(frames >= frames[0] + edge) & (frames <= frames[-1] - edge)]
+    return np.sqrt(np.mean((ours[frames] - nexus[frames]) ** 2, axis=0))
+
+
+def worst(run: tuple[KineticsResult, dict[str, np.ndarray]], kind: str, edge: int = 0) -> float:
+    """The largest component RMS of ``kind`` (``"Moment"`` in N·m/kg, ``"Power"`` W/kg)
+    over both sides and the three joints."""
+    kinetics, nexus = run
+    scale = 1e-3 if kind == "Moment" else 1.0
+    return max(float(rms(kinetics.outputs[s + j + kind], nexus[s + j + kind], edge).max()) * scale
+               for s in "LR" for j in JOINTS)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def movement() -> tuple[KineticsResult, dict[str, np.ndarray]]:
+    return nexus_run("vicon", "Movement_trial.c3d")
+
+
+def test_movement_trial_moments_powers_and_forces(movement: tuple[KineticsResult, dict[str, np.ndarray]]) -> None:
+    kinetics, nexus = movement
+    assert worst(movement, "Moment") < 0.006
+    assert worst(movement, "Power") < 0.03
+    for name in ("LAnkleForce", "LKneeForce", "LHipForce", "RAnkleForce", "RKneeForce", "RHipForce"):
+        assert rms(kinetics.outputs[name], nexus[name]).max() < 0.005, name
+    # the right foot's plate is wholly above 10 N while Nexus has a value: exact
+    assert rms(kinetics.outputs["RNormalisedGRF"], nexus["RNormalisedGRF"]).max() < 1e-3
+    assert rms(kinetics.outputs["LNormalisedGRF"], nexus["LNormalisedGRF"]).max() < 0.1
+
+
+def test_movement_trial_frames_and_units(movement: tuple[KineticsResult, dict[str, np.ndarray]]) -> None:
+    """Outputs on the frames Nexus has (four lost at each end), powers in Z only, the
+    ankle moment's X a plantarflexor moment (positive) in stance."""
+    kinetics, nexus = movement
+    ours = kinetics.outputs["RAnkleMoment"]
+    np.testing.assert_array_equal(np.isfinite(ours[:, 0]), np.isfinite(nexus["RAnkleMoment"][:, 0]))
+    assert np.all(kinetics.outputs["LHipPower"][4:-4, :2] == 0.0)
+    stance = np.isfinite(nexus["RGroundReactionForce"][:, 2]) & np.isfinite(ours[:, 0])
+    assert np.nanmax(ours[stance, 0]) > 1000.0  # N·mm/kg
+
+
+def test_kad_medial_session() -> None:
+    """Every moment to 0.005 N·m/kg.  The powers too, except the left ankle's and knee's
+    on frames 108-118, where Nexus puts plate 2 under the left foot (its moment grows to
+    -2.9 N·m/kg there and we agree on it) but stores powers up to 0.37 W/kg from moment x
+    relative angular velocity, unexplained (docs/kinetics.md)."""
+    run = nexus_run("pig-options", "PiGKadMed_Motion.c3d")
+    kinetics, nexus = run
+    assert worst(run, "Moment") < 0.005
+    assert worst(run, "Power") < 0.07
+    outside = np.r_[:108, 119 : len(nexus["LAnklePower"])]
+    for name in ("LAnklePower", "LKneePower"):
+        assert rms(kinetics.outputs[name][outside], nexus[name][outside])[2] < 0.015, name
+
+
+def test_flat_foot_session_inside_the_edges() -> None:
+    """Nexus 1.4: the same inside its output range; its first and last three output
+    frames differ (up to 0.6 N·m/kg at the hip on the last frame), an end treatment of
+    its derivatives we have not found (docs/kinetics.md)."""
+    run = nexus_run("pig-options", "PiG_Motion-FlatFoot-Full.c3d", marker_diameter=16.0)
+    assert worst(run, "Moment", edge=3) < 0.012
+    assert worst(run, "Power", edge=3) < 0.025
+
+
+def test_kad_session_ankles() -> None:
+    """PiGKad: the ankles agree as on the other trials; its knees and hips do not
+    (RMS up to 0.013 and 0.038 N·m/kg, joint forces 0.08 N/kg: the tibia's and thigh's
+    centre-of-mass accelerations differ, unexplained, see docs/kinetics.md)."""
+    kinetics, nexus = nexus_run("pig-options", "PiGKad_Motion.c3d")
+    for side in "LR":
+        assert rms(kinetics.outputs[side + "AnkleMoment"], nexus[side + "AnkleMoment"]).max() < 1.0  # N·mm/kg
+        assert rms(kinetics.outputs[side + "NormalisedGRF"], nexus[side + "NormalisedGRF"]).max() < 1e-3
+
+
+def test_a_body_mass_of_zero_is_one_error_line() -> None:
+    path = shared_file("vicon", "Movement_trial.c3d")
+    trial = read_c3d(path)
+    subject = replace(subject_from_processing(trial.parameters), body_mass=0.0)
+    result = compute_lower_body(trial, subject)
+    with pytest.raises(ParameterError, match=r"^body mass must be positive \(kg\) for kinetics; got 0.0$"):
+        plug_in_gait_kinetics(result, trial, subject, {})
