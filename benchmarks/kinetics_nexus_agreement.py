@@ -87,6 +87,15 @@ def stats(ours: np.ndarray, nexus: np.ndarray) -> tuple[float, float, float]:
     return float(np.sqrt(np.mean(diff**2))), float(np.abs(diff).max()), float(np.sqrt(np.mean(inner**2)))
 
 
+#: summary rows: (case, run, quantity) -> (worst RMS, its output, worst inner RMS)
+SUMMARY: dict[tuple[str, str, str], tuple[float, str, float]] = {}
+
+
+def note_worst(key: tuple[str, str, str], label: str, rms: float, inner: float) -> None:
+    worst, name, worst_inner = SUMMARY.get(key, (0.0, "", 0.0))
+    SUMMARY[key] = (rms, label, max(worst_inner, inner)) if rms > worst else (worst, name, max(worst_inner, inner))
+
+
 def table(case: Case) -> None:
     runs = {label: kinetics(case, threshold) for label, threshold in
             (("all samples", 0.0), (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N))}  # fmt: skip
@@ -103,12 +112,14 @@ def table(case: Case) -> None:
         for name, unit, factor, axes in rows:
             for axis in axes:
                 cells = []
-                for ours, nexus, _ in runs.values():
+                for label, (ours, nexus, _) in runs.items():
                     if name not in nexus:
                         cells.append("- | - | -")
                         continue
                     rms, worst, inner = stats(ours[name][:, axis] * factor, nexus[name][:, axis] * factor)
                     cells.append(f"{rms:.4f} | {worst:.4f} | {inner:.4f}")
+                    if "Force" not in name:
+                        note_worst((case.name, label, unit), f"{name} {'XYZ'[axis]}", rms, inner)
                 print(f"| {name} | {unit} | {'XYZ'[axis]} | {' | '.join(cells)} |")
     print()
 
@@ -120,6 +131,12 @@ def main() -> None:
     for case in CASES:
         table(case)
     print("gait-pig.c3d: not compared (no Bodymass stored; its kinetics are per kilogram).")
+    print()
+    print("## Summary: the worst component RMS of each kind (inner: without Nexus' 3 edge frames)")
+    print("| trial | ground load | unit | worst RMS | output | worst inner RMS |")
+    print("|---|---|---|---|---|---|")
+    for (name, label, unit), (rms, output, inner) in SUMMARY.items():
+        print(f"| {name} | {label} | {unit} | {rms:.4f} | {output} | {inner:.4f} |")
 
 
 if __name__ == "__main__":
