@@ -124,12 +124,20 @@ def rot_pelvis_truth(truth, side: str) -> np.ndarray:
 @dataclass
 class FakeAnalysis:
     """Stands in for ``fuzzygait.workflows.marker_uncertainty.MarkerErrorAnalysis`` (a run,
-    a fuzzy dataset made up by the test, its ΔΦ table, notes)."""
+    a fuzzy dataset made up by the test, its ΔΦ table, notes, and the whole result: None
+    given, the bands ``fuzzy`` alone)."""
 
     run: Any
     fuzzy: Any
     delta_phi: Any
     notes: list[Finding] = field(default_factory=list)
+    result: Any = None
+
+    def __post_init__(self) -> None:
+        if self.result is None and self.fuzzy is not None:
+            from fuzzygait.markererror.result import MarkerErrorResult
+
+            self.result = MarkerErrorResult(self.fuzzy)
 
 
 def sparse_angles_run(angles_run: Any, n_frames: int = 6) -> Any:

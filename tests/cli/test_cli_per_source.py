@@ -14,7 +14,7 @@ import pytest
 
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.markererror.per_source import source_components, widest_source_bands
-from fuzzygait.uncertainty import load_result
+from fuzzygait.markererror.result import read_marker_result
 from support import SAMPLE_DATA, run
 
 pytestmark = pytest.mark.slow  # each test runs the marker-error analysis in a subprocess
@@ -37,7 +37,7 @@ def test_uncertainty_per_source_by_default_and_off(short: Path, tmp_path: Path) 
     out = tmp_path / "fuzzy.nc"
     result = run("uncertainty", short, *SAMPLE_ARGS, *CHEAP, "--out", out)
     assert result.returncode == 0, result.stderr
-    dataset = load_result(out)
+    dataset = read_marker_result(out)
     assert source_components(dataset) == ["LKneeAngles_X"]
     assert "note: per-source bands (Fig. 5.9): measurement, placement, sta each alone" in result.stdout
     text = result.stdout.split("Widest α = 0 band per error source alone and all together")[1]
@@ -50,7 +50,7 @@ def test_uncertainty_per_source_by_default_and_off(short: Path, tmp_path: Path) 
     off = tmp_path / "off.nc"
     result = run("uncertainty", short, *SAMPLE_ARGS, *CHEAP, "--no-per-source", "--out", off)
     assert result.returncode == 0, result.stderr
-    assert "source_hull" not in load_result(off) and "Widest α = 0 band" not in result.stdout
+    assert read_marker_result(off).sources is None and "Widest α = 0 band" not in result.stdout
 
 
 def test_report_per_source_flag(short: Path, tmp_path: Path) -> None:

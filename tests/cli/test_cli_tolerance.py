@@ -21,7 +21,7 @@ from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.markererror.allowable import allowable_table
 from fuzzygait.markererror.analysis import relative_envelope_width, undetermined_levels
-from fuzzygait.uncertainty import load_result
+from fuzzygait.markererror.result import MarkerErrorResult, read_marker_result
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
 from support import SAMPLE_DATA, assert_one_line_error, run, run_here, sparse_knee_analysis
@@ -78,16 +78,17 @@ def test_delta_phi_undetermined_where_the_dataset_says(analysis: MarkerErrorAnal
 
 
 def test_allowable_table_text(analysis: MarkerErrorAnalysis) -> None:
-    text = _allowable_text(analysis.fuzzy)
+    text = _allowable_text(analysis.result)
     assert text is not None
     title, header, *lines = text.splitlines()
     assert title.startswith("Allowable marker error for ±2.5°") and "% of Table 3.1" in title
     assert "mm" in header and "% of Table 3.1" in header
-    table = allowable_table(analysis.fuzzy)
+    assert analysis.result is not None
+    table = allowable_table(analysis.result)
     for line, (name, row) in zip(lines, table.iterrows(), strict=True):
         assert line.startswith(f"{name}  {row['label']}")
         assert re.search(rf"\s{row['allowable_mm']:.1f}\s", line), line
-    assert _allowable_text(analysis.fuzzy.drop_vars("allowable_status")) is None
+    assert _allowable_text(MarkerErrorResult(analysis.fuzzy)) is None and _allowable_text(None) is None
 
 
 @pytest.mark.slow
@@ -106,7 +107,8 @@ def test_uncertainty_prints_undetermined_and_the_allowable_table(tmp_path: Path)
     assert "note: allowable marker error for ±2.5°: " in text
     delta, allowable = text.split("ΔΦ, relative envelope width")[1].split("Allowable marker error for ±2.5°")
     allowable = allowable.split("Widest α =")[0]  # the per-source table follows (knee flexion rows again)
-    dataset = load_result(out)
+    saved = read_marker_result(out)
+    dataset = saved.bands
     flags, dataset_dphi = undetermined_levels(dataset), relative_envelope_width(dataset)
     for name in ("LKneeAngles_X", "LKneeAngles_Y", "LKneeAngles_Z"):
         (line,) = [line for line in delta.splitlines() if line.startswith(name)]
@@ -114,4 +116,4 @@ def test_uncertainty_prints_undetermined_and_the_allowable_table(tmp_path: Path)
                                     for a in (0.5, 0.0)], line  # fmt: skip
         assert "nan" not in line.lower()
         (row,) = [line for line in allowable.splitlines() if line.startswith(name)]
-        assert f"{allowable_table(dataset).at[name, 'allowable_mm']:.1f}" in row or "≥" in row or "<" in row
+        assert f"{allowable_table(saved).at[name, 'allowable_mm']:.1f}" in row or "≥" in row or "<" in row

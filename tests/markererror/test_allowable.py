@@ -204,7 +204,8 @@ def test_table_and_refined_dataset(knee, plain: xr.Dataset) -> None:  # noqa: AN
     # no prefixed names, no comma-joined attributes; every part (the refined levels merged) keeps the schema
     assert not any(str(v).startswith(("refined_", "allowable_", "source_")) for v in fuzzy.bands.variables)
     assert not any(k.startswith(("allowable_", "source_")) for k in fuzzy.bands.attrs)
-    assert list(check_result(fuzzy)) == ["values", "largest_violation"] and list(fuzzy.parts()) == ["/", f"/allowable/{KNEE}"]
+    assert list(fuzzy.parts()) == ["/", f"/allowable/{KNEE}"]
+    assert check_result(fuzzy)["largest_violation"] <= 1e-9
 
 
 def test_table_survives_saving(knee, tmp_path) -> None:  # noqa: ANN001

@@ -72,7 +72,8 @@ def plain(sparse_run: AnglesRun, options: FuzzyAngleOptions) -> xr.Dataset:
 
 @pytest.fixture(scope="module")
 def banded(sparse_run: AnglesRun, options: FuzzyAngleOptions, plain: xr.Dataset) -> MarkerErrorResult:
-    sources = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain, PerSourceRequest(options))
+    sources = per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain,
+                               PerSourceRequest(options))  # fmt: skip
     return MarkerErrorResult(plain, sources=sources)
 
 

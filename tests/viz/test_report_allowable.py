@@ -9,15 +9,16 @@ The analysis is real but small: the sample trial cut to 6 frames, left knee, α 
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from fuzzygait.markererror.allowable import allowable_table
+from fuzzygait.markererror.result import MarkerErrorResult
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorAnalysis
@@ -45,7 +46,7 @@ def _text(path: Path) -> str:
 @pytest.mark.slow  # writes the trial's report end to end (~9 s)
 def test_trial_page_leads_with_the_flexion_sentence_and_the_table(report: Path,
                                                                   analysis: MarkerErrorAnalysis) -> None:  # fmt: skip
-    table = allowable_table(analysis.fuzzy)
+    table = allowable_table(analysis.result)
     sentence = str(table.at["LKneeAngles_X", "text"])
     assert sentence.startswith("Left knee, sagittal (+ flexion): known within ±2.5° if every marker stays within")
     source = (report / "walking.html").read_text(encoding="utf-8")
@@ -68,19 +69,22 @@ def test_trial_page_leads_with_the_flexion_sentence_and_the_table(report: Path,
     assert f"L {table.at['LKneeAngles_X', 'allowable_mm']:.1f} mm" in index and "knee flexion ±2.5°" in index
 
 
-def _with_status(fuzzy: xr.Dataset, component: str, status: str, scale: float, failing: float) -> xr.Dataset:
-    out = fuzzy.copy(deep=True)
+def _with_status(result: MarkerErrorResult, component: str, status: str, scale: float,
+                 failing: float) -> MarkerErrorResult:  # fmt: skip
+    assert result.allowable is not None
+    out = result.allowable.copy(deep=True)
     at = {"component": component}
-    out["allowable_status"] = out["allowable_status"].astype(object)  # not truncated to the longest status
-    out["allowable_status"].loc[at] = status
-    out["allowable_scale"].loc[at] = scale
-    out["allowable_failing_scale"].loc[at] = failing
-    out["allowable_mm"].loc[at] = scale * float(out["segment_radius"].sel(at).max())
-    return out
+    out["status"] = out["status"].astype(object)  # not truncated to the longest status
+    out["status"].loc[at] = status
+    out["scale"].loc[at] = scale
+    out["failing_scale"].loc[at] = failing
+    out["mm"].loc[at] = scale * float(out["segment_radius"].sel(at).max())
+    return dataclasses.replace(result, allowable=out)
 
 
 def test_status_cells(analysis: MarkerErrorAnalysis) -> None:
-    fuzzy = _with_status(analysis.fuzzy, "LKneeAngles_Y", "full table passes", 1.0, np.nan)
+    assert analysis.result is not None
+    fuzzy = _with_status(analysis.result, "LKneeAngles_Y", "full table passes", 1.0, np.nan)
     fuzzy = _with_status(fuzzy, "LKneeAngles_Z", "smallest fails", 0.0, 0.01)
     fuzzy = _with_status(fuzzy, "LKneeAngles_X", "no data", np.nan, np.nan)
     summary = allowable_summary(fuzzy)
@@ -91,4 +95,4 @@ def test_status_cells(analysis: MarkerErrorAnalysis) -> None:
     assert (rows["LKneeAngles_Z"].mm, rows["LKneeAngles_Z"].percent) == ("< 0.32", "< 1.0")
     assert (rows["LKneeAngles_X"].mm, rows["LKneeAngles_X"].percent) == ("—", "—")
     assert summary.lead_sentences() == [rows["LKneeAngles_X"].text]
-    assert allowable_summary(analysis.fuzzy.drop_vars("allowable_status")) is None
+    assert allowable_summary(MarkerErrorResult(analysis.fuzzy)) is None and allowable_summary(None) is None

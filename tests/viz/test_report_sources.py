@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from fuzzygait.markererror.analysis import relative_envelope_width
-from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, attach_source_hulls, widest_source_bands
-from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
+from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, source_bands_dataset, widest_source_bands
+from fuzzygait.markererror.result import AngleAxes, MarkerErrorResult, fuzzy_angles_dataset
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.sources import _tint, dominant_sentence, source_figure
 from fuzzygait.workflows.angles import AnglesRun
@@ -59,7 +59,9 @@ def source_analysis(run: AnglesRun, per_source: bool = True) -> FakeAnalysis:
                      for n in FLEXION_COMPONENTS} for s, h in HALF.items()}  # fmt: skip
         sizes = (("measurement", 2.0), ("placement", 10.0), ("sta", 20.0))
         radii = {s: np.full(run.trial.n_markers, r) for s, r in sizes}
-        fuzzy = attach_source_hulls(fuzzy, bands, SOURCE_ALPHAS, radii=radii)
+        sources = source_bands_dataset(fuzzy, bands, SOURCE_ALPHAS, radii=radii)
+        return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy), ["fake per-source analysis"],
+                            MarkerErrorResult(fuzzy, sources=sources))  # fmt: skip
     return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy), ["fake per-source analysis"])
 
 
@@ -80,7 +82,7 @@ def _text(page: str) -> str:
 
 
 def test_widest_bands_and_the_dominating_source(analysis: FakeAnalysis) -> None:
-    table = widest_source_bands(analysis.fuzzy)
+    table = widest_source_bands(analysis.result)
     for name in FLEXION_COMPONENTS:
         for source, half in (*HALF.items(), ("all", ALL_HALF)):
             assert table.width(name, source) == pytest.approx(2 * half), (name, source)
@@ -142,12 +144,12 @@ def test_figure_panels_legend_and_unstretched_axes(analysis: FakeAnalysis) -> No
 
 
 def test_demo_sentence_names_the_dominating_source(analysis: FakeAnalysis) -> None:
-    sentence = dominant_sentence(analysis.fuzzy, "Knee")
+    sentence = dominant_sentence(analysis.result, "Knee")
     assert sentence is not None and sentence.startswith("Knee flexion: soft-tissue artefact dominates")
     assert "measurement system 2.0°/2.0°" in sentence and "all sources together 20.0°/20.0°" in sentence
     assert any(line.endswith(sentence) for line in uncertainty_lines(analysis))
     plain = source_analysis(analysis.run, per_source=False)
-    assert dominant_sentence(plain.fuzzy) is None
+    assert dominant_sentence(plain.result) is None
     assert not any("dominates" in line for line in uncertainty_lines(plain))
 
 

@@ -19,7 +19,7 @@ import pytest
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import FindingKind, messages
 from fuzzygait.markererror.allowable import allowable_table, refined_levels
-from fuzzygait.uncertainty.storage import load_result
+from fuzzygait.markererror.result import read_marker_result
 from fuzzygait.workflows import trial_inputs
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.demo import allowable_lines
@@ -49,21 +49,22 @@ def analysis(sparse_run: AnglesRun) -> MarkerErrorAnalysis:
 
 
 def test_refinement_follows_the_fuzzy_analysis(analysis: MarkerErrorAnalysis) -> None:
-    table, fuzzy = analysis.allowable, analysis.fuzzy
+    table, fuzzy = analysis.allowable, analysis.result
     assert table is not None and list(table.index) == ["LKneeAngles_X", "LKneeAngles_Y", "LKneeAngles_Z"]
+    assert fuzzy is not None and fuzzy.allowable is not None
     pd.testing.assert_frame_equal(allowable_table(fuzzy), table)
-    assert fuzzy.attrs["tolerance_deg"] == 2.5 and fuzzy.attrs["allowable_runs"] > 0
+    assert fuzzy.allowable.attrs["tolerance_deg"] == 2.5 and fuzzy.allowable.attrs["runs"] > 0
     assert int(refined_levels(fuzzy, "LKneeAngles_X")["refined"].sum()) == table.loc["LKneeAngles_X", "evaluations"]
     (note,) = [n for n in messages(analysis.notes) if n.startswith("allowable marker error")]
-    assert note.startswith(f"allowable marker error for ±2.5°: {fuzzy.attrs['allowable_runs']} refinement runs, ")
+    assert note.startswith(f"allowable marker error for ±2.5°: {fuzzy.allowable.attrs['runs']} refinement runs, ")
     assert note.endswith(" s")
     # ΔΦ of the refined dataset (its plain levels), the trial's name
-    assert list(analysis.delta_phi.columns) == [0.5, 0.0] and fuzzy.attrs["trial"] == "walking.c3d"
+    assert list(analysis.delta_phi.columns) == [0.5, 0.0] and analysis.fuzzy.attrs["trial"] == "walking.c3d"
 
 
 def test_no_tolerance_no_refinement(sparse_run: AnglesRun) -> None:
     plain = analyse_run(sparse_run, dataclasses.replace(SETTINGS, tolerance=None, angles=("LKneeAngles",)))
-    assert plain.allowable is None and "allowable_status" not in plain.fuzzy
+    assert plain.allowable is None and plain.result is not None and plain.result.allowable is None
     assert not [n for n in messages(plain.notes) if n.startswith("allowable")]
 
 
@@ -83,10 +84,11 @@ def test_saved_dataset_is_the_refined_one(sparse_run: AnglesRun, tmp_path: Path,
     out = tmp_path / "fuzzy.nc"
     analysis = analyse_to_files(MarkerErrorRequest(TrialInputs(sparse_run.trial), settings), out)
     assert analysis.allowable is not None and list(analysis.allowable.index) == ["LKneeAngles_X"]
-    again = load_result(out)
+    again = read_marker_result(out)
+    assert analysis.result is not None
     pd.testing.assert_frame_equal(allowable_table(again), analysis.allowable, check_dtype=False)
     np.testing.assert_allclose(refined_levels(again, "LKneeAngles_X")["hull"],
-                               refined_levels(analysis.fuzzy, "LKneeAngles_X")["hull"])  # fmt: skip
+                               refined_levels(analysis.result, "LKneeAngles_X")["hull"])  # fmt: skip
     assert analysis.notes[-1].kind is FindingKind.ALLOWABLE_ERROR and "(LKneeAngles_X)" in analysis.notes[-1].message
 
 
@@ -98,4 +100,4 @@ def test_demo_summary_has_the_flexion_sentence(analysis: MarkerErrorAnalysis) ->
     assert f"- {sentence}" in lines
     (row,) = [line for line in lines if line.startswith("| LKneeAngles_X ")]
     assert f"| {analysis.allowable.loc['LKneeAngles_X', 'allowable_mm']:.1f} |" in row
-    assert allowable_lines(dataclasses.replace(analysis, fuzzy=analysis.fuzzy.drop_vars("allowable_status"))) == []
+    assert allowable_lines(dataclasses.replace(analysis, result=None)) == []  # the bands alone

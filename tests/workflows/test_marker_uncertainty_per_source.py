@@ -17,7 +17,7 @@ import pytest
 
 from fuzzygait.core.findings import messages
 from fuzzygait.markererror.per_source import source_components, source_names, widest_source_bands
-from fuzzygait.uncertainty.storage import load_result
+from fuzzygait.markererror.result import read_marker_result
 from fuzzygait.workflows import trial_inputs
 from fuzzygait.workflows.angles import AnglesRun
 from fuzzygait.workflows.marker_uncertainty import (
@@ -71,14 +71,15 @@ def test_default_per_source_with_progress_through_every_stage(sparse_run: Angles
     recorder, components = Recorder(), []
     analysis = analyse_run(sparse_run, SETTINGS, lambda done, total: components.append((done, total)),
                            stages=recorder)  # fmt: skip
-    fuzzy = analysis.fuzzy
+    fuzzy = analysis.result
+    assert fuzzy is not None and fuzzy.bands is analysis.fuzzy
     assert source_names(fuzzy) == ["measurement", "placement", "sta"]
     assert source_components(fuzzy) == ["LKneeAngles_X"]  # the analysed flexion only
-    assert "allowable_status" in fuzzy  # the refinement still ran, before
+    assert fuzzy.allowable is not None  # the refinement still ran, before
     assert recorder.stages() == ["fuzzy angles", "allowable marker error", "per-source bands"]
     # per angle: the knee's three components are optimised together
     assert recorder.updates("fuzzy angles")[-1] == (1, 1) and components[-1] == (1, 1)
-    runs = fuzzy.attrs["allowable_runs"]
+    runs = fuzzy.allowable.attrs["runs"]
     assert recorder.updates("allowable marker error")[-1] == (runs, runs)
     assert recorder.updates("per-source bands") == [(1, 3), (2, 3), (3, 3)]
     (note,) = [n for n in messages(analysis.notes) if n.startswith("per-source bands")]
@@ -91,11 +92,12 @@ def test_default_per_source_with_progress_through_every_stage(sparse_run: Angles
 
 def test_per_source_off_or_one_source(sparse_run: AnglesRun) -> None:
     off = analyse_run(sparse_run, dataclasses.replace(SETTINGS, per_source=False, tolerance=None))
-    assert "source_hull" not in off.fuzzy and not [n for n in messages(off.notes) if n.startswith("per-source")]
+    assert off.result is not None and off.result.sources is None
+    assert not [n for n in messages(off.notes) if n.startswith("per-source")]
     assert not MarkerErrorSettings.create(per_source=False).per_source
     recorder = Recorder()
     one = analyse_run(sparse_run, dataclasses.replace(SETTINGS, sources=("sta",), tolerance=None), stages=recorder)
-    assert "source_hull" not in one.fuzzy and recorder.stages() == ["fuzzy angles"]
+    assert one.result is not None and one.result.sources is None and recorder.stages() == ["fuzzy angles"]
     assert "per-source bands: not computed (a single error source is selected)" in messages(one.notes)
     frontal = analyse_run(sparse_run, dataclasses.replace(SETTINGS, angles=("LPelvisAngles",), tolerance=None))
     assert "per-source bands: not computed (no hip/knee/ankle flexion analysed)" in messages(frontal.notes)
@@ -109,6 +111,7 @@ def test_saved_with_the_per_source_bands(sparse_run: AnglesRun, tmp_path: Path,
     request = MarkerErrorRequest(TrialInputs(sparse_run.trial), dataclasses.replace(SETTINGS, tolerance=None))
     analysis = analyse_to_files(request, out, stages=Prefixed(recorder, "walking.c3d: "))
     assert recorder.stages() == ["walking.c3d: fuzzy angles", "walking.c3d: per-source bands"]
-    again = load_result(out)
-    np.testing.assert_array_equal(again["source_hull"], analysis.fuzzy["source_hull"])
-    assert widest_source_bands(again).widths.equals(widest_source_bands(analysis.fuzzy).widths)
+    again = read_marker_result(out)
+    assert again.sources is not None and analysis.result is not None and analysis.result.sources is not None
+    np.testing.assert_array_equal(again.sources["hull"], analysis.result.sources["hull"])
+    assert widest_source_bands(again).widths.equals(widest_source_bands(analysis.result).widths)
