@@ -31,6 +31,8 @@ if TYPE_CHECKING:
     import pandas as pd
     import xarray as xr
 
+    from fuzzygait.markererror.result import MarkerErrorResult
+
 
 def _check_workers(workers: int) -> None:
     if workers < 1:
@@ -86,9 +88,9 @@ def uncertainty(
     out.print("ΔΦ, relative envelope width (Eq. 5.3), % of the largest |angle|, over the determined frames "
               '("undetermined": a segment frame can flip at that α-level):', markup=False)  # fmt: skip
     out.print(_delta_phi_text(analysis.fuzzy, analysis.delta_phi), markup=False)
-    if (allowable := _allowable_text(analysis.fuzzy)) is not None:
+    if (allowable := _allowable_text(analysis.result)) is not None:
         out.print(allowable, markup=False)
-    if (sources := _per_source_text(analysis.fuzzy)) is not None:
+    if (sources := _per_source_text(analysis.result)) is not None:
         out.print(sources, markup=False)
     out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
 
@@ -112,12 +114,12 @@ def _delta_phi_text(fuzzy: xr.Dataset, delta_phi: pd.DataFrame) -> str:
     return pd.DataFrame(cells, index=delta_phi.index, columns=columns).to_string()
 
 
-def _allowable_text(fuzzy: xr.Dataset) -> str | None:
+def _allowable_text(result: MarkerErrorResult | None) -> str | None:
     """The allowable-marker-error table (None without the refinement): per component the
     largest error on its largest ball (mm) and as % of Table 3.1, with its status."""
     from fuzzygait.viz.report.allowable import allowable_summary
 
-    summary = allowable_summary(fuzzy)
+    summary = allowable_summary(result)
     if summary is None or not summary.rows:
         return None
     header = ("", "angle", "mm", f"% of {summary.source}", "")
@@ -131,7 +133,7 @@ def _allowable_text(fuzzy: xr.Dataset) -> str | None:
     return "\n".join([title, *lines])
 
 
-def _per_source_text(fuzzy: xr.Dataset) -> str | None:
+def _per_source_text(result: MarkerErrorResult | None) -> str | None:
     """The widest band of each flexion component per error source alone and all together
     (deg, over the determined frames; "undetermined (n)" when no frame is determined), and
     the source that dominates; None without per-source bands."""
@@ -139,9 +141,9 @@ def _per_source_text(fuzzy: xr.Dataset) -> str | None:
 
     from fuzzygait.markererror.per_source import ALL, has_source_bands, widest_source_bands
 
-    if not has_source_bands(fuzzy):
+    if result is None or not has_source_bands(result):
         return None
-    table = widest_source_bands(fuzzy)
+    table = widest_source_bands(result)
     columns = [*table.sources, ALL]
     header = ("", *columns, "dominates")
     rows = [header]

@@ -181,7 +181,7 @@ def allowable_lines(analysis: TrialAnalysis) -> list[str]:
     """The summary's allowable-marker-error part: the knee-flexion sentences, then the
     table (mm on the largest ball, % of Table 3.1) -- what leads the report's first screen;
     nothing without the refinement."""
-    summary = allowable_summary(analysis.fuzzy)
+    summary = allowable_summary(analysis.result)
     if summary is None or not summary.rows:
         return []
     tau = f"±{summary.tolerance:g}°"
@@ -238,7 +238,7 @@ def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
             count = table.frames_undetermined(name, lowest_alpha)
             cells.append(f"{count} of {table.n_frames}" if count else "none")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    if (sentence := dominant_sentence(analysis.fuzzy, "Knee")) is not None:
+    if (sentence := dominant_sentence(analysis.result, "Knee")) is not None:
         lines += ["", f"Which marker error source dominates, each alone (thesis Fig. 5.9): {sentence}"]
     return lines
 
