@@ -89,6 +89,8 @@ def stats(ours: np.ndarray, nexus: np.ndarray) -> tuple[float, float, float]:
 
 #: summary rows: (case, run, quantity) -> (worst RMS, its output, worst inner RMS)
 SUMMARY: dict[tuple[str, str, str], tuple[float, str, float]] = {}
+#: (output, axis, unit) -> case -> (RMS, inner RMS) with every sample (the compact table)
+COMPACT: dict[tuple[str, str, str], dict[str, tuple[float, float]]] = {}
 
 
 def note_worst(key: tuple[str, str, str], label: str, rms: float, inner: float) -> None:
@@ -120,6 +122,8 @@ def table(case: Case) -> None:
                     cells.append(f"{rms:.4f} | {worst:.4f} | {inner:.4f}")
                     if "Force" not in name:
                         note_worst((case.name, label, unit), f"{name} {'XYZ'[axis]}", rms, inner)
+                        if label == "all samples":
+                            COMPACT.setdefault((name, "XYZ"[axis], unit), {})[case.name] = (rms, inner)
                 print(f"| {name} | {unit} | {'XYZ'[axis]} | {' | '.join(cells)} |")
     print()
 
@@ -137,6 +141,16 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     for (name, label, unit), (rms, output, inner) in SUMMARY.items():
         print(f"| {name} | {label} | {unit} | {rms:.4f} | {output} | {inner:.4f} |")
+    print()
+    print("## Every component, every analog sample: RMS (inner RMS where it differs by more than 0.001)")
+    print("| output | axis | unit | " + " | ".join(case.name for case in CASES) + " |")
+    print("|---|---|---|" + "---|" * len(CASES))
+    for (name, axis, unit), per_case in COMPACT.items():
+        cells = []
+        for case in CASES:
+            rms, inner = per_case.get(case.name, (float("nan"), float("nan")))
+            cells.append(f"{rms:.4f}" + (f" ({inner:.4f})" if abs(rms - inner) > 1e-3 else ""))
+        print(f"| {name} | {axis} | {unit} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":
