@@ -146,6 +146,14 @@ def test_zero_baseline_removes_the_offsets(tmp_path: Path) -> None:
     np.testing.assert_allclose(raw.force[0], [3.0, -5.0, 12.0])
 
 
+def test_zero_baseline_not_taken_from_a_loaded_plate(tmp_path: Path) -> None:
+    t = pf.truth(43, unloaded=None)  # loaded from the first sample
+    plate = pf.Plate(2, pf.yaw(0.6, 0.8), np.zeros(3), (500, 400), DEPTH, pf.type2_channels(t, DEPTH))
+    got = read_force_plates(pf.write(tmp_path / "loaded_zero.c3d", [plate], zero=(1, 3)))[0]
+    _close(got.force, pf.expected_lab(plate, t)["force"])
+    assert "offsets not removed" in of_kind(got.findings, FindingKind.FORCE_PLATE)[0].message
+
+
 # --------------------------------------------------------------------------- bad plates
 def test_saturated_channel_is_noted(tmp_path: Path) -> None:
     """12-bit converter (ANALOG:BITS): a stored value of -2048 is at its limit."""

@@ -39,7 +39,7 @@ lengths of ``CORNERS``/``ORIGIN`` in ``POINT:UNITS``.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -119,25 +119,12 @@ class PlateLoads:
         return bool(np.isfinite(self.force).any())
 
 
-def _channel_data(analog: AnalogData, setup: PlateSetup) -> NDArray[np.float64]:
-    """``(n, k)`` the plate's channels in their physical units."""
-    return analog.values[:, list(setup.channels)]
+def _units(units: list[str], table: dict[str, float]) -> Array:
+    """Factors of ``units`` in ``table``, 1 for an unknown or missing unit."""
+    return np.array([factor(u, table) or 1.0 for u in units])
 
 
-def _six(analog: AnalogData, setup: PlateSetup, channels: Array) -> tuple[Array, Array, list[Finding]]:
-    """Force (N) and moment about the transducer origin (N·mm) in plate coordinates from
-    the channels of a type 2, 4 or 5 plate (after the calibration matrix)."""
-    findings: list[Finding] = []
-    if setup.calibration is not None:
-        data = channels @ setup.calibration.T
-        return data[:, :3], data[:, 3:6], findings  # calibrated outputs: N and N·mm
-    units = [analog.units[c] for c in setup.channels]
-    force_factor = np.array([factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
-    moment_factor = np.array([factor(u, MOMENT_UNITS) or 1.0 for u in units[3:6]])
-    return channels[:, :3] * force_factor, channels[:, 3:6] * moment_factor, findings
-
-
-def _kistler(setup: PlateSetup, ch: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _kistler(setup: PlateSetup, ch: Array) -> tuple[Array, Array]:
     """Force (N) and moment about the sensor plane's centre (N·mm) of a Kistler (type 3)
     plate from fx12, fx34, fy14, fy23, fz1..fz4 (N) and the sensor offsets a, b (mm)."""
     a, b = setup.sensor_offsets
@@ -150,81 +137,86 @@ def _kistler(setup: PlateSetup, ch: NDArray[np.float64]) -> tuple[NDArray[np.flo
     return force, moment
 
 
-def _loads(analog: AnalogData, setup: PlateSetup) -> tuple[NDArray[np.float64], NDArray[np.float64], list[Finding]]:
-    """Force (N) and moment about the surface centre (N·mm), plate frame, on the plate."""
-    ch = _channel_data(analog, setup)
-    findings: list[Finding] = []
+def _loads(setup: PlateSetup, ch: Array, units: list[str], moment_factor: float | None = None) -> tuple[Array, Array]:
+    """Force (N) and moment about the surface centre (N·mm), plate frame, with the sign
+    the channels give, from the plate's channels ``ch`` ``(n, k)`` in ``units``;
+    ``moment_factor``: to N·mm for moment channels, overriding their units."""
     if setup.kind == 1:
-        units = [analog.units[c].strip().lower() for c in setup.channels]
-        cop_factor = np.array([LENGTH_UNITS_TO_MM.get(u, 1.0) for u in units[3:5]])
-        force = ch[:, :3] * np.array([factor(u, FORCE_UNITS) or 1.0 for u in units[:3]])
+        force = ch[:, :3] * _units(units[:3], FORCE_UNITS)
         cop = np.zeros_like(force)
-        cop[:, :2] = ch[:, 3:5] * cop_factor
-        torque = ch[:, 5] * (factor(units[5], MOMENT_UNITS) or 1.0)
+        cop[:, :2] = ch[:, 3:5] * np.array([LENGTH_UNITS_TO_MM.get(u.strip().lower(), 1.0) for u in units[3:5]])
         moment = np.cross(cop, force)
-        moment[:, 2] += torque
-        return force, moment, findings
+        moment[:, 2] += ch[:, 5] * _units(units[5:6], MOMENT_UNITS)[0]
+        return force, moment
     if setup.kind == 3:
         force, moment = _kistler(setup, ch)
+    elif setup.calibration is not None:  # types 4 and 5: outputs in N and N·mm
+        data = ch @ setup.calibration.T
+        force, moment = data[:, :3], data[:, 3:6]
     else:
-        force, moment, findings = _six(analog, setup, ch)
+        force = ch[:, :3] * _units(units[:3], FORCE_UNITS)
+        moment = ch[:, 3:6] * (_units(units[3:6], MOMENT_UNITS) if moment_factor is None else moment_factor)
     # moment about the surface centre: M_c = M_o + (o - c) x F, o - c = depth
-    moment = moment + np.cross(setup.depth, force)
-    return force, moment, findings
+    return force, moment + np.cross(setup.depth, force)
 
 
-def _moment_unit_check(
-    analog: AnalogData, setup: PlateSetup, force: Array, moment: Array, threshold_n: float
-) -> tuple[Array, list[Finding]]:
-    """Moment channels labelled N·m whose values are N·mm (Vicon Workstation): the centre
-    of pressure computed with N·m lies off the plate, with N·mm on it."""
-    if setup.kind not in (2, 4) or setup.calibration is not None:
-        return moment, []
-    units = [analog.units[c] for c in setup.channels[3:6]]
-    if not all(factor(u, MOMENT_UNITS) == 1000.0 for u in units):
-        return moment, []
+def _on_plate(setup: PlateSetup, force: Array, moment: Array, loaded: NDArray[np.bool_]) -> float:
+    """Fraction of the ``loaded`` samples whose centre of pressure lies on the plate
+    (within 5 % of its half sizes)."""
+    half = setup.half_size() * 1.05
+    fz = force[loaded, 2]
+    x, y = -moment[loaded, 1] / fz, moment[loaded, 0] / fz
+    return float(np.mean((np.abs(x) <= half[0]) & (np.abs(y) <= half[1])))
+
+
+def _moment_units(
+    setup: PlateSetup, ch: Array, units: list[str], threshold_n: float
+) -> tuple[float | None, list[Finding]]:
+    """None (the moment channels' own units), or 1.0 with a note for channels labelled
+    N·m whose values are N·mm (Vicon Workstation): with N·m the centre of pressure lies
+    off the plate in most loaded samples, with N·mm on it."""
+    labels = units[3:6]
+    if setup.kind != 2 or not all(factor(u, MOMENT_UNITS) == 1000.0 for u in labels):
+        return None, []
+    force, as_labelled = _loads(setup, ch, units)
     normal = np.abs(force[:, 2])
     loaded = normal > max(threshold_n, 0.2 * float(np.nanmax(normal, initial=0.0)))
     if not loaded.any():
-        return moment, []
-    half = setup.half_size()
-    as_is = moment[loaded] - np.cross(setup.depth, force[loaded])  # about the transducer, as converted
-
-    def on_plate(m: NDArray[np.float64]) -> float:
-        m_c = m + np.cross(setup.depth, force[loaded])
-        x, y = -m_c[:, 1] / force[loaded, 2], m_c[:, 0] / force[loaded, 2]
-        return float(np.mean((np.abs(x) <= half[0] * 1.05) & (np.abs(y) <= half[1] * 1.05)))
-
-    if on_plate(as_is) < 0.5 <= on_plate(as_is / 1000.0):
-        note = Finding(
+        return None, []
+    _, as_nmm = _loads(setup, ch, units, moment_factor=1.0)
+    if _on_plate(setup, force, as_labelled, loaded) < 0.5 <= _on_plate(setup, force, as_nmm, loaded):
+        return 1.0, [Finding(
             FindingKind.FORCE_PLATE_UNITS,
-            f"force plate {setup.number}: ANALOG:UNITS says {units[0]} for the moment channels but the values are "
+            f"force plate {setup.number}: ANALOG:UNITS says {labels[0]} for the moment channels but the values are "
             "N·mm (in N·m the centre of pressure would lie off the plate); read as N·mm",
             Severity.WARNING,
-        )
-        fixed = moment.copy()
-        fixed -= np.cross(setup.depth, force)
-        fixed /= 1000.0
-        fixed += np.cross(setup.depth, force)
-        return fixed, [note]
-    return moment, []
+        )]  # fmt: skip
+    return None, []
 
 
-def _zero(analog: AnalogData, setup: PlateSetup, values: Array) -> tuple[Array, list[Finding]]:
-    """Channels less their mean over the ``FORCE_PLATFORM:ZERO`` frames (a range of
-    marker frames, 1-based from the file's first frame; none when it is empty)."""
-    first, last = setup.zero
-    first = max(first, 1)
-    if last < first or not analog.n_frames:
-        return values, []
-    per_frame = values.shape[0] / analog.n_frames
-    start, stop = int(round((first - 1) * per_frame)), int(round(min(last, analog.n_frames) * per_frame))
+def _zero(
+    setup: PlateSetup, ch: Array, units: list[str], n_frames: int, threshold_n: float
+) -> tuple[Array, list[Finding]]:
+    """Channels less their mean over the ``FORCE_PLATFORM:ZERO`` frames (marker frames,
+    1-based from the file's first; none when the range is empty). Not when the normal
+    force varies by more than ``threshold_n`` in those frames (a load, not an offset)."""
+    first, last = max(setup.zero[0], 1), setup.zero[1]
+    if last < first or not n_frames:
+        return ch, []
+    per_frame = ch.shape[0] / n_frames
+    start, stop = int(round((first - 1) * per_frame)), int(round(min(last, n_frames) * per_frame))
     if stop <= start:
-        return values, []
-    baseline = values[start:stop].mean(axis=0)
+        return ch, []
+    window = ch[start:stop]
+    fz = _loads(setup, window, units)[0][:, 2]
+    if float(np.ptp(fz)) > threshold_n:
+        return ch, [Finding(FindingKind.FORCE_PLATE,
+                            f"force plate {setup.number}: offsets not removed: the plate is loaded in the "
+                            f"FORCE_PLATFORM:ZERO frames {first}-{last} (normal force varies by {np.ptp(fz):.0f} N)",
+                            Severity.WARNING)]  # fmt: skip
     note = Finding(FindingKind.FORCE_PLATE, f"force plate {setup.number}: channel offsets removed (their mean over "
                                             f"frames {first}-{last}, FORCE_PLATFORM:ZERO)")  # fmt: skip
-    return values - baseline, [note]
+    return ch - window.mean(axis=0), [note]
 
 
 def read_plate_loads(
@@ -269,25 +261,32 @@ def _plate(
         nan = np.full((n, 3), np.nan)
         return PlateLoads(setup, analog.rate, nan, nan.copy(), (bad,))
     findings: list[Finding] = list(_saturation(analog, setup))
-    values = analog.values
+    ch = analog.values[:, list(setup.channels)]
+    units = [analog.units[c] for c in setup.channels]
     if zero_baseline:
-        zeroed, notes = _zero(analog, setup, values[:, list(setup.channels)])
-        if notes:
-            values = values.copy()
-            values[:, list(setup.channels)] = zeroed
-            findings += notes
-    used = replace(analog, values=values) if values is not analog.values else analog
-    force, moment, more = _loads(used, setup)
-    moment, unit_notes = _moment_unit_check(used, setup, force, moment, threshold_n)
-    findings += more + unit_notes
-    peak = int(np.argmax(np.abs(force[:, 2]))) if n else 0
-    if n and force[peak, 2] > threshold_n:  # the action on the plate: the reaction is its opposite
+        ch, notes = _zero(setup, ch, units, analog.n_frames, threshold_n)
+        findings += notes
+    moment_factor, notes = _moment_units(setup, ch, units, threshold_n)
+    findings += notes
+    force, moment = _loads(setup, ch, units, moment_factor)
+    return PlateLoads(setup, analog.rate, *_reaction(setup, force, moment, threshold_n, findings))
+
+
+def _reaction(
+    setup: PlateSetup, force: Array, moment: Array, threshold_n: float, findings: list[Finding]
+) -> tuple[Array, Array, tuple[Finding, ...]]:
+    """The loads as the reaction on the body (negated when the channels give the action
+    on the plate) and the notes on the normal force."""
+    normal = np.abs(force[:, 2])
+    if not normal.size:
+        return force, moment, tuple(findings)
+    peak = int(np.argmax(normal))
+    if force[peak, 2] > threshold_n:  # the action on the plate: the reaction is its opposite
         force, moment = -force, -moment
         findings.append(Finding(FindingKind.FORCE_PLATE,
                                 f"force plate {setup.number}: its channels give the force on the plate (the normal "
                                 "force points into it); negated to the reaction on the body"))  # fmt: skip
-    normal = np.abs(force[:, 2])
-    if n and normal.min() > threshold_n:
+    if normal.min() > threshold_n:
         findings.append(Finding(FindingKind.FORCE_PLATE,
                                 f"force plate {setup.number}: the normal force never falls below {threshold_n:g} N "
                                 f"(least {normal.min():.0f} N): an offset not removed? Contact is found throughout",
@@ -296,7 +295,7 @@ def _plate(
         findings.append(Finding(FindingKind.FORCE_PLATE_UNLOADED,
                                 f"force plate {setup.number} carries no load (normal force below {threshold_n:g} N "
                                 "throughout)"))  # fmt: skip
-    return PlateLoads(setup, analog.rate, force, moment, tuple(findings))
+    return force, moment, tuple(findings)
 
 
 def _saturation(analog: AnalogData, setup: PlateSetup) -> list[Finding]:
