@@ -39,7 +39,7 @@ lengths of ``CORNERS``/``ORIGIN`` in ``POINT:UNITS``.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -242,9 +242,11 @@ def read_plate_loads(
     """
     analog = read_analog(path)
     setups, problems = plate_setups(analog, LENGTH_UNITS_TO_MM)
+    read_notes = tuple(Finding(FindingKind.FILE_FORMAT, note) for note in analog.notes)  # the reader used
     out = []
     for setup in setups:
-        out.append(_plate(analog, setup, problems.get(setup.number), zero_baseline, threshold_n))
+        plate = _plate(analog, setup, problems.get(setup.number), zero_baseline, threshold_n)
+        out.append(replace(plate, findings=read_notes + plate.findings) if read_notes else plate)
     if out and not any(p.usable for p in out):
         reasons = "; ".join(f.message for p in out for f in p.findings if f.kind is FindingKind.FORCE_PLATE_CALIBRATION)
         raise ForcePlateError(f"{Path(path)}: no force plate can be used ({reasons})")
