@@ -251,6 +251,8 @@ SHARED_TRIALS = [
     ("pig-options", "PiGKadMed_Motion.c3d"),
     ("pig-options", "PiG_Motion-FlatFoot-Full.c3d"),
     ("pig-options", "PiGKad_Calibration.c3d"),
+    ("pig-options", "PiGKadMed_Calibration.c3d"),
+    ("pig-options", "PiG_Calibration-FlatFoot-Full.c3d"),
     ("cgm2", "qualisys-cgm24-input", "Gait - CGM2 3 (pyCGM2 CGM2.3 output).c3d"),
     ("c3d-formats", "pc_real.c3d"),
     ("c3d-formats", "pc_int.c3d"),
@@ -276,6 +278,16 @@ def test_shared_trials_equal_ezc3d_extraction(parts: tuple[str, ...]) -> None:
         c = plate.contact
         np.testing.assert_allclose(plate.cop[c], platform["center_of_pressure"].T[c], rtol=0, atol=1e-9)
         np.testing.assert_allclose(plate.free_moment[c], platform["Tz"].T[c], rtol=0, atol=1e-7)
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("name", ["Gait - CGM2 1.c3d", "Static - CGM2 1.c3d"])
+def test_type5_plates_ezc3d_refuses_we_read(name: str) -> None:
+    path = shared_file("cgm2", "qualisys-cgm24-input", name)
+    with pytest.raises(RuntimeError, match="Type 5 is not supported"):
+        ezc3d.c3d(str(path), extract_forceplat_data=True)
+    plates = read_force_plates(path)
+    assert [p.kind for p in plates] == [5, 5] and all(np.isfinite(p.force).all() for p in plates)
 
 
 @pytest.mark.shared
