@@ -37,7 +37,7 @@ from fuzzygait.mechanics.scenarios import LegSimulator  # noqa: E402
 from fuzzygait.mechanics.solver import SolverSettings  # noqa: E402
 from fuzzygait.mechanics.targets import LegModelRecipe, LegTargetModel  # noqa: E402
 from fuzzygait.uncertainty.execution import Evaluator  # noqa: E402
-from fuzzygait.uncertainty.frv import FRVMultiStudy, FRVSpec, MultiStudyOptions, generate_box_samples  # noqa: E402
+from fuzzygait.uncertainty.frv import FRVSpec, FRVStudy, MultiStudyOptions, generate_box_samples  # noqa: E402
 
 MODULUS = 59.958e9  # Pa, Table 5.3
 ALPHAS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -79,9 +79,9 @@ def study(model, recipe, specs, n, disc, workers, store, timed=None, peak_refine
             timed.inner = evaluator
             evaluator = timed
         start = time.perf_counter()
-        result = FRVMultiStudy.create(model, specs, n,
-                                      MultiStudyOptions(n_disc=disc, seed=0, overwrite=True, peak_refine=peak_refine),
-                                      store=store, evaluator=evaluator)  # fmt: skip
+        result = FRVStudy.create(model, specs, n,
+                                 MultiStudyOptions(n_disc=disc, seed=0, overwrite=True, peak_refine=peak_refine),
+                                 store=store, evaluator=evaluator)  # fmt: skip
         return result, time.perf_counter() - start
 
 
@@ -126,7 +126,7 @@ def main() -> None:
 
     with Evaluator(workers=args.workers) as pool:
         added_timer = Timed(pool.batch(recipe, sensitivities=True))
-        reopened = FRVMultiStudy.open(args.store, model, evaluator=added_timer)
+        reopened = FRVStudy.open(args.store, model, evaluator=added_timer)
         start = time.perf_counter()
         reopened.add_samples(args.samples)
         added = time.perf_counter() - start
