@@ -2,15 +2,25 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import Side
-from fuzzygait.kinetics.assignment import assigned_ground, stored_assignment
+from fuzzygait.io import read_c3d
+from fuzzygait.kinetics.assignment import (
+    Foot,
+    PlateContact,
+    assigned_ground,
+    automatic_assignment,
+    contact_ground,
+    stored_assignment,
+)
 from fuzzygait.kinetics.ground import frame_means, plate_load, samples_per_frame
+from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
+from support import shared_file
 
 
 @dataclass(frozen=True)
@@ -75,3 +85,67 @@ def test_stored_assignment_finds_the_plate_and_the_frames() -> None:
     ground = assigned_ground([first, second], found.plate, 100.0)
     np.testing.assert_allclose(ground.force[55], [-20.0, 0.0, 800.0])
     assert np.all(ground.force[:52] == 0.0)
+
+
+# ------------------------------------------------------------------ automatic assignment
+@dataclass(frozen=True)
+class Outlined(Plate):
+    corners: np.ndarray = field(default_factory=lambda: np.zeros((4, 3)))
+
+
+def square(x0: float) -> np.ndarray:
+    """A 500 mm square plate from x0 to x0 + 500, y 0..500, corners round it."""
+    return np.array([[x0 + 500, 500, 0], [x0 + 500, 0, 0], [x0, 0, 0], [x0, 500, 0.0]])
+
+
+def foot_at(heel: tuple[float, float], n: int = 100) -> Foot:
+    """A static foot pointing +x: heel, toe 200 mm ahead, ankle 50 mm ahead and up."""
+    h = np.tile([heel[0], heel[1], 30.0], (n, 1))
+    return Foot(h, h + [200.0, 0, 0], h + [50.0, 0, 50.0])
+
+
+def loaded(x0: float, cop: tuple[float, float], on: slice = slice(200, 800), number: int = 1) -> Outlined:
+    p = plate(number, 1000, np.array([0.0, 0.0, 700.0]), np.array([cop[0], cop[1], 0.0]), 0.0, on)
+    return Outlined(p.number, p.rate, p.force, p.cop, p.free_moment, p.contact, square(x0))
+
+
+def test_a_foot_wholly_on_the_plate_gets_the_contact() -> None:
+    feet = {Side.LEFT: foot_at((100, 150)), Side.RIGHT: foot_at((700, 350))}
+    contacts = automatic_assignment([loaded(0.0, (200, 160))], feet, 100.0, 10.0)
+    assert contacts == [PlateContact(1, 20, 79, Side.LEFT)]
+    ground = contact_ground([loaded(0.0, (200, 160))], contacts, Side.LEFT, 100, 100.0)
+    assert np.all(ground.force[21:79, 2] == 700.0) and np.all(ground.force[:20] == 0.0)
+
+
+@pytest.mark.parametrize(("feet", "reason"), [
+    ({Side.LEFT: foot_at((-100, 150))}, "left foot off the plate's edge"),
+    ({Side.LEFT: foot_at((100, 150)), Side.RIGHT: foot_at((100, 200))}, "both feet over the centre of pressure"),
+    ({Side.LEFT: foot_at((900, 150))}, "no foot over the centre of pressure"),
+])  # fmt: skip
+def test_contacts_that_are_not_used(feet: dict[Side, Foot], reason: str) -> None:
+    cop = (50.0, 160.0) if reason.endswith("edge") else (200.0, 170.0)
+    (contact,) = automatic_assignment([loaded(0.0, cop)], feet, 100.0, 10.0)
+    assert contact.side is None and contact.reason == reason
+
+
+def test_a_foot_on_two_plates_at_once_uses_neither() -> None:
+    """A foot across two plates' joint (heel 20 mm before it, ankle 20 mm after), loading
+    both: each contact alone would be its."""
+    heel = np.tile([480.0, 150.0, 30.0], (100, 1))
+    feet = {Side.RIGHT: Foot(heel, heel + [200.0, 0, 0], heel + [40.0, 0, 50.0])}
+    plates = [loaded(0.0, (490, 150), number=1), loaded(500.0, (600, 150), number=2)]
+    assert [c.side for c in automatic_assignment(plates[:1], feet, 100.0, 10.0)] == [Side.RIGHT]
+    contacts = automatic_assignment(plates, feet, 100.0, 10.0)
+    assert [c.reason for c in contacts] == ["right foot on two plates at once"] * 2
+
+
+def test_automatic_assignment_agrees_with_nexus_on_pigkad() -> None:
+    """PiGKad: each foot's one contact on the plate Nexus used, the frames where both
+    plates' loads exceed the threshold."""
+    path = shared_file("pig-options", "PiGKad_Motion.c3d")
+    trial = read_c3d(path)
+    feet = {side: Foot(*(trial.marker(side.value + m) for m in ("HEE", "TOE", "ANK"))) for side in Side}
+    contacts = automatic_assignment(read_force_plates(path), feet, trial.rate, DEFAULT_THRESHOLD_N)
+    assert [(c.plate, c.side) for c in contacts] == [(1, Side.RIGHT), (2, Side.LEFT)]
+    nexus = np.flatnonzero(np.isfinite(trial.outputs["RGroundReactionForce"][:, 2]))
+    assert (contacts[0].first, contacts[0].last) == (nexus[0], nexus[-1])

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fuzzygait.core.names import Side
-from fuzzygait.kinetics.ground import PlateSignals, no_load, plate_load
+from fuzzygait.kinetics.ground import PlateSignals, frame_means, no_load, plate_load, samples_per_frame
 from fuzzygait.kinetics.inverse_dynamics import Load
 
 #: How far (N/kg) a plate's frame force may be from the stored ground reaction and still
@@ -76,3 +77,154 @@ def assigned_ground(plates: Sequence[PlateSignals], plate: NDArray[np.int_], rat
             load = plate_load(p, n, rate)
             force[on], moment[on] = load.force[on], load.moment[on]
     return Load(np.zeros((n, 3)), force, moment) if plates else no_load(n)
+
+
+# ------------------------------------------------------------------------ automatic
+#: Contacts shorter than this (s) or peaking below MIN_PEAK x the contact threshold are
+#: noise, not a foot (a step lasts several tenths of a second).
+MIN_CONTACT_S = 0.05
+MIN_PEAK = 5.0
+#: How far (mm, horizontally) the centre of pressure may lie from a foot's heel-toe line
+#: for the load to be that foot's: half a foot's width and the markers' offsets.
+REACH_MM = 60.0
+#: How far (mm) the heel and ankle markers may lie outside the plate's outline in the
+#: middle third of a contact (foot flat): the heel marker sits behind the point of the
+#: heel that touches, by its radius and more.
+EDGE_MARGIN_MM = 25.0
+
+
+class PlateCorners(PlateSignals, Protocol):
+    """A plate's signals and its outline: ``corners`` ``(4, 3)`` mm, laboratory frame, in
+    order round the plate (a :class:`fuzzygait.io.force_plates.ForcePlate`)."""
+
+    @property
+    def corners(self) -> NDArray[np.float64]: ...
+
+
+@dataclass(frozen=True)
+class Foot:
+    """A foot's markers, ``(n, 3)`` mm, laboratory frame."""
+
+    heel: NDArray[np.float64]
+    toe: NDArray[np.float64]
+    ankle: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PlateContact:
+    """One contact on one plate and the foot it went to.
+
+    Attributes:
+        plate: 1-based plate number.
+        first, last: the contact's first and last frame (0-based indices of the trial).
+        side: the foot whose load it is, or None when it is not used.
+        reason: why it is not used (None when used).
+    """
+
+    plate: int
+    first: int
+    last: int
+    side: Side | None
+    reason: str | None = None
+
+
+def over_plate(points: NDArray[np.float64], corners: NDArray[np.float64], margin: float = 0.0) -> NDArray[np.bool_]:
+    """``(n,)``: the points (``(n, 3)`` mm) whose projection on the plate lies inside its
+    outline (``corners``, ``(4, 3)`` mm, in order round a rectangle) grown by ``margin`` mm
+    on every side; NaN points are not."""
+    origin, e1, e2 = corners[1], corners[0] - corners[1], corners[2] - corners[1]
+    l1, l2 = np.linalg.norm(e1), np.linalg.norm(e2)
+    s = (points - origin) @ (e1 / l1)
+    t = (points - origin) @ (e2 / l2)
+    with np.errstate(invalid="ignore"):
+        return (s >= -margin) & (s <= l1 + margin) & (t >= -margin) & (t <= l2 + margin)
+
+
+def frame_contacts(plate: PlateSignals, n_frames: int, rate: float, threshold_n: float) -> list[tuple[int, int]]:
+    """The contacts of ``plate``: runs of frames (first, last) where most of a frame's
+    samples are in contact, at least :data:`MIN_CONTACT_S` long and peaking above
+    :data:`MIN_PEAK` x ``threshold_n`` (N)."""
+    ratio = samples_per_frame(plate.rate, rate)
+    on = frame_means(np.asarray(plate.contact, dtype=float), ratio, n_frames) > 0.5
+    fz = np.abs(frame_means(np.nan_to_num(np.asarray(plate.force, dtype=float)[:, 2]), ratio, n_frames))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
+    runs = [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    long_enough = MIN_CONTACT_S * rate
+    return [(a, b) for a, b in runs if (b - a + 1) >= long_enough and fz[a : b + 1].max() > MIN_PEAK * threshold_n]
+
+
+def cop_distance(foot: Foot, cop: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(n,)`` mm: the horizontal distance (laboratory x, y) of the centre of pressure from
+    the foot's heel-toe segment; NaN where a marker or the COP is missing."""
+    heel, line, rel = foot.heel[:, :2], (foot.toe - foot.heel)[:, :2], (cop - foot.heel)[:, :2]
+    along = np.clip(np.einsum("ni,ni->n", rel, line) / np.einsum("ni,ni->n", line, line), 0.0, 1.0)
+    return np.linalg.norm(rel - along[:, None] * line, axis=1) + 0.0 * heel[:, 0]
+
+
+def _contact_foot(plate: PlateCorners, feet: Mapping[Side, Foot], cop: NDArray[np.float64],
+                  frames: slice) -> tuple[Side | None, str | None]:  # fmt: skip
+    """The foot of one contact, or why none."""
+    near = {side: cop_distance(foot, cop)[frames] for side, foot in feet.items()}
+    loaded = [side for side, d in near.items() if np.nanmedian(d) <= REACH_MM]
+    touching = [side for side, d in near.items() if np.nanmin(d) <= REACH_MM]
+    if len(loaded) != 1:
+        return None, "no foot over the centre of pressure" if not loaded else "both feet over the centre of pressure"
+    side = loaded[0]
+    if len(touching) > 1:
+        return None, "both feet on the plate during the contact"
+    foot = feet[side]
+    length = frames.stop - frames.start
+    middle = slice(frames.start + length // 3, frames.stop - length // 3)
+    rearfoot = (foot.heel[middle], foot.ankle[middle])
+    if not all(over_plate(points, plate.corners, EDGE_MARGIN_MM).all() for points in rearfoot):
+        return None, f"{side.word.lower()} foot off the plate's edge"
+    return side, None
+
+
+def automatic_assignment(plates: Sequence[PlateCorners], feet: Mapping[Side, Foot], rate: float,
+                         threshold_n: float) -> list[PlateContact]:  # fmt: skip
+    """Each contact of each plate to one foot: the foot whose heel-toe line the centre of
+    pressure stays within :data:`REACH_MM` of (median over the contact), with its heel and
+    ankle markers over the plate through the middle third of the contact, the foot flat
+    (at heel strike the heel marker may still be behind the edge it lands on; the toes may
+    overhang, as on a stair).  Not used: a contact no foot or both feet are over, a contact the other foot
+    also comes within reach of, a foot off the plate's edge, and the contacts of a foot on
+    two plates at once.
+
+    Args:
+        plates: the plates at their own rate (first sample at the first frame).
+        feet: per side the foot markers (a side without them is absent).
+        rate: marker frames per second; ``threshold_n`` the plates' contact threshold (N).
+    """
+    contacts: list[PlateContact] = []
+    n_frames = len(next(iter(feet.values())).heel) if feet else 0
+    for plate in plates:
+        ratio = samples_per_frame(plate.rate, rate)
+        cop = frame_means(np.where(np.asarray(plate.contact)[:, None], plate.cop, 0.0), ratio, n_frames)
+        weight = frame_means(np.asarray(plate.contact, dtype=float), ratio, n_frames)
+        cop = np.where(weight[:, None] > 0, cop / np.maximum(weight, 1e-12)[:, None], np.nan)
+        for first, last in frame_contacts(plate, n_frames, rate, threshold_n):
+            side, reason = _contact_foot(plate, feet, cop, slice(first, last + 1))
+            contacts.append(PlateContact(plate.number, first, last, side, reason))
+    return _one_plate_per_foot(contacts)
+
+
+def _one_plate_per_foot(contacts: list[PlateContact]) -> list[PlateContact]:
+    """Contacts of one foot on two plates at the same time become unused."""
+    out = []
+    for c in contacts:
+        clash = any(o is not c and o.side == c.side and o.side is not None and o.first <= c.last and c.first <= o.last
+                    for o in contacts)  # fmt: skip
+        out.append(PlateContact(c.plate, c.first, c.last, None, f"{c.side.word.lower()} foot on two plates at once")
+                   if clash and c.side is not None else c)  # fmt: skip
+    return out
+
+
+def contact_ground(plates: Sequence[PlateSignals], contacts: Sequence[PlateContact], side: Side, n_frames: int,
+                   rate: float) -> Load:  # fmt: skip
+    """The ground's load on the ``side`` foot: its used contacts' plate loads, on their frames."""
+    plate = np.zeros(n_frames, dtype=int)
+    for c in contacts:
+        if c.side is side:
+            plate[c.first : c.last + 1] = c.plate
+    return assigned_ground(plates, plate, rate)
