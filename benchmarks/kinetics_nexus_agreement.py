@@ -9,8 +9,9 @@ the plate Nexus put there frame by frame (:func:`fuzzygait.kinetics.assignment.s
 Two ground loads:
 
 * ``all samples``: every analog sample of the assigned plate (threshold 0 N), as Nexus;
-* ``contact``: only the samples above the reader's contact threshold (10 N), as the
-  pipeline will run.
+* ``contact``: only the samples above the reader's contact threshold (10 N);
+* ``automatic assignment``: the contacts (10 N) assigned by our own rule
+  (:func:`fuzzygait.kinetics.assignment.automatic_assignment`), as the pipeline will run.
 
 Prints per trial, output and component the RMS and max difference over the frames where
 Nexus has an output (moments N·m/kg, powers W/kg, GRF % body weight), and the RMS without
@@ -32,7 +33,13 @@ from fuzzygait.core.names import Side  # noqa: E402
 from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.io.subject import subject_from_processing  # noqa: E402
 from fuzzygait.kinematics import compute_lower_body  # noqa: E402
-from fuzzygait.kinetics.assignment import assigned_ground, stored_assignment  # noqa: E402
+from fuzzygait.kinetics.assignment import (  # noqa: E402
+    Foot,
+    assigned_ground,
+    automatic_assignment,
+    contact_ground,
+    stored_assignment,
+)
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
 from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics  # noqa: E402
 
@@ -57,8 +64,10 @@ QUANTITIES = {"Moment": ("N·m/kg", 1e-3, (0, 1, 2)), "Power": ("W/kg", 1.0, (2,
 EDGE = 3  # Nexus output frames left out at each end for the "inner" column
 
 
-def kinetics(case: Case, threshold_n: float) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], str]:
-    """Our outputs, Nexus', and a note on the plates used."""
+def kinetics(case: Case, threshold_n: float, automatic: bool = False) -> tuple[dict[str, np.ndarray],
+                                                                             dict[str, np.ndarray], str]:  # fmt: skip
+    """Our outputs, Nexus', and a note on the plates used (``automatic``: our own
+    assignment, :func:`~fuzzygait.kinetics.assignment.automatic_assignment`)."""
     path = DATA / case.path
     trial = read_c3d(path)
     subject = subject_from_processing(trial.parameters)
@@ -68,6 +77,14 @@ def kinetics(case: Case, threshold_n: float) -> tuple[dict[str, np.ndarray], dic
     every_sample = read_force_plates(path, threshold_n=0.0)
     plates = read_force_plates(path, threshold_n=threshold_n)
     ground, notes = {}, []
+    if automatic:
+        feet = {side: Foot(*(trial.marker(side.value + m) for m in ("HEE", "TOE", "ANK"))) for side in Side}
+        contacts = automatic_assignment(plates, feet, trial.rate, threshold_n)
+        ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
+        ours = plug_in_gait_kinetics(result, trial, subject, ground).outputs
+        used = [f"plate {c.plate} frames {c.first}-{c.last}: {c.side.value if c.side else f'unused ({c.reason})'}"
+                for c in contacts]  # fmt: skip
+        return ours, trial.outputs, "; ".join(used)
     for side in Side:
         assigned = stored_assignment(every_sample, trial.outputs, side, subject.body_mass, trial.rate)
         ground[side] = assigned_ground(plates, assigned.plate, trial.rate)
@@ -99,10 +116,12 @@ def note_worst(key: tuple[str, str, str], label: str, rms: float, inner: float) 
 
 
 def table(case: Case) -> None:
-    runs = {label: kinetics(case, threshold) for label, threshold in
-            (("all samples", 0.0), (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N))}  # fmt: skip
+    runs = {label: kinetics(case, threshold, automatic) for label, threshold, automatic in
+            (("all samples", 0.0, False), (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N, False),
+             ("automatic assignment", DEFAULT_THRESHOLD_N, True))}  # fmt: skip
     print(f"## {case.name}: {case.path}")
     print("plates (from Nexus' stored GRF): " + next(iter(runs.values()))[2])
+    print("automatic assignment: " + runs["automatic assignment"][2])
     print()
     head = " | ".join(f"{label} RMS | max | inner RMS" for label in runs)
     print(f"| output | unit | axis | {head} |")
