@@ -20,6 +20,7 @@ from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import subject_from_processing
 from fuzzygait.kinematics import compute_lower_body
 from fuzzygait.kinetics.assignment import assigned_ground, stored_assignment
+from fuzzygait.kinetics.ground import no_load
 from fuzzygait.kinetics.plates import read_force_plates
 from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait_kinetics
 from support import shared_file
@@ -122,3 +123,16 @@ def test_a_body_mass_of_zero_is_one_error_line() -> None:
     result = compute_lower_body(trial, subject)
     with pytest.raises(ParameterError, match=r"^body mass must be positive \(kg\) for kinetics; got 0.0$"):
         plug_in_gait_kinetics(result, trial, subject, {})
+
+
+def test_a_leg_without_its_heel_marker_is_unavailable_not_wrong() -> None:
+    path = shared_file("vicon", "Movement_trial.c3d")
+    trial = read_c3d(path)
+    keep = [k for k, label in enumerate(trial.marker_labels) if label != "RHEE"]
+    trial = replace(trial, markers=trial.markers[:, keep], marker_labels=[trial.marker_labels[k] for k in keep])
+    subject = subject_from_processing(trial.parameters)
+    kinetics = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {})
+    assert kinetics.unavailable == {Side.RIGHT: "no kinetics for the right leg: markers RHEE and RTOE are needed"}
+    assert "RAnkleMoment" not in kinetics.outputs and "LHipMoment" in kinetics.outputs
+    with pytest.raises(ParameterError, match="^the left foot's ground load has 10 frames; the trial has 323$"):
+        plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {Side.LEFT: no_load(10)})

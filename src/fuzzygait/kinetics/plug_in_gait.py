@@ -164,10 +164,15 @@ def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParam
         (markers missing) is in ``unavailable`` instead.
 
     Raises:
-        ParameterError: a body mass that is not positive.
+        ParameterError: a body mass that is not positive, a ground load of another length
+            than the trial.
     """
     if not np.isfinite(subject.body_mass) or subject.body_mass <= 0:
         raise ParameterError(f"body mass must be positive (kg) for kinetics; got {subject.body_mass}")
+    for side, load in ground.items():
+        if load.force.shape != (trial.n_frames, 3):
+            raise ParameterError(f"the {side.word.lower()} foot's ground load has {len(load.force)} frames; "
+                                 f"the trial has {trial.n_frames}")  # fmt: skip
     out = KineticsResult()
     for side in Side:
         try:
