@@ -1,0 +1,366 @@
+"""Plug-in Gait joint moments and powers of one leg as a model of marker deviations and
+centre-of-pressure errors, for the uncertainty engine (issue 39 item 5; the kinetic
+counterpart of :class:`~fuzzygait.markererror.angle_model.JointAngleModel`).
+
+Parameters (mm, one ball each, the same deviation at every frame of the trajectory):
+
+* the deviation ``p_i`` (laboratory x, y, z) of every dynamic marker the leg's kinetics
+  are computed from — the pelvis and the leg's THI, KNE, TIB, ANK, TOE
+  (:func:`~fuzzygait.kinematics.chain.segment_markers` of the foot: the ankle's joint
+  centre needs the knee's, the knee's the hip's, and the hip power the pelvis' rotation);
+* per loaded plate under the foot, the centre-of-pressure deviation ``d`` in the plate's
+  plane: coordinates along the plate's x and y axes and along its normal, the normal one
+  without effect — the projections of a 3-D ball of radius ``r`` onto the plane are the
+  disc of radius ``r``, so a 3-D ball parameter is the plate-plane disc of the brief.
+  The ground's moment about the laboratory origin at frame ``i`` becomes
+  ``M_i + d x F_i`` (``F_i`` that plate's share of the foot's load): the force acts at
+  ``COP + d``, its magnitude, direction and the free moment unchanged.
+
+Default centre-of-pressure error: :data:`DEFAULT_COP_ERROR_MM` = 10 mm.  Schmiedmayer &
+Kastner (2000, J Biomech Eng 122:523-527) report errors of up to ±30 mm for
+piezoelectric plates before correction and 5.8 ± 3.7 mm (mean ± SD) left after the
+usual single-point-load correction; Middleton et al. (1999, Clin Biomech 14:357-360)
+find the single-point errors of a Kistler plate of the same order.  10 mm is that
+corrected error's mean plus one standard deviation, as the α = 0 support of a triangular
+fuzzy radius (Table 3.1's radii are such maximum deviations).
+
+Fixed (thesis §3.6, as for the angles): the subject parameters with the inter-ASIS
+distance of the unperturbed trial, the static offsets, the foot length (mean HEE-TOE
+distance minus the marker radius of the unperturbed trial: HEE is no parameter), the
+body mass and the segment table, and the force itself.
+
+An evaluation at frame ``j`` runs the chain on the nine frames ``j - 4 … j + 4`` (the
+five-point second derivative of the centres of mass and the two-frame differences of the
+rotations take them, :mod:`fuzzygait.kinetics.inverse_dynamics`), all shifted by the
+row's deviation, and Newton–Euler from the foot up at ``j`` only: at zero deviation the
+outputs equal :func:`~fuzzygait.kinetics.plug_in_gait.plug_in_gait_kinetics`'s.  Outputs
+in N·m/kg (moments: Nexus' X, Y, Z in the distal segment's frame with
+:data:`~fuzzygait.kinetics.plug_in_gait.MOMENT_AXES`' signs) or W/kg (powers, Nexus' Z).
+Gradients are exact (reverse-mode through the kinematic chain and the dynamics,
+:func:`~fuzzygait.markererror.angle_model.row_gradients`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import autograd.numpy as anp
+import numpy as np
+from numpy.typing import NDArray
+
+from fuzzygait.core.arrays import floats
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import Side
+from fuzzygait.core.subject import SubjectParameters
+from fuzzygait.core.trial import Trial
+from fuzzygait.kinematics.chain import segment_markers
+from fuzzygait.kinematics.model import model_chain
+from fuzzygait.kinematics.versions import model_version
+from fuzzygait.kinetics.ground import plate_load
+from fuzzygait.kinetics.inverse_dynamics import GRAVITY
+from fuzzygait.kinetics.plug_in_gait import JOINTS, MOMENT_AXES, foot_length
+from fuzzygait.kinetics.segments import MM, PLUG_IN_GAIT_TABLE
+from fuzzygait.markererror.angle_model import AXES, fixed_subject, row_gradients
+from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODES, TIME_STEP, Evaluation, Output
+
+Array = NDArray[np.float64]
+
+#: Default centre-of-pressure error ball radius at α = 0, mm (module docstring).
+DEFAULT_COP_ERROR_MM = 10.0
+#: Frames either side of a frame its kinetics need (Nexus' derivatives lose four).
+HALF_WINDOW = 4
+#: Kinds of output and their units.
+KINDS = {"Moment": "N·m/kg", "Power": "W/kg"}
+_OFFSETS = np.arange(-HALF_WINDOW, HALF_WINDOW + 1)
+_FIVE_POINT = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
+#: The five-point first difference applied twice: weights of the nine frames (× rate²).
+SECOND_DIFFERENCE = np.convolve(_FIVE_POINT, _FIVE_POINT)
+
+
+@dataclass(frozen=True)
+class PlateShare:
+    """One plate's share of a foot's ground load: what its centre-of-pressure error moves.
+
+    Attributes:
+        number: the plate's 1-based number.
+        force: ``(n_frames, 3)`` N, laboratory frame, at the trial's frames: the plate's
+            force on the foot on the frames it is under the foot, zero elsewhere.
+        axes: ``(3, 3)`` rows the plate's x, y axes and normal (unit vectors, laboratory
+            frame): the centre-of-pressure deviation's coordinates.
+    """
+
+    number: int
+    force: Array
+    axes: Array
+
+
+def plate_axes(corners: Array) -> Array:
+    """``(3, 3)`` rows x, y, z of a plate from its ``(4, 3)`` corners (the C3D rule: x from
+    corner 2 to corner 1, z = x × (corner 4 → 1), y = z × x)."""
+    corners = np.asarray(corners, dtype=float)
+    x = corners[0] - corners[1]
+    x = x / np.linalg.norm(x)
+    z = np.cross(x, corners[0] - corners[3])
+    z = z / np.linalg.norm(z)
+    return np.stack([x, np.cross(z, x), z])
+
+
+def plate_shares(plates: Sequence[object], plate: NDArray[np.int_], rate: float) -> tuple[PlateShare, ...]:
+    """Each plate's share of a foot's load whose plate on each frame is ``plate``
+    (``(n,)`` 1-based numbers, 0: off the plates; as
+    :func:`~fuzzygait.kinetics.assignment.assigned_ground`), for the plates that carry the
+    foot on some frame.  ``plates``: :class:`~fuzzygait.io.force_plates.ForcePlate` s at
+    the analog rate; ``rate``: the marker rate, Hz."""
+    n = len(plate)
+    shares = []
+    for p in plates:
+        on = np.asarray(plate) == p.number  # type: ignore[attr-defined]
+        if on.any():
+            force = np.where(on[:, None], plate_load(p, n, rate).force, 0.0)  # type: ignore[arg-type]
+            shares.append(PlateShare(int(p.number), force, plate_axes(p.corners)))  # type: ignore[attr-defined]
+    return tuple(shares)
+
+
+@dataclass
+class LegKineticsModel:
+    """Joint moments or powers of one leg as a function of marker and centre-of-pressure
+    deviations (module docstring).
+
+    Node ``b · n_frames + j`` is component ``components[b]`` at trial frame
+    ``frames[j]``; the components are :attr:`blocks` independent outputs of the same
+    parameters (one pass of the chain gives all of them).
+
+    Attributes:
+        trial: the pre-processed trial; ``subject``: its subject parameters (body mass,
+            static offsets; the inter-ASIS distance is fixed on the trial).
+        side: the leg.
+        components: ``(joint, axis)`` pairs: joint ``"Ankle"``, ``"Knee"`` or ``"Hip"``,
+            axis 0, 1, 2 = Nexus X, Y, Z (powers: 2 only).
+        frames: 0-based trial frames (each with four frames either side).
+        ground_force, ground_moment: ``(n_frames, 3)`` the ground's load on the foot at
+            the trial's frames, N and N·m about the laboratory origin
+            (:class:`~fuzzygait.kinetics.inverse_dynamics.Load` ``force``, ``moment``).
+        plates: the plates whose centre of pressure is a parameter (:func:`plate_shares`).
+        kind: ``"Moment"`` (N·m/kg) or ``"Power"`` (W/kg).
+        markers: the markers whose deviations are parameters (default: all the leg's).
+        model: the model version (``"cgm1.0"``, ``"cgm1.1"``, ``"cgm2.1"``).
+    """
+
+    trial: Trial
+    subject: SubjectParameters
+    side: Side
+    components: tuple[tuple[str, int], ...]
+    frames: np.ndarray
+    ground_force: Array
+    ground_moment: Array
+    plates: tuple[PlateShare, ...] = ()
+    kind: str = "Moment"
+    markers: list[str] = field(default_factory=list)
+    model: str = "cgm1.0"
+
+    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP})
+
+    def __post_init__(self) -> None:
+        version = model_version(self.model)
+        if version.clusters:
+            raise ParameterError(f"fuzzy kinetics take the Plug-in Gait chain (cgm1.0-2.1); {version.name} tracks "
+                                 "clusters, not supported yet")  # fmt: skip
+        if self.kind not in KINDS:
+            raise ParameterError(f"kind must be one of {', '.join(KINDS)}; got {self.kind!r}")
+        self.components = tuple((str(j), int(a)) for j, a in self.components)
+        wrong = [c for c in self.components if c[0] not in JOINTS or c[1] not in (0, 1, 2)
+                 or (self.kind == "Power" and c[1] != 2)]  # fmt: skip
+        if not self.components or wrong:
+            raise ParameterError(f"components must be (joint in {JOINTS}, axis 0-2; powers 2 only); got {wrong}")
+        self.subject = fixed_subject(self.trial, self.subject)
+        needed = segment_markers(self.trial, "foot", self.side.value, False)
+        self.markers = list(self.markers) or list(needed)
+        if [m for m in self.markers if m not in needed] or [m for m in needed if not self.trial.has_marker(m)]:
+            raise ParameterError(f"the {self.side.word.lower()} leg's kinetics are computed from {', '.join(needed)} "
+                                 f"(all needed in the trial); got {', '.join(self.markers)}")  # fmt: skip
+        self.fixed_markers = [m for m in needed if m not in self.markers]
+        self.frames = np.asarray(self.frames, dtype=int)
+        n = self.trial.n_frames
+        if self.frames.size == 0 or self.frames.min() < HALF_WINDOW or self.frames.max() >= n - HALF_WINDOW:
+            raise ParameterError(f"frames must lie {HALF_WINDOW} frames inside the trial's {n} (the derivatives)")
+        self.foot_length = foot_length(self.trial, self.side, self.subject.marker_radius)
+        self._positions = np.stack([self.trial.marker(m) for m in self.markers], axis=1)
+        self._fixed = np.stack([self.trial.marker(m) for m in self.fixed_markers], axis=1) \
+            if self.fixed_markers else np.zeros((n, 0, 3))
+        self._force = np.asarray(self.ground_force, dtype=float)
+        self._moment = np.asarray(self.ground_moment, dtype=float)
+        self._shares = np.stack([s.force for s in self.plates]) if self.plates else np.zeros((0, n, 3))
+        self._plane = np.stack([s.axes[:2] for s in self.plates]) if self.plates else np.zeros((0, 2, 3))
+        self.times = np.tile(self.trial.times[self.frames], len(self.components))
+        #: Sampling period of the trial, s.
+        self.time_step = 1.0 / self.trial.rate
+        #: Independent outputs: one per component.
+        self.blocks = len(self.components)
+
+    @property
+    def ball_names(self) -> list[str]:
+        """The markers, then ``COP<plate number>`` per plate."""
+        return [*self.markers, *(f"COP{s.number}" for s in self.plates)]
+
+    @property
+    def n_parameters(self) -> int:
+        return 3 * len(self.ball_names)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """``<marker>_x|y|z`` (mm, lab frame), then ``COP<n>_x|y|z`` (mm along the plate's
+        x, y and normal)."""
+        return tuple(f"{b}_{c}" for b in self.ball_names for c in "xyz")
+
+    @property
+    def output(self) -> Output:
+        names = ",".join(f"{self.side.value}{j}{self.kind}_{AXES[a]}" for j, a in self.components)
+        return Output(names, KINDS[self.kind], f"Plug-in Gait joint {self.kind.lower()}, {self.side.word.lower()} leg")
+
+    def component_labels(self) -> list[str]:
+        """``"LKneeMoment_X"`` … per component (Nexus' output and axis)."""
+        return [f"{self.side.value}{j}{self.kind}_{AXES[a]}" for j, a in self.components]
+
+    def _chain(self, P: np.ndarray, frames: np.ndarray) -> dict[str, np.ndarray]:
+        """Joint centres (m) and frames of the leg at the nine frames around each row's
+        frame, the row's deviation applied: each ``(k, 9, 3)`` or ``(k, 9, 3, 3)``."""
+        k, m = len(frames), len(self.markers)
+        window = frames[:, None] + _OFFSETS[None, :]
+        positions = self._positions[window] + anp.reshape(P[:, : 3 * m], (k, 1, m, 3))
+        positions = anp.concatenate([positions, self._fixed[window]], axis=2)
+        flat = anp.reshape(positions, (k * _OFFSETS.size, -1, 3))
+        rows = Trial(markers=flat, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
+        chain = model_chain(rows, self.subject, self.model)
+        s = self.side.value
+        parts = {"HJC": chain.hjc(s) * MM, "KJC": chain.kjc(s) * MM, "AJC": chain.ajc(s) * MM,
+                 "thigh": chain.thigh(s), "tibia": chain.tibia(s), "foot": chain.foot(s),
+                 "pelvis": chain.pelvis()[1]}  # fmt: skip
+        return {key: anp.reshape(v, (k, _OFFSETS.size) + v.shape[1:]) for key, v in parts.items()}
+
+    def outputs(self, P: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """``(k, 3, 3)``: per row (deviations ``P`` (k, n_p), trial frames ``frames`` (k,)),
+        joint (ankle, knee, hip) and axis the moment (N·m/kg; Nexus X, Y, Z) or the power
+        (W/kg, in Z; X = Y = 0)."""
+        P, frames = floats(P), np.asarray(frames, dtype=int)
+        parts = self._chain(P, frames)
+        rate, mass = self.trial.rate, self.subject.body_mass
+        shifts = anp.reshape(P[:, 3 * len(self.markers) :], (len(frames), len(self.plates), 3))
+        moment = self._moment[frames]
+        for p in range(len(self.plates)):
+            offset = anp.dot(shifts[:, p, :2], self._plane[p]) * MM
+            moment = moment + anp.cross(offset, self._shares[p][frames])
+        segments = _segments(parts, self.foot_length * MM, mass)
+        loads = _newton_euler(segments, self._force[frames], moment, rate)
+        omegas = [omega for _, omega in loads] + [_omega(parts["pelvis"], rate)[:, 1]]
+        out = []
+        for j, (joint, (m_lab, _)) in enumerate(zip(JOINTS, loads, strict=True)):
+            if self.kind == "Power":
+                power = anp.sum(m_lab * (omegas[j] - omegas[j + 1]), axis=1) / mass
+                zero = anp.zeros_like(power)
+                out.append(anp.stack([zero, zero, power], axis=1))
+                continue
+            local = anp.einsum("kji,kj->ki", segments[j].frames[:, HALF_WINDOW], m_lab)
+            out.append(anp.stack([sign * local[:, axis] for axis, sign in MOMENT_AXES[(joint, self.side)]],
+                                 axis=1) / mass)  # fmt: skip
+        return anp.stack(out, axis=1)
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
+        (k, n_p)."""
+        block, j = np.divmod(np.asarray(nodes, dtype=int), self.frames.size)
+        pairs = np.asarray(self.components, dtype=object)
+        joint = np.array([JOINTS.index(str(pairs[b][0])) for b in block], dtype=int)
+        axis = np.array([int(pairs[b][1]) for b in block], dtype=int)
+        values = self.outputs(P, self.frames[j])
+        return values[np.arange(len(j)), joint, axis]
+
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Values and exact gradients (per mm) per row."""
+        return row_gradients(self.evaluate_nodes, P, nodes)
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
+        P = np.tile(np.asarray(p, dtype=float), (self.frames.size, 1))
+        values = np.asarray(self.outputs(P, self.frames), dtype=float)
+        return Evaluation(np.concatenate([values[:, JOINTS.index(j), a] for j, a in self.components]))
+
+    def frame_turn(self, P: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """``(k,)`` degrees: the largest rotation of the pelvis, thigh, tibia or foot frame
+        from its measured orientation over the nine frames each row's kinetics use, at the
+        row's deviation (more than 90°: a frame can flip inside the ball)."""
+        P, frames = np.asarray(P, dtype=float), np.asarray(frames, dtype=int)
+        moved = self._chain(P, frames)
+        still = self._chain(np.zeros_like(P), frames)
+        turns = []
+        for name in ("pelvis", "thigh", "tibia", "foot"):
+            trace = np.einsum("kwij,kwij->kw", moved[name], still[name])
+            turns.append(np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))).max(axis=1))
+        return np.max(turns, axis=0)
+
+
+def _omega(frames: np.ndarray, rate: float) -> np.ndarray:
+    """``(k, 3, 3)`` rad/s: the angular velocity at window offsets −2, 0, +2 of the
+    ``(k, 9, 3, 3)`` rotations (axial vector of ``Ṙ Rᵀ``, ``Ṙ`` the two-frame difference)."""
+    out = []
+    for c in (2, 4, 6):
+        w = anp.einsum("kij,klj->kil", (frames[:, c + 2] - frames[:, c - 2]) * (rate / 4.0), frames[:, c])
+        out.append(0.5 * anp.stack([w[:, 2, 1] - w[:, 1, 2], w[:, 0, 2] - w[:, 2, 0], w[:, 1, 0] - w[:, 0, 1]], axis=1))
+    return anp.stack(out, axis=1)
+
+
+class _Segment(NamedTuple):
+    """A segment over each row's nine frames, SI units, laboratory frame."""
+
+    mass: float
+    frames: np.ndarray  # (k, 9, 3, 3)
+    com: np.ndarray  # (k, 9, 3) m
+    inertia: np.ndarray  # (k, 3) kg·m² at the centre frame
+    joint: np.ndarray  # (k, 3) m, the proximal joint centre at the centre frame
+
+
+def _segments(parts: dict[str, np.ndarray], foot_length: float, body_mass: float) -> list[_Segment]:
+    """Foot, tibia and femur as :mod:`fuzzygait.kinetics.segments` builds them (the
+    foot's centre of mass on its long axis, the long segments' lengths per frame)."""
+    out = []
+    for name, distal, proximal, frame_name in (("foot", "AJC", "AJC", "foot"), ("tibia", "AJC", "KJC", "tibia"),
+                                               ("femur", "KJC", "HJC", "thigh")):  # fmt: skip
+        row = PLUG_IN_GAIT_TABLE[name]
+        mass = row.mass_fraction * body_mass
+        frames = parts[frame_name]
+        if name == "foot":
+            com = parts["AJC"] - (1.0 - row.com_from_distal) * foot_length * frames[..., 2]
+            length = foot_length * anp.ones(frames.shape[0])
+        else:
+            com = parts[distal] + row.com_from_distal * (parts[proximal] - parts[distal])
+            length = anp.sqrt(anp.sum((parts[proximal][:, HALF_WINDOW] - parts[distal][:, HALF_WINDOW]) ** 2, axis=1))
+        across = mass * (row.gyration * length) ** 2
+        out.append(_Segment(mass, frames, com, anp.stack([across, across, anp.zeros_like(across)], axis=1),
+                            parts[proximal][:, HALF_WINDOW]))  # fmt: skip
+    return out
+
+
+def _newton_euler(segments: list[_Segment], force: np.ndarray, moment: np.ndarray,
+                  rate: float) -> list[tuple[np.ndarray, np.ndarray]]:  # fmt: skip
+    """Per joint (ankle, knee, hip): the joint moment (N·m about the joint centre,
+    laboratory frame, of the proximal segment on the distal one) and the distal segment's
+    angular velocity (rad/s), at the window's centre, from the ground load (``force`` N,
+    ``moment`` N·m about the laboratory origin) up: :func:`~fuzzygait.kinetics.
+    inverse_dynamics.newton_euler` with its derivatives."""
+    out = []
+    point: np.ndarray = np.zeros(np.shape(force))
+    distal_force, distal_moment = force, moment
+    for segment in segments:
+        acceleration = anp.einsum("w,kwi->ki", SECOND_DIFFERENCE * rate**2, segment.com)
+        omega = _omega(segment.frames, rate)
+        alpha = (omega[:, 2] - omega[:, 0]) * (rate / 4.0)
+        centre, rotation, inertia = segment.com[:, HALF_WINDOW], segment.frames[:, HALF_WINDOW], segment.inertia
+        w_local = anp.einsum("kji,kj->ki", rotation, omega[:, 1])
+        a_local = anp.einsum("kji,kj->ki", rotation, alpha)
+        h_dot = anp.einsum("kij,kj->ki", rotation, inertia * a_local + anp.cross(w_local, inertia * w_local))
+        f = segment.mass * (acceleration - GRAVITY) - distal_force
+        m = h_dot - distal_moment - anp.cross(point - centre, distal_force) - anp.cross(segment.joint - centre, f)
+        out.append((m, omega[:, 1]))
+        point, distal_force, distal_moment = segment.joint, -f, -m
+    return out
