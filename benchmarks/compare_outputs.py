@@ -19,12 +19,16 @@ The two folders are compared file by file:
 * same set of files (a ``*.zarr`` directory is one entry);
 * CSV: pandas, exact and NaN-aware (else the largest absolute difference);
 * C3D: ezc3d, header, parameters and data (points, residuals, analogs) exactly;
-* netCDF / zarr: every variable (values, dims, dtype, attributes) and the attributes of
-  every group, exactly, except timing-like attributes (``seconds``, ``wall_time*``,
-  ``time_*_s``, ``created``, ``date``, ``version``).  The marker-error dataset may change
-  from one variable per angle component (``LKneeAngles_X``, ``LKneeAngles_X__deviation``)
-  to ``hull`` / ``deviation`` with a ``component`` dimension: when the two files differ in
-  just that way the old layout is mapped onto the new one and the values are compared;
+* netCDF / zarr: every group, every variable (values, dims, dtype, attributes) and the
+  attributes of every group, exactly, except timing-like attributes (``seconds``,
+  ``wall_time*``, ``time_*_s``, ``created``, ``date``, ``version``).  The marker-error
+  dataset may change from one variable per angle component (``LKneeAngles_X``,
+  ``LKneeAngles_X__deviation``) to ``hull`` / ``deviation`` with a ``component``
+  dimension, and from one flat dataset with ``refined_*``/``allowable_*``/``source_*``
+  variables (layout version 1) to the bands at the root and the groups ``allowable`` and
+  ``sources`` (layout version 2, issue 38; mapped with
+  :func:`fuzzygait.markererror.legacy.from_flat`): when the two files differ in just
+  that way the old layout is mapped onto the new one and the values are compared (.nc);
 * PNG: decoded pixels (matplotlib.image.imread), exactly;
 * SVG, HTML, Markdown, text and the printed stdout: text after masking dates, times,
   timing numbers, versions, matplotlib's random SVG ids and absolute temporary paths;
@@ -338,6 +342,29 @@ def to_component_layout(ds: Any, like: Any) -> Any:
     return out
 
 
+#: Variables of a version-1 (flat) marker-error dataset that version 2 keeps in groups.
+FLAT_MARKER_ERROR = ("refined_alpha", "allowable_status", "source_hull")
+
+
+def netcdf_groups(path: Path) -> dict[str, Any]:
+    """Every group of a netCDF file, loaded: ``{"/": root, "/name": group, ...}``."""
+    import xarray as xr
+
+    groups = xr.open_groups(path)
+    try:
+        return {name: ds.load() for name, ds in groups.items()}
+    finally:
+        for ds in groups.values():
+            ds.close()
+
+
+def to_marker_error_groups(ds: Any) -> dict[str, Any]:
+    """A version-1 (flat) marker-error dataset as the groups version 2 writes."""
+    from fuzzygait.markererror.legacy import from_flat
+
+    return from_flat(ds).groups()
+
+
 def compare_variables(x: Any, y: Any, where: str, allow_transpose: bool = False) -> list[str]:
     """Differences of two xarray Datasets (all variables, attributes)."""
     problems = []
@@ -363,10 +390,8 @@ def compare_variables(x: Any, y: Any, where: str, allow_transpose: bool = False)
 
 
 def compare_netcdf(a: Path, b: Path) -> Outcome:
-    import xarray as xr
-
-    with xr.open_dataset(a) as x0, xr.open_dataset(b) as y0:
-        x, y = x0.load(), y0.load()
+    x_groups, y_groups = netcdf_groups(a), netcdf_groups(b)
+    x, y = x_groups["/"], y_groups["/"]
     notes = []
     allow_transpose = False
     la, lb = marker_error_layout(x), marker_error_layout(y)
@@ -379,7 +404,20 @@ def compare_netcdf(a: Path, b: Path) -> Outcome:
         allow_transpose = True
     elif la != lb and None not in (la, lb):
         notes.append(f"marker-error layout base {la} vs new {lb}")
-    problems = compare_variables(x, y, "", allow_transpose)
+    x_groups["/"] = x
+    flat = any(v in x.data_vars for v in FLAT_MARKER_ERROR) and len(x_groups) == 1
+    if flat and lb == "component" and not any(v in y.data_vars for v in FLAT_MARKER_ERROR):
+        try:
+            x_groups = to_marker_error_groups(x)
+        except Exception as error:  # noqa: BLE001 - any failure: the layouts cannot be mapped
+            return Outcome(False, f"marker-error groups cannot be mapped: {error}")
+        notes.append("marker-error layout mapped: base flat refined_/allowable_/source_ variables -> new groups")
+    problems = []
+    if set(x_groups) != set(y_groups):
+        problems.append(f"groups: base {sorted(x_groups)} vs new {sorted(y_groups)}")
+    for name in sorted(set(x_groups) & set(y_groups)):
+        where = "" if name == "/" else f"{name}: "
+        problems += compare_variables(x_groups[name], y_groups[name], where, allow_transpose)
     if problems:
         return Outcome(
             False, "; ".join(notes + problems[:8]) + (f"; ... {len(problems) - 8} more" if len(problems) > 8 else "")

@@ -86,7 +86,8 @@ def test_marker_error_estimate_and_what_the_analysis_did(angles_run: AnglesRun) 
     said: list[str] = []
     recorder = Recorder()
     settings = MarkerErrorSettings(alphas=(0.0, 0.5), angles=("LKneeAngles",), workers=1)
-    fuzzy = analyse_run(sparse, settings, stages=Announced(recorder, said.append)).fuzzy
+    analysis = analyse_run(sparse, settings, stages=Announced(recorder, said.append))
+    fuzzy, result = analysis.fuzzy, analysis.result
     assert said == ["estimate: 36 α-level optimisations of the fuzzy angles (6 frames × 2 α-levels × 3 angle "
                     "components, each for the upper and the lower bound), then at most 36 allowable-error refinement "
                     "runs (≤ 12 per component) and 3 per-source runs (3 sources × 1 flexion component), each one "
@@ -95,7 +96,8 @@ def test_marker_error_estimate_and_what_the_analysis_did(angles_run: AnglesRun) 
                                                "allowable marker error (≤ 36 runs)", "per-source bands (3 runs)"]
     analysed = fuzzy["hull"].sel(alpha=[0.0, 0.5]).notnull().all("bound").sum().item()
     assert analysed == 36  # component × α-level × frame
-    assert 0 < fuzzy.attrs["allowable_runs"] <= 36 and fuzzy.attrs["source_runs"] == 3
+    assert result is not None and result.allowable is not None and result.sources is not None
+    assert 0 < result.allowable.attrs["runs"] <= 36 and result.sources.attrs["runs"] == 3
 
 
 def test_fuzzy_simulation_labels_its_bar_and_keeps_to_its_bound(tmp_path: Path) -> None:

@@ -47,7 +47,7 @@ runs that are not part of this batch stay in ``OUT`` but are not linked.
 
 Allowable marker error
 ----------------------
-A dataset refined by :func:`fuzzygait.markererror.allowable.allowable_errors` (what
+A result refined by :func:`fuzzygait.markererror.allowable.allowable_errors` (what
 ``uncertainty`` / ``report`` compute for ``--tolerance``, default ±2.5°) leads the trial
 page with the sentences of left and right knee flexion ("known within ±2.5° if every
 marker stays within 2.3 mm of where it was measured ..."), followed by the table of every
@@ -55,7 +55,7 @@ angle (largest error mm, % of Table 3.1, mm per segment); the index shows knee f
 
 Error sources
 -------------
-A dataset with per-source bands (:func:`fuzzygait.markererror.per_source.per_source_bands`,
+A result with per-source bands (:func:`fuzzygait.markererror.per_source.per_source_bands`,
 ``--per-source``, the default) gets a section after the ΔΦ table (thesis Fig. 5.9): per
 joint (hip, knee, ankle) and side the measured flexion over the gait cycle with the α = 0
 band of each error source alone and of all together (opaque fills drawn widest first, so
