@@ -75,3 +75,20 @@ def test_no_message_below_the_command_line_spells_a_flag() -> None:
 @pytest.mark.parametrize("option", list(Option))
 def test_keywords_are_python_names(option: Option) -> None:
     assert option.keyword.isidentifier()
+
+
+def test_no_flag_is_assembled_in_an_f_string() -> None:
+    """Nor pieced together (``f"--{'no-' if on else ''}flat-foot"``): an f-string part below
+    ``cli/`` that ends in ``--`` right before a substitution is a flag built as text."""
+    offenders = []
+    for path in sorted(SRC.rglob("*.py")):
+        relative = path.relative_to(SRC).as_posix()
+        if relative.startswith("cli/") or path.name == "__main__.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.JoinedStr):
+                for part, following in zip(node.values, node.values[1:], strict=False):
+                    if (isinstance(part, ast.Constant) and isinstance(following, ast.FormattedValue)
+                            and re.search(r"(^|[\s(\"'`])--$", str(part.value))):  # fmt: skip
+                        offenders.append(f"{relative}:{node.lineno}: {str(part.value)[-40:]!r}")
+    assert offenders == [], "\n".join(offenders)

@@ -32,11 +32,13 @@ class Option(StrEnum):
     DISTRIBUTION = "distribution"
     DT = "dt"
     DURATION = "duration"
+    FLAT_FOOT = "flat-foot"
     FORCE = "force"
     FRV = "frv"
     FUZZY = "fuzzy"
     MARKER_DIAMETER = "marker-diameter"
     MODEL = "model"
+    NO_FLAT_FOOT = "no-flat-foot"
     NODES = "nodes"
     NORMATIVE = "normative"
     OUT = "out"
@@ -83,6 +85,7 @@ _KEYWORDS = {
     Option.FRV: "parameters",
     Option.VALUE: "deterministic_value",
     Option.DEBUG: "strict",
+    Option.NO_FLAT_FOOT: "flat_foot",
 }
 
 

@@ -95,9 +95,10 @@ def calibrate_static(
     if flat_foot is None:
         flat_foot = bool(subject.flat_foot)
         if subject.flat_foot is not None:
+            override = Option.NO_FLAT_FOOT if flat_foot else Option.FLAT_FOOT
             notes += (Finding(FindingKind.STATIC_CALIBRATION, f"foot flat {'on' if flat_foot else 'off'} as "
                               f"{Path(subject.source).name} sets it (feet {'' if flat_foot else 'not '}normalised to "
-                              f"the static trial); --{'no-' if flat_foot else ''}flat-foot overrides it"),)  # fmt: skip
+                              f"the static trial); {override} overrides it"),)  # fmt: skip
     calibrated = static_calibration(clean, subject, flat_foot=flat_foot, model=model,
                                     knee_ankle_centres=knee_ankle_centres)  # fmt: skip
     method = knee_method(clean)
