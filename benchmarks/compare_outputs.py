@@ -130,6 +130,8 @@ MASKS: list[tuple[re.Pattern[str], str]] = [
         ),
         r"\1<T>",
     ),
+    # the notes' run times: "3 runs, 1.7 s", "22 refinement runs, 14.0 s"
+    (re.compile(r"(\bruns, )\d+(?:\.\d+)? s\b"), r"\1<T> s"),
     # package and library versions
     (
         re.compile(r"(?i)\b(fuzzygait|matplotlib|rerun|xarray|numpy|ezc3d)(\s+v?|[ -]?)\d+\.\d+(\.\d+)?[\w.+-]*"),
