@@ -1,0 +1,191 @@
+"""Fuzzy joint moments: the leg's kinetics as a model of marker and centre-of-pressure
+deviations (:mod:`fuzzygait.markererror.moment_model`) and the bands of
+:func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`.
+
+Truth: a static foot on a plate with a known vertical force, whose ankle moment band for
+a centre-of-pressure ball of radius r is ``M ± F r |y_h| / m`` in closed form (``y_h``:
+the horizontal part of the foot's flexion axis, 1 for a level axis); the existing
+Plug-in Gait kinetics (:func:`~fuzzygait.kinetics.plug_in_gait.plug_in_gait_kinetics`)
+at zero deviation; central differences for the gradients; random deviations inside the
+balls for the hulls.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import Side
+from fuzzygait.core.trial import Trial
+from fuzzygait.io import read_c3d
+from fuzzygait.io.subject import read_subject_toml
+from fuzzygait.kinematics import compute_lower_body
+from fuzzygait.kinetics.inverse_dynamics import Load
+from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics
+from fuzzygait.markererror.fuzzy_kinetics import (
+    FootGround,
+    FuzzyKineticsOptions,
+    allowable_kinetic_error,
+    fuzzy_joint_moments,
+)
+from fuzzygait.markererror.moment_model import LegKineticsModel, PlateShare, plate_axes
+from fuzzygait.markererror.sources import ErrorModel
+from fuzzygait.testing import check_model, check_result
+from support import SAMPLE_DATA
+
+#: A level plate whose x, y run along the laboratory's and whose normal points down.
+LEVEL_PLATE = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+FORCE_N = 700.0
+
+
+def ground_under(trial: Trial, side: Side, force: np.ndarray) -> FootGround:
+    """``force`` (N, constant) at the foot's heel-toe midpoint on the floor (z = 0), with
+    a free moment of 2 N·m about the vertical, on every frame: one plate."""
+    n = trial.n_frames
+    cop = 0.5 * (trial.marker(side.value + "HEE") + trial.marker(side.value + "TOE")) * 1e-3
+    cop[:, 2] = 0.0
+    forces = np.tile(force, (n, 1))
+    moment = np.cross(cop, forces) + np.array([0.0, 0.0, 2.0])
+    return FootGround(forces, moment, (PlateShare(1, forces, LEVEL_PLATE),))
+
+
+@pytest.fixture(scope="module")
+def sample() -> tuple[Trial, object]:
+    return read_c3d(SAMPLE_DATA / "walking.c3d"), read_subject_toml(SAMPLE_DATA / "subject.toml")
+
+
+@pytest.fixture(scope="module")
+def standing(sample: tuple[Trial, object]) -> tuple[Trial, object]:
+    """Frame 100 of the sample trial held for 13 frames: every derivative is zero."""
+    trial, subject = sample
+    markers = np.repeat(trial.markers[100:101], 13, axis=0)
+    return Trial(markers=markers, marker_labels=list(trial.marker_labels), rate=trial.rate), subject
+
+
+def no_marker_error(trial: Trial) -> ErrorModel:
+    return ErrorModel(marker_radius=dict.fromkeys(trial.marker_labels, 0.0))
+
+
+def test_static_foot_band_is_the_cop_ball_times_the_force(standing: tuple[Trial, object]) -> None:
+    """Markers exact, the COP within r = 15 mm: the right ankle's sagittal moment band at
+    level α is M ± F (1 − α) r |y_h| / m exactly, M the statics of the resting foot."""
+    trial, subject = standing
+    force = np.array([0.0, 0.0, FORCE_N])
+    ground = ground_under(trial, Side.RIGHT, force)
+    result = compute_lower_body(trial, subject)
+    options = FuzzyKineticsOptions(alphas=(0.0, 0.5), error_model=no_marker_error(trial), cop_error_mm=15.0)
+    frames = np.array([5, 6, 7])
+    ds = fuzzy_joint_moments(trial, subject, result, {Side.RIGHT: ground}, options, ["RAnkleMoment_X"], frames)
+    hull = ds.fuzzy.hull("RAnkleMoment_X").isel(frame=frames)
+
+    # the resting foot: the ground's load and the foot's weight balanced about the AJC
+    mass, foot = subject.body_mass, result.segment_frames["right_foot"][6]
+    ajc = result.joint_centres["RAJC"][6] * 1e-3
+    length = np.mean(np.linalg.norm(trial.marker("RHEE") - trial.marker("RTOE"), axis=1)) - subject.marker_radius
+    com = ajc - 0.5 * length * 1e-3 * foot[:, 2]
+    weight = 0.0145 * mass * np.array([0.0, 0.0, -9.81])
+    cop = np.r_[0.5 * (trial.marker("RHEE")[6] + trial.marker("RTOE")[6])[:2] * 1e-3, 0.0]
+    moment = -(np.cross(cop - ajc, force) + np.array([0.0, 0.0, 2.0]) + np.cross(com - ajc, weight))
+    measured = foot[:, 1] @ moment / mass
+    half = FORCE_N * 0.015 * np.hypot(foot[0, 1], foot[1, 1]) / mass
+    for alpha, scale in ((0.0, 1.0), (0.5, 0.5), (1.0, 0.0)):
+        expected = np.array([measured - scale * half, measured + scale * half])
+        np.testing.assert_allclose(hull.sel(alpha=alpha).to_numpy(), np.tile(expected[:, None], (1, 3)), rtol=1e-9)
+    # the same M as the Plug-in Gait kinetics (N·mm/kg)
+    load = Load(np.zeros((13, 3)), ground.force, ground.moment)
+    nexus_like = plug_in_gait_kinetics(result, trial, subject, {Side.RIGHT: load}).outputs["RAnkleMoment"]
+    np.testing.assert_allclose(nexus_like[frames, 0] * 1e-3, measured, rtol=1e-9)
+    # the allowable answer: half-width s x half <= 0.1 N·m/kg on the levels 0, 0.5, 1
+    answer = allowable_kinetic_error(ds, "RAnkleMoment_X", tolerance=0.6 * half)
+    assert (answer.scale, answer.failing, answer.cop_mm, answer.marker_mm) == (0.5, 1.0, 7.5, 0.0)
+    assert "centre of pressure within 7.5 mm" in answer.sentence
+
+
+def leg(sample: tuple[Trial, object], kind: str = "Moment") -> LegKineticsModel:
+    trial, subject = sample
+    ground = ground_under(trial, Side.RIGHT, np.array([40.0, -15.0, FORCE_N]))
+    components = tuple((j, a) for j in JOINTS for a in ((0, 1, 2) if kind == "Moment" else (2,)))
+    return LegKineticsModel(trial, subject, Side.RIGHT, components, np.arange(4, trial.n_frames - 4, 7),
+                            ground.force, ground.moment, ground.plates, kind=kind)  # fmt: skip
+
+
+@pytest.mark.parametrize("kind", ["Moment", "Power"])
+def test_zero_deviation_is_the_plug_in_gait_kinetics(sample: tuple[Trial, object], kind: str) -> None:
+    trial, subject = sample
+    model = leg(sample, kind)
+    values = model.evaluate(np.zeros(model.n_parameters)).values.reshape(model.blocks, -1)
+    ground = ground_under(trial, Side.RIGHT, np.array([40.0, -15.0, FORCE_N]))
+    load = Load(np.zeros((trial.n_frames, 3)), ground.force, ground.moment)
+    outputs = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {Side.RIGHT: load}).outputs
+    scale = 1e-3 if kind == "Moment" else 1.0
+    for b, (joint, axis) in enumerate(model.components):
+        expected = outputs["R" + joint + kind][model.frames, axis] * scale
+        np.testing.assert_allclose(values[b], expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_leg_model_keeps_the_protocol_with_exact_gradients(sample: tuple[Trial, object]) -> None:
+    model = leg(sample)
+    assert model.parameter_names[-3:] == ("COP1_x", "COP1_y", "COP1_z")
+    p = np.random.default_rng(3).normal(0.0, 3.0, model.n_parameters)
+    report = check_model(model, p)
+    assert report["node_gradients_error"] < 1e-4 and report["nodes_error"] == 0.0
+    # the COP's normal coordinate moves nothing; along the plate's x it moves the moment by d x F
+    nodes = np.arange(model.times.size)
+    _, gradients = model.evaluate_nodes_gradients(np.zeros((nodes.size, model.n_parameters)), nodes)
+    assert np.all(gradients[:, -1] == 0.0)
+
+
+def test_plate_axes_follow_the_c3d_corner_rule() -> None:
+    corners = np.array([[600.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 400.0, 0.0], [600.0, 400.0, 0.0]])
+    np.testing.assert_allclose(plate_axes(corners), LEVEL_PLATE, atol=1e-15)
+
+
+def uniform_in_balls(rng: np.random.Generator, radii: np.ndarray, n: int) -> np.ndarray:
+    """``(n, 3 × balls)`` deviations uniformly distributed in the balls."""
+    direction = rng.standard_normal((n, radii.size, 3))
+    direction /= np.linalg.norm(direction, axis=2, keepdims=True)
+    return (direction * (radii * rng.random((n, radii.size)) ** (1.0 / 3.0))[..., None]).reshape(n, -1)
+
+
+def test_bands_hold_every_monte_carlo_sample(sample: tuple[Trial, object]) -> None:
+    """300 deviations inside the α = 0 and α = 0.5 balls, markers and COP, on four frames:
+    none outside the hulls (undetermined bands too); the dataset keeps the result schema."""
+    trial, subject = sample
+    ground = ground_under(trial, Side.RIGHT, np.array([40.0, -15.0, FORCE_N]))
+    frames = np.array([60, 140, 220, 300])
+    options = FuzzyKineticsOptions(alphas=(0.0, 0.5))
+    ds = fuzzy_joint_moments(trial, subject, compute_lower_body(trial, subject), {Side.RIGHT: ground}, options,
+                             ["RAnkleMoment_X", "RKneeMoment_X", "RHipMoment_Y"], frames)  # fmt: skip
+    assert check_result(ds)["largest_violation"] == 0.0
+    assert ds.fuzzy.units == "N·m/kg" and list(ds["marker"].to_numpy()[-1:]) == ["COP1"]
+    assert float(ds["ball_radius"].sel(marker="COP1")) == 10.0 and float(ds["ball_radius"].sel(marker="RTHI")) == 32.0
+    # Table 3.1's full balls turn the thigh, tibia or foot frame by more than 90° here (the
+    # fuzzy ankle angles' bands are 120-350° wide at α = 0 on these frames): undetermined
+    assert bool(ds.fuzzy.undetermined(0.0).isel(frame=frames).all())
+    assert not bool(ds.fuzzy.undetermined(1.0).any())
+    model = leg(sample)
+    model = replace(model, components=(("Ankle", 0), ("Knee", 0), ("Hip", 1)), frames=frames)
+    radii = ds["ball_radius"].to_numpy()
+    rng = np.random.default_rng(0)
+    for alpha in (0.0, 0.5):
+        P = uniform_in_balls(rng, (1.0 - alpha) * radii, 300)
+        values = np.stack([model.evaluate(p).values for p in P]).reshape(300, 3, frames.size)
+        hull = ds["hull"].sel(alpha=alpha).isel(frame=frames).to_numpy()  # (component, bound, frame)
+        below, above = hull[None, :, 0] - values, values - hull[None, :, 1]
+        assert np.max(np.maximum(below, above)) <= 0.0, alpha  # undetermined or not: the hull is an outer bound
+
+
+def test_bad_options_are_one_line(standing: tuple[Trial, object]) -> None:
+    trial, subject = standing
+    result = compute_lower_body(trial, subject)
+    with pytest.raises(ParameterError, match=r"^kind must be one of Moment, Power; got 'Force'$"):
+        fuzzy_joint_moments(trial, subject, result, {}, FuzzyKineticsOptions(kind="Force"))
+    with pytest.raises(ParameterError, match=r"^the centre-of-pressure error must be a distance >= 0 mm; got -1"):
+        fuzzy_joint_moments(trial, subject, result, {}, FuzzyKineticsOptions(cop_error_mm=-1.0))
+    with pytest.raises(ParameterError, match=r"^'LKneeAngles_X' is not a moment output of a leg joint"):
+        fuzzy_joint_moments(trial, subject, result, {}, outputs=["LKneeAngles_X"])
+    with pytest.raises(ParameterError, match=r"^body mass must be positive \(kg\) for kinetics; got 0.0$"):
+        fuzzy_joint_moments(trial, replace(subject, body_mass=0.0), result, {})
