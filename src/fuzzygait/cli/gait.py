@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -17,13 +18,14 @@ from fuzzygait.cli.app import (
     user_errors,
 )
 from fuzzygait.cli.options import (
+    DEFAULT_CALIBRATION,
     DEFAULT_PREPROCESSING,
+    CalibrationOptions,
     FlatFootOption,
     KneeAnkleCentresOption,
     MarkerDiameterOption,
     MaxGapOption,
     PreprocessingOptions,
-    StaticOption,
     SubjectOption,
     check_knee_ankle_centres,
     with_option_groups,
@@ -192,24 +194,40 @@ def _print_calibrated(subject: SubjectParameters) -> None:
 
 
 # --------------------------------------------------------------------------- angles
+@dataclass(frozen=True)
+class AngleFileOptions:
+    """The files ``angles`` writes: ``--out`` (per frame), ``--c3d-out``, ``--cycles``,
+    and the ``--suffix`` of the angle names in the C3D."""
+
+    out_table: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Angles per frame, .csv or .parquet.")
+    ] = None
+    c3d_out: Annotated[
+        Path | None, typer.Option("--c3d-out", help="C3D with markers, angles and virtual markers.")
+    ] = None
+    cycles: Annotated[
+        Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
+    ] = None
+    suffix: Annotated[
+        str,
+        typer.Option(
+            "--suffix",
+            help="Appended to the angle output names in --c3d-out (e.g. _CGM_2.3, or 'model': the model's "
+            "pyCGM2 suffix); default none: Vicon's names (LKneeAngles).",
+        ),
+    ] = ""
+
+
+DEFAULT_ANGLE_FILES = AngleFileOptions()
+
+
 @app.command()
 @with_option_groups
 def angles(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
-    static: StaticOption = None,
-    subject: SubjectOption = None,
-    out_table: Annotated[
-        Path | None, typer.Option("--out", "-o", help="Angles per frame, .csv or .parquet.")
-    ] = None,
-    c3d_out: Annotated[
-        Path | None, typer.Option("--c3d-out", help="C3D with markers, angles and virtual markers.")
-    ] = None,
-    cycles: Annotated[
-        Path | None, typer.Option("--cycles", help="Mean and SD over gait cycles, .csv or .parquet.")
-    ] = None,
+    calibration: CalibrationOptions = DEFAULT_CALIBRATION,
+    files: AngleFileOptions = DEFAULT_ANGLE_FILES,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
-    flat_foot: FlatFootOption = None,
-    marker_diameter: MarkerDiameterOption = None,
     model: Annotated[
         str,
         typer.Option(
@@ -220,14 +238,6 @@ def angles(
             "cluster calibration, if any).",
         ),
     ] = "auto",
-    suffix: Annotated[
-        str,
-        typer.Option(
-            "--suffix",
-            help="Appended to the angle output names in --c3d-out (e.g. _CGM_2.3, or 'model': the model's "
-            "pyCGM2 suffix); default none: Vicon's names (LKneeAngles).",
-        ),
-    ] = "",
     knee_ankle_centres: KneeAnkleCentresOption = None,
 ) -> None:
     """Lower-body joint angles (degrees) of a walking trial by a Conventional Gait Model
@@ -239,17 +249,18 @@ def angles(
     from fuzzygait.workflows.trial_inputs import TrialInputs
 
     with user_errors():
-        for path, option in ((out_table, "--out"), (cycles, "--cycles")):
+        for path, option in ((files.out_table, "--out"), (files.cycles, "--cycles")):
             if path is not None:
                 check_table_path(path, option)
-        if c3d_out is not None and c3d_out.suffix.lower() != ".c3d":
-            raise FuzzyGaitError(f"{c3d_out}: --c3d-out must name a .c3d file")
-        output_suffix(suffix, "cgm1.0")  # checked before any work
+        if files.c3d_out is not None and files.c3d_out.suffix.lower() != ".c3d":
+            raise FuzzyGaitError(f"{files.c3d_out}: --c3d-out must name a .c3d file")
+        output_suffix(files.suffix, "cgm1.0")  # checked before any work
         check_knee_ankle_centres(knee_ankle_centres)
-        trial = TrialInputs(dynamic, static=static, subject_file=subject, preprocessing=preprocessing.preprocessing(),
-                            flat_foot=flat_foot, marker_diameter=marker_diameter, model=model,
+        trial = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
+                            preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
+                            marker_diameter=calibration.marker_diameter, model=model,
                             knee_ankle_centres=knee_ankle_centres)  # fmt: skip
-        outputs = AngleOutputs(table=out_table, cycles=cycles, c3d=c3d_out, suffix=suffix)
+        outputs = AngleOutputs(table=files.out_table, cycles=files.cycles, c3d=files.c3d_out, suffix=files.suffix)
         run, written = angles_to_files(trial, outputs)
     print_run_summary(run)
     for path in written:

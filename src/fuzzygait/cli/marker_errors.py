@@ -3,6 +3,7 @@ report (whole sessions, the clinicians' HTML report)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -34,6 +35,48 @@ if TYPE_CHECKING:
     from fuzzygait.markererror.result import MarkerErrorResult
 
 
+@dataclass(frozen=True)
+class EngineOptions:
+    """How ``uncertainty`` computes the bands: ``--method`` of the marker deviations and
+    ``--workers`` processes."""
+
+    method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian"
+    workers: Annotated[int, typer.Option(help="Processes for the angles.")] = 2
+
+
+@dataclass(frozen=True)
+class ReportContentOptions:
+    """What ``report`` shows: the ``--uncertainty`` bands, a ``--pdf`` beside the pages and
+    the ``--normative`` reference curves."""
+
+    uncertainty: Annotated[
+        str, typer.Option(help="none: the angles only (seconds per trial); fast: the α = 0 and 0.5 bands of hip, "
+                          "knee and ankle angles; full: the marker-error analysis of the options below.")
+    ] = "full"
+    pdf: Annotated[bool, typer.Option("--pdf", help="Also a PDF (A4) of every trial page and session page.")] = False
+    normative: Annotated[
+        Path | None, typer.Option("--normative", metavar="NORM.csv",
+                                  help="Normative mean/SD per % gait cycle (see README 'Normative data').")
+    ] = None
+
+
+@dataclass(frozen=True)
+class BatchRunOptions:
+    """How ``report`` runs its trials: ``--workers`` (a local Dask pool) or a
+    ``--scheduler``, and ``--force`` to recompute unchanged trials."""
+
+    workers: Annotated[int, typer.Option(help="Processes for the trials (a local Dask pool; one trial: for its "
+                                         "angle components).")] = 2
+    scheduler: SchedulerOption = None
+    force: Annotated[bool, typer.Option("--force", help="Recompute trials whose inputs and options are unchanged "
+                                        "since the last run on --out (they are skipped otherwise).")] = False
+
+
+DEFAULT_ENGINE = EngineOptions()
+DEFAULT_REPORT_CONTENTS = ReportContentOptions()
+DEFAULT_BATCH_RUN = BatchRunOptions()
+
+
 def _check_workers(workers: int) -> None:
     if workers < 1:
         raise FuzzyGaitError(f"--workers must be at least 1; got {workers}")
@@ -47,9 +90,8 @@ def uncertainty(
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Fuzzy joint angles, .nc or .zarr.")],
     calibration: CalibrationOptions = DEFAULT_CALIBRATION,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
-    method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian",
+    engine: EngineOptions = DEFAULT_ENGINE,
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also write a Rerun recording (.rrd).")] = None,
-    workers: Annotated[int, typer.Option(help="Processes for the angles.")] = 2,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     model: ModelOption = "auto",
 ) -> None:
@@ -67,12 +109,12 @@ def uncertainty(
             raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
         if rrd is not None and rrd.suffix.lower() != ".rrd":
             raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
-        _check_workers(workers)
+        _check_workers(engine.workers)
         check_model(model)
         selected = parse_angles(marker_errors.angle_names)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
-                                              method=method, workers=workers,
+                                              method=engine.method, workers=engine.workers,
                                               tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
         inputs = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
@@ -175,21 +217,9 @@ def report(
     ],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Report folder (index.html, a folder per session).")],
     calibration: CalibrationOptions = DEFAULT_CALIBRATION,
-    uncertainty: Annotated[
-        str, typer.Option(help="none: the angles only (seconds per trial); fast: the α = 0 and 0.5 bands of hip, "
-                          "knee and ankle angles; full: the marker-error analysis of the options below.")
-    ] = "full",
+    contents: ReportContentOptions = DEFAULT_REPORT_CONTENTS,
     marker_errors: MarkerErrorOptions = DEFAULT_MARKER_ERRORS,
-    workers: Annotated[int, typer.Option(help="Processes for the trials (a local Dask pool; one trial: for its "
-                                         "angle components).")] = 2,
-    scheduler: SchedulerOption = None,
-    pdf: Annotated[bool, typer.Option("--pdf", help="Also a PDF (A4) of every trial page and session page.")] = False,
-    force: Annotated[bool, typer.Option("--force", help="Recompute trials whose inputs and options are unchanged "
-                                        "since the last run on --out (they are skipped otherwise).")] = False,
-    normative: Annotated[
-        Path | None, typer.Option("--normative", metavar="NORM.csv",
-                                  help="Normative mean/SD per % gait cycle (see README 'Normative data').")
-    ] = None,
+    batch: BatchRunOptions = DEFAULT_BATCH_RUN,
     preprocessing: PreprocessingOptions = DEFAULT_PREPROCESSING,
     model: ModelOption = "auto",
 ) -> None:
@@ -212,27 +242,29 @@ def report(
 
     with user_errors():
         alpha_levels = parse_alphas(marker_errors.alphas)
-        _check_workers(workers)
+        _check_workers(batch.workers)
         check_model(model)
+        normative = contents.normative
         if normative is not None and not normative.is_file():
             raise FuzzyGaitError(f"{normative}: no such normative file; check the path (--normative)")
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
-                                              workers=workers, tolerance=marker_errors.tolerance_deg(),
+                                              workers=batch.workers, tolerance=marker_errors.tolerance_deg(),
                                               per_source=marker_errors.per_source)  # fmt: skip
         # checked when made: one clear line for a bad --uncertainty, --marker-diameter..., before any work
         request = BatchReportRequest(
             inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
             marker_diameter=calibration.marker_diameter, flat_foot=calibration.flat_foot,
-            preprocessing=preprocessing.preprocessing(), settings=settings, uncertainty=uncertainty, model=model,
-            pdf=pdf, workers=workers, scheduler=scheduler, force=force, normative=normative, strict=debugging(),
+            preprocessing=preprocessing.preprocessing(), settings=settings, uncertainty=contents.uncertainty,
+            model=model, pdf=contents.pdf, workers=batch.workers, scheduler=batch.scheduler, force=batch.force,
+            normative=normative, strict=debugging(),
         )  # fmt: skip
         analysed = request.analysis()
         with progress_bars() as bars:
             stages = estimated_stages(bars)
             if analysed is not None:  # the work, before any trial is read
                 stages.estimate(report_work(inputs, analysed, static=calibration.static,
-                                            subject_file=calibration.subject, force=force))  # fmt: skip
+                                            subject_file=calibration.subject, force=batch.force))  # fmt: skip
             result = write_batch_report(request, trials=stages, on_failure=failed)
     for summary in result.sessions:
         for warning in summary.warnings:
