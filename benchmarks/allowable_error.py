@@ -98,8 +98,9 @@ def study(title: str, run: AnglesRun, evaluator: Evaluator) -> None:
                                       **extra)  # fmt: skip
     refine_wall = time.perf_counter() - start
     n_frames = int(np.isfinite(trial.markers[:, 0, 0]).sum())
-    plain_ev, refine_ev = int(plain.attrs["node_evaluations"]), int(refined.attrs["allowable_node_evaluations"])
-    runs = int(refined.attrs["allowable_runs"])
+    assert refined.allowable is not None  # the refinement group
+    plain_ev, refine_ev = int(plain.attrs["node_evaluations"]), int(refined.allowable.attrs["node_evaluations"])
+    runs = int(refined.allowable.attrs["runs"])
     print()
     print(f"## {title}: model {result.model}, {n_frames} frames, 18 components, α = {', '.join(map(str, ALPHAS))}")
     print(f"plain run: wall {wall:.1f} s, node evaluations {plain_ev:,}")
