@@ -49,8 +49,7 @@ and the runs cheap.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -70,7 +69,7 @@ from fuzzygait.markererror.analysis import (
     fuzzy_joint_angles,
 )
 from fuzzygait.markererror.angle_model import AXES, undetermined
-from fuzzygait.markererror.refinement import Progress, component_setups, refine
+from fuzzygait.markererror.refinement import Progress, component_setups, evaluator_or_own, refine
 from fuzzygait.markererror.result import (
     MarkerErrorResult,
     angle_components,
@@ -389,19 +388,6 @@ class AllowableRequest:
             raise ParameterError(f"max_evaluations must be a whole number >= 1; got {self.max_evaluations!r}")
 
 
-@contextmanager
-def _runner(evaluator: Evaluator | None, workers: int) -> Iterator[Evaluator]:
-    """``evaluator``, or else an evaluator of ``workers`` processes of its own, closed after use."""
-    if evaluator is not None:
-        yield evaluator
-        return
-    own = Evaluator(workers=max(1, int(workers)))
-    try:
-        yield own
-    finally:
-        own.close()
-
-
 def _start_searches(fuzzy: xr.Dataset, setups: dict[str, ComponentTask], tolerance: float,
                     resolution: float) -> dict[str, ScaleSearch]:  # fmt: skip
     """Each component's search for its allowable scale, started from the excursions of the
@@ -463,7 +449,7 @@ def allowable_errors(
     """
     options, tolerance, angles, resolution = request.options, request.tolerance, request.angles, request.resolution
     sources = parse_sources(options.sources)
-    with _runner(evaluator, options.workers) as runner:
+    with evaluator_or_own(evaluator, options.workers) as runner:
         if fuzzy is None:
             names = None if angles is None else list(dict.fromkeys(angle_of(a) for a in angles))
             fuzzy = fuzzy_joint_angles(trial, subject, result, options, names, evaluator=runner, clusters=clusters)

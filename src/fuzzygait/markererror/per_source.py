@@ -42,8 +42,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -58,6 +57,7 @@ from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task
 from fuzzygait.markererror.angle_model import undetermined
+from fuzzygait.markererror.refinement import evaluator_or_own
 from fuzzygait.markererror.result import (
     MarkerErrorResult,
     angle_components,
@@ -326,7 +326,7 @@ def per_source_bands(
     counts = {"forward_simulations": 0, "node_evaluations": 0}
     markers = [str(m) for m in fuzzy["marker"].to_numpy()]
     start = time.perf_counter()
-    with _runner(evaluator, options.workers) as runner:
+    with evaluator_or_own(evaluator, options.workers) as runner:
         for source in chosen:
             alone = replace(options, sources=(source,), alphas=tuple(float(a) for a in levels))
             run, _ = component_tasks(trial, subject, result, alone, wanted, clusters)
@@ -347,16 +347,6 @@ def per_source_bands(
             radii[source] = np.array([alone.error_model.radius(m, (source,)) for m in markers])
     attrs = {"seconds": round(time.perf_counter() - start, 3), "runs": total, **counts}
     return source_bands_dataset(fuzzy, hulls, levels, radii=radii, attrs=attrs)
-
-
-@contextmanager
-def _runner(evaluator: Evaluator | None, workers: int) -> Iterator[Evaluator]:
-    """``evaluator``, or else an evaluator of ``workers`` processes of its own, closed after use."""
-    if evaluator is not None:
-        yield evaluator
-        return
-    with Evaluator(workers=max(1, int(workers))) as own:
-        yield own
 
 
 # ---------------------------------------------------------------------------- the table

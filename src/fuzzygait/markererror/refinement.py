@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -108,3 +109,16 @@ def refine(setups: dict[str, ComponentTask], searches: dict[str, ScaleSearch], r
     if progress is not None:
         progress(sum(counts.values()), sum(counts.values()))
     return Refinement(runs, counts, node_evaluations, seconds)
+
+
+@contextmanager
+def evaluator_or_own(evaluator: Evaluator | None, workers: int) -> Iterator[Evaluator]:
+    """``evaluator``, or else an evaluator of ``workers`` processes of its own, closed after use."""
+    if evaluator is not None:
+        yield evaluator
+        return
+    own = Evaluator(workers=max(1, int(workers)))
+    try:
+        yield own
+    finally:
+        own.close()
