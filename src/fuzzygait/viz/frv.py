@@ -21,7 +21,7 @@ the stored hulls are streamed, never loaded whole):
   mean (full colour) to one σ (almost transparent).
 
 All return a :class:`matplotlib.figure.Figure` (no pyplot state; save with
-``fig.savefig`` or :func:`fuzzygait.viz.figures.save_figure`).
+``fig.savefig`` or :func:`fuzzygait.io.figure_files.save_figure`).
 """
 
 from __future__ import annotations
