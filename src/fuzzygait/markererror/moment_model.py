@@ -198,6 +198,11 @@ class LegKineticsModel:
         self.time_step = 1.0 / self.trial.rate
         #: Independent outputs: one per component.
         self.blocks = len(self.components)
+        #: ``(joint, output, axis)`` signs picking Nexus' X, Y, Z from the distal frame's axes.
+        self._picks = np.zeros((3, 3, 3))
+        for j, joint in enumerate(JOINTS):
+            for c, (axis, sign) in enumerate(MOMENT_AXES[(joint, self.side)]):
+                self._picks[j, c, axis] = sign
 
     @property
     def ball_names(self) -> list[str]:
@@ -251,20 +256,17 @@ class LegKineticsModel:
         for p in range(len(self.plates)):
             offset = anp.dot(shifts[:, p, :2], self._plane[p]) * MM
             moment = moment + anp.cross(offset, self._shares[p][frames])
-        segments = _segments(parts, self.foot_length * MM, mass)
-        loads = _newton_euler(segments, self._force[frames], moment, rate)
-        omegas = [omega for _, omega in loads] + [_omega(parts["pelvis"], rate)[:, 1]]
-        out = []
-        for j, (joint, (m_lab, _)) in enumerate(zip(JOINTS, loads, strict=True)):
-            if self.kind == "Power":
-                power = anp.sum(m_lab * (omegas[j] - omegas[j + 1]), axis=1) / mass
-                zero = anp.zeros_like(power)
-                out.append(anp.stack([zero, zero, power], axis=1))
-                continue
-            local = anp.einsum("kji,kj->ki", segments[j].frames[:, HALF_WINDOW], m_lab)
-            out.append(anp.stack([sign * local[:, axis] for axis, sign in MOMENT_AXES[(joint, self.side)]],
-                                 axis=1) / mass)  # fmt: skip
-        return anp.stack(out, axis=1)
+        rotations = anp.stack([parts["foot"], parts["tibia"], parts["thigh"], parts["pelvis"]], axis=1)
+        omega = _omega(rotations, rate)  # (k, 4 segments, 3 offsets, 3)
+        moments = _newton_euler(_segments(parts, self.foot_length * MM, mass), rotations, omega,
+                                self._force[frames], moment, rate)  # fmt: skip
+        if self.kind == "Power":
+            relative = omega[:, :3, 1] - omega[:, 1:, 1]
+            power = anp.sum(moments * relative, axis=2) / mass
+            zero = anp.zeros_like(power)
+            return anp.stack([zero, zero, power], axis=2)
+        local = _apply(anp.swapaxes(rotations[:, :3, HALF_WINDOW], -1, -2), moments)
+        return anp.einsum("sca,ksa->ksc", self._picks, local) / mass
 
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
@@ -273,8 +275,9 @@ class LegKineticsModel:
         pairs = np.asarray(self.components, dtype=object)
         joint = np.array([JOINTS.index(str(pairs[b][0])) for b in block], dtype=int)
         axis = np.array([int(pairs[b][1]) for b in block], dtype=int)
-        values = self.outputs(P, self.frames[j])
-        return values[np.arange(len(j)), joint, axis]
+        pick = np.zeros((len(j), 3, 3))
+        pick[np.arange(len(j)), joint, axis] = 1.0
+        return anp.sum(self.outputs(P, self.frames[j]) * pick, axis=(1, 2))
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Values and exact gradients (per mm) per row."""
@@ -300,67 +303,72 @@ class LegKineticsModel:
         return np.max(turns, axis=0)
 
 
+def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """``matrices @ vectors`` over the leading axes (``(..., 3, 3)`` and ``(..., 3)``)."""
+    return anp.matmul(matrices, vectors[..., None])[..., 0]
+
+
 def _omega(frames: np.ndarray, rate: float) -> np.ndarray:
-    """``(k, 3, 3)`` rad/s: the angular velocity at window offsets −2, 0, +2 of the
-    ``(k, 9, 3, 3)`` rotations (axial vector of ``Ṙ Rᵀ``, ``Ṙ`` the two-frame difference)."""
-    out = []
-    for c in (2, 4, 6):
-        w = anp.einsum("kij,klj->kil", (frames[:, c + 2] - frames[:, c - 2]) * (rate / 4.0), frames[:, c])
-        out.append(0.5 * anp.stack([w[:, 2, 1] - w[:, 1, 2], w[:, 0, 2] - w[:, 2, 0], w[:, 1, 0] - w[:, 0, 1]], axis=1))
-    return anp.stack(out, axis=1)
+    """``(k, s, 3, 3)`` rad/s: the angular velocity at window offsets −2, 0, +2 of the
+    ``(k, s, 9, 3, 3)`` rotations of ``s`` segments (axial vector of ``Ṙ Rᵀ``, ``Ṙ`` the
+    two-frame difference, :func:`~fuzzygait.kinetics.inverse_dynamics.angular_velocity`)."""
+    ahead, behind, centre = frames[:, :, 4:9:2], frames[:, :, 0:5:2], frames[:, :, 2:7:2]  # offsets c ± 2, c
+    w = anp.matmul((ahead - behind) * (rate / 4.0), anp.swapaxes(centre, -1, -2))
+    return 0.5 * anp.stack([w[..., 2, 1] - w[..., 1, 2], w[..., 0, 2] - w[..., 2, 0], w[..., 1, 0] - w[..., 0, 1]],
+                           axis=-1)  # fmt: skip
 
 
-class _Segment(NamedTuple):
-    """A segment over each row's nine frames, SI units, laboratory frame."""
+class _Segments(NamedTuple):
+    """Foot, tibia and femur over each row's nine frames, SI units, laboratory frame."""
 
-    mass: float
-    frames: np.ndarray  # (k, 9, 3, 3)
-    com: np.ndarray  # (k, 9, 3) m
-    inertia: np.ndarray  # (k, 3) kg·m² at the centre frame
-    joint: np.ndarray  # (k, 3) m, the proximal joint centre at the centre frame
+    mass: np.ndarray  # (3,) kg
+    com: np.ndarray  # (k, 3, 9, 3) m
+    inertia: np.ndarray  # (k, 3, 3) kg·m² at the centre frame, principal x, y, z
+    joint: np.ndarray  # (k, 3, 3) m, each segment's proximal joint centre at the centre frame
 
 
-def _segments(parts: dict[str, np.ndarray], foot_length: float, body_mass: float) -> list[_Segment]:
+def _segments(parts: dict[str, np.ndarray], foot_length: float, body_mass: float) -> _Segments:
     """Foot, tibia and femur as :mod:`fuzzygait.kinetics.segments` builds them (the
     foot's centre of mass on its long axis, the long segments' lengths per frame)."""
-    out = []
-    for name, distal, proximal, frame_name in (("foot", "AJC", "AJC", "foot"), ("tibia", "AJC", "KJC", "tibia"),
-                                               ("femur", "KJC", "HJC", "thigh")):  # fmt: skip
-        row = PLUG_IN_GAIT_TABLE[name]
-        mass = row.mass_fraction * body_mass
-        frames = parts[frame_name]
-        if name == "foot":
-            com = parts["AJC"] - (1.0 - row.com_from_distal) * foot_length * frames[..., 2]
-            length = foot_length * anp.ones(frames.shape[0])
-        else:
-            com = parts[distal] + row.com_from_distal * (parts[proximal] - parts[distal])
-            length = anp.sqrt(anp.sum((parts[proximal][:, HALF_WINDOW] - parts[distal][:, HALF_WINDOW]) ** 2, axis=1))
-        across = mass * (row.gyration * length) ** 2
-        out.append(_Segment(mass, frames, com, anp.stack([across, across, anp.zeros_like(across)], axis=1),
-                            parts[proximal][:, HALF_WINDOW]))  # fmt: skip
-    return out
+    foot, tibia, femur = (PLUG_IN_GAIT_TABLE[name] for name in ("foot", "tibia", "femur"))
+    ajc, kjc, hjc = parts["AJC"], parts["KJC"], parts["HJC"]
+    com = anp.stack([ajc - (1.0 - foot.com_from_distal) * foot_length * parts["foot"][..., 2],
+                     ajc + tibia.com_from_distal * (kjc - ajc),
+                     kjc + femur.com_from_distal * (hjc - kjc)], axis=1)  # fmt: skip
+    joint = anp.stack([ajc[:, HALF_WINDOW], kjc[:, HALF_WINDOW], hjc[:, HALF_WINDOW]], axis=1)
+    lengths = anp.stack([foot_length * anp.ones(joint.shape[0]),
+                         anp.sqrt(anp.sum((joint[:, 1] - joint[:, 0]) ** 2, axis=1)),
+                         anp.sqrt(anp.sum((joint[:, 2] - joint[:, 1]) ** 2, axis=1))], axis=1)  # fmt: skip
+    mass = body_mass * np.array([foot.mass_fraction, tibia.mass_fraction, femur.mass_fraction])
+    gyration = np.array([foot.gyration, tibia.gyration, femur.gyration])
+    across = mass * (gyration * lengths) ** 2
+    return _Segments(mass, com, anp.stack([across, across, anp.zeros_like(across)], axis=2), joint)
 
 
-def _newton_euler(segments: list[_Segment], force: np.ndarray, moment: np.ndarray,
-                  rate: float) -> list[tuple[np.ndarray, np.ndarray]]:  # fmt: skip
-    """Per joint (ankle, knee, hip): the joint moment (N·m about the joint centre,
-    laboratory frame, of the proximal segment on the distal one) and the distal segment's
-    angular velocity (rad/s), at the window's centre, from the ground load (``force`` N,
-    ``moment`` N·m about the laboratory origin) up: :func:`~fuzzygait.kinetics.
-    inverse_dynamics.newton_euler` with its derivatives."""
+def _newton_euler(segments: _Segments, rotations: np.ndarray, omega: np.ndarray, force: np.ndarray,
+                  moment: np.ndarray, rate: float) -> np.ndarray:  # fmt: skip
+    """``(k, 3, 3)``: per joint (ankle, knee, hip) the joint moment (N·m about the joint
+    centre, laboratory frame, of the proximal segment on the distal one) at the window's
+    centre, from the ground load (``force`` N, ``moment`` N·m about the laboratory
+    origin) up: :func:`~fuzzygait.kinetics.inverse_dynamics.newton_euler` with its
+    derivatives (``rotations`` ``(k, 4, 9, 3, 3)`` and ``omega`` :func:`_omega` of foot,
+    tibia, femur and pelvis)."""
+    acceleration = anp.einsum("w,kswi->ksi", SECOND_DIFFERENCE * rate**2, segments.com)
+    alpha = (omega[:, :3, 2] - omega[:, :3, 0]) * (rate / 4.0)
+    rotation, inertia = rotations[:, :3, HALF_WINDOW], segments.inertia
+    transposed = anp.swapaxes(rotation, -1, -2)
+    w_local = _apply(transposed, omega[:, :3, 1])
+    a_local = _apply(transposed, alpha)
+    h_dot = _apply(rotation, inertia * a_local + anp.cross(w_local, inertia * w_local))
+    weight = segments.mass[None, :, None] * (acceleration - GRAVITY)
+    centre = segments.com[:, :, HALF_WINDOW]
     out = []
     point: np.ndarray = np.zeros(np.shape(force))
     distal_force, distal_moment = force, moment
-    for segment in segments:
-        acceleration = anp.einsum("w,kwi->ki", SECOND_DIFFERENCE * rate**2, segment.com)
-        omega = _omega(segment.frames, rate)
-        alpha = (omega[:, 2] - omega[:, 0]) * (rate / 4.0)
-        centre, rotation, inertia = segment.com[:, HALF_WINDOW], segment.frames[:, HALF_WINDOW], segment.inertia
-        w_local = anp.einsum("kji,kj->ki", rotation, omega[:, 1])
-        a_local = anp.einsum("kji,kj->ki", rotation, alpha)
-        h_dot = anp.einsum("kij,kj->ki", rotation, inertia * a_local + anp.cross(w_local, inertia * w_local))
-        f = segment.mass * (acceleration - GRAVITY) - distal_force
-        m = h_dot - distal_moment - anp.cross(point - centre, distal_force) - anp.cross(segment.joint - centre, f)
-        out.append((m, omega[:, 1]))
-        point, distal_force, distal_moment = segment.joint, -f, -m
-    return out
+    for s in range(3):
+        f = weight[:, s] - distal_force
+        joint, c = segments.joint[:, s], centre[:, s]
+        m = h_dot[:, s] - distal_moment - anp.cross(point - c, distal_force) - anp.cross(joint - c, f)
+        out.append(m)
+        point, distal_force, distal_moment = joint, -f, -m
+    return anp.stack(out, axis=1)
