@@ -82,8 +82,7 @@ def kinetics(case: Case, threshold_n: float, automatic: bool = False) -> tuple[d
         contacts = automatic_assignment(plates, feet, trial.rate, threshold_n)
         ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
         ours = plug_in_gait_kinetics(result, trial, subject, ground).outputs
-        used = [f"plate {c.plate} frames {c.first}-{c.last}: {c.side.value if c.side else f'unused ({c.reason})'}"
-                for c in contacts]  # fmt: skip
+        used = [f"plate {c.plate} frames {c.first}-{c.last}: {c.describe()}" for c in contacts]
         return ours, trial.outputs, "; ".join(used)
     for side in Side:
         assigned = stored_assignment(every_sample, trial.outputs, side, subject.body_mass, trial.rate)

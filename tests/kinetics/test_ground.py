@@ -11,6 +11,7 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import Side
 from fuzzygait.io import read_c3d
 from fuzzygait.kinetics.assignment import (
+    ContactUse,
     Foot,
     PlateContact,
     assigned_ground,
@@ -117,15 +118,17 @@ def test_a_foot_wholly_on_the_plate_gets_the_contact() -> None:
     assert np.all(ground.force[21:79, 2] == 700.0) and np.all(ground.force[:20] == 0.0)
 
 
-@pytest.mark.parametrize(("feet", "reason"), [
-    ({Side.LEFT: foot_at((-100, 150))}, "left foot off the plate's edge"),
-    ({Side.LEFT: foot_at((100, 150)), Side.RIGHT: foot_at((100, 200))}, "both feet over the centre of pressure"),
-    ({Side.LEFT: foot_at((900, 150))}, "no foot over the centre of pressure"),
+@pytest.mark.parametrize(("feet", "reason", "foot", "text"), [
+    ({Side.LEFT: foot_at((-100, 150))}, ContactUse.OFF_EDGE, Side.LEFT, "not used: left foot off the plate's edge"),
+    ({Side.LEFT: foot_at((100, 150)), Side.RIGHT: foot_at((100, 200))}, ContactUse.BOTH_FEET, None,
+     "not used: both feet over the centre of pressure"),
+    ({Side.LEFT: foot_at((900, 150))}, ContactUse.NO_FOOT, None, "not used: no foot over the centre of pressure"),
 ])  # fmt: skip
-def test_contacts_that_are_not_used(feet: dict[Side, Foot], reason: str) -> None:
-    cop = (50.0, 160.0) if reason.endswith("edge") else (200.0, 170.0)
+def test_contacts_that_are_not_used(feet: dict[Side, Foot], reason: ContactUse, foot: Side | None, text: str) -> None:
+    cop = (50.0, 160.0) if reason is ContactUse.OFF_EDGE else (200.0, 170.0)
     (contact,) = automatic_assignment([loaded(0.0, cop)], feet, 100.0, 10.0)
-    assert contact.side is None and contact.reason == reason
+    assert (contact.side, contact.reason, contact.foot, contact.describe()) == (None, reason, foot, text)
+    assert not contact.reason.used
 
 
 def test_a_foot_on_two_plates_at_once_uses_neither() -> None:
@@ -136,7 +139,8 @@ def test_a_foot_on_two_plates_at_once_uses_neither() -> None:
     plates = [loaded(0.0, (490, 150), number=1), loaded(500.0, (600, 150), number=2)]
     assert [c.side for c in automatic_assignment(plates[:1], feet, 100.0, 10.0)] == [Side.RIGHT]
     contacts = automatic_assignment(plates, feet, 100.0, 10.0)
-    assert [c.reason for c in contacts] == ["right foot on two plates at once"] * 2
+    assert [(c.side, c.reason, c.foot) for c in contacts] == [(None, ContactUse.TWO_PLATES, Side.RIGHT)] * 2
+    assert contacts[0].describe() == "not used: right foot on two plates at once"
 
 
 def test_automatic_assignment_agrees_with_nexus_on_pigkad() -> None:

@@ -81,6 +81,12 @@ class FindingKind(enum.Enum):
     FORCE_PLATE_UNLOADED = "force_plate_unloaded"
     #: A force plate's channel units read otherwise than labelled.
     FORCE_PLATE_UNITS = "force_plate_units"
+    #: A force-plate contact and the foot it is assigned to, or why it is not used
+    #: (:class:`fuzzygait.kinetics.assignment.PlateContact`; :attr:`Finding.side` the foot).
+    FORCE_PLATE_ASSIGNMENT = "force_plate_assignment"
+    #: The joint kinetics of a trial: not computed and why (no force plates, a side's
+    #: markers missing), the units they were computed in (:mod:`fuzzygait.workflows.kinetics`).
+    KINETICS = "kinetics"
 
 
 class Severity(enum.Enum):

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 from xml.sax.saxutils import escape as xml_escape
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.names import Side
 from fuzzygait.core.options import Option
 from fuzzygait.core.subject import (  # the definitions; the names importable from here too
     ANGLE_FIELDS,
@@ -98,6 +99,53 @@ def read_subject_toml(path: str | os.PathLike[str]) -> SubjectParameters:
     if bad:
         raise ParameterError(f"{path}: parameters {bad} must be numbers")
     return subject_from_processing(numbers, source=str(path))
+
+
+#: The words of a ``[force_plates]`` table: the foot on the plate, none, or the automatic
+#: assignment (the plate left out of the override).
+_PLATE_FEET: dict[str, Side | None] = {"left": Side.LEFT, "right": Side.RIGHT, "none": None}
+_PLATE_AUTO = "auto"
+
+
+def read_force_plate_assignment(path: str | os.PathLike[str]) -> dict[int, Side | None]:
+    """The foot on each force plate as a subject file's ``[force_plates]`` table states it
+    (TOML subject files only; ``[subject.force_plates]`` too), e.g.::
+
+        [force_plates]
+        1 = "left"
+        2 = "none"    # no foot's load: the contacts on plate 2 are not used
+        3 = "auto"    # the automatic assignment (as if not listed)
+
+    Returns plate number (1-based, as ``FORCE_PLATFORM``) -> :class:`Side`, None for
+    ``"none"``; plates set to ``"auto"`` or not listed are left out (empty: no override,
+    also for a file of another kind or without the table).
+
+    Raises:
+        ParameterError: a key that is not a plate number 1, 2, ... or a value other than
+            ``"left"``, ``"right"``, ``"none"``, ``"auto"`` (one line naming the file and key).
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".toml":
+        return {}
+    data = load_toml(path, "subject file")
+    nested = data.get("subject")
+    table = data.get("force_plates", nested.get("force_plates") if isinstance(nested, dict) else None)
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        raise ParameterError(f"{path}: force_plates must be a table of plate number = \"left\", \"right\", "
+                             f"\"none\" or \"auto\"")  # fmt: skip
+    out: dict[int, Side | None] = {}
+    words = ", ".join(f'"{w}"' for w in [*_PLATE_FEET, _PLATE_AUTO])
+    for key, value in table.items():
+        if not (key.isdigit() and int(key) >= 1):
+            raise ParameterError(f"{path}: force_plates.{key}: not a plate number; use 1, 2, ... as in the C3D")
+        word = value.lower() if isinstance(value, str) else None
+        if word != _PLATE_AUTO and word not in _PLATE_FEET:
+            raise ParameterError(f"{path}: force_plates.{key} = {value!r}; use one of {words}")
+        if word in _PLATE_FEET:
+            out[int(key)] = _PLATE_FEET[word]
+    return out
 
 
 def read_vsk(path: str | os.PathLike[str]) -> SubjectParameters:

@@ -10,13 +10,16 @@ foot's window holds the end of one contact on plate 2 and a whole contact on pla
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, Severity
 from fuzzygait.core.names import Side
 from fuzzygait.kinetics.ground import PlateSignals, frame_means, no_load, plate_load, samples_per_frame
 from fuzzygait.kinetics.inverse_dynamics import Load
@@ -110,6 +113,45 @@ class Foot:
     ankle: NDArray[np.float64]
 
 
+class ContactUse(enum.Enum):
+    """Whether a plate contact is used, and why (not)."""
+
+    #: The automatic rule gave it to the foot over the centre of pressure.
+    USED = "used"
+    #: The subject file puts the plate under this foot (``[force_plates]``).
+    ASSIGNED = "assigned"
+    #: The subject file puts no foot on the plate.
+    EXCLUDED = "excluded"
+    #: No foot's heel-toe line within reach of the centre of pressure.
+    NO_FOOT = "no_foot"
+    #: Both feet's heel-toe lines within reach of the centre of pressure (median).
+    BOTH_FEET = "both_feet"
+    #: The other foot came within reach of the centre of pressure during the contact.
+    OTHER_FOOT = "other_foot"
+    #: The foot's heel or ankle marker beyond the plate's outline in mid-stance.
+    OFF_EDGE = "off_edge"
+    #: The foot on another plate at the same time.
+    TWO_PLATES = "two_plates"
+
+    @property
+    def used(self) -> bool:
+        """The contact's load acts on a foot."""
+        return self in (ContactUse.USED, ContactUse.ASSIGNED)
+
+
+#: The text of each reason, ``{foot}`` the foot's word in lower case.
+_REASON_TEXT = {
+    ContactUse.USED: "the {foot} foot's",
+    ContactUse.ASSIGNED: "the {foot} foot's, as the subject file assigns the plate",
+    ContactUse.EXCLUDED: "not used: the subject file assigns the plate to no foot",
+    ContactUse.NO_FOOT: "not used: no foot over the centre of pressure",
+    ContactUse.BOTH_FEET: "not used: both feet over the centre of pressure",
+    ContactUse.OTHER_FOOT: "not used: both feet on the plate during the contact",
+    ContactUse.OFF_EDGE: "not used: {foot} foot off the plate's edge",
+    ContactUse.TWO_PLATES: "not used: {foot} foot on two plates at once",
+}
+
+
 @dataclass(frozen=True)
 class PlateContact:
     """One contact on one plate and the foot it went to.
@@ -118,14 +160,39 @@ class PlateContact:
         plate: 1-based plate number.
         first, last: the contact's first and last frame (0-based indices of the trial).
         side: the foot whose load it is, or None when it is not used.
-        reason: why it is not used (None when used).
+        reason: whether and why (not) it is used.
+        foot: of an unused contact, the foot the reason is about (off the plate's edge,
+            on two plates), else None.
     """
 
     plate: int
     first: int
     last: int
     side: Side | None
-    reason: str | None = None
+    reason: ContactUse = ContactUse.USED
+    foot: Side | None = None
+
+    def describe(self) -> str:
+        """What became of the contact, e.g. ``"not used: left foot off the plate's edge"``."""
+        foot = self.side or self.foot
+        return _REASON_TEXT[self.reason].format(foot=foot.word.lower() if foot else "")
+
+    def finding(self, first_frame: int = 1) -> Finding:
+        """The contact as a :attr:`~fuzzygait.core.findings.FindingKind.FORCE_PLATE_ASSIGNMENT`
+        finding; its frames numbered from ``first_frame`` (the trial's first C3D frame).
+        A warning when a foot made it and it is not used (both feet, off the edge, two
+        plates); ``side`` the foot it is about."""
+        foot = self.side or self.foot
+        warn = self.reason in (ContactUse.BOTH_FEET, ContactUse.OTHER_FOOT, ContactUse.OFF_EDGE, ContactUse.TWO_PLATES)
+        frames = f"{first_frame + self.first}-{first_frame + self.last}"
+        text = f"force plate {self.plate}, frames {frames}: {self.describe()}"
+        return Finding(FindingKind.FORCE_PLATE_ASSIGNMENT, text, Severity.WARNING if warn else Severity.INFO,
+                       side=foot.word.lower() if foot else None)  # fmt: skip
+
+
+def contact_findings(contacts: Sequence[PlateContact], first_frame: int = 1) -> list[Finding]:
+    """One finding per contact (:meth:`PlateContact.finding`), in order."""
+    return [c.finding(first_frame) for c in contacts]
 
 
 def over_plate(points: NDArray[np.float64], corners: NDArray[np.float64], margin: float = 0.0) -> NDArray[np.bool_]:
@@ -162,27 +229,29 @@ def cop_distance(foot: Foot, cop: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _contact_foot(plate: PlateCorners, feet: Mapping[Side, Foot], cop: NDArray[np.float64],
-                  frames: slice) -> tuple[Side | None, str | None]:  # fmt: skip
-    """The foot of one contact, or why none."""
+                  frames: slice) -> tuple[Side | None, ContactUse]:  # fmt: skip
+    """The foot of one contact, or None and why none (off the edge: the foot is the
+    side the contact is about, the one returned with :attr:`ContactUse.OFF_EDGE`)."""
     near = {side: cop_distance(foot, cop)[frames] for side, foot in feet.items()}
     loaded = [side for side, d in near.items() if np.nanmedian(d) <= REACH_MM]
     touching = [side for side, d in near.items() if np.nanmin(d) <= REACH_MM]
     if len(loaded) != 1:
-        return None, "no foot over the centre of pressure" if not loaded else "both feet over the centre of pressure"
+        return None, ContactUse.NO_FOOT if not loaded else ContactUse.BOTH_FEET
     side = loaded[0]
     if len(touching) > 1:
-        return None, "both feet on the plate during the contact"
+        return None, ContactUse.OTHER_FOOT
     foot = feet[side]
     length = frames.stop - frames.start
     middle = slice(frames.start + length // 3, frames.stop - length // 3)
     rearfoot = (foot.heel[middle], foot.ankle[middle])
     if not all(over_plate(points, plate.corners, EDGE_MARGIN_MM).all() for points in rearfoot):
-        return None, f"{side.word.lower()} foot off the plate's edge"
-    return side, None
+        return side, ContactUse.OFF_EDGE
+    return side, ContactUse.USED
 
 
 def automatic_assignment(plates: Sequence[PlateCorners], feet: Mapping[Side, Foot], rate: float,
-                         threshold_n: float) -> list[PlateContact]:  # fmt: skip
+                         threshold_n: float, *, override: Mapping[int, Side | None] | None = None,
+                         ) -> list[PlateContact]:  # fmt: skip
     """Each contact of each plate to one foot: the foot whose heel-toe line the centre of
     pressure stays within :data:`REACH_MM` of (median over the contact), with its heel and
     ankle markers over the plate through the middle third of the contact, the foot flat
@@ -195,7 +264,21 @@ def automatic_assignment(plates: Sequence[PlateCorners], feet: Mapping[Side, Foo
         plates: the plates at their own rate (first sample at the first frame).
         feet: per side the foot markers (a side without them is absent).
         rate: marker frames per second; ``threshold_n`` the plates' contact threshold (N).
+        override: plate number -> the foot on it, None for none (a subject file's
+            ``[force_plates]``, :func:`fuzzygait.io.subject.read_force_plate_assignment`):
+            each contact of such a plate goes to that foot (:attr:`ContactUse.ASSIGNED`)
+            or to none (:attr:`ContactUse.EXCLUDED`) instead of the rule's choice; a foot
+            on two plates at once is still not used.
+
+    Raises:
+        ParameterError: ``override`` names a plate the trial does not have.
     """
+    override = dict(override or {})
+    numbers = [p.number for p in plates]
+    unknown = sorted(set(override) - set(numbers))
+    if unknown:
+        raise ParameterError(f"the subject file's [force_plates] names plate {', '.join(map(str, unknown))}, "
+                             f"but the trial has plates {', '.join(map(str, numbers)) or 'none'}")  # fmt: skip
     contacts: list[PlateContact] = []
     n_frames = len(next(iter(feet.values())).heel) if feet else 0
     for plate in plates:
@@ -204,8 +287,14 @@ def automatic_assignment(plates: Sequence[PlateCorners], feet: Mapping[Side, Foo
         weight = frame_means(np.asarray(plate.contact, dtype=float), ratio, n_frames)
         cop = np.where(weight[:, None] > 0, cop / np.maximum(weight, 1e-12)[:, None], np.nan)
         for first, last in frame_contacts(plate, n_frames, rate, threshold_n):
+            if plate.number in override:
+                side = override[plate.number]
+                reason = ContactUse.ASSIGNED if side is not None else ContactUse.EXCLUDED
+                contacts.append(PlateContact(plate.number, first, last, side, reason))
+                continue
             side, reason = _contact_foot(plate, feet, cop, slice(first, last + 1))
-            contacts.append(PlateContact(plate.number, first, last, side, reason))
+            contacts.append(PlateContact(plate.number, first, last, side, reason) if reason.used
+                            else PlateContact(plate.number, first, last, None, reason, side))  # fmt: skip
     return _one_plate_per_foot(contacts)
 
 
@@ -213,10 +302,9 @@ def _one_plate_per_foot(contacts: list[PlateContact]) -> list[PlateContact]:
     """Contacts of one foot on two plates at the same time become unused."""
     out = []
     for c in contacts:
-        clash = any(o is not c and o.side == c.side and o.side is not None and o.first <= c.last and c.first <= o.last
-                    for o in contacts)  # fmt: skip
-        out.append(PlateContact(c.plate, c.first, c.last, None, f"{c.side.word.lower()} foot on two plates at once")
-                   if clash and c.side is not None else c)  # fmt: skip
+        clash = c.side is not None and any(
+            o is not c and o.side is c.side and o.first <= c.last and c.first <= o.last for o in contacts)
+        out.append(replace(c, side=None, reason=ContactUse.TWO_PLATES, foot=c.side) if clash else c)
     return out
 
 
