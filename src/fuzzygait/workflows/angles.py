@@ -40,6 +40,7 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import Gap
 from fuzzygait.mocap.sanity import check_trial
 from fuzzygait.workflows.crosscheck import CrossCheck, check_run
+from fuzzygait.workflows.kinetics import TrialKinetics, run_kinetics
 from fuzzygait.workflows.preprocessing import (  # noqa: F401  (re-exported: the pipeline's options)
     DEFAULT_PREPROCESSING,
     Preprocessing,
@@ -93,6 +94,9 @@ class AnglesRun:
             (:func:`~fuzzygait.workflows.subject_resolution.settle_marker_diameter`).
         clusters: the static cluster calibration of a cluster model (cgm2.3, cgm2.4; the
             marker-error analysis holds it fixed), else None.
+        kinetics: Plug-in Gait kinetics when the trial's file has force plates
+            (:func:`fuzzygait.workflows.kinetics.trial_kinetics`), else None; their
+            findings are in ``notes``.
     """
 
     raw: Trial
@@ -107,6 +111,7 @@ class AnglesRun:
     warnings: list[str] = field(default_factory=list)
     crosscheck: CrossCheck | None = None
     diameter: DiameterChoice | None = None
+    kinetics: TrialKinetics | None = None
 
     @property
     def model(self) -> str:
@@ -218,7 +223,10 @@ def run_angles(
     events, source = trial_gait_events(trial)
     if source != "file":
         notes.append(Finding(FindingKind.EVENTS, f"gait events {source}"))
-    return AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
+    run = AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
+    run.kinetics, kinetic_notes = run_kinetics(run, subject_file)
+    run.notes += kinetic_notes
+    return run
 
 
 def choose_model(

@@ -1,0 +1,326 @@
+"""Plug-in Gait kinetics of one trial in the pipeline: plates read, feet assigned, both
+sides' joint moments, powers and ground reactions (issue 39).
+
+:func:`trial_kinetics` takes an :class:`~fuzzygait.workflows.angles.AnglesRun` (the model
+result, the pre-processed trial the model saw, the subject) and the trial's C3D file: the
+force plates at the analog rate (:func:`fuzzygait.kinetics.plates.read_force_plates`),
+each contact given to a foot automatically
+(:func:`fuzzygait.kinetics.assignment.automatic_assignment`) and
+:func:`fuzzygait.kinetics.plug_in_gait.plug_in_gait_kinetics`. The result,
+:class:`TrialKinetics`, holds the kinetics as an :class:`xarray.Dataset` with named
+dimensions in the units the pages use (N·m/kg, W/kg, % body weight); Nexus' names and
+units (``LAnkleMoment`` in N·mm/kg ...) are made only at the edges
+(:meth:`TrialKinetics.nexus_outputs`: the C3D written back and the tables' columns).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.findings import Finding, FindingKind, Severity, of_kind
+from fuzzygait.core.names import Axis, Side
+from fuzzygait.core.trial import Trial
+from fuzzygait.io.force_plates import ForcePlate, ForcePlateError
+from fuzzygait.io.subject import read_force_plate_assignment
+from fuzzygait.kinetics.assignment import (
+    Foot,
+    PlateContact,
+    automatic_assignment,
+    contact_findings,
+    contact_ground,
+    over_plate,
+)
+from fuzzygait.kinetics.ground import frame_means, samples_per_frame
+from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
+from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait_kinetics
+
+if TYPE_CHECKING:
+    from fuzzygait.workflows.angles import AnglesRun
+
+__all__ = ["JOINTS", "NEXUS_QUANTITIES", "TrialKinetics", "run_kinetics", "trial_kinetics"]
+
+Array = NDArray[np.float64]
+AXES = tuple(a.value for a in Axis)
+SIDES = tuple(s.value for s in Side)
+
+#: Loaded samples (normal force above this, N) whose centre of pressure is checked to lie
+#: on its plate, and how far beyond the plate's edge it may lie (mm).
+COP_CHECK_N = 100.0
+COP_MARGIN_MM = 50.0
+#: Fewer of those samples on the plate than this fraction: the plate's lengths and
+#: moments are in different units.
+COP_ON_PLATE = 0.9
+
+#: The dataset's variables: name -> (unit, Nexus output suffix, Nexus kind, factor to
+#: Nexus' unit). The ground reactions' names are per side (no joint).
+NEXUS_QUANTITIES: dict[str, tuple[str, str, str, float]] = {
+    "moment": ("N·m/kg", "Moment", "moment", 1e3),
+    "joint_force": ("N/kg", "Force", "force", 1.0),
+    "power": ("W/kg", "Power", "power", 1.0),
+    "ground_force": ("N/kg", "GroundReactionForce", "force", 1.0),
+    "grf": ("% BW", "NormalisedGRF", "force", 1.0),
+}
+#: Nexus' unit of each output kind written (C3D ``POINT:<KIND>_UNITS`` says N, Nmm, W).
+NEXUS_UNITS = {"Moment": "N·mm/kg", "Force": "N/kg", "Power": "W/kg", "GroundReactionForce": "N/kg",
+               "NormalisedGRF": "% BW"}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class TrialKinetics:
+    """Plug-in Gait kinetics of one trial.
+
+    Attributes:
+        data: dims ``side`` (``"L"``, ``"R"``), ``joint`` (``"Ankle"``, ``"Knee"``,
+            ``"Hip"``), ``axis`` (``"X"``, ``"Y"``, ``"Z"``: Nexus' components), ``frame``
+            (C3D frame numbers; coordinate ``time`` s), ``plate`` (1-based numbers).
+            Variables (units in each one's ``attrs["units"]``):
+            ``moment (side, joint, axis, frame)`` N·m/kg, the internal joint moment in the
+            distal segment's frame (X sagittal, + extensor/plantarflexor);
+            ``joint_force (side, joint, axis, frame)`` N/kg, distal frame;
+            ``power (side, joint, frame)`` W/kg, + generation;
+            ``grf (side, axis, frame)`` % body weight, X forward, Y medial, Z up;
+            ``ground_force (side, axis, frame)`` N/kg, laboratory frame;
+            ``plate_force (plate, axis, frame)`` N, the reaction on the body, laboratory
+            frame, and ``plate_cop (plate, axis, frame)`` mm, laboratory frame (NaN without
+            contact), each the mean of the analog samples of the frame.
+            NaN on the first and last four frames and for a side not computed.
+            ``attrs["body_mass"]`` kg.
+        contacts: every contact of every plate, the foot it went to or why not used.
+        findings: the plates' findings, one per contact, the sides not computed.
+        unavailable: side -> why its kinetics were not computed.
+    """
+
+    data: xr.Dataset
+    contacts: tuple[PlateContact, ...] = ()
+    findings: tuple[Finding, ...] = ()
+    unavailable: Mapping[Side, str] = field(default_factory=dict)
+
+    @property
+    def body_mass(self) -> float:
+        """kg, the mass the outputs are normalised by."""
+        return float(self.data.attrs["body_mass"])
+
+    @property
+    def plates(self) -> tuple[int, ...]:
+        """The plate numbers read."""
+        return tuple(int(p) for p in self.data["plate"].values)
+
+    def plates_used(self, side: Side) -> tuple[int, ...]:
+        """The plates whose contacts act on the ``side`` foot, in order."""
+        return tuple(dict.fromkeys(c.plate for c in self.contacts if c.side is side))
+
+    def unused(self) -> tuple[PlateContact, ...]:
+        """The contacts not used (:attr:`PlateContact.reason`)."""
+        return tuple(c for c in self.contacts if c.side is None)
+
+    def summary(self) -> str:
+        """One line: the plates used per side and the contacts not used."""
+        sides = []
+        for side in Side:
+            plates = self.plates_used(side)
+            what = ("plate " + ", ".join(map(str, plates))) if plates else "no plate"
+            sides.append(f"{side.word.lower()} {what}" + (" (not computed)" if side in self.unavailable else ""))
+        unused = len(self.unused())
+        return (f"kinetics ({len(self.plates)} force plates, {self.body_mass:g} kg): " + "; ".join(sides)
+                + (f"; {unused} contact{'s' if unused != 1 else ''} not used" if unused else ""))  # fmt: skip
+
+    def _nexus(self, suffix: str = "") -> list[tuple[str, str, Array, str]]:
+        """``(name, Nexus quantity, (n, 3) in Nexus' unit, C3D kind)`` of every output."""
+        out: list[tuple[str, str, Array, str]] = []
+        for side in Side:
+            for joint in JOINTS:
+                for var in ("moment", "joint_force", "power"):
+                    _, quantity, kind, factor = NEXUS_QUANTITIES[var]
+                    values = self.data[var].sel(side=side.value, joint=joint).values
+                    if var == "power":
+                        values = np.stack([np.zeros_like(values), np.zeros_like(values), values])
+                    out.append((side.value + joint + quantity + suffix, quantity, values.T * factor, kind))
+            for var in ("ground_force", "grf"):
+                _, quantity, kind, factor = NEXUS_QUANTITIES[var]
+                values = self.data[var].sel(side=side.value).values.T * factor
+                out.append((side.value + quantity + suffix, quantity, values, kind))
+        return out
+
+    def nexus_outputs(self, suffix: str = "") -> dict[str, tuple[Array, str]]:
+        """The kinetics as Nexus names and stores them: ``LAnkleMoment`` N·mm/kg,
+        ``LAnkleForce`` N/kg, ``LAnklePower`` W/kg (in Z; X = Y = 0), ``LGroundReactionForce``
+        N/kg, ``LNormalisedGRF`` % BW, each ``(n, 3)`` with ``suffix`` appended, and its C3D
+        output kind (``"moment"``, ``"power"``, ``"force"``)."""
+        return {name: (np.ascontiguousarray(values), kind) for name, _, values, kind in self._nexus(suffix)}
+
+    def columns(self) -> dict[str, tuple[Array, str]]:
+        """Per-frame table columns named as Nexus (``LAnkleMoment_X`` ...; powers Z only)
+        -> values in Nexus' units and the unit (:data:`NEXUS_UNITS`)."""
+        out: dict[str, tuple[Array, str]] = {}
+        for name, quantity, values, _ in self._nexus():
+            for k, axis in enumerate(AXES):
+                if quantity != "Power" or axis == "Z":
+                    out[f"{name}_{axis}"] = (values[:, k], NEXUS_UNITS[quantity])
+        return out
+
+
+def check_units(plate: ForcePlate, path: Path) -> None:
+    """Refuse a plate whose loaded centre of pressure lies off its own surface: its
+    corners (``POINT:UNITS``) and its moments (``ANALOG:UNITS``) are in different units
+    (e.g. corners in m labelled mm), so every moment computed from it would be wrong.
+
+    Raises:
+        ForcePlateError: naming the file, the plate and what to check.
+    """
+    loaded = np.asarray(plate.contact, dtype=bool) & (np.linalg.norm(plate.force, axis=1) > COP_CHECK_N)
+    loaded &= np.all(np.isfinite(plate.cop), axis=1)
+    if loaded.sum() < 10:
+        return
+    on = over_plate(plate.cop[loaded], plate.corners, COP_MARGIN_MM)
+    if on.mean() < COP_ON_PLATE:
+        size = np.ptp(plate.corners, axis=0)
+        raise ForcePlateError(f"{path}: force plate {plate.number}: the centre of pressure lies off the plate on "
+                              f"{1 - on.mean():.0%} of the loaded samples (plate {size[0]:.4g} x {size[1]:.4g} in "
+                              "POINT:UNITS, converted to mm): the corners and the moment channels are in different "
+                              "units - check POINT:UNITS and the moment channels' ANALOG:UNITS")  # fmt: skip
+
+
+def _plate_frames(plates: Sequence[ForcePlate], n_frames: int, rate: float) -> tuple[Array, Array]:
+    """``(plate, axis, frame)`` force N and COP mm at the marker frames: the means of each
+    frame's analog samples (:func:`~fuzzygait.kinetics.ground.frame_means`), the COP over
+    the samples in contact (NaN without)."""
+    forces, cops = [], []
+    for p in plates:
+        ratio = samples_per_frame(p.rate, rate)
+        contact = np.asarray(p.contact, dtype=bool) & np.all(np.isfinite(p.cop), axis=1)
+        forces.append(frame_means(np.where(contact[:, None], p.force, 0.0), ratio, n_frames))
+        weight = frame_means(contact.astype(float), ratio, n_frames)
+        cop = frame_means(np.where(contact[:, None], p.cop, 0.0), ratio, n_frames)
+        cops.append(np.where(weight[:, None] > 0, cop / np.maximum(weight, 1e-12)[:, None], np.nan))
+    shape = (0, 3, n_frames)
+    if not plates:
+        return np.zeros(shape), np.zeros(shape)
+    return np.stack(forces).transpose(0, 2, 1), np.stack(cops).transpose(0, 2, 1)
+
+
+def _dataset(out: KineticsResult, trial: Trial, plates: Sequence[ForcePlate], body_mass: float) -> xr.Dataset:
+    """The :attr:`TrialKinetics.data` of ``out`` (Nexus' names and units) and the plates."""
+    n = trial.n_frames
+    nan = np.full((n, 3), np.nan)
+
+    def get(name: str, factor: float = 1.0) -> Array:
+        return np.asarray(out.outputs.get(name, nan), dtype=float).T / factor
+
+    moment = np.array([[get(s + j + "Moment", 1e3) for j in JOINTS] for s in SIDES])
+    force = np.array([[get(s + j + "Force") for j in JOINTS] for s in SIDES])
+    power = np.array([[get(s + j + "Power")[2] for j in JOINTS] for s in SIDES])
+    ground = np.array([get(s + "GroundReactionForce") for s in SIDES])
+    grf = np.array([get(s + "NormalisedGRF") for s in SIDES])
+    plate_force, plate_cop = _plate_frames(plates, n, trial.rate)
+    data = xr.Dataset(
+        {"moment": (("side", "joint", "axis", "frame"), moment),
+         "joint_force": (("side", "joint", "axis", "frame"), force),
+         "power": (("side", "joint", "frame"), power), "ground_force": (("side", "axis", "frame"), ground),
+         "grf": (("side", "axis", "frame"), grf), "plate_force": (("plate", "axis", "frame"), plate_force),
+         "plate_cop": (("plate", "axis", "frame"), plate_cop)},
+        coords={"side": list(SIDES), "joint": list(JOINTS), "axis": list(AXES), "frame": trial.frames,
+                "time": ("frame", trial.times), "plate": [p.number for p in plates]},
+        attrs={"body_mass": float(body_mass), "model": "Plug-in Gait kinetics", "rate": float(trial.rate)},
+    )  # fmt: skip
+    for var, (unit, *_) in NEXUS_QUANTITIES.items():
+        data[var].attrs["units"] = unit
+    data["plate_force"].attrs["units"], data["plate_cop"].attrs["units"] = "N", "mm"
+    return data
+
+
+def _feet(trial: Trial) -> dict[Side, Foot]:
+    """The feet whose heel, toe and ankle markers the trial has."""
+    labels = ("HEE", "TOE", "ANK")
+    return {side: Foot(*(trial.marker(side.value + m) for m in labels)) for side in Side
+            if all(trial.has_marker(side.value + m) for m in labels)}  # fmt: skip
+
+
+def _check_mass(body_mass: float, path: Path, subject_file: str | os.PathLike[str] | None) -> None:
+    if not (np.isfinite(body_mass) and body_mass > 0):
+        where = f"in the subject file {subject_file}" if subject_file is not None else \
+            f"in a subject file (subject_file) or the PROCESSING group of {path.name}"
+        raise ParameterError(f"{path}: has force plates but the body mass is {body_mass:g} kg: set Bodymass (kg) "
+                             f"{where} for the kinetics")  # fmt: skip
+
+
+def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *,
+                   threshold_n: float = DEFAULT_THRESHOLD_N,
+                   subject_file: str | os.PathLike[str] | None = None) -> TrialKinetics | None:  # fmt: skip
+    """The Plug-in Gait kinetics of a run's trial.
+
+    Args:
+        run: the angles run (its pre-processed ``trial``, ``result``, ``subject``).
+        path: the trial's C3D file (default: the file it was read from).
+        threshold_n: the plates' contact threshold, N.
+        subject_file: its ``[force_plates]`` table assigns plates to feet in place of the
+            automatic rule (:func:`fuzzygait.io.subject.read_force_plate_assignment`); named
+            in the body-mass error.
+
+    Returns:
+        None when the trial has no file or no force plates.
+
+    Raises:
+        ParameterError: the trial has plates but no positive body mass (names where to set
+            ``Bodymass``).
+        ForcePlateError: no plate can be used (each plate's reason), or a plate's centre of
+            pressure lies off the plate (lengths and moments in different units,
+            :func:`check_units`).
+    """
+    source = Path(path) if path is not None else run.raw.source
+    if source is None:
+        return None
+    plates = read_force_plates(source, threshold_n=threshold_n)
+    if not plates:
+        return None
+    _check_mass(run.subject.body_mass, source, subject_file)
+    for plate in plates:
+        check_units(plate, source)
+    trial = run.trial
+    override = read_force_plate_assignment(subject_file) if subject_file is not None else {}
+    contacts = automatic_assignment(plates, _feet(trial), trial.rate, threshold_n, override=override)
+    ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
+    out = plug_in_gait_kinetics(run.result, trial, run.subject, ground)
+    findings = [f for p in plates for f in p.findings] + contact_findings(contacts, trial.first_frame)
+    if of_kind(run.raw.notes, FindingKind.UNITS) and not any(f.severity is Severity.WARNING
+                                                             for f in of_kind(run.raw.notes, FindingKind.UNITS)):
+        findings.append(Finding(FindingKind.KINETICS, "kinetics in mm: the marker positions and the plates' corners "
+                                "were both converted to mm (POINT:UNITS), the forces are in N"))  # fmt: skip
+    for side in Side:
+        if side in out.unavailable:
+            findings.append(Finding(FindingKind.KINETICS, f"{side.word.lower()} kinetics not computed: "
+                                    f"{out.unavailable[side]}", Severity.WARNING, side=side.word.lower()))  # fmt: skip
+        elif not any(c.side is side for c in contacts):
+            findings.append(Finding(FindingKind.KINETICS, f"the {side.word.lower()} foot is on no force plate: its "
+                                    "moments hold no ground reaction (right in swing only)", Severity.WARNING,
+                                    side=side.word.lower()))  # fmt: skip
+    return TrialKinetics(_dataset(out, trial, plates, run.subject.body_mass), tuple(contacts), tuple(findings),
+                         dict(out.unavailable))  # fmt: skip
+
+
+def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = None,
+                 ) -> tuple[TrialKinetics | None, list[Finding]]:  # fmt: skip
+    """:func:`trial_kinetics` as the angles pipeline runs it: the kinetics (None without
+    plates) and the notes for the run. A trial read from a file without force plates gets
+    one note; kinetics that cannot be computed (no body mass, no usable plate, units that
+    disagree) are a warning note with the error's line and no kinetics - the angles
+    stand."""
+    from fuzzygait.core.errors import FuzzyGaitError
+
+    try:
+        kinetics = trial_kinetics(run, subject_file=subject_file)
+    except FuzzyGaitError as exc:
+        return None, [Finding(FindingKind.KINETICS, f"kinetics not computed: {exc}", Severity.WARNING)]
+    if kinetics is None:
+        source = run.raw.source
+        return None, ([] if source is None else [Finding(FindingKind.KINETICS, f"no force plates in {source.name}: "
+                                                                               "no kinetics")])  # fmt: skip
+    return kinetics, list(kinetics.findings)
