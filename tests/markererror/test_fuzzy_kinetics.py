@@ -189,3 +189,13 @@ def test_bad_options_are_one_line(standing: tuple[Trial, object]) -> None:
         fuzzy_joint_moments(trial, subject, result, {}, outputs=["LKneeAngles_X"])
     with pytest.raises(ParameterError, match=r"^body mass must be positive \(kg\) for kinetics; got 0.0$"):
         fuzzy_joint_moments(trial, replace(subject, body_mass=0.0), result, {})
+
+
+def test_a_subset_of_the_markers_keeps_the_others_where_measured(sample: tuple[Trial, object]) -> None:
+    full = leg(sample)
+    part = replace(full, markers=["RTOE", "RANK"])
+    assert part.parameter_names[:6] == ("RTOE_x", "RTOE_y", "RTOE_z", "RANK_x", "RANK_y", "RANK_z")
+    np.testing.assert_array_equal(part.evaluate(np.zeros(part.n_parameters)).values,
+                                  full.evaluate(np.zeros(full.n_parameters)).values)  # fmt: skip
+    with pytest.raises(ParameterError, match=r"^the right leg's kinetics are computed from LASI, RASI, .*; got LHEE$"):
+        replace(full, markers=["LHEE"])

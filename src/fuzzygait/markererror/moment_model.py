@@ -234,7 +234,8 @@ class LegKineticsModel:
         k, m = len(frames), len(self.markers)
         window = frames[:, None] + _OFFSETS[None, :]
         positions = self._positions[window] + anp.reshape(P[:, : 3 * m], (k, 1, m, 3))
-        positions = anp.concatenate([positions, self._fixed[window]], axis=2)
+        if self.fixed_markers:
+            positions = anp.concatenate([positions, self._fixed[window]], axis=2)
         flat = anp.reshape(positions, (k * _OFFSETS.size, -1, 3))
         rows = Trial(markers=flat, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
         chain = model_chain(rows, self.subject, self.model)
@@ -272,11 +273,10 @@ class LegKineticsModel:
         """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
         (k, n_p)."""
         block, j = np.divmod(np.asarray(nodes, dtype=int), self.frames.size)
-        pairs = np.asarray(self.components, dtype=object)
-        joint = np.array([JOINTS.index(str(pairs[b][0])) for b in block], dtype=int)
-        axis = np.array([int(pairs[b][1]) for b in block], dtype=int)
+        joints = np.array([JOINTS.index(joint) for joint, _ in self.components], dtype=int)
+        axes = np.array([axis for _, axis in self.components], dtype=int)
         pick = np.zeros((len(j), 3, 3))
-        pick[np.arange(len(j)), joint, axis] = 1.0
+        pick[np.arange(len(j)), joints[block], axes[block]] = 1.0
         return anp.sum(self.outputs(P, self.frames[j]) * pick, axis=(1, 2))
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
