@@ -268,8 +268,8 @@ def angles(
 
 
 def print_run_summary(run: AnglesRun) -> None:
-    """One line on the trial and the angles computed, then the run's notes; its warnings
-    on stderr first."""
+    """One line on the trial and the angles computed, one on the kinetics when computed,
+    then the run's notes (the kinetics' among them); its warnings on stderr first."""
     for warning in run.warnings:
         err.print(f"fuzzygait: warning: {warning}", markup=False)
     trial = run.trial
@@ -282,6 +282,8 @@ def print_run_summary(run: AnglesRun) -> None:
         f"(events: {run.event_source})",
         markup=False,
     )
+    if run.kinetics is not None:  # plates used per side, contacts not used (each in the notes)
+        out.print(f"  {run.kinetics.summary()}", markup=False)
     for note in run.notes:
         out.print(f"  note: {note.message}", markup=False)
 

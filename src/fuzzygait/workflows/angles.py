@@ -8,6 +8,7 @@ version (:class:`AngleOutputs`).
 
 from __future__ import annotations
 
+import json
 import os
 import re
 from dataclasses import dataclass, field
@@ -40,7 +41,7 @@ from fuzzygait.kinematics.versions import model_version, supported_version
 from fuzzygait.mocap.gaps import Gap
 from fuzzygait.mocap.sanity import check_trial
 from fuzzygait.workflows.crosscheck import CrossCheck, check_run
-from fuzzygait.workflows.kinetics import TrialKinetics, run_kinetics
+from fuzzygait.workflows.kinetics import LONGEST_KINETIC_NAME, TrialKinetics, run_kinetics
 from fuzzygait.workflows.preprocessing import (  # noqa: F401  (re-exported: the pipeline's options)
     DEFAULT_PREPROCESSING,
     Preprocessing,
@@ -138,6 +139,26 @@ class AnglesRun:
         table.attrs["model"] = self.model
         return table
 
+    def frame_table(self) -> pd.DataFrame:
+        """The per-frame table written (``AngleOutputs.table``): :meth:`angle_table` and,
+        with kinetics, their columns named as Nexus in Nexus' units (``LAnkleMoment_X``
+        N·mm/kg, ``LAnklePower_Z`` W/kg, ``LGroundReactionForce_X`` N/kg,
+        ``LNormalisedGRF_X`` % BW; :meth:`TrialKinetics.columns
+        <fuzzygait.workflows.kinetics.TrialKinetics.columns>`)."""
+        table = self.angle_table()
+        if self.kinetics is not None:
+            kinetic = pd.DataFrame({name: values for name, (values, _) in self.kinetics.columns().items()})
+            table = pd.concat([table, kinetic], axis=1)
+            table.attrs["model"] = self.model
+        return table
+
+    def units(self) -> dict[str, str]:
+        """The unit of every value column of :meth:`frame_table` (angles ``deg``)."""
+        units = {f"{name}_{axis}": "deg" for name in self.angle_names() for axis in AXES}
+        if self.kinetics is not None:
+            units.update({name: unit for name, (_, unit) in self.kinetics.columns().items()})
+        return units
+
     def cycle_table(self) -> pd.DataFrame:
         """Gait-cycle-normalised angles, long format (angle, side, cycle, percent, value)."""
         table = normalised_angle_table(self.result.angles, self.trial, self.events)
@@ -145,8 +166,14 @@ class AnglesRun:
         return table
 
     def cycle_statistics(self) -> pd.DataFrame:
-        """Mean and SD over cycles per angle component and percent of the cycle."""
-        table = mean_sd_table(self.cycle_table())
+        """Mean and SD over cycles per angle component and percent of the cycle, then the
+        kinetics' (:meth:`frame_table`'s names and units) when the run has them."""
+        cycles = self.cycle_table()
+        if self.kinetics is not None:
+            outputs = {name: values for name, (values, _) in self.kinetics.nexus_outputs().items()}
+            kinetic = normalised_angle_table(outputs, self.trial, self.events)
+            cycles = pd.concat([cycles, kinetic[kinetic["angle"].isin(self.kinetics.columns())]], ignore_index=True)
+        table = mean_sd_table(cycles)
         table.attrs["model"] = self.model
         return table
 
@@ -254,7 +281,7 @@ def output_suffix(suffix: str, model: str) -> str:
     suffix (``"_CGM_2.3"``), else ``suffix`` itself (letters, digits, ``_ . -``)."""
     if suffix == "model":
         return model_version(model).suffix
-    longest = max(map(len, ALL_ANGLE_NAMES))
+    longest = max(*map(len, ALL_ANGLE_NAMES), LONGEST_KINETIC_NAME)
     if suffix and not (re.fullmatch(r"[A-Za-z0-9_.\-]+", suffix) and len(suffix) <= MAX_LABEL - longest):
         raise FuzzyGaitError(f"{Option.SUFFIX} {suffix!r}: use up to {MAX_LABEL - longest} letters, digits, '_', '.' "
                              "or '-' (e.g. _CGM_2.3; C3D labels hold 32 characters), or 'model'")  # fmt: skip
@@ -266,12 +293,19 @@ def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
     outputs, the subject parameters used and the events (for ``--c3d-out``: the trial's
     own, and the detected gait events when it had none).  The angle
     outputs keep Vicon's names (``LKneeAngles``) with ``suffix`` appended
-    (:func:`output_suffix`); virtual markers and joint centres are not suffixed."""
+    (:func:`output_suffix`); virtual markers and joint centres are not suffixed.  With
+    kinetics, their outputs as Nexus stores them (:meth:`TrialKinetics.nexus_outputs
+    <fuzzygait.workflows.kinetics.TrialKinetics.nexus_outputs>`: ``LAnkleMoment`` N·mm/kg
+    in ``POINT:MOMENTS``, ``LAnklePower`` W/kg in ``POWERS``, ``LAnkleForce``,
+    ``LGroundReactionForce`` N/kg and ``LNormalisedGRF`` % BW in ``FORCES``), suffixed like
+    the angles: with a suffix the input's own (Nexus') kinetic outputs are kept beside."""
     out = run.trial.with_markers(run.trial.markers)
     suffix = output_suffix(suffix, run.model)
     for name, values in run.result.angles.items():
         out.outputs[name + suffix] = values
         out.output_kinds[name + suffix] = "angle"
+    for name, (values, kind) in (run.kinetics.nexus_outputs(suffix) if run.kinetics is not None else {}).items():
+        out.outputs[name], out.output_kinds[name] = values, kind
     for name, values in run.result.virtual_markers.items():
         if name not in out.marker_labels:
             out.outputs[name] = values
@@ -317,8 +351,8 @@ class AngleOutputs:
     def write(self, run: AnglesRun) -> list[Path]:
         """Write the files asked for (folders created); returns them in that order."""
         written = []
-        metadata = table_metadata(run)
-        for path, make in ((self.table, run.angle_table), (self.cycles, run.cycle_statistics)):
+        metadata = table_metadata(run) | {"units": json.dumps(run.units())}
+        for path, make in ((self.table, run.frame_table), (self.cycles, run.cycle_statistics)):
             if path is not None:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 written.append(write_table(make(), path, metadata=metadata, columns=("model",)))

@@ -46,7 +46,7 @@ from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait
 if TYPE_CHECKING:
     from fuzzygait.workflows.angles import AnglesRun
 
-__all__ = ["JOINTS", "NEXUS_QUANTITIES", "TrialKinetics", "run_kinetics", "trial_kinetics"]
+__all__ = ["JOINTS", "LONGEST_KINETIC_NAME", "NEXUS_QUANTITIES", "TrialKinetics", "run_kinetics", "trial_kinetics"]
 
 Array = NDArray[np.float64]
 AXES = tuple(a.value for a in Axis)
@@ -69,6 +69,10 @@ NEXUS_QUANTITIES: dict[str, tuple[str, str, str, float]] = {
     "ground_force": ("N/kg", "GroundReactionForce", "force", 1.0),
     "grf": ("% BW", "NormalisedGRF", "force", 1.0),
 }
+#: Characters of the longest kinetic output name (``RGroundReactionForce``).
+LONGEST_KINETIC_NAME = max(len(Side.RIGHT.value + joint + NEXUS_QUANTITIES[var][1]) for var, joints in
+                           (("moment", JOINTS), ("joint_force", JOINTS), ("power", JOINTS), ("ground_force", ("",)),
+                            ("grf", ("",))) for joint in joints)  # fmt: skip
 #: Nexus' unit of each output kind written (C3D ``POINT:<KIND>_UNITS`` says N, Nmm, W).
 NEXUS_UNITS = {"Moment": "N·mm/kg", "Force": "N/kg", "Power": "W/kg", "GroundReactionForce": "N/kg",
                "NormalisedGRF": "% BW"}  # fmt: skip
