@@ -18,8 +18,17 @@ line, no comment lines::
   then without.
 * ``percent``: 0 to 100 (% of the gait cycle, foot strike to the next foot strike of the
   same side); any grid that covers 0 and 100, interpolated linearly onto 0, 1, ..., 100.
-* ``mean``, ``sd``: degrees (sd >= 0; the sample SD over the reference cycles).
+* ``mean``, ``sd``: in the variable's unit (sd >= 0; the sample SD over the reference
+  cycles): degrees for the angles.
 * ``cycles`` (optional): number of reference cycles at that point.
+
+Kinetic variables (Plug-in Gait's, :func:`kinetic_cycles`) are named as the angles are:
+``KneeMoment_X`` ... (joint moment, N·m per kg body mass, components X sagittal, Y
+frontal, Z transverse as Plug-in Gait signs them), ``KneePower_Z`` (joint power, W/kg,
+positive = generated) over the gait cycle, and ``NormalisedGRF_X/_Y/_Z`` (ground reaction,
+% body weight; forward, medial, up) over the **stance** phase as the plate measured it
+(``percent`` 0 = first, 100 = last frame of the foot's load on the plate).  Only cycles
+whose stance was on a force plate count.
 
 :func:`write_normative` writes every float with 17 significant digits, so a file read
 back gives the very numbers that were written.
@@ -52,7 +61,7 @@ import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.trial import Event, Trial
-from fuzzygait.gait.cycles import cycle_statistics, gait_cycles, normalise_cycles, percent_points
+from fuzzygait.gait.cycles import GaitCycle, cycle_statistics, gait_cycles, normalise_cycles, percent_points
 
 __all__ = [
     "COLUMNS",
@@ -62,6 +71,8 @@ __all__ = [
     "build_normative",
     "gait_profile",
     "gait_variable_score",
+    "kinetic_cycles",
+    "loaded_cycles",
     "mean_curves",
     "normalised_cycles",
     "read_normative",
@@ -86,6 +97,14 @@ GPS_VARIABLES: tuple[tuple[str, str, str], ...] = (
 )
 #: The GVS grid: every 2 % of the cycle (indices into the 101-point curves).
 GVS_POINTS = np.arange(0, N_POINTS, 2)
+#: Percentages of the gait cycle (mid-stance) at which the foot must be on a force plate
+#: for the cycle's kinetics to count (a foot that struck no plate still gets small,
+#: inertial moments; one that reaches a plate only at the next strike must not count).
+STANCE_CHECKS = (20.0, 30.0, 40.0)
+#: Vertical ground reaction (% body weight) above which the foot is on a force plate.
+MIN_LOAD_PERCENT = 1.0
+#: The kinetic output cut over the stance phase instead of the whole cycle.
+STANCE_OUTPUT = "NormalisedGRF"
 
 
 @dataclass
@@ -145,6 +164,73 @@ def normalised_cycles(angles: Mapping[str, np.ndarray], trial: Trial, events: Se
         normalised = normalise_cycles(values, cycles[side], N_POINTS)  # (c, p, 3)
         for k, axis in enumerate("XYZ"):
             out[f"{name}_{axis}"] = normalised[:, :, k]
+    return out
+
+
+def loaded_cycles(cycles: Sequence[GaitCycle], vertical: np.ndarray) -> list[GaitCycle]:
+    """The ``cycles`` whose foot stood on a force plate in mid-stance: the side's vertical
+    ground reaction ``vertical`` (``(n_frames,)``, % body weight; 0 or NaN off the plates)
+    above :data:`MIN_LOAD_PERCENT` at each of :data:`STANCE_CHECKS` % of the cycle
+    (nearest frame)."""
+    load = np.nan_to_num(np.asarray(vertical, dtype=float))
+    kept = []
+    for cycle in cycles:
+        frames = [int(round(cycle.start + p / 100.0 * (cycle.end - cycle.start))) for p in STANCE_CHECKS]
+        if all(0 <= f < load.size and load[f] > MIN_LOAD_PERCENT for f in frames):
+            kept.append(cycle)
+    return kept
+
+
+def _stance(cycle: GaitCycle, load: np.ndarray) -> GaitCycle | None:
+    """The stance of a counted ``cycle`` as the plate measured it: the run of frames
+    around 30 % of the cycle where the vertical ground reaction ``load`` (% BW) exceeds
+    :data:`MIN_LOAD_PERCENT` (independent of how well the gait events were placed)."""
+    middle = int(round(cycle.start + 0.3 * (cycle.end - cycle.start)))
+    on = np.nan_to_num(np.asarray(load, dtype=float)) > MIN_LOAD_PERCENT
+    if not on[middle]:
+        return None
+    first, last = middle, middle
+    while first > 0 and on[first - 1]:
+        first -= 1
+    while last < on.size - 1 and on[last + 1]:
+        last += 1
+    return GaitCycle(cycle.side, cycle.index, first, last, cycle.rate, cycle.first_frame) if last > first else None
+
+
+def kinetic_cycles(outputs: Mapping[str, Mapping[str, np.ndarray]],
+                   cycles: Mapping[str, Sequence[GaitCycle]]) -> dict[str, np.ndarray]:  # fmt: skip
+    """Kinetic components cut into the cycles whose stance was on a force plate.
+
+    Args:
+        outputs: side (``"L"``, ``"R"``) -> component without side (``"KneeMoment_X"``
+            N·m/kg, ``"KneePower_Z"`` W/kg, ``"NormalisedGRF_Z"`` % body weight ...) ->
+            ``(n_frames,)`` at the trial's frames (NaN where not computed).  The side's
+            ``NormalisedGRF_Z`` (vertical) decides which of its cycles count
+            (:func:`loaded_cycles`); a side without it has none.
+        cycles: side -> its gait cycles of the same trial.
+
+    Returns:
+        Sided component (``"LKneeMoment_X"``) -> ``(n_cycles, 101)`` in its unit, one row
+        per counted cycle with a value on every frame of its span (cycles reaching into
+        frames without kinetics, e.g. the first and last four, are left out): moments
+        and powers over 0..100 % of the gait cycle, ``NormalisedGRF`` over 0..100 % of
+        the stance phase as the plate measured it (the frames around mid-stance with a
+        vertical ground reaction above :data:`MIN_LOAD_PERCENT`).  Components without any
+        such cycle are absent.
+    """
+    out: dict[str, np.ndarray] = {}
+    for side, components in outputs.items():
+        vertical = components.get(f"{STANCE_OUTPUT}_Z")
+        if vertical is None:
+            continue
+        kept = loaded_cycles(cycles.get(side, ()), vertical)
+        stances = [s for s in (_stance(c, vertical) for c in kept) if s is not None]
+        grf = {f"{STANCE_OUTPUT}_{axis}" for axis in "XYZ"}
+        for name, values in components.items():
+            stack = normalise_cycles(np.asarray(values, dtype=float), stances if name in grf else kept, N_POINTS)
+            stack = stack[np.isfinite(stack).all(axis=1)]
+            if len(stack):
+                out[side + name] = stack
     return out
 
 

@@ -22,8 +22,9 @@ import numpy as np
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.core.findings import Finding
+from fuzzygait.core.findings import Finding, FindingKind, Severity, of_kind
 from fuzzygait.core.options import Option
+from fuzzygait.gait.cycles import GaitCycle
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import TrialParameters
 from fuzzygait.io.atomic import replace_path
@@ -31,13 +32,24 @@ from fuzzygait.io.figure_files import save_figure_files
 from fuzzygait.viz.report.allowable import allowable_summary
 from fuzzygait.viz.report.bands import ReportRun, TrialAnalysis, TrialData, TrialEntry, delta_phi_table
 from fuzzygait.viz.report.clinical import ClinicalData
-from fuzzygait.viz.report.clinical_figures import gait_profile_figure, kinetics_figure
+from fuzzygait.viz.report.clinical_figures import gait_profile_figure
+from fuzzygait.viz.report.clinical_figures import kinetics_figure as stored_kinetics_figure
 from fuzzygait.viz.report.figures import DPI, cycle_figure, time_series_figure
+from fuzzygait.viz.report.kinetics import (
+    KINETIC_ROWS,
+    KineticCycles,
+    dataset_components,
+    grf_figure,
+    kinetics_figure,
+    session_kinetics_figure,
+)
+from fuzzygait.viz.report.kinetics_section import NO_PLATES, KineticsPage
 from fuzzygait.viz.report.pages import PageSource, index_page, trial_page
 from fuzzygait.viz.report.session import SESSION_DPI, session_cycles_figure
 from fuzzygait.viz.report.sources import has_source_bands, source_figure
 
-__all__ = ["ReportItem", "ReportWriter", "write_report", "write_session_cycles"]
+__all__ = ["ReportItem", "ReportWriter", "kinetics_page", "run_kinetic_cycles", "write_report", "write_session_cycles",
+           "write_session_kinetics"]
 
 
 @dataclass
@@ -197,8 +209,11 @@ class ReportWriter:
         save_figure_files(cycle_figure(data, title + " (mean over gait cycles)", clinical), folder / "cycles", dpi=DPI)
         save_figure_files(time_series_figure(data, title + " (whole trial)", clinical), folder / "time_series",
                           dpi=DPI)  # fmt: skip
-        if clinical.has_kinetics():
-            figure = kinetics_figure(clinical, f"{source.name}: joint moments and powers stored in the file")
+        kinetics = kinetics_page(analysis.run, data.cycles, self.normative)
+        if kinetics.cycles is not None and kinetics.cycles.any():
+            self._kinetic_figures(kinetics.cycles, source, folder)
+        elif clinical.has_kinetics():
+            figure = stored_kinetics_figure(clinical, f"{source.name}: joint moments and powers stored in the file")
             save_figure_files(figure, folder / "kinetics", dpi=DPI)
         if clinical.profile is not None:
             figure = gait_profile_figure(clinical.profile, f"{source.name}: Movement Analysis Profile")
@@ -214,9 +229,17 @@ class ReportWriter:
                               gps)  # fmt: skip
         warnings = list(dict.fromkeys([*item.warnings, *analysis.run.warnings]))  # the run's may repeat the job's
         page = trial_page(analysis, data, entry, table, PageSource(source, files, item.session, warnings),
-                          clinical=clinical)  # fmt: skip
+                          clinical=clinical, kinetics=kinetics)  # fmt: skip
         (self._staging / f"{name}.html").write_text(page, encoding="utf-8")
         return entry
+
+    def _kinetic_figures(self, cycles: KineticCycles, source: Path, folder: Path) -> None:
+        """The computed kinetics' figures of a trial (``kinetics``, ``grf``)."""
+        title = f"{source.name}: joint moments and powers (Plug-in Gait, from the force plates)"
+        save_figure_files(kinetics_figure(cycles, title, self.normative), folder / "kinetics", dpi=DPI)
+        grf = grf_figure(cycles.cycles, f"{source.name}: ground reaction force over stance", self.normative)
+        if grf is not None:
+            save_figure_files(grf, folder / "grf", dpi=DPI)
 
     # -- the end
     def finish(self) -> Path:
@@ -272,3 +295,46 @@ def write_session_cycles(cycles: Mapping[str, np.ndarray], stem: Path, title: st
         return False
     save_figure_files(figure, stem, dpi=SESSION_DPI)
     return True
+
+
+def run_kinetic_cycles(run: ReportRun, cycles: Mapping[str, list[GaitCycle]]) -> KineticCycles | None:
+    """The run's computed kinetics (``AnglesRun.kinetics``) cut into ``cycles`` (per
+    side), or None when it has none."""
+    kinetics = getattr(run, "kinetics", None)  # the report's ReportRun protocol does not require it
+    if kinetics is None:
+        return None
+    return KineticCycles.of(dataset_components(kinetics.data), cycles)
+
+
+def kinetics_page(run: ReportRun, cycles: Mapping[str, list[GaitCycle]],
+                  normative: NormativeData | None = None) -> KineticsPage:  # fmt: skip
+    """What the trial page's kinetics section shows: the computed kinetics, their contacts
+    and notes; without them, why (the run's kinetics warning, else :data:`NO_PLATES` when
+    the pipeline noted a file without force plates)."""
+    kinetics = getattr(run, "kinetics", None)
+    if kinetics is None:
+        notes = of_kind(run.notes, FindingKind.KINETICS)
+        warned = [n.message for n in notes if n.severity is Severity.WARNING]
+        reason = warned[0] if warned else (NO_PLATES if notes else None)
+        return KineticsPage(None, missing=reason)
+    has_norm = normative is not None and any(normative.curve(f"L{j}Moment_X") is not None for j in KINETIC_ROWS)
+    return KineticsPage(run_kinetic_cycles(run, cycles), tuple(kinetics.contacts),
+                        tuple(dict.fromkeys(f.message for f in kinetics.findings if f.kind is not
+                                            FindingKind.FORCE_PLATE_ASSIGNMENT)),
+                        None, run.trial.first_frame, run.trial.rate, has_norm)  # fmt: skip
+
+
+def write_session_kinetics(cycles: Mapping[str, np.ndarray], folder: Path, title: str,
+                           normative: NormativeData | None = None) -> tuple[str, ...]:  # fmt: skip
+    """The session's kinetics figures (mean ± SD over every counted cycle of its trials:
+    ``kinetics`` and ``grf``, PNG and SVG into ``folder``); the stems written."""
+    written = []
+    figure = session_kinetics_figure(cycles, f"{title}: joint moments and powers, mean ± SD", normative)
+    if figure is not None:
+        save_figure_files(figure, folder / "kinetics", dpi=SESSION_DPI)
+        written.append("kinetics")
+    grf = grf_figure(cycles, f"{title}: ground reaction over stance, mean ± SD", normative, spread="sd")
+    if grf is not None:
+        save_figure_files(grf, folder / "grf", dpi=SESSION_DPI)
+        written.append("grf")
+    return tuple(written)

@@ -1,0 +1,301 @@
+"""The report's kinetics figures: Plug-in Gait joint moments and powers over the gait cycle
+and the ground reaction over stance, computed by fuzzygait from the force plates
+(:mod:`fuzzygait.kinetics`; nothing here writes a file: :mod:`fuzzygait.workflows.
+report_folder` writes them as PNG and SVG).
+
+Units: moments N·m per kg body mass (internal moments, Plug-in Gait's X sagittal, Y
+frontal, Z transverse), powers W/kg (positive = generated), ground reaction % body
+weight (forward, medial, up).  Sides as the angle pages draw them: left red and solid,
+right green and dashed.  A trial's figure draws each counted cycle thin and their mean
+thick; a session's figure the mean ± 1 SD over every counted cycle of its trials.  Only
+cycles whose stance was on a force plate count
+(:func:`fuzzygait.gait.normative.kinetic_cycles`); the normative mean ± 1 SD is grey
+where a normative file has the variable (``KneeMoment_X``, ``KneePower_Z``,
+``NormalisedGRF_Z``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never needs a display
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.artist import Artist  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from fuzzygait.gait.cycles import GaitCycle, cycle_statistics, percent_points  # noqa: E402
+from fuzzygait.gait.normative import N_POINTS, STANCE_OUTPUT, NormativeData, kinetic_cycles  # noqa: E402
+from fuzzygait.viz.layout import SIDE_STYLE  # noqa: E402
+from fuzzygait.viz.report.figures import NORMATIVE_COLOUR, SIDE_LINE, _add_legend, _right_hatch  # noqa: E402
+from fuzzygait.viz.report.grid import GridMargins  # noqa: E402
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = [
+    "GRF_COLUMNS",
+    "KINETIC_COLUMNS",
+    "KINETIC_ROWS",
+    "KineticCycles",
+    "dataset_components",
+    "grf_figure",
+    "kinetics_figure",
+    "session_kinetics_figure",
+]
+
+#: Rows of the kinetics grid (Plug-in Gait's joint names).
+KINETIC_ROWS = ("Hip", "Knee", "Ankle")
+#: Columns: (output, axis, title, unit).
+KINETIC_COLUMNS = (
+    ("Moment", "X", "Moment, sagittal", "N·m/kg"),
+    ("Moment", "Y", "Moment, frontal", "N·m/kg"),
+    ("Moment", "Z", "Moment, transverse", "N·m/kg"),
+    ("Power", "Z", "Power", "W/kg"),
+)
+#: What a positive value is, per (joint, output, axis) (internal moments; checked on
+#: Movement_trial: hip and knee extensor moments and abductor moments in stance positive,
+#: the ankle's plantarflexor moment positive at push-off); Plug-in Gait's own sign elsewhere.
+MEANING = {
+    ("Hip", "Moment", "X"): "+ extensor", ("Knee", "Moment", "X"): "+ extensor",
+    ("Ankle", "Moment", "X"): "+ plantarflexor", ("Hip", "Moment", "Y"): "+ abductor",
+    ("Knee", "Moment", "Y"): "+ abductor",
+}  # fmt: skip
+#: The ground reaction's columns: (axis, title, meaning of positive values).
+GRF_COLUMNS = (("X", "Anterior–posterior", "+ forward"), ("Y", "Medial–lateral", "+ medial"),
+               ("Z", "Vertical", "+ up"))  # fmt: skip
+#: Line widths (points): the mean, one cycle.
+MEAN_WIDTH, CYCLE_WIDTH = 1.7, 0.6
+#: Size (inches) of the kinetics grid and of the ground-reaction row.
+KINETICS_SIZE, GRF_SIZE = (11.0, 8.2), (11.0, 3.6)
+#: Margins (inches) of the two grids: two-line y-labels before every column.
+KINETIC_GRID = GridMargins(left=0.85, right=0.3, wgap=1.0, hgap=0.22)
+GRF_GRID = GridMargins(left=0.85, right=0.3, wgap=0.9, hgap=0.2, bottom=0.6)
+
+
+def _meaning(joint: str, output: str, axis: str) -> str:
+    return MEANING.get((joint, output, axis), "Plug-in Gait sign" if output == "Moment" else "+ generated")
+
+
+def dataset_components(kinetics: xr.Dataset) -> dict[str, dict[str, np.ndarray]]:
+    """Side -> component without side (``"KneeMoment_X"`` N·m/kg, ``"KneePower_Z"`` W/kg,
+    ``"NormalisedGRF_Z"`` % BW) -> ``(n_frames,)`` of a kinetics dataset with variables
+    ``moment (side, joint, axis, frame)``, ``power (side, joint, frame)`` and ``grf (side,
+    axis, frame)``."""
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for side in (str(s) for s in kinetics["side"].values):
+        parts: dict[str, np.ndarray] = {}
+        if "moment" in kinetics:
+            moment = kinetics["moment"].sel(side=side).transpose("joint", "axis", "frame")
+            for joint in (str(j) for j in moment["joint"].values):
+                for axis in (str(a) for a in moment["axis"].values):
+                    parts[f"{joint}Moment_{axis}"] = np.asarray(moment.sel(joint=joint, axis=axis).values, dtype=float)
+        if "power" in kinetics:
+            power = kinetics["power"].sel(side=side).transpose("joint", "frame")
+            for joint in (str(j) for j in power["joint"].values):
+                parts[f"{joint}Power_Z"] = np.asarray(power.sel(joint=joint).values, dtype=float)
+        if "grf" in kinetics:
+            grf = kinetics["grf"].sel(side=side).transpose("axis", "frame")
+            for axis in (str(a) for a in grf["axis"].values):
+                parts[f"{STANCE_OUTPUT}_{axis}"] = np.asarray(grf.sel(axis=axis).values, dtype=float)
+        out[side] = parts
+    return out
+
+
+def _counted(cycles: Mapping[str, np.ndarray], side: str) -> int:
+    """The most cycles of ``side`` any joint moment or power of ``cycles`` has."""
+    return max((len(cycles.get(f"{side}{joint}{output}_{axis}", ())) for joint in KINETIC_ROWS
+                for output, axis, _, _ in KINETIC_COLUMNS), default=0)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class KineticCycles:
+    """A trial's kinetics cut into its gait cycles.
+
+    Attributes:
+        cycles: sided component (``"LKneeMoment_X"``) -> ``(n, 101)``: N·m/kg, W/kg over
+            the gait cycle, % body weight over stance (:func:`~fuzzygait.gait.normative.
+            kinetic_cycles`).
+        counted: side -> its cycles with force-plate data; ``total`` -> all its cycles.
+        foot_off: side -> mean foot off (% of the cycle) of its counted cycles.
+    """
+
+    cycles: dict[str, np.ndarray]
+    counted: dict[str, int] = field(default_factory=dict)
+    total: dict[str, int] = field(default_factory=dict)
+    foot_off: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, components: Mapping[str, Mapping[str, np.ndarray]],
+           cycles: Mapping[str, Sequence[GaitCycle]]) -> KineticCycles:  # fmt: skip
+        """Cut ``components`` (:func:`dataset_components`) into ``cycles`` (per side)."""
+        stacks = kinetic_cycles(components, cycles)
+        counted = {side: _counted(stacks, side) for side in SIDE_STYLE}
+        foot_off = {}
+        for side, side_cycles in cycles.items():
+            offs = [c.foot_off_percent for c in side_cycles if c.foot_off_percent is not None]
+            if offs and counted.get(side):
+                foot_off[side] = float(np.mean(offs))
+        return cls(stacks, counted, {s: len(c) for s, c in cycles.items()}, foot_off)
+
+    def any(self) -> bool:
+        """Whether some cycle has kinetics."""
+        return bool(self.cycles)
+
+
+def _normative(ax: Axes, x: np.ndarray, normative: NormativeData | None, variable: str) -> bool:
+    """The normative mean ± 1 SD (grey, below everything) of ``variable`` without side;
+    per side when the file has sided curves (drawn once when both share one)."""
+    if normative is None:
+        return False
+    drawn: list[int] = []
+    for side in SIDE_STYLE:
+        found = normative.curve(side + variable)
+        if found is None or id(found) in drawn:
+            continue
+        drawn.append(id(found))
+        mean, sd = found
+        ax.fill_between(x, mean - sd, mean + sd, color=NORMATIVE_COLOUR, lw=0, zorder=0)
+        ax.plot(x, mean, color="0.6", lw=0.8, zorder=0.5)
+    return bool(drawn)
+
+
+def _draw_side(ax: Axes, x: np.ndarray, stack: np.ndarray, side: str, spread: str) -> None:
+    """One side's curves: ``spread`` ``"cycles"`` each cycle thin, ``"sd"`` the mean ±
+    1 SD (left filled, right hatched), and the mean thick on top."""
+    colour = SIDE_STYLE[side][1]
+    mean, sd = cycle_statistics(stack)
+    if spread == "cycles":
+        for row in stack:
+            ax.plot(x, row, color=colour, lw=CYCLE_WIDTH, alpha=0.55, zorder=2)
+    elif np.isfinite(sd).any():
+        if side == "R":
+            ax.fill_between(x, mean - sd, mean + sd, facecolor="none", edgecolor=colour, hatch=_right_hatch(3), lw=0)
+        else:
+            ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.2, lw=0)
+    ax.plot(x, mean, color=colour, lw=MEAN_WIDTH, ls=SIDE_LINE[side], zorder=3, gid=f"mean-{side}")
+
+
+def _panel(ax: Axes, title: str | None, ylabel: str) -> None:
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.grid(alpha=0.3)
+    ax.tick_params(labelsize=8)
+    ax.set_ylabel(ylabel, fontsize=7.5)
+    if title:
+        ax.set_title(title, fontsize=10.5)
+
+
+def _empty(ax: Axes, text: str) -> None:
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", fontsize=8, color="0.45")
+
+
+def _handles(counts: Mapping[str, int], spread: str, normative: bool, foot_off: bool) -> list[Artist]:
+    """Legend entries: per side its mean (with the cycles counted) and its spread, then
+    foot off and the normative band."""
+    handles: list[Artist] = []
+    for side, (name, colour) in SIDE_STYLE.items():
+        n = counts.get(side, 0)
+        if not n:
+            continue
+        cycles = f"{n} cycle{'s' if n != 1 else ''} on a force plate"
+        handles.append(Line2D([], [], color=colour, lw=MEAN_WIDTH, ls=SIDE_LINE[side],
+                              label=f"{name}: mean of {cycles}"))  # fmt: skip
+        if spread == "cycles":
+            handles.append(Line2D([], [], color=colour, lw=CYCLE_WIDTH, alpha=0.55, label=f"{name}: each cycle"))
+        else:
+            face = ({"facecolor": "white", "hatch": _right_hatch(3)} if side == "R"
+                    else {"facecolor": colour, "alpha": 0.2})  # fmt: skip
+            handles.append(Patch(edgecolor=colour, lw=0.5, label=f"{name}: ± 1 SD over cycles", **face))
+    if foot_off:
+        handles.append(Line2D([], [], color="0.2", lw=1.0, label="foot off (vertical, per side)"))
+    if normative:
+        handles.append(Patch(facecolor=NORMATIVE_COLOUR, edgecolor="0.6", lw=0.5, label="normative mean ± 1 SD"))
+    return handles
+
+
+def _kinetics_grid(cycles: Mapping[str, np.ndarray], title: str, normative: NormativeData | None, spread: str,
+                   foot_off: Mapping[str, float]) -> Figure:  # fmt: skip
+    """Hip, knee and ankle (rows) moments in three planes and power (columns) over the
+    gait cycle (axes row-major in ``fig.axes``)."""
+    x = percent_points(N_POINTS)
+    fig, axes = plt.subplots(len(KINETIC_ROWS), len(KINETIC_COLUMNS), figsize=KINETICS_SIZE, sharex=True,
+                             squeeze=False)  # fmt: skip
+    fig.suptitle(title, fontsize=13)
+    counts: dict[str, int] = {}
+    any_norm = False
+    for r, joint in enumerate(KINETIC_ROWS):
+        for c, (output, axis, column, unit) in enumerate(KINETIC_COLUMNS):
+            ax = axes[r, c]
+            label = f"{joint} {output.lower()} ({unit})\n{_meaning(joint, output, axis)}"
+            _panel(ax, column if r == 0 else None, label)
+            any_norm = _normative(ax, x, normative, f"{joint}{output}_{axis}") or any_norm
+            for side, percent in foot_off.items():
+                ax.axvline(percent, color=SIDE_STYLE[side][1], lw=1.0, ls=SIDE_LINE[side], alpha=0.85, zorder=1)
+            drawn = False
+            for side in SIDE_STYLE:
+                stack = cycles.get(f"{side}{joint}{output}_{axis}")
+                if stack is None or not len(stack):
+                    continue
+                _draw_side(ax, x, stack, side, spread)
+                counts[side] = max(counts.get(side, 0), len(stack))
+                drawn = True
+            if not drawn:
+                _empty(ax, "no cycle on a force plate")
+            ax.set_xlim(0, 100)
+            if r == len(KINETIC_ROWS) - 1:
+                ax.set_xlabel("gait cycle (%)", fontsize=8)
+    handles = _handles(counts, spread, any_norm, bool(foot_off))
+    return _add_legend(fig, handles, ncol=3, margins=KINETIC_GRID)
+
+
+def kinetics_figure(kinetics: KineticCycles, title: str, normative: NormativeData | None = None) -> Figure:
+    """A trial's joint moments and powers over the gait cycle: per side every cycle on a
+    force plate (thin) and their mean (thick; left solid, right dashed), the sides' mean
+    foot off, the normative band where given.  Axes ``fig.axes`` row-major (rows
+    :data:`KINETIC_ROWS`, columns :data:`KINETIC_COLUMNS`); each mean line carries the
+    gid ``"mean-L"``/``"mean-R"``."""
+    return _kinetics_grid(kinetics.cycles, title, normative, "cycles", kinetics.foot_off)
+
+
+def session_kinetics_figure(cycles: Mapping[str, np.ndarray], title: str,
+                            normative: NormativeData | None = None) -> Figure | None:  # fmt: skip
+    """A session's joint moments and powers: per side the mean ± 1 SD over ``cycles``
+    (sided component -> ``(n_cycles, 101)``, every counted cycle of every trial stacked);
+    None when no cycle has kinetics."""
+    if not any(_counted(cycles, side) for side in SIDE_STYLE):
+        return None
+    return _kinetics_grid(cycles, title, normative, "sd", {})
+
+
+def grf_figure(cycles: Mapping[str, np.ndarray], title: str, normative: NormativeData | None = None,
+               spread: str = "cycles") -> Figure | None:  # fmt: skip
+    """The ground reaction over stance (0 and 100 %: the first and last frame of the foot's
+    load on the plate), % body weight,
+    one panel per component (:data:`GRF_COLUMNS`): per side each cycle thin and the mean
+    (``spread`` ``"sd"``: mean ± 1 SD, the session's); None without a cycle on a plate."""
+    if not any(f"{s}{STANCE_OUTPUT}_Z" in cycles for s in SIDE_STYLE):
+        return None
+    x = percent_points(N_POINTS)
+    fig, axes = plt.subplots(1, len(GRF_COLUMNS), figsize=GRF_SIZE, squeeze=False)
+    fig.suptitle(title, fontsize=13)
+    counts: dict[str, int] = {}
+    any_norm = False
+    for c, (axis, column, meaning) in enumerate(GRF_COLUMNS):
+        ax = axes[0, c]
+        _panel(ax, column, f"ground reaction (% body weight)\n{meaning}")
+        any_norm = _normative(ax, x, normative, f"{STANCE_OUTPUT}_{axis}") or any_norm
+        for side in SIDE_STYLE:
+            stack = cycles.get(f"{side}{STANCE_OUTPUT}_{axis}")
+            if stack is not None and len(stack):
+                _draw_side(ax, x, stack, side, spread)
+                counts[side] = max(counts.get(side, 0), len(stack))
+        ax.set_xlim(0, 100)
+        ax.set_xlabel("stance on the plate (%)", fontsize=8)
+    return _add_legend(fig, _handles(counts, spread, any_norm, False), ncol=3, margins=GRF_GRID)
