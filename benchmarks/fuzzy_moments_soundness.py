@@ -2,7 +2,7 @@
 inside the Graph Follower hull?  And their cost beside the fuzzy angles'.
 
 Run:  .venv/bin/python benchmarks/fuzzy_moments_soundness.py [--frames 20] [--samples 10000]
-      [--first 1000] [--skip-angles]
+      [--first 1000] [--skip-angles] [--allowable-only]
 
 Trial: ``Movement_trial.c3d`` (Vicon Nexus 2, four plates) with its own PROCESSING subject;
 each foot gets the plate Nexus put under it (read back from its stored ground reaction,
@@ -27,6 +27,10 @@ whatever the deviation).
 Cost: the wall time of the fuzzy moments (both legs, nine components each) and of the fuzzy
 angles (:func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`, every angle, the same
 α-levels) on the same cut trial, one process; the issue's speed line asks for ≤ 2×.
+
+Allowable error: the right leg's sagittal moments at the α-levels :data:`FINE_ALPHAS`
+(small balls), and :func:`~fuzzygait.markererror.fuzzy_kinetics.allowable_kinetic_error`'s
+answer for ±0.1 N·m/kg.
 """
 
 from __future__ import annotations
@@ -53,6 +57,7 @@ from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
 from fuzzygait.markererror.fuzzy_kinetics import (  # noqa: E402
     FootGround,
     FuzzyKineticsOptions,
+    allowable_kinetic_error,
     foot_ground,
     fuzzy_joint_moments,
     leg_model,
@@ -61,6 +66,8 @@ from fuzzygait.markererror.fuzzy_kinetics import (  # noqa: E402
 from fuzzygait.markererror.moment_model import HALF_WINDOW, PlateShare  # noqa: E402
 
 CHECKED = (0.0, 0.5)
+#: α-levels of the allowable-error answer (scales 20 % down to 1 % of the full balls).
+FINE_ALPHAS = (0.8, 0.9, 0.95, 0.97, 0.99)
 #: Samples evaluated per model call.
 CHUNK = 500
 
@@ -123,6 +130,7 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=10000)
     parser.add_argument("--first", type=int, default=None, help="C3D frame of the first checked frame")
     parser.add_argument("--skip-angles", action="store_true", help="no fuzzy-angle timing")
+    parser.add_argument("--allowable-only", action="store_true", help="only the allowable-error answer")
     args = parser.parse_args()
     path = VICON / "Movement_trial.c3d"
     if not path.is_file():
@@ -138,6 +146,9 @@ def main() -> None:
     lo, hi = first - HALF_WINDOW, first + args.frames + HALF_WINDOW
     part, feet = cut(trial, ground, lo, hi)
     result = compute_lower_body(part, subject)
+    if args.allowable_only:
+        allowable(part, subject, result, feet)
+        return
     shown = (part.first_frame + HALF_WINDOW, part.first_frame + hi - lo - 1 - HALF_WINDOW)
     print(f"Movement_trial.c3d, C3D frames {shown[0]}-{shown[1]} (right foot on plate(s) "
           f"{[p.number for p in feet[Side.RIGHT].plates]}), body mass {subject.body_mass} kg")  # fmt: skip
@@ -158,6 +169,16 @@ def main() -> None:
     print("Monte Carlo:")
     for side in Side:
         check_leg(ds, part, subject, side, feet[side], args.samples)
+    allowable(part, subject, result, feet)
+
+
+def allowable(part: Trial, subject: object, result: object, feet: dict[Side, FootGround]) -> None:
+    """The allowable-error answer (±0.1 N·m/kg) of the right leg's sagittal moments."""
+    names = ["RAnkleMoment_X", "RKneeMoment_X", "RHipMoment_X"]
+    fine = fuzzy_joint_moments(part, subject, result, feet, FuzzyKineticsOptions(alphas=FINE_ALPHAS),  # type: ignore[arg-type]
+                               outputs=names)  # fmt: skip
+    for name in names:
+        print(allowable_kinetic_error(fine, name, 0.1).sentence)
 
 
 if __name__ == "__main__":
