@@ -199,3 +199,18 @@ def test_a_subset_of_the_markers_keeps_the_others_where_measured(sample: tuple[T
                                   full.evaluate(np.zeros(full.n_parameters)).values)  # fmt: skip
     with pytest.raises(ParameterError, match=r"^the right leg's kinetics are computed from LASI, RASI, .*; got LHEE$"):
         replace(full, markers=["LHEE"])
+
+
+def test_a_static_leg_generates_no_power_whatever_the_cop(standing: tuple[Trial, object]) -> None:
+    """Powers in W/kg: a leg at rest has none, at every level of the COP ball."""
+    trial, subject = standing
+    ground = ground_under(trial, Side.RIGHT, np.array([0.0, 0.0, FORCE_N]))
+    options = FuzzyKineticsOptions(alphas=(0.0,), error_model=no_marker_error(trial), kind="Power")
+    ds = fuzzy_joint_moments(trial, subject, compute_lower_body(trial, subject), {Side.RIGHT: ground}, options,
+                             frames=np.array([6]))  # fmt: skip
+    assert list(ds["component"].to_numpy()) == ["LAnklePower_Z", "LKneePower_Z", "LHipPower_Z", "RAnklePower_Z",
+                                                "RKneePower_Z", "RHipPower_Z"]  # fmt: skip
+    assert ds.fuzzy.units == "W/kg" and ds.attrs["output"] == "joint power"
+    np.testing.assert_array_equal(ds["hull"].isel(frame=6).to_numpy(), 0.0)
+    cop = ds["deviation"].sel(marker="COP1", component="RAnklePower_Z").isel(frame=6).to_numpy()
+    assert np.all(cop <= 15.0 + 1e-9)

@@ -195,7 +195,9 @@ def run_leg(model: LegKineticsModel, radii: Array, options: FuzzyKineticsOptions
     result = graph_follower(model, params, tuple(alphas), strategy=strategy)
     hull = result["hull"].to_numpy()
     extremiser = result["extremiser"].to_numpy()  # (alpha, bound, nodes, n_p)
-    norms = np.linalg.norm(extremiser.reshape(*hull.shape, len(balls), 3), axis=-1)
+    coordinates = extremiser.reshape(*hull.shape, len(balls), 3).copy()
+    coordinates[..., len(model.markers) :, 2] = 0.0  # a COP's normal coordinate moves nothing: the in-plane norm
+    norms = np.linalg.norm(coordinates, axis=-1)
     frames = np.tile(model.frames, model.blocks)
     turn = np.stack([[model.frame_turn(extremiser[a, b], frames) for b in range(2)] for a in range(alphas.size)])
     flags = np.any(turn > UNDETERMINED_DEG, axis=1)
