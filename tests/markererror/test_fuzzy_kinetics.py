@@ -29,12 +29,13 @@ from fuzzygait.markererror.fuzzy_kinetics import (
     FootGround,
     FuzzyKineticsOptions,
     allowable_kinetic_error,
+    foot_ground,
     fuzzy_joint_moments,
 )
 from fuzzygait.markererror.moment_model import LegKineticsModel, PlateShare, plate_axes
 from fuzzygait.markererror.sources import ErrorModel
 from fuzzygait.testing import check_model, check_result
-from support import SAMPLE_DATA
+from support import SAMPLE_DATA, shared_file
 
 #: A level plate whose x, y run along the laboratory's and whose normal points down.
 LEVEL_PLATE = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
@@ -214,3 +215,34 @@ def test_a_static_leg_generates_no_power_whatever_the_cop(standing: tuple[Trial,
     np.testing.assert_array_equal(ds["hull"].isel(frame=6).to_numpy(), 0.0)
     cop = ds["deviation"].sel(marker="COP1", component="RAnklePower_Z").isel(frame=6).to_numpy()
     assert np.all(cop <= 15.0 + 1e-9)
+
+
+def test_movement_trial_plates_give_the_nexus_matched_kinetics() -> None:
+    """Movement_trial (skips without ../shared): each foot's load from the plates Nexus
+    used (:func:`foot_ground`) — its plate shares add up to it, the plates' normals point
+    down — and at zero deviation every moment and power of both legs is the Plug-in Gait
+    kinetics' (which agree with Nexus', tests/kinetics)."""
+    from fuzzygait.io.subject import subject_from_processing
+    from fuzzygait.kinetics.assignment import stored_assignment
+    from fuzzygait.kinetics.plates import read_force_plates
+
+    path = shared_file("vicon", "Movement_trial.c3d")
+    trial = read_c3d(path)
+    subject = subject_from_processing(trial.parameters)
+    plates = read_force_plates(path, threshold_n=0.0)
+    ground = {side: foot_ground(plates, stored_assignment(plates, trial.outputs, side, subject.body_mass,
+                                                          trial.rate).plate, trial.rate) for side in Side}  # fmt: skip
+    assert [p.number for p in ground[Side.LEFT].plates] == [1] and [p.number for p in ground[Side.RIGHT].plates] == [4]
+    loads = {side: Load(np.zeros((trial.n_frames, 3)), g.force, g.moment) for side, g in ground.items()}
+    outputs = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, loads).outputs
+    frames = np.arange(4, trial.n_frames - 4)
+    for side, g in ground.items():
+        np.testing.assert_array_equal(sum(p.force for p in g.plates), g.force)
+        assert all(p.axes[2, 2] < -0.999 for p in g.plates)
+        for kind, scale in (("Moment", 1e-3), ("Power", 1.0)):
+            components = tuple((j, a) for j in JOINTS for a in ((0, 1, 2) if kind == "Moment" else (2,)))
+            model = LegKineticsModel(trial, subject, side, components, frames, g.force, g.moment, g.plates, kind=kind)
+            values = model.evaluate(np.zeros(model.n_parameters)).values.reshape(model.blocks, -1)
+            for b, (joint, axis) in enumerate(components):
+                expected = outputs[side.value + joint + kind][frames, axis] * scale
+                np.testing.assert_allclose(values[b], expected, rtol=0.0, atol=1e-12)
