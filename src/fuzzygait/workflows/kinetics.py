@@ -146,7 +146,8 @@ class TrialKinetics:
                     _, quantity, kind, factor = NEXUS_QUANTITIES[var]
                     values = self.data[var].sel(side=side.value, joint=joint).values
                     if var == "power":
-                        values = np.stack([np.zeros_like(values), np.zeros_like(values), values])
+                        zero = np.where(np.isnan(values), np.nan, 0.0)  # X = Y = 0 where Z is known
+                        values = np.stack([zero, zero, values])
                     out.append((side.value + joint + quantity + suffix, quantity, values.T * factor, kind))
             for var in ("ground_force", "grf"):
                 _, quantity, kind, factor = NEXUS_QUANTITIES[var]
@@ -156,7 +157,7 @@ class TrialKinetics:
 
     def nexus_outputs(self, suffix: str = "") -> dict[str, tuple[Array, str]]:
         """The kinetics as Nexus names and stores them: ``LAnkleMoment`` N·mm/kg,
-        ``LAnkleForce`` N/kg, ``LAnklePower`` W/kg (in Z; X = Y = 0), ``LGroundReactionForce``
+        ``LAnkleForce`` N/kg, ``LAnklePower`` W/kg (in Z; X = Y = 0 where Z is known), ``LGroundReactionForce``
         N/kg, ``LNormalisedGRF`` % BW, each ``(n, 3)`` with ``suffix`` appended, and its C3D
         output kind (``"moment"``, ``"power"``, ``"force"``)."""
         return {name: (np.ascontiguousarray(values), kind) for name, _, values, kind in self._nexus(suffix)}
@@ -186,11 +187,11 @@ def check_units(plate: ForcePlate, path: Path) -> None:
         return
     on = over_plate(plate.cop[loaded], plate.corners, COP_MARGIN_MM)
     if on.mean() < COP_ON_PLATE:
-        size = np.ptp(plate.corners, axis=0)
+        sides = np.linalg.norm(plate.corners[[0, 1]] - plate.corners[[1, 2]], axis=1)
         raise ForcePlateError(f"{path}: force plate {plate.number}: the centre of pressure lies off the plate on "
-                              f"{1 - on.mean():.0%} of the loaded samples (plate {size[0]:.4g} x {size[1]:.4g} in "
-                              "POINT:UNITS, converted to mm): the corners and the moment channels are in different "
-                              "units - check POINT:UNITS and the moment channels' ANALOG:UNITS")  # fmt: skip
+                              f"{1 - on.mean():.0%} of the loaded samples (the plate read as {sides[0]:.3g} x "
+                              f"{sides[1]:.3g} mm): its corners and moment channels are in different units - check "
+                              "POINT:UNITS and the moment channels' ANALOG:UNITS")  # fmt: skip
 
 
 def _plate_frames(plates: Sequence[ForcePlate], n_frames: int, rate: float) -> tuple[Array, Array]:
