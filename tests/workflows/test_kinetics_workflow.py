@@ -49,7 +49,8 @@ def test_the_dataset_is_plug_in_gait_kinetics_in_page_units(movement: AnglesRun)
     assert kinetics is not None and kinetics.body_mass == 85.0 and kinetics.plates == (1, 2, 3, 4)
     assert kinetics.plates_used(Side.LEFT) == (1, 3) and kinetics.plates_used(Side.RIGHT) == (2, 4)
     data, expected = kinetics.data, _independent(movement)
-    assert data["moment"].dims == ("side", "joint", "axis", "frame") and data["power"].dims == ("side", "joint", "frame")
+    assert data["moment"].dims == ("side", "joint", "axis", "frame")
+    assert data["power"].dims == ("side", "joint", "frame")
     assert data["moment"].attrs["units"] == "N·m/kg" and data["grf"].attrs["units"] == "% BW"
     for side in "LR":
         for joint in JOINTS:
