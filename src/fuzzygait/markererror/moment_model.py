@@ -257,8 +257,9 @@ class LegKineticsModel:
         for p in range(len(self.plates)):
             offset = anp.dot(shifts[:, p, :2], self._plane[p]) * MM
             moment = moment + anp.cross(offset, self._shares[p][frames])
-        rotations = anp.stack([parts["foot"], parts["tibia"], parts["thigh"], parts["pelvis"]], axis=1)
-        omega = _omega(rotations, rate)  # (k, 4 segments, 3 offsets, 3)
+        # foot, tibia, femur, pelvis at the window's even offsets −4, −2, 0, 2, 4 (the rotations' differences)
+        rotations = anp.stack([parts[name][:, ::2] for name in ("foot", "tibia", "thigh", "pelvis")], axis=1)
+        omega = _omega(rotations, rate)  # (k, 4 segments, offsets −2, 0, 2, 3)
         moments = _newton_euler(_segments(parts, self.foot_length * MM, mass), rotations, omega,
                                 self._force[frames], moment, rate)  # fmt: skip
         if self.kind == "Power":
@@ -266,7 +267,7 @@ class LegKineticsModel:
             power = anp.sum(moments * relative, axis=2) / mass
             zero = anp.zeros_like(power)
             return anp.stack([zero, zero, power], axis=2)
-        local = _apply(anp.swapaxes(rotations[:, :3, HALF_WINDOW], -1, -2), moments)
+        local = _apply(anp.swapaxes(rotations[:, :3, 2], -1, -2), moments)
         return anp.einsum("sca,ksa->ksc", self._picks, local) / mass
 
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -305,14 +306,15 @@ class LegKineticsModel:
 
 def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """``matrices @ vectors`` over the leading axes (``(..., 3, 3)`` and ``(..., 3)``)."""
-    return anp.matmul(matrices, vectors[..., None])[..., 0]
+    return anp.sum(matrices * vectors[..., None, :], axis=-1)
 
 
 def _omega(frames: np.ndarray, rate: float) -> np.ndarray:
     """``(k, s, 3, 3)`` rad/s: the angular velocity at window offsets −2, 0, +2 of the
-    ``(k, s, 9, 3, 3)`` rotations of ``s`` segments (axial vector of ``Ṙ Rᵀ``, ``Ṙ`` the
-    two-frame difference, :func:`~fuzzygait.kinetics.inverse_dynamics.angular_velocity`)."""
-    ahead, behind, centre = frames[:, :, 4:9:2], frames[:, :, 0:5:2], frames[:, :, 2:7:2]  # offsets c ± 2, c
+    ``(k, s, 5, 3, 3)`` rotations of ``s`` segments at offsets −4, −2, 0, 2, 4: the axial
+    vector of ``Ṙ Rᵀ`` with ``Ṙ`` the two-frame difference
+    (:func:`~fuzzygait.kinetics.inverse_dynamics.angular_velocity`)."""
+    ahead, behind, centre = frames[:, :, 2:5], frames[:, :, 0:3], frames[:, :, 1:4]
     w = anp.matmul((ahead - behind) * (rate / 4.0), anp.swapaxes(centre, -1, -2))
     return 0.5 * anp.stack([w[..., 2, 1] - w[..., 1, 2], w[..., 0, 2] - w[..., 2, 0], w[..., 1, 0] - w[..., 0, 1]],
                            axis=-1)  # fmt: skip
@@ -351,11 +353,11 @@ def _newton_euler(segments: _Segments, rotations: np.ndarray, omega: np.ndarray,
     centre, laboratory frame, of the proximal segment on the distal one) at the window's
     centre, from the ground load (``force`` N, ``moment`` N·m about the laboratory
     origin) up: :func:`~fuzzygait.kinetics.inverse_dynamics.newton_euler` with its
-    derivatives (``rotations`` ``(k, 4, 9, 3, 3)`` and ``omega`` :func:`_omega` of foot,
-    tibia, femur and pelvis)."""
+    derivatives (``rotations`` ``(k, 4, 5, 3, 3)`` at the even offsets and ``omega``
+    :func:`_omega` of foot, tibia, femur and pelvis)."""
     acceleration = anp.einsum("w,kswi->ksi", SECOND_DIFFERENCE * rate**2, segments.com)
     alpha = (omega[:, :3, 2] - omega[:, :3, 0]) * (rate / 4.0)
-    rotation, inertia = rotations[:, :3, HALF_WINDOW], segments.inertia
+    rotation, inertia = rotations[:, :3, 2], segments.inertia
     transposed = anp.swapaxes(rotation, -1, -2)
     w_local = _apply(transposed, omega[:, :3, 1])
     a_local = _apply(transposed, alpha)
