@@ -22,6 +22,7 @@ from fuzzygait.viz.layout import SIDE_STYLE
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.figures import cycle_figure
+from fuzzygait.viz.report.kinetics_section import NO_PLATES
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.workflows.report_folder import ReportItem, ReportWriter, write_report
 from support import SAMPLE_DATA, FakeAnalysis, needs_shared, shared_file
@@ -82,7 +83,7 @@ def test_page_shows_every_section(content_dir: Path) -> None:
     assert html.lower().count("thesis") >= 3
     for figure in ("cycles.png", "time_series.png", "profile.png"):
         assert (content_dir / "walking_noisy_files" / figure).is_file()
-    assert "None in the file" in html  # the synthetic file holds no kinetics
+    assert NO_PLATES in html and not (content_dir / "walking_noisy_files" / "kinetics.png").exists()  # no plates
 
 
 def test_angles_only_page_has_no_uncertainty_sections(content_dir: Path) -> None:

@@ -26,16 +26,22 @@ def normative(
         typer.Option("--per-side/--pooled", help="Keep left and right apart (default: pool both sides' cycles)."),
     ] = False,
 ) -> None:
-    """Normative mean ± SD per % gait cycle and angle component from reference trials.
+    """Normative mean ± SD per % gait cycle and angle component from reference trials,
+    and of the kinetics where the trials have force plates.
 
     Session folders are searched as `report` does (static trial, subject file, walking
     trials); files given directly use --static/--subject (else their PROCESSING group).
-    Every gait cycle of every trial counts once; the file format is in docs/reports.md
-    ("Normative data"). A trial that fails gets one error line; the others are used.
+    Every gait cycle of every trial counts once; a cycle's joint moments (KneeMoment_X,
+    N·m/kg), powers (KneePower_Z, W/kg) and ground reaction over stance (NormalisedGRF_Z,
+    % body weight) count when its stance was on a force plate. The file format is in
+    docs/reports.md ("Normative data"). A trial that fails gets one error line; the
+    others are used.
     """
     from fuzzygait.core.errors import FuzzyGaitError
+    from fuzzygait.gait.cycles import gait_cycles
     from fuzzygait.gait.normative import build_normative, normalised_cycles, write_normative
     from fuzzygait.workflows.angles import run_angles
+    from fuzzygait.workflows.report_folder import run_kinetic_cycles
     from fuzzygait.workflows.session import find_sessions
 
     with user_errors():
@@ -43,7 +49,7 @@ def normative(
         if out_file.suffix.lower() != ".csv":
             raise FuzzyGaitError(f"{out_file}: the normative file is a .csv file")
         trials = [t for s in find_sessions(inputs, static, subject) for t in s.trials]
-    stacks, failures, names = [], 0, []
+    stacks, kinetic_stacks, failures, names = [], [], 0, []
     for trial in trials:
         try:
             run = run_angles(trial.path, static=trial.static, subject_file=trial.subject_file, model=model)
@@ -55,7 +61,9 @@ def normative(
             err.print(f"fuzzygait: error: {trial.path}: internal error {type(exc).__name__}: {exc}", markup=False)
             failures += 1
             continue
+        cut = run_kinetic_cycles(run, {side: gait_cycles(run.trial, run.events, side) for side in "LR"})
         stacks.append(normalised_cycles(run.result.angles, run.trial, run.events))
+        kinetic_stacks.append(cut.cycles if cut is not None else {})
         names.append(trial.path.name)
     with user_errors():
         if not stacks:
@@ -63,10 +71,16 @@ def normative(
         data = build_normative(stacks, per_side=per_side, source=", ".join(names))
         if not data.curves:
             raise FuzzyGaitError("the reference trials have no complete gait cycle; nothing written")
+        kinetic = build_normative(kinetic_stacks, per_side=per_side)
+        angles = len(data.curves)
+        data.curves.update(kinetic.curves)
+        data.cycles.update(kinetic.cycles)
         write_normative(data, out_file)
     cycles = max(data.cycles.values(), default=0)
-    out.print(f"{len(data.curves)} angle components from {len(stacks)} trial{'s' if len(stacks) != 1 else ''} "
-              f"(up to {cycles} cycles each) -> {out_file}", markup=False)  # fmt: skip
+    kinetics = f" and {len(kinetic.curves)} kinetic components" if kinetic.curves else ""
+    none = "" if kinetic.curves else " (no kinetics: no gait cycle's stance on a force plate)"
+    out.print(f"{angles} angle components{kinetics} from {len(stacks)} trial{'s' if len(stacks) != 1 else ''} "
+              f"(up to {cycles} cycles each) -> {out_file}{none}", markup=False)  # fmt: skip
     if failures:
         err.print(f"fuzzygait: {failures} of {len(trials)} trials failed", markup=False)
         raise typer.Exit(EXIT_USER_ERROR)

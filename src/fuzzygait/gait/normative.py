@@ -321,7 +321,7 @@ def read_normative(path: str | os.PathLike[str]) -> NormativeData:
             raise _fail(path, f"line {row}: {column} is not a number ({table[column].iloc[row - 2]!r})")
         numbers[column] = values.to_numpy(dtype=float)
     if (numbers["sd"] < 0).any() or not np.isfinite(numbers["mean"]).all():
-        raise _fail(path, "sd must be >= 0 and mean finite (degrees)")
+        raise _fail(path, "sd must be >= 0 and mean finite (in the variable's unit)")
     data = NormativeData(source=path.name)
     grid = percent_points(N_POINTS)
     variables = table["variable"].astype(str).str.strip().to_numpy()

@@ -52,7 +52,7 @@ from fuzzygait.viz.report.session import (
 )
 from fuzzygait.workflows.progress import SILENT, StageProgress
 from fuzzygait.workflows.report_entries import ENTRY_SCHEMA, EntryFormatError, read_entry
-from fuzzygait.workflows.report_folder import write_session_cycles
+from fuzzygait.workflows.report_folder import write_session_cycles, write_session_kinetics
 from fuzzygait.workflows.report_request import BatchReportRequest
 from fuzzygait.workflows.session import Session, find_sessions
 from fuzzygait.workflows.trial_job import TrialJob, TrialOutcome, finished_outcome, run_trial_job
@@ -271,8 +271,10 @@ def _write_session(session: Session, outcomes: Sequence[TrialOutcome], out_dir: 
         cycles = _stacked_cycles(outcomes, folder)
         drawn = write_session_cycles(cycles, figures / "cycles", title)
         parameters = pooled_parameters(session.name, _stacked_parameters(outcomes, folder), "the trials' events")
+        kinetic = {k: np.vstack(v) for k, v in _stacked(outcomes, folder, "kinetics/").items()}
+        kinetics = write_session_kinetics(kinetic, figures, f"Session {session.name}")
         html = session_page(summary, "session_files/cycles" if drawn else None, index_href, cycles_used(cycles),
-                            parameters)  # fmt: skip
+                            parameters, kinetics)  # fmt: skip
         (staging / page_name).write_text(html, encoding="utf-8")
         if pdf:
             from fuzzygait.workflows.pdf import html_to_pdf

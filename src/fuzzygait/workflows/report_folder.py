@@ -45,7 +45,7 @@ from fuzzygait.viz.report.kinetics import (
 )
 from fuzzygait.viz.report.kinetics_section import NO_PLATES, KineticsPage
 from fuzzygait.viz.report.pages import PageSource, index_page, trial_page
-from fuzzygait.viz.report.session import SESSION_DPI, session_cycles_figure
+from fuzzygait.viz.report.session import SESSION_DPI, SessionKinetics, session_cycles_figure
 from fuzzygait.viz.report.sources import has_source_bands, source_figure
 
 __all__ = ["ReportItem", "ReportWriter", "kinetics_page", "run_kinetic_cycles", "write_report", "write_session_cycles",
@@ -325,16 +325,20 @@ def kinetics_page(run: ReportRun, cycles: Mapping[str, list[GaitCycle]],
 
 
 def write_session_kinetics(cycles: Mapping[str, np.ndarray], folder: Path, title: str,
-                           normative: NormativeData | None = None) -> tuple[str, ...]:  # fmt: skip
-    """The session's kinetics figures (mean ± SD over every counted cycle of its trials:
-    ``kinetics`` and ``grf``, PNG and SVG into ``folder``); the stems written."""
-    written = []
+                           normative: NormativeData | None = None) -> SessionKinetics:  # fmt: skip
+    """The session's kinetics figures, mean ± SD over every counted cycle of its trials
+    (``cycles``: sided component -> ``(n, 101)`` stacked, as ``data.npz`` holds them):
+    ``kinetics`` and ``grf`` as PNG and SVG into ``folder`` (the page's
+    ``session_files``; into a staging folder: not atomic itself)."""
+    moments = grf = None
     figure = session_kinetics_figure(cycles, f"{title}: joint moments and powers, mean ± SD", normative)
     if figure is not None:
         save_figure_files(figure, folder / "kinetics", dpi=SESSION_DPI)
-        written.append("kinetics")
-    grf = grf_figure(cycles, f"{title}: ground reaction over stance, mean ± SD", normative, spread="sd")
-    if grf is not None:
-        save_figure_files(grf, folder / "grf", dpi=SESSION_DPI)
-        written.append("grf")
-    return tuple(written)
+        moments = f"{folder.name}/kinetics"
+    stance = grf_figure(cycles, f"{title}: ground reaction over stance, mean ± SD", normative, spread="sd")
+    if stance is not None:
+        save_figure_files(stance, folder / "grf", dpi=SESSION_DPI)
+        grf = f"{folder.name}/grf"
+    counted = {side: max((len(cycles.get(f"{side}{j}Moment_X", ())) for j in KINETIC_ROWS), default=0)
+               for side in ("L", "R")}  # fmt: skip
+    return SessionKinetics(moments, grf, counted)

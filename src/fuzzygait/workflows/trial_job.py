@@ -30,6 +30,7 @@ import xarray as xr
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.core.options import Option
+from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.gait.normative import NormativeData
 from fuzzygait.gait.spatiotemporal import NAMES, spatiotemporal_parameters
 from fuzzygait.io.atomic import replace_path
@@ -42,7 +43,7 @@ from fuzzygait.workflows.marker_uncertainty import (
     analyse_run,
 )
 from fuzzygait.workflows.report_entries import EntryFormatError, read_entry, write_entry
-from fuzzygait.workflows.report_folder import ReportItem, ReportWriter
+from fuzzygait.workflows.report_folder import ReportItem, ReportWriter, run_kinetic_cycles
 
 __all__ = ["UNCERTAINTY_MODES", "TrialJob", "TrialOutcome", "finished_outcome", "mode_settings", "run_trial_job"]
 
@@ -171,7 +172,11 @@ def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     percent (the component's side's cycles), ``spatiotemporal/<L|R>`` (n_complete_cycles,
     11) -- each complete cycle's spatio-temporal parameters in
     :data:`~fuzzygait.gait.spatiotemporal.NAMES` order and units (absent without one) --
-    and, when analysed, ``hull`` (component, alpha, bound, frame) deg with its ``alpha``
+    ``kinetics/<component>`` (n_cycles, 101) -- the computed kinetics of each cycle whose
+    stance was on a force plate (``LKneeMoment_X`` N·m/kg, ``LKneePower_Z`` W/kg over the
+    gait cycle, ``LNormalisedGRF_Z`` % body weight over stance;
+    :func:`~fuzzygait.workflows.report_folder.run_kinetic_cycles`) -- and, when analysed,
+    ``hull`` (component, alpha, bound, frame) deg with its ``alpha``
     levels and ``component`` names."""
     run = analysis.run
     angles = sorted(run.result.angles.items())
@@ -187,6 +192,9 @@ def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     for code, side in (parameters.sides.items() if parameters is not None else ()):
         if side.complete_cycles:
             data[f"spatiotemporal/{code}"] = np.array([[c.values[n] for n in NAMES] for c in side.complete_cycles])
+    kinetic = run_kinetic_cycles(run, {side: gait_cycles(run.trial, run.events, side) for side in "LR"})
+    for name, stack in (kinetic.cycles.items() if kinetic is not None else ()):
+        data[f"kinetics/{name}"] = stack
     fuzzy = analysis.fuzzy
     if fuzzy.sizes.get("component", 0):
         hull = fuzzy["hull"].transpose("component", "alpha", "bound", "frame")

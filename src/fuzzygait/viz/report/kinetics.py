@@ -209,7 +209,7 @@ def _handles(counts: Mapping[str, int], spread: str, normative: bool, foot_off: 
                               label=f"{name}: mean of {cycles}"))  # fmt: skip
         if spread == "cycles":
             handles.append(Line2D([], [], color=colour, lw=CYCLE_WIDTH, alpha=0.55, label=f"{name}: each cycle"))
-        else:
+        elif n > 1:  # one cycle has no SD
             face = ({"facecolor": "white", "hatch": _right_hatch(3)} if side == "R"
                     else {"facecolor": colour, "alpha": 0.2})  # fmt: skip
             handles.append(Patch(edgecolor=colour, lw=0.5, label=f"{name}: ± 1 SD over cycles", **face))

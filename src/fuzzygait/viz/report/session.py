@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
+    "SessionKinetics",
     "SessionSummary",
     "SummaryTrial",
     "cross_session_index",
@@ -131,6 +132,42 @@ def session_cycles_figure(cycles: Mapping[str, np.ndarray], title: str) -> Figur
     return figure
 
 
+@dataclass(frozen=True)
+class SessionKinetics:
+    """The session page's kinetics: the stems (relative to the page) of the moments and
+    powers figure and of the ground-reaction figure (None: not written) and per side the
+    cycles with their stance on a force plate they average."""
+
+    moments: str | None = None
+    grf: str | None = None
+    cycles: dict[str, int] = field(default_factory=dict)
+
+
+def kinetics_section(kinetics: SessionKinetics | None) -> str:
+    """The session page's kinetics: mean ± SD moments and powers over every cycle on a
+    force plate of the session's trials, and the ground reaction over stance."""
+    head = '<h2 id="kinetics">Kinetics: all trials</h2>'
+    if kinetics is None or kinetics.moments is None:
+        return head + ("<p>No kinetics: no trial of the session has a gait cycle whose stance was on a force "
+                       "plate (a trial page says why: no force plates, or no foot on a plate).</p>")  # fmt: skip
+    n = kinetics.cycles
+    parts = [head, f"<p>Joint moments (N·m per kg body mass; internal moments, positive X extensor at hip and knee, "
+             f"plantarflexor at the ankle) and powers (W/kg; positive: generated), mean ± SD over the "
+             f"{n.get('L', 0)} left and {n.get('R', 0)} right gait cycles of the session's trials whose stance was "
+             "on a force plate, computed from the plates as Plug-in Gait does; left: solid line, right: dashed. "
+             "The SD is the stride-to-stride variability, not a measurement uncertainty.</p>"]  # fmt: skip
+    figures = [(kinetics.moments, "Joint moments and powers of the session, mean and SD per side", 820),
+               (kinetics.grf, "Ground reaction force of the session over stance on the plate, mean and SD per side",
+                360)]  # fmt: skip
+    for stem, text, height in figures:
+        if stem is None:
+            continue
+        parts.append(f'<figure><a href="{quote(stem)}.svg"><img src="{quote(stem)}.png" width="1100" '
+                     f'height="{height}" alt="{escape(text)}"></a><figcaption>{escape(text)} '
+                     f'(<a href="{quote(stem)}.svg">SVG</a>).</figcaption></figure>')  # fmt: skip
+    return "".join(parts)
+
+
 def _document(title: str, body: str) -> str:
     stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
     return ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
@@ -176,11 +213,13 @@ def cycles_used(cycles: Mapping[str, np.ndarray]) -> dict[str, int]:
 
 
 def session_page(summary: SessionSummary, figure: str | None, index_href: str | None,
-                 used: Mapping[str, int] | None = None, parameters: TrialParameters | None = None) -> str:  # fmt: skip
+                 used: Mapping[str, int] | None = None, parameters: TrialParameters | None = None,
+                 kinetics: SessionKinetics | None = None) -> str:  # fmt: skip
     """The HTML of a session page; ``figure`` the stem of its cycle figure (relative),
     ``index_href`` the index across sessions (None: there is none), ``used`` the cycles
     per side the figure averages (:func:`cycles_used`), ``parameters`` the complete cycles
-    of all trials (:func:`~fuzzygait.gait.spatiotemporal.pooled_parameters`)."""
+    of all trials (:func:`~fuzzygait.gait.spatiotemporal.pooled_parameters`), ``kinetics``
+    its kinetics figures (:func:`kinetics_section`)."""
     facts = "".join(f'<tr><th scope="row">{escape(k)}</th><td>{escape(v)}</td></tr>' for k, v in summary.facts)
     nav = f'<nav><a href="{quote(index_href)}">← All sessions (index)</a></nav>' if index_href else ""
     n_cycles = {s: sum(t.cycles.get(s, 0) for t in summary.trials if t.error is None) for s in SIDE_STYLE}
@@ -218,6 +257,7 @@ def session_page(summary: SessionSummary, figure: str | None, index_href: str | 
 {spatiotemporal}
 <h2 id="cycles">Gait cycle: all trials</h2>
 {fig}
+{kinetics_section(kinetics)}
 <h2 id="trials">Trials</h2>
 <div class="index-table">{html_table(_TRIAL_HEADER, _trial_rows(summary.trials))}</div>
 {f'<h2 id="notes">Notes</h2><ul class="small">{notes}</ul>' if notes else ''}
