@@ -1,4 +1,7 @@
-"""Rerun recordings (``.rrd``) of a gait trial: markers, model and joint angles.
+"""Rerun recordings (``.rrd``) of a gait trial: markers, model, joint angles and, with
+force plates, the kinetics (:mod:`fuzzygait.viz.rerun_kinetics`: ground reaction arrows
+at the centres of pressure, ``world/force_plates/...``; moments and powers,
+``kinetics/...``; a "Kinetics" tab).
 
 :func:`log_trial` logs one trial, its Plug-in Gait model result and optionally the fuzzy
 joint-angle envelopes into a Rerun recording stream, :func:`trial_blueprint` is the
@@ -88,6 +91,7 @@ __all__ = [
 ]
 
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES  # noqa: E402
+from fuzzygait.viz.rerun_kinetics import kinetics_views, log_kinetics  # noqa: E402
 
 #: Length of the drawn segment axes, mm.
 AXIS_LENGTH_MM = 100.0
@@ -364,7 +368,7 @@ def _log_angles(
                 )  # fmt: skip
 
 
-def _blueprint(rrb: Any, result: CGMResult) -> Any:
+def _blueprint(rrb: Any, result: CGMResult, kinetics: bool = False) -> Any:
     rows = []
     for angle, title in ANGLE_ROWS:
         present = [side + angle for side in _SIDES if side + angle in result.angles]
@@ -385,8 +389,9 @@ def _blueprint(rrb: Any, result: CGMResult) -> Any:
         origin="/angles", name="Joint angles"
     )
     world_tab = rrb.Spatial3DView(origin="/world", name="3D (lab frame, mm)")
+    kinetic_tabs = [kinetics_views(rrb)] if kinetics else []
     return rrb.Blueprint(
-        rrb.Tabs(angle_tab, world_tab, active_tab=0),
+        rrb.Tabs(angle_tab, *kinetic_tabs, world_tab, active_tab=0),
         rrb.TimePanel(timeline="frame"),
     )
 
@@ -405,11 +410,12 @@ def check_recording(trial: Trial, result: CGMResult, fuzzy: xr.Dataset | None = 
         _fuzzy_parts(fuzzy, trial, alphas_to_show)
 
 
-def trial_blueprint(rrb: Any, result: CGMResult) -> Any:
+def trial_blueprint(rrb: Any, result: CGMResult, kinetics: bool = False) -> Any:
     """The default blueprint of a trial's recording (module docstring): the joint-angle
-    grid of the angles ``result`` has, and the 3D view of ``world``; ``rrb`` is
-    ``rerun.blueprint``."""
-    return _blueprint(rrb, result)
+    grid of the angles ``result`` has, with ``kinetics`` the kinetics tab
+    (:func:`~fuzzygait.viz.rerun_kinetics.kinetics_views`), and the 3D view of ``world``;
+    ``rrb`` is ``rerun.blueprint``."""
+    return _blueprint(rrb, result, kinetics)
 
 
 def log_trial(
@@ -420,6 +426,7 @@ def log_trial(
     fuzzy: xr.Dataset | None = None,
     *,
     alphas_to_show: Iterable[float] | None = None,
+    kinetics: xr.Dataset | None = None,
 ) -> None:
     """Log ``trial``, its model ``result`` and optional fuzzy envelopes into the Rerun
     recording stream ``rec`` (``rr``: the ``rerun`` module); writes no file (the stream's
@@ -437,6 +444,10 @@ def log_trial(
         alphas_to_show: alpha levels of ``fuzzy`` whose envelopes are logged; None for
             every level below 1 (alpha = 1 is the deterministic series, always logged;
             ignored without ``fuzzy``).
+        kinetics: the trial's kinetics (:attr:`TrialKinetics.data
+            <fuzzygait.workflows.kinetics.TrialKinetics.data>`, on the trial's frames): the
+            ground reactions as arrows at the plates' centres of pressure and the joint
+            moments and powers as series (:mod:`fuzzygait.viz.rerun_kinetics`).
     """
     indexes = [
         rr.TimeColumn("frame", sequence=trial.frames.astype(np.int64)),
@@ -444,3 +455,5 @@ def log_trial(
     ]
     _log_world(rec, rr, trial, result, fuzzy, indexes)
     _log_angles(rec, rr, trial, result, fuzzy, alphas_to_show, indexes)
+    if kinetics is not None:
+        log_kinetics(rec, rr, kinetics, indexes)

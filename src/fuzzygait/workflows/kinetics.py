@@ -95,7 +95,9 @@ class TrialKinetics:
             ``ground_force (side, axis, frame)`` N/kg, laboratory frame;
             ``plate_force (plate, axis, frame)`` N, the reaction on the body, laboratory
             frame, and ``plate_cop (plate, axis, frame)`` mm, laboratory frame (NaN without
-            contact), each the mean of the analog samples of the frame.
+            contact), each the mean of the analog samples of the frame;
+            ``plate_corners (plate, corner, axis)`` mm, the surface corners as the file
+            lists them (laboratory frame).
             NaN on the first and last four frames and for a side not computed.
             ``attrs["body_mass"]`` kg.
         contacts: every contact of every plate, the foot it went to or why not used.
@@ -231,14 +233,16 @@ def _dataset(out: KineticsResult, trial: Trial, plates: Sequence[ForcePlate], bo
          "joint_force": (("side", "joint", "axis", "frame"), force),
          "power": (("side", "joint", "frame"), power), "ground_force": (("side", "axis", "frame"), ground),
          "grf": (("side", "axis", "frame"), grf), "plate_force": (("plate", "axis", "frame"), plate_force),
-         "plate_cop": (("plate", "axis", "frame"), plate_cop)},
+         "plate_cop": (("plate", "axis", "frame"), plate_cop),
+         "plate_corners": (("plate", "corner", "axis"), np.array([p.corners for p in plates]).reshape(-1, 4, 3))},
         coords={"side": list(SIDES), "joint": list(JOINTS), "axis": list(AXES), "frame": trial.frames,
-                "time": ("frame", trial.times), "plate": [p.number for p in plates]},
+                "time": ("frame", trial.times), "plate": [p.number for p in plates], "corner": [1, 2, 3, 4]},
         attrs={"body_mass": float(body_mass), "model": "Plug-in Gait kinetics", "rate": float(trial.rate)},
     )  # fmt: skip
     for var, (unit, *_) in NEXUS_QUANTITIES.items():
         data[var].attrs["units"] = unit
-    data["plate_force"].attrs["units"], data["plate_cop"].attrs["units"] = "N", "mm"
+    data["plate_force"].attrs["units"] = "N"
+    data["plate_cop"].attrs["units"] = data["plate_corners"].attrs["units"] = "mm"
     return data
 
 

@@ -308,5 +308,6 @@ def analyse_to_files(
         from fuzzygait.workflows.rerun_recordings import write_recording
 
         rrd.parent.mkdir(parents=True, exist_ok=True)
-        write_recording(rrd, run.trial, run.result, analysis.fuzzy)
+        write_recording(rrd, run.trial, run.result, analysis.fuzzy,
+                        kinetics=run.kinetics.data if run.kinetics is not None else None)  # fmt: skip
     return analysis

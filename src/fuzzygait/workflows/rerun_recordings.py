@@ -44,6 +44,7 @@ def write_recording(
     *,
     alphas_to_show: Iterable[float] | None = None,
     recording_name: str = "fuzzygait",
+    kinetics: xr.Dataset | None = None,
 ) -> Path:
     """Write ``trial``, its model ``result`` and optional fuzzy envelopes as a Rerun ``.rrd``.
 
@@ -62,6 +63,10 @@ def write_recording(
         recording_name: Rerun application id the recording is filed under (the viewer
             keeps one default blueprint per application id); the recording itself is
             named after the trial.
+        kinetics: the trial's kinetics (:attr:`AnglesRun.kinetics
+            <fuzzygait.workflows.angles.AnglesRun.kinetics>` ``.data``): the ground reaction
+            arrows at the plates' centres of pressure (1 mm per N), the moments and powers
+            as series and their tab.
 
     Returns:
         ``path``.
@@ -76,8 +81,11 @@ def write_recording(
 
     path = _rrd_path(path)
     check_recording(trial, result, fuzzy, alphas_to_show)  # before touching the disk
-    with recording_file(path, recording_name, trial.name, lambda rrb: trial_blueprint(rrb, result)) as (rec, rr):
-        log_trial(rec, rr, trial, result, fuzzy, alphas_to_show=alphas_to_show)
+    if kinetics is not None and kinetics.sizes["frame"] != trial.n_frames:
+        raise ParameterError(f"the kinetics have {kinetics.sizes['frame']} frames; the trial has {trial.n_frames}")
+    blueprint = lambda rrb: trial_blueprint(rrb, result, kinetics is not None)  # noqa: E731
+    with recording_file(path, recording_name, trial.name, blueprint) as (rec, rr):
+        log_trial(rec, rr, trial, result, fuzzy, alphas_to_show=alphas_to_show, kinetics=kinetics)
     return path
 
 
