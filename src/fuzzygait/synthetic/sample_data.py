@@ -16,6 +16,12 @@ import numpy as np
 
 from fuzzygait.core.trial import Trial
 from fuzzygait.synthetic import cgm24_sample
+from fuzzygait.synthetic.force_plates import (
+    PlateRecording,
+    add_force_plates,
+    plate_readme_values,
+    sample_walking_plates,
+)
 from fuzzygait.synthetic.gait_curves import STRIDE_TIME_S
 from fuzzygait.synthetic.generate import (
     LEAD_IN_CYCLES,
@@ -58,11 +64,14 @@ def write_sample_data(out_dir: Path | str = "sample_data") -> list[Path]:
     walking, truth = make_walking_trial(geometry=geometry)
     noisy, gaps = make_noisy_gapped(walking)
 
+    plates = sample_walking_plates(walking.n_frames, walking.rate, geometry.bodymass, geometry)
     written: list[Path] = []
     for name, trial in (("static.c3d", static), ("walking.c3d", walking),
                         ("walking_noisy.c3d", noisy)):  # fmt: skip
         path = out / name
         write_c3d(trial, path)
+        if trial is not static:
+            add_force_plates(path, plates)
         written.append(path)
     written.append(_write_text(out / "subject.toml", subject_toml_text(walking.parameters)))
     written.append(_write_text(out / "walking_truth_angles.csv", truth_angles_csv_text(truth)))
@@ -71,11 +80,12 @@ def write_sample_data(out_dir: Path | str = "sample_data") -> list[Path]:
     )
     written.append(_write_text(out / "walking_noisy_gaps.csv", gaps_csv_text(gaps)))
     written += cgm24_sample.write_cgm24_sample_data(out)
-    written.append(_write_text(out / "README.md", readme_text(geometry, walking, gaps)))
+    written.append(_write_text(out / "README.md", readme_text(geometry, walking, gaps, plates)))
     return written
 
 
-def readme_text(geometry: SubjectGeometry, walking: Trial, gaps: Sequence[CutGap]) -> str:
+def readme_text(geometry: SubjectGeometry, walking: Trial, gaps: Sequence[CutGap],
+                plates: Sequence[PlateRecording]) -> str:  # fmt: skip
     """The sample-data README (generated so that it always matches the files)."""
     offsets = static_offsets(geometry)
     hjc = geometry.hjc_local("L")
@@ -112,6 +122,7 @@ def readme_text(geometry: SubjectGeometry, walking: Trial, gaps: Sequence[CutGap
         pf_rad=offsets["plantarflexion"],
         pf_deg=np.degrees(offsets["plantarflexion"]),
         rot_rad=offsets["rotation"],
+        **plate_readme_values(plates, geometry, walking.rate),
         cgm24_rows=cgm24_sample.readme_rows(cgm24_sample.make_cgm24_walking()[0]),
         cgm24_section=cgm24_sample.readme_section(),
     )
@@ -137,9 +148,10 @@ Synthetic subject "Synthetic": a Plug-in Gait / CGM 1.0 lower-body session (`sta
 level, feet parallel along +X, soles on the floor (ASIS midpoint at X=Y=0, Z={standing:.3f} mm). Markers: LASI RASI \
 LPSI RPSI LTHI LKNE LTIB LANK LHEE LTOE RTHI RKNE RTIB RANK RHEE RTOE + medial LKNM RKNM LMED RMED. No events. |
 | `walking.c3d` | clean walking trial, {rate:g} Hz, {n_frames} frames (0 .. {duration:.2f} s), 4 complete gait cycles \
-per side, the 16 dynamic markers. Events: {events}. |
+per side, the 16 dynamic markers. Events: {events}. Two force plates ({analog_rate:g} Hz; see "Force plates" \
+below). |
 | `walking_noisy.c3d` | `walking.c3d` + Gaussian noise (sigma = {noise} mm per coordinate, seed {seed}) + the gaps of \
-`walking_noisy_gaps.csv`; same events. |
+`walking_noisy_gaps.csv`; same events and force plates (no noise on the plates). |
 | `subject.toml` | subject parameters (Vicon `PROCESSING` names; mm, rad, kg), also stored in every C3D. |
 | `walking_truth_angles.csv` | exact joint angles of `walking.c3d`: `frame` (1-based C3D frame), `time_s`, \
 `LPelvisAngles_X/Y/Z`, `LHipAngles_*`, `LKneeAngles_*`, `LAnkleAngles_*`, then the same for R; degrees; X = sagittal, \
@@ -215,6 +227,39 @@ marker turns anterior) |
   static rotation offset = **{rot_rad:.6f} rad** (TOE and HEE in the foot x-z plane).
   (`fuzzygait.synthetic.static_offsets()`.) Like trials calibrated in Nexus, every C3D
   file and `subject.toml` carry them as `L/RStaticPlantFlex` and `L/RStaticRotOff`.
+
+## Force plates (in `walking.c3d` and `walking_noisy.c3d`)
+
+The forces are **synthetic: plausible in shape and size, not measured**, and not the
+result of any contact or muscle model (the walker has none; its stance foot slides a
+little). They are drawn under the generator's feet so that the kinetics pipeline has
+something realistic to work on (`fuzzygait.synthetic.force_plates`):
+
+{plate_rows}
+
+* Two floor plates, {plate_x:g} mm along X by {plate_y:g} mm, surface at Z = 0,
+  `FORCE_PLATFORM:TYPE` 2 (Fx, Fy, Fz in N; Mx, My, Mz in N·mm about the transducer origin,
+  `ORIGIN` = (0, 0, {origin_z:g}) mm below the surface centre), plate axes x = +X, y = -Y,
+  z = -Z (down); the reaction on the body is stored (Fz < 0). Analog channels as Vicon Nexus
+  writes them: {analog_rate:g} Hz ({per_frame} samples a marker frame, the first on frame 1),
+  `ANALOG:SCALE` 1, `OFFSET` 0, `GEN_SCALE` 1, `UNITS` N / Nmm, labels `Force.Fx1` ...
+  `Moment.Mz2`.
+* Plate 1 carries the whole left stance starting at the second left Foot Strike, plate 2
+  the right stance after it; each plate's centre is the middle of that stance's centre of
+  pressure (rounded to the mm). No other foot touches a plate.
+* Loads over a stance (s = 0 at Foot Strike, 1 at Foot Off), W = body weight
+  ({bodymass:g} kg x 9.81 m/s²): vertical `W ({vert_a:.4f} sin(pi s) + {vert_b:g} sin(3 pi s))` (two
+  peaks of {vert_peak:.2f} W, {vert_valley:.2f} W at mid-stance; over a stride both feet's vertical
+  impulse is W x stride time); anterior-posterior `-{ap:g} W sin(2 pi s)` (braking, then
+  propulsion); medio-lateral `{ml:g} W sin(pi s)` towards the midline; free moment about
+  the vertical `{free:g} N·m sin(2 pi s)` (toe in, then out); centre of pressure on the
+  horizontal heel-marker-to-toe-marker line of the stance foot at each sample, from
+  {cop_a:.0%} to {cop_b:.0%} of the way as stance goes on.
+* The joint moments and powers computed from them (`fuzzygait angles` or `fuzzygait demo`)
+  are therefore plausible, not a real subject's: the loads and the generator's joint
+  angles are not dynamically consistent (e.g. knee power absorption near Foot Off is larger
+  than in normal gait). The kinetics pipeline itself is checked against closed-form truth in
+  `tests/synthetic/test_kinetics_truth.py`.
 
 {cgm24_section}
 ## Gaps in `walking_noisy.c3d`
