@@ -162,6 +162,7 @@ def test_bands_hold_every_monte_carlo_sample(sample: tuple[Trial, object]) -> No
                              ["RAnkleMoment_X", "RKneeMoment_X", "RHipMoment_Y"], frames)  # fmt: skip
     assert check_result(ds)["largest_violation"] == 0.0
     assert ds.fuzzy.units == "N·m/kg" and list(ds["marker"].to_numpy()[-1:]) == ["COP1"]
+    assert list(ds["cop"].to_numpy()) == [False] * 9 + [True]
     assert float(ds["ball_radius"].sel(marker="COP1")) == 10.0 and float(ds["ball_radius"].sel(marker="RTHI")) == 32.0
     # Table 3.1's full balls turn the thigh, tibia or foot frame by more than 90° here (the
     # fuzzy ankle angles' bands are 120-350° wide at α = 0 on these frames): undetermined

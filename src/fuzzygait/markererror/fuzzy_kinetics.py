@@ -19,7 +19,7 @@ schema) with the kinetic units:
   deviation at the bound, the ``marker`` dimension holding the markers and ``COP<n>``
   per plate (its deviation in the plate's plane);
 * ``ball_radius (marker)``: α = 0 radii (mm): Σ of Table 3.1, ``cop_error_mm`` for the
-  plates;
+  plates; coordinate ``cop (marker)``: True for the centre-of-pressure balls;
 * ``undetermined (component, alpha, frame)``: at a bound's deviation a segment frame the
   leg's kinetics use (pelvis, thigh, tibia, foot, over the nine frames) is turned more
   than 90° from the measured one — it can flip inside the ball, the band is no band
@@ -42,7 +42,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.core.names import AngleComponent, Axis, Side
+from fuzzygait.core.names import AngleComponent, Side
 from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import CGMResult
@@ -249,16 +249,13 @@ def fuzzy_joint_moments(trial: Trial, subject: SubjectParameters, result: CGMRes
     return _assemble(trial, runs, alphas, KINDS[options.kind], attrs)
 
 
-def _label(component: str) -> str:
-    """``"LKneeMoment_X"`` -> ``"Left knee moment, sagittal (+ extensor)"``."""
-    parsed = AngleComponent.parse(component)
-    side = Side(parsed.angle[0])
-    kind = "Moment" if parsed.angle.endswith("Moment") else "Power"
-    joint = parsed.angle[1:].removesuffix(kind)
-    plane = {Axis.X: "sagittal", Axis.Y: "frontal", Axis.Z: "transverse"}[parsed.axis]
+def kinetic_label(side: Side, joint: str, axis: int, kind: str) -> str:
+    """``(Side.LEFT, "Knee", 0, "Moment")`` -> ``"Left knee moment, sagittal (+ extensor)"``
+    (the signs of :data:`~fuzzygait.kinetics.plug_in_gait.MOMENT_AXES`)."""
     if kind == "Power":
         return f"{side.word} {joint.lower()} power (+ generation)"
-    positive = {"Ankle": "plantarflexor", "Knee": "extensor", "Hip": "extensor"}[joint] if parsed.axis is Axis.X else ""
+    plane = ("sagittal", "frontal", "transverse")[axis]
+    positive = {"Ankle": "plantarflexor", "Knee": "extensor", "Hip": "extensor"}[joint] if axis == 0 else ""
     return f"{side.word} {joint.lower()} moment, {plane}" + (f" (+ {positive})" if positive else "")
 
 
@@ -266,17 +263,20 @@ def _assemble(trial: Trial, runs: list[_LegRun], alphas: Array, units: str, attr
     """The runs' hulls, deviations and flags on the trial's frames, in the angles' layout."""
     balls: list[str] = []
     radius: dict[str, float] = {}
+    cop: dict[str, bool] = {}
     for run in runs:
-        for name, r in zip(run.balls, run.radii, strict=True):
+        for k, (name, r) in enumerate(zip(run.balls, run.radii, strict=True)):
             if name not in radius:
                 balls.append(name)
                 radius[name] = float(r)
-    hulls, deviations, flags = {}, {}, {}
+                cop[name] = k >= len(run.model.markers)
+    hulls, deviations, flags, labels = {}, {}, {}, []
     totals = dict.fromkeys(("forward_simulations", "node_evaluations", "node_gradients"), 0)
     n = trial.n_frames
     for run in runs:
         frames, k = run.model.frames, run.model.frames.size
         columns = np.asarray([balls.index(b) for b in run.balls])
+        labels += [kinetic_label(run.model.side, j, a, run.model.kind) for j, a in run.model.components]
         for b, component in enumerate(run.model.component_labels()):
             nodes = slice(b * k, (b + 1) * k)
             hulls[component] = np.full((alphas.size, 2, n), np.nan)
@@ -290,7 +290,7 @@ def _assemble(trial: Trial, runs: list[_LegRun], alphas: Array, units: str, attr
     axes = AngleAxes(alphas=alphas, frames=trial.frames, times=trial.times, markers=balls,
                      ball_radius=[radius[b] for b in balls])  # fmt: skip
     ds = fuzzy_angles_dataset(hulls, axes, deviations=deviations, attrs={**attrs, **totals}, undetermined=flags)
-    ds = ds.assign_coords(label=("component", [_label(c) for c in hulls]))
+    ds = ds.assign_coords(label=("component", labels), cop=("marker", [cop[b] for b in balls]))
     ds["hull"].attrs.update(units=units, long_name=f"{attrs['output']} bounds of the α-level")
     ds["undetermined"].attrs["long_name"] = "band undetermined: a segment frame turns more than 90 deg in the ball"
     ds["ball_radius"].attrs["long_name"] = "marker and centre-of-pressure error ball radius at α = 0"
@@ -346,8 +346,9 @@ def allowable_kinetic_error(fuzzy: xr.Dataset, component: str,
     deviation = fuzzy["deviation"].sel(component=component) if "deviation" in fuzzy.data_vars else None
     used = [b for b in balls if deviation is None or bool(np.isfinite(deviation.sel(marker=b)).any())]
     radius = {b: float(fuzzy["ball_radius"].sel(marker=b)) for b in used}
-    marker = scale * max([r for b, r in radius.items() if not b.startswith("COP")] + [0.0])
-    cop = scale * max([r for b, r in radius.items() if b.startswith("COP")] + [0.0])
+    is_cop = {str(b): bool(c) for b, c in zip(balls, fuzzy["cop"].to_numpy(), strict=True)}
+    marker = scale * max([r for b, r in radius.items() if not is_cop[b]] + [0.0])
+    cop = scale * max([r for b, r in radius.items() if is_cop[b]] + [0.0])
     units = str(fuzzy.attrs.get("units", ""))
     label = str(fuzzy["label"].sel(component=component).item()) if "label" in fuzzy.coords else component
     if np.isnan(failing):
