@@ -27,8 +27,9 @@ from fuzzygait.viz.report.kinetics import (
 )
 from fuzzygait.viz.report.kinetics_section import NO_PLATES
 from fuzzygait.workflows.angles import AnglesRun, run_angles
+from fuzzygait.workflows.pdf import _PageText
 from fuzzygait.workflows.report_folder import ReportItem, kinetics_page, write_report
-from support import FakeAnalysis, needs_shared, shared_file
+from support import SAMPLE_DATA, FakeAnalysis, needs_shared, shared_file
 
 
 @pytest.fixture(scope="module")
@@ -102,17 +103,24 @@ def test_trial_page_has_the_section_and_a_row_per_contact(movement: tuple[Path, 
     assert expected[0] == "4|Right|732–820" and len(cells) == 4
     assert all(cell.endswith(f"used for the {cell.split('|')[1].lower()} foot") for cell in cells)
     assert "Cycles with their stance on a force plate: left 1 of 1, right 2 of 2" in section
+    # the PDF (printed from the page; without Chromium each of its figures on a page of its own)
+    parser = _PageText()
+    parser.feed(html)
+    assert {"Movement_trial_files/kinetics.png", "Movement_trial_files/grf.png"} <= set(parser.images)
+    assert any(tag == "tr" and "732–820" in text and "used for the right foot" in text for tag, text in parser.blocks)
 
 
-def test_trial_without_plates_says_so(angles_run: AnglesRun, tmp_path: Path) -> None:
-    assert angles_run.kinetics is None
-    page = kinetics_page(angles_run, _cycles(angles_run))
+def test_trial_without_plates_says_so(tmp_path: Path) -> None:
+    source = SAMPLE_DATA / "cgm24_walking.c3d"  # the CGM 2.4 sample has no force plates
+    run = run_angles(source, static=SAMPLE_DATA / "cgm24_static.c3d", subject_file=SAMPLE_DATA / "cgm24_subject.toml",
+                     model="auto")  # fmt: skip
+    assert run.kinetics is None
+    page = kinetics_page(run, _cycles(run))
     assert page.cycles is None and page.missing == NO_PLATES
-    source = Path(angles_run.raw.source)
-    index = write_report([ReportItem(source, FakeAnalysis(angles_run, None, pd.DataFrame()))], tmp_path / "out")
-    html = (index.parent / f"{source.stem}.html").read_text(encoding="utf-8")
+    index = write_report([ReportItem(source, FakeAnalysis(run, None, pd.DataFrame()))], tmp_path / "out")
+    html = (index.parent / "cgm24_walking.html").read_text(encoding="utf-8")
     assert NO_PLATES in html.split('<h2 id="kinetics">')[1].split("<h2 ")[0]
-    assert not (index.parent / f"{source.stem}_files" / "grf.png").exists()
+    assert not (index.parent / "cgm24_walking_files" / "grf.png").exists()
 
 
 def test_session_figure_draws_mean_and_sd() -> None:
