@@ -247,3 +247,33 @@ def test_movement_trial_plates_give_the_nexus_matched_kinetics() -> None:
             for b, (joint, axis) in enumerate(components):
                 expected = outputs[side.value + joint + kind][frames, axis] * scale
                 np.testing.assert_allclose(values[b], expected, rtol=0.0, atol=1e-12)
+
+
+def test_contacts_ground_is_the_assignments_load_with_its_plate_shares() -> None:
+    """Two synthetic plates (1000 Hz, markers at 100 Hz) and the automatic assignment's
+    contacts: the foot's load equals :func:`~fuzzygait.kinetics.assignment.contact_ground`'s
+    and each plate's share is its load on its contact's frames."""
+    from types import SimpleNamespace
+
+    from fuzzygait.kinetics.assignment import PlateContact, contact_ground
+    from fuzzygait.markererror.fuzzy_kinetics import contacts_ground
+
+    n, samples = 40, 400
+    corners = np.array([[600.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 400.0, 0.0], [600.0, 400.0, 0.0]])
+    plates = []
+    for number, shift in ((1, 0.0), (2, 600.0)):
+        force = np.tile([10.0 * number, 0.0, 600.0], (samples, 1))
+        cop = np.tile([300.0 + shift, 200.0, 0.0], (samples, 1))
+        plates.append(SimpleNamespace(number=number, rate=1000.0, force=force, cop=cop,
+                                      free_moment=np.zeros((samples, 3)), contact=np.ones(samples, dtype=bool),
+                                      corners=corners + [shift, 0.0, 0.0]))  # fmt: skip
+    contacts = [PlateContact(1, 5, 14, Side.LEFT), PlateContact(2, 20, 29, Side.LEFT), PlateContact(2, 30, 35, None)]
+    ground = contacts_ground(plates, contacts, Side.LEFT, n, 100.0)
+    expected = contact_ground(plates, contacts, Side.LEFT, n, 100.0)
+    np.testing.assert_array_equal(ground.force, expected.force)
+    np.testing.assert_array_equal(ground.moment, expected.moment)
+    assert [p.number for p in ground.plates] == [1, 2]
+    np.testing.assert_allclose(ground.plates[0].force[5:15], np.tile([10.0, 0.0, 600.0], (10, 1)), rtol=1e-12)
+    np.testing.assert_array_equal(ground.plates[0].force[15:], 0.0)
+    np.testing.assert_array_equal(ground.plates[0].force + ground.plates[1].force, ground.force)
+    np.testing.assert_allclose(ground.plates[1].axes, LEVEL_PLATE, atol=1e-15)
