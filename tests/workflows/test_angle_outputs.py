@@ -46,7 +46,7 @@ def test_plug_in_gait_outputs_name_cgm10_and_keep_vicon_names(tmp_path: Path) ->
     assert "model cgm1.0 (given by name)" in messages(run.notes)
     table = pd.read_csv(tmp_path / "angles.csv")  # plain read_csv
     assert table.columns[-1] == "model" and set(table["model"]) == {"cgm1.0"}
-    expected = run.angle_table()
+    expected = run.frame_table()  # the sample trial has force plates: the kinetics columns too
     assert list(table.columns[:-1]) == list(expected.columns)
     np.testing.assert_allclose(table.drop(columns="model"), expected, atol=5e-7)  # %.6f
     cycles = pd.read_csv(tmp_path / "cycles.csv")
@@ -60,7 +60,7 @@ def test_parquet_tables_carry_the_model_in_their_metadata(tmp_path: Path, angles
     _outputs(tmp_path, "parquet").write(angles_run)
     table = pd.read_parquet(tmp_path / "angles.parquet")
     assert table.attrs["model"] == "cgm1.0" and table.attrs["fuzzygait"] == __version__
-    pd.testing.assert_frame_equal(table.drop(columns="model"), angles_run.angle_table(), check_exact=True)
+    pd.testing.assert_frame_equal(table.drop(columns="model"), angles_run.frame_table(), check_exact=True)
     cycles = pd.read_parquet(tmp_path / "cycles.parquet")
     assert cycles.attrs["model"] == "cgm1.0"
     pd.testing.assert_frame_equal(cycles.drop(columns="model"), angles_run.cycle_statistics(), check_exact=True)
