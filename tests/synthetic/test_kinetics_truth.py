@@ -42,7 +42,13 @@ import pytest
 from fuzzygait.core.names import Side
 from fuzzygait.core.trial import Trial
 from fuzzygait.io.c3d import write_c3d
-from fuzzygait.synthetic.force_plates import PLATE_AXES, SAMPLES_PER_FRAME, PlateRecording, SyntheticPlate, add_force_plates
+from fuzzygait.synthetic.force_plates import (
+    PLATE_AXES,
+    SAMPLES_PER_FRAME,
+    PlateRecording,
+    SyntheticPlate,
+    add_force_plates,
+)
 from fuzzygait.synthetic.gait_curves import STRIDE_TIME_S
 from fuzzygait.synthetic.generate import walking_state
 from fuzzygait.synthetic.leg_model import DYNAMIC_LABELS, Pose, SubjectGeometry
