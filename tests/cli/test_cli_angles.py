@@ -21,7 +21,9 @@ def test_angles_csv_recovers_the_synthetic_truth(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     table = pd.read_csv(out)
     expected = ["frame", "time"] + [f"{a}_{x}" for a in ANGLES for x in "XYZ"]
-    assert sorted(table.columns[:-1]) == sorted(expected)
+    kinetic = list(table.columns[len(expected) : -1])  # the sample stands on force plates: Nexus' kinetic names
+    assert sorted(table.columns[: len(expected)]) == sorted(expected)
+    assert "LKneeMoment_X" in kinetic and "RAnklePower_Z" in kinetic and len(kinetic) == 2 * (3 * 3 * 2 + 3 + 3 * 2)
     assert table.columns[-1] == "model" and set(table["model"]) == {"cgm1.0"}  # the auto choice, named
     truth = pd.read_csv(SAMPLE_DATA / "walking_truth_angles.csv")
     merged = table.merge(truth, on="frame", suffixes=("", "_truth"))

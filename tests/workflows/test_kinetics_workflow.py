@@ -23,7 +23,7 @@ from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
 from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics
 from fuzzygait.workflows.angles import AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.kinetics import run_kinetics, trial_kinetics
-from support import shared_file
+from support import SAMPLE_DATA, shared_file
 
 RAW = Preprocessing(filter=False)  # Nexus' outputs come from the unfiltered markers
 
@@ -127,11 +127,25 @@ def test_table_and_c3d_carry_the_kinetics_as_nexus(tmp_path: Path, movement: Ang
     np.testing.assert_allclose(back.outputs["RHipMoment_fg"], expected["RHipMoment"][0], rtol=1e-6, atol=1e-3)
 
 
-def test_a_trial_without_plates_runs_as_before_with_one_note(angles_run: AnglesRun) -> None:
-    assert angles_run.kinetics is None
-    notes = of_kind(angles_run.notes, FindingKind.KINETICS)
-    assert [n.message for n in notes] == ["no force plates in walking.c3d: no kinetics"]
-    pd.testing.assert_frame_equal(angles_run.frame_table(), angles_run.angle_table())
+def test_a_trial_without_plates_runs_as_before_with_one_note() -> None:
+    run = run_angles(SAMPLE_DATA / "cgm24_walking.c3d", static=SAMPLE_DATA / "cgm24_static.c3d",
+                     subject_file=SAMPLE_DATA / "cgm24_subject.toml", model="cgm2.4")  # fmt: skip
+    assert run.kinetics is None
+    notes = of_kind(run.notes, FindingKind.KINETICS)
+    assert [n.message for n in notes] == ["no force plates in cgm24_walking.c3d: no kinetics"]
+    assert not of_kind(run.notes, FindingKind.FORCE_PLATE_ASSIGNMENT)
+    pd.testing.assert_frame_equal(run.frame_table(), run.angle_table())
+    assert set(run.units().values()) == {"deg"}
+
+
+def test_the_sample_walking_trial_has_kinetics_from_its_synthetic_plates(angles_run: AnglesRun) -> None:
+    """The generated sample stands on two plates, one step each (the demo's main job)."""
+    assert angles_run.kinetics is not None
+    assert angles_run.kinetics.plates_used(Side.LEFT) == (1,) and angles_run.kinetics.plates_used(Side.RIGHT) == (2,)
+    table = angles_run.frame_table()
+    assert list(table.columns[: len(angles_run.angle_table().columns)]) == list(angles_run.angle_table().columns)
+    knee = table["LKneeMoment_X"].to_numpy() * 1e-3  # N·m/kg
+    assert 0.1 < np.nanmax(np.abs(knee)) < 3.0  # a walking knee moment
 
 
 def test_no_body_mass_is_one_line_naming_the_parameter(movement: AnglesRun) -> None:
