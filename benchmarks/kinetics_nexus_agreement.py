@@ -6,9 +6,13 @@ For each shared Nexus trial with stored kinetics and a body mass: the model on t
 file's own ``PROCESSING`` parameters (its angles then equal Nexus'), the plates read by
 :func:`fuzzygait.kinetics.plates.read_force_plates` at the analog rate, and on each foot
 the plate Nexus put there frame by frame (:func:`fuzzygait.kinetics.assignment.stored_assignment`).
-Two ground loads:
+Runs:
 
-* ``all samples``: every analog sample of the assigned plate (threshold 0 N), as Nexus;
+* ``all samples``: every analog sample of the assigned plate (threshold 0 N), as Nexus,
+  the centres of mass differentiated as Nexus does (quintic GCV smoothing spline,
+  ``ComDerivative.GCV_SPLINE``);
+* ``five-point``: the same with the five-point differences (``ComDerivative.FIVE_POINT``,
+  plug_in_gait_kinetics' default);
 * ``contact``: only the samples above the reader's contact threshold (10 N);
 * ``automatic assignment``: the contacts (10 N) assigned by our own rule
   (:func:`fuzzygait.kinetics.assignment.automatic_assignment`), as the pipeline will run.
@@ -40,6 +44,7 @@ from fuzzygait.kinetics.assignment import (  # noqa: E402
     contact_ground,
     stored_assignment,
 )
+from fuzzygait.kinetics.inverse_dynamics import ComDerivative  # noqa: E402
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
 from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics  # noqa: E402
 
@@ -64,10 +69,12 @@ QUANTITIES = {"Moment": ("N·m/kg", 1e-3, (0, 1, 2)), "Power": ("W/kg", 1.0, (2,
 EDGE = 3  # Nexus output frames left out at each end for the "inner" column
 
 
-def kinetics(case: Case, threshold_n: float, automatic: bool = False) -> tuple[dict[str, np.ndarray],
-                                                                             dict[str, np.ndarray], str]:  # fmt: skip
+def kinetics(case: Case, threshold_n: float, automatic: bool = False,
+             method: ComDerivative = ComDerivative.GCV_SPLINE) -> tuple[dict[str, np.ndarray],
+                                                                        dict[str, np.ndarray], str]:  # fmt: skip
     """Our outputs, Nexus', and a note on the plates used (``automatic``: our own
-    assignment, :func:`~fuzzygait.kinetics.assignment.automatic_assignment`)."""
+    assignment, :func:`~fuzzygait.kinetics.assignment.automatic_assignment`; ``method``:
+    how the centres of mass are differentiated)."""
     path = DATA / case.path
     trial = read_c3d(path)
     subject = subject_from_processing(trial.parameters)
@@ -81,7 +88,7 @@ def kinetics(case: Case, threshold_n: float, automatic: bool = False) -> tuple[d
         feet = {side: Foot(*(trial.marker(side.value + m) for m in ("HEE", "TOE", "ANK"))) for side in Side}
         contacts = automatic_assignment(plates, feet, trial.rate, threshold_n)
         ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
-        ours = plug_in_gait_kinetics(result, trial, subject, ground).outputs
+        ours = plug_in_gait_kinetics(result, trial, subject, ground, method).outputs
         used = [f"plate {c.plate} frames {c.first}-{c.last}: {c.describe()}" for c in contacts]
         return ours, trial.outputs, "; ".join(used)
     for side in Side:
@@ -91,7 +98,7 @@ def kinetics(case: Case, threshold_n: float, automatic: bool = False) -> tuple[d
         unmatched = f", {int(assigned.unmatched.sum())} unmatched" if assigned.unmatched.any() else ""
         frames = int((assigned.plate > 0).sum())
         notes.append(f"{side.value}: plate {'+'.join(map(str, used))}, {frames} frames{unmatched}")
-    ours = plug_in_gait_kinetics(result, trial, subject, ground).outputs
+    ours = plug_in_gait_kinetics(result, trial, subject, ground, method).outputs
     return ours, trial.outputs, "; ".join(notes)
 
 
@@ -105,8 +112,9 @@ def stats(ours: np.ndarray, nexus: np.ndarray) -> tuple[float, float, float]:
 
 #: summary rows: (case, run, quantity) -> (worst RMS, its output, worst inner RMS)
 SUMMARY: dict[tuple[str, str, str], tuple[float, str, float]] = {}
-#: (output, axis, unit) -> case -> (RMS, inner RMS) with every sample (the compact table)
-COMPACT: dict[tuple[str, str, str], dict[str, tuple[float, float]]] = {}
+#: (output, axis, unit) -> case -> (RMS, inner RMS, five-point RMS) with every sample (the compact table)
+COMPACT: dict[tuple[str, str, str], dict[str, tuple[float, float, float]]] = {}
+ALL, FIVE = "all samples", "all samples, five-point"
 
 
 def note_worst(key: tuple[str, str, str], label: str, rms: float, inner: float) -> None:
@@ -115,9 +123,11 @@ def note_worst(key: tuple[str, str, str], label: str, rms: float, inner: float) 
 
 
 def table(case: Case) -> None:
-    runs = {label: kinetics(case, threshold, automatic) for label, threshold, automatic in
-            (("all samples", 0.0, False), (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N, False),
-             ("automatic assignment", DEFAULT_THRESHOLD_N, True))}  # fmt: skip
+    spline, five = ComDerivative.GCV_SPLINE, ComDerivative.FIVE_POINT
+    runs = {label: kinetics(case, threshold, automatic, method) for label, threshold, automatic, method in
+            ((ALL, 0.0, False, spline), (FIVE, 0.0, False, five),
+             (f"contact > {DEFAULT_THRESHOLD_N:g} N", DEFAULT_THRESHOLD_N, False, spline),
+             ("automatic assignment", DEFAULT_THRESHOLD_N, True, spline))}  # fmt: skip
     print(f"## {case.name}: {case.path}")
     print("plates (from Nexus' stored GRF): " + next(iter(runs.values()))[2])
     print("automatic assignment: " + runs["automatic assignment"][2])
@@ -140,8 +150,10 @@ def table(case: Case) -> None:
                     cells.append(f"{rms:.4f} | {worst:.4f} | {inner:.4f}")
                     if "Force" not in name:
                         note_worst((case.name, label, unit), f"{name} {'XYZ'[axis]}", rms, inner)
-                        if label == "all samples":
-                            COMPACT.setdefault((name, "XYZ"[axis], unit), {})[case.name] = (rms, inner)
+                        if label in (ALL, FIVE):
+                            cell = COMPACT.setdefault((name, "XYZ"[axis], unit), {})
+                            old = cell.get(case.name, (0.0, 0.0, 0.0))
+                            cell[case.name] = (rms, inner, old[2]) if label == ALL else (old[0], old[1], rms)
                 print(f"| {name} | {unit} | {'XYZ'[axis]} | {' | '.join(cells)} |")
     print()
 
@@ -160,14 +172,15 @@ def main() -> None:
     for (name, label, unit), (rms, output, inner) in SUMMARY.items():
         print(f"| {name} | {label} | {unit} | {rms:.4f} | {output} | {inner:.4f} |")
     print()
-    print("## Every component, every analog sample: RMS (inner RMS where it differs by more than 0.001)")
+    print("## Every component, every analog sample, GCV spline: RMS (inner RMS where it differs by more than "
+          "0.001) [five-point differences' RMS]")
     print("| output | axis | unit | " + " | ".join(case.name for case in CASES) + " |")
     print("|---|---|---|" + "---|" * len(CASES))
     for (name, axis, unit), per_case in COMPACT.items():
         cells = []
         for case in CASES:
-            rms, inner = per_case.get(case.name, (float("nan"), float("nan")))
-            cells.append(f"{rms:.4f}" + (f" ({inner:.4f})" if abs(rms - inner) > 1e-3 else ""))
+            rms, inner, five = per_case.get(case.name, (float("nan"),) * 3)
+            cells.append(f"{rms:.4f}" + (f" ({inner:.4f})" if abs(rms - inner) > 1e-3 else "") + f" [{five:.4f}]")
         print(f"| {name} | {axis} | {unit} | " + " | ".join(cells) + " |")
 
 

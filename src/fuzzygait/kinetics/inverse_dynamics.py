@@ -15,26 +15,43 @@ Each segment obeys ``F_p + F_d + m g = m a`` and, about its centre of mass ``c``
 inertia in the segment's frame.
 
 Derivatives as Nexus' Plug-in Gait takes them (found on the shared Nexus trials, see
-``docs/kinetics.md``): the centre-of-mass acceleration by the five-point central
-difference of :func:`derivative` applied twice; the angular velocity from the
-rotations two frames either side (:func:`angular_velocity`) and the angular
-acceleration by the same two-frame central difference of the angular velocity
-(:func:`wide_difference`).  Both lose four frames at each end, as Nexus does.
+``docs/kinetics.md``): the centre-of-mass acceleration as the second derivative of a
+quintic smoothing spline, its smoothing chosen by generalised cross-validation
+(:attr:`ComDerivative.GCV_SPLINE`, :mod:`fuzzygait.kinetics.gcv_spline`), or by the
+five-point central difference of :func:`derivative` applied twice
+(:attr:`ComDerivative.FIVE_POINT`, the default: the same to 0.003 m/s² on filtered
+markers, local, and 0.2-1 m/s² apart on unfiltered ones); the angular velocity from the
+rotations two frames either side (:func:`angular_velocity`) and the angular acceleration
+by the same two-frame central difference of the angular velocity (:func:`wide_difference`).
+Four frames are lost at each end, as Nexus does.
 """
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
+from fuzzygait.kinetics.gcv_spline import spline_second_derivative
 from fuzzygait.kinetics.segments import Segment
 
 #: Gravity (m/s²) along the laboratory's vertical (z up): Plug-in Gait's 9.81.
 GRAVITY: NDArray[np.float64] = np.array([0.0, 0.0, -9.81])
 
 Array = NDArray[np.float64]
+
+
+class ComDerivative(enum.Enum):
+    """How a segment's centre-of-mass acceleration is taken from its positions."""
+
+    #: The five-point central difference applied twice (:func:`derivative`): local (nine
+    #: frames), NaN on the first and last four frames.
+    FIVE_POINT = "five_point"
+    #: Nexus' Plug-in Gait: the second derivative of the quintic GCV smoothing spline
+    #: through the whole trajectory (:func:`fuzzygait.kinetics.gcv_spline.spline_second_derivative`).
+    GCV_SPLINE = "gcv_spline"
 
 
 @dataclass(frozen=True)
@@ -102,10 +119,19 @@ def angular_velocity(frames: Array, rate: float) -> Array:
     return 0.5 * np.stack([w[:, 2, 1] - w[:, 1, 2], w[:, 0, 2] - w[:, 2, 0], w[:, 1, 0] - w[:, 0, 1]], axis=1)
 
 
-def segment_motion(segment: Segment, rate: float) -> SegmentMotion:
-    """Centre-of-mass acceleration, angular velocity and acceleration of ``segment``."""
+def com_acceleration(com: Array, rate: float, method: ComDerivative = ComDerivative.FIVE_POINT) -> Array:
+    """``(n, 3)``: the acceleration of the ``(n, 3)`` positions ``com`` sampled at ``rate`` Hz
+    (their units per s²) by ``method``."""
+    if method is ComDerivative.GCV_SPLINE:
+        return spline_second_derivative(com, rate)
+    return derivative(derivative(com, rate), rate)
+
+
+def segment_motion(segment: Segment, rate: float, method: ComDerivative = ComDerivative.FIVE_POINT) -> SegmentMotion:
+    """Centre-of-mass acceleration (by ``method``), angular velocity and acceleration of
+    ``segment``."""
     omega = angular_velocity(segment.frame, rate)
-    return SegmentMotion(derivative(derivative(segment.com, rate), rate), omega, wide_difference(omega, rate))
+    return SegmentMotion(com_acceleration(segment.com, rate, method), omega, wide_difference(omega, rate))
 
 
 def _local(frame: Array, v: Array) -> Array:
@@ -130,7 +156,8 @@ def newton_euler(segment: Segment, motion: SegmentMotion, distal: Load, proximal
 
 
 def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, ...], ground: Load, rate: float,
-                           gravity: Array = GRAVITY) -> tuple[list[Load], list[SegmentMotion]]:  # fmt: skip
+                           gravity: Array = GRAVITY, method: ComDerivative = ComDerivative.FIVE_POINT,
+                           ) -> tuple[list[Load], list[SegmentMotion]]:  # fmt: skip
     """Inverse dynamics from the distal end up.
 
     Args:
@@ -140,6 +167,7 @@ def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, .
             ground).
         rate: frames per second.
         gravity: ``(3,)`` m/s².
+        method: how the centres of mass are differentiated (:class:`ComDerivative`).
 
     Returns:
         The load at each joint (of the proximal segment on the distal one, about the
@@ -149,7 +177,7 @@ def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, .
     motions: list[SegmentMotion] = []
     distal = ground
     for segment, joint in zip(segments, joints, strict=True):
-        motion = segment_motion(segment, rate)
+        motion = segment_motion(segment, rate, method)
         load = newton_euler(segment, motion, distal, joint, gravity)
         loads.append(load)
         motions.append(motion)

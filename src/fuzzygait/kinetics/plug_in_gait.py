@@ -39,6 +39,7 @@ from fuzzygait.kinematics.model import CGMResult
 from fuzzygait.kinematics.virtual_markers import foot_bone_length
 from fuzzygait.kinetics.ground import no_load
 from fuzzygait.kinetics.inverse_dynamics import (
+    ComDerivative,
     Load,
     SegmentMotion,
     angular_velocity,
@@ -126,12 +127,12 @@ def normalised_grf(force: Array, progression: Array, side: Side, body_mass: floa
 
 
 def side_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, side: Side, ground: Load,
-                  out: KineticsResult) -> None:  # fmt: skip
+                  out: KineticsResult, method: ComDerivative = ComDerivative.FIVE_POINT) -> None:  # fmt: skip
     """One side's outputs into ``out`` (see :func:`plug_in_gait_kinetics`)."""
     mass = subject.body_mass
     segments = leg_segments(result, side, mass, foot_length(trial, side, subject.marker_radius))
     joints = tuple(result.joint_centres[side.value + name] * MM for name in ("AJC", "KJC", "HJC"))
-    loads, motions = chain_inverse_dynamics(segments, joints, ground, trial.rate)
+    loads, motions = chain_inverse_dynamics(segments, joints, ground, trial.rate, method=method)
     pelvis = SegmentMotion(np.zeros(0), angular_velocity(result.segment_frames["pelvis"], trial.rate), np.zeros(0))
     proximal = [*motions[1:], pelvis]
     for joint, segment, load, motion, above in zip(JOINTS, segments, loads, motions, proximal, strict=True):
@@ -147,8 +148,8 @@ def side_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, s
         out.outputs[side.value + "NormalisedGRF"] = normalised_grf(ground.force, result.progression, side, mass)
 
 
-def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters,
-                          ground: Mapping[Side, Load]) -> KineticsResult:  # fmt: skip
+def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, ground: Mapping[Side, Load],
+                          com_derivative: ComDerivative = ComDerivative.FIVE_POINT) -> KineticsResult:  # fmt: skip
     """Plug-in Gait joint kinetics of both legs.
 
     Args:
@@ -158,6 +159,10 @@ def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParam
         ground: per side, the ground's load on that foot at the trial's frames (see
             :func:`fuzzygait.kinetics.ground.plate_load`; zero off the ground); a side
             absent here is taken as never on a plate (swing-only kinetics).
+        com_derivative: how the segments' centres of mass are differentiated:
+            :attr:`~fuzzygait.kinetics.inverse_dynamics.ComDerivative.GCV_SPLINE` as Nexus
+            (agrees on unfiltered markers too), ``FIVE_POINT`` (the default; local, as the
+            fuzzy kinetics' nine-frame windows).
 
     Returns:
         The outputs in Nexus' names and units; a side whose segments are not computed
@@ -176,7 +181,7 @@ def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParam
     out = KineticsResult()
     for side in Side:
         try:
-            side_kinetics(result, trial, subject, side, ground.get(side, no_load(trial.n_frames)), out)
+            side_kinetics(result, trial, subject, side, ground.get(side, no_load(trial.n_frames)), out, com_derivative)
         except ParameterError as exc:
             out.unavailable[side] = str(exc)
     return out
