@@ -16,7 +16,11 @@ plates if it has any), one core (BLAS and OpenMP threads pinned to 1), best of
   (:func:`~fuzzygait.kinetics.assignment.automatic_assignment`), each foot's ground load
   (:func:`~fuzzygait.kinetics.assignment.contact_ground`) and the joint forces, moments
   and powers of both legs (:func:`~fuzzygait.kinetics.plug_in_gait.plug_in_gait_kinetics`);
-* ``inverse dynamics alone``: ``plug_in_gait_kinetics`` with the ground loads made.
+* ``inverse dynamics alone``: ``plug_in_gait_kinetics`` with the ground loads made;
+* the same two with the centres of mass differentiated as Nexus does
+  (``ComDerivative.GCV_SPLINE``: the quintic GCV smoothing spline), its eigenbasis for the
+  trial's length cached (built once per trial length: the last row, timed with the cache
+  cleared).
 
 Prints seconds, marker frames per second and the ratio of each time to the angles'.
 The issue's target: both sides' kinetics >= 20,000 frames/s on one core.
@@ -38,6 +42,8 @@ from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.io.subject import read_subject, subject_from_processing  # noqa: E402
 from fuzzygait.kinematics import compute_lower_body  # noqa: E402
 from fuzzygait.kinetics.assignment import Foot, automatic_assignment, contact_ground  # noqa: E402
+from fuzzygait.kinetics.gcv_spline import _basis  # noqa: E402
+from fuzzygait.kinetics.inverse_dynamics import ComDerivative  # noqa: E402
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
 from fuzzygait.kinetics.plug_in_gait import plug_in_gait_kinetics  # noqa: E402
 
@@ -73,10 +79,14 @@ def main() -> None:
         return
     feet = {side: Foot(*(trial.marker(side.value + m) for m in ("HEE", "TOE", "ANK"))) for side in Side}
 
-    def assigned() -> object:
+    def assigned(method: ComDerivative = ComDerivative.FIVE_POINT) -> object:
         contacts = automatic_assignment(plates, feet, trial.rate, DEFAULT_THRESHOLD_N)
         ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
-        return plug_in_gait_kinetics(result, trial, subject, ground)
+        return plug_in_gait_kinetics(result, trial, subject, ground, method)
+
+    def new_length() -> object:
+        _basis.cache_clear()
+        return _basis(trial.n_frames)
 
     contacts = automatic_assignment(plates, feet, trial.rate, DEFAULT_THRESHOLD_N)
     ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
@@ -86,6 +96,10 @@ def main() -> None:
         ("assignment + inverse dynamics, both sides", best_of(assigned, repeats)),
         ("inverse dynamics alone, both sides", best_of(lambda: plug_in_gait_kinetics(result, trial, subject, ground),
                                                        repeats)),
+        ("assignment + inverse dynamics, GCV spline", best_of(lambda: assigned(ComDerivative.GCV_SPLINE), repeats)),
+        ("inverse dynamics alone, GCV spline", best_of(lambda: plug_in_gait_kinetics(
+            result, trial, subject, ground, ComDerivative.GCV_SPLINE), repeats)),
+        ("GCV spline eigenbasis for a new trial length (once per length)", best_of(new_length, max(3, repeats // 10))),
     ]  # fmt: skip
     frames = trial.n_frames
     angles = rows[0][1]
