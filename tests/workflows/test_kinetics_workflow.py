@@ -23,7 +23,7 @@ from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
 from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics
 from fuzzygait.workflows.angles import AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.kinetics import run_kinetics, trial_kinetics
-from support import SAMPLE_DATA, shared_file
+from support import SAMPLE_DATA, run_here, shared_file
 
 RAW = Preprocessing(filter=False)  # Nexus' outputs come from the unfiltered markers
 
@@ -227,3 +227,11 @@ def test_a_contact_not_used_is_a_warning_note_per_contact() -> None:
     assert len(unused) >= 1 and len(warned) == len(unused)
     assert all("not used" in f.message for f in warned)
     assert run.kinetics.summary().endswith(f"{len(unused)} contact{'s' if len(unused) != 1 else ''} not used")
+
+
+def test_the_angles_command_prints_the_kinetics_line(tmp_path: Path) -> None:
+    result = run_here("angles", shared_file("vicon", "Movement_trial.c3d"), "--out", tmp_path / "a.csv")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[1] == "  kinetics (4 force plates, 85 kg): left plate 1, 3; right plate 2, 4"
+    assert "  note: force plate 2, frames 856-951: the right foot's" in lines

@@ -256,7 +256,7 @@ def _feet(trial: Trial) -> dict[Side, Foot]:
 def _check_mass(body_mass: float, path: Path, subject_file: str | os.PathLike[str] | None) -> None:
     if not (np.isfinite(body_mass) and body_mass > 0):
         where = f"in the subject file {subject_file}" if subject_file is not None else \
-            f"in a subject file (subject_file) or the PROCESSING group of {path.name}"
+            f"in a subject file (.toml or .vsk) or the PROCESSING group of {path.name}"
         raise ParameterError(f"{path}: has force plates but the body mass is {body_mass:g} kg: set Bodymass (kg) "
                              f"{where} for the kinetics")  # fmt: skip
 
