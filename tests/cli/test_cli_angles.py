@@ -123,7 +123,8 @@ def test_demo_writes_results(tmp_path: Path) -> None:
     assert "walking.c3d" in session and "walking_noisy.c3d" in session and 'src="session_files/cycles.png"' in session
     assert (out / "session" / "session_files" / "cycles.png").is_file()
     assert (out / "session" / "walking.html").is_file() and (out / "session" / "walking_noisy.html").is_file()
-    assert "Session report (walking.c3d and walking_noisy.c3d, angles only)" in summary
+    assert "Session report (walking.c3d and walking_noisy.c3d; angles and the kinetics of the cycles" in summary
+    assert "The forces are synthetic" in summary and "| left | 1 | " in summary  # the sample trial stands on plates
 
 
 def test_demo_generates_missing_sample_data(tmp_path: Path) -> None:

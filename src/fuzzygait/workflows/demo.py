@@ -11,12 +11,15 @@ calibration of ``static.c3d`` and ``subject.toml``, then writes
   error), how wide their fuzzy bands are (determined bands first; "undetermined" where a
   segment frame can flip) and which marker error source dominates knee flexion (each
   source alone, thesis Fig. 5.9); then how close the angles are to the known truth
-  (one row per angle, X / Y / Z),
+  (one row per angle, X / Y / Z); then the kinetics from the trial's two synthetic force
+  plates (:func:`kinetics_lines`: the plates used per side, peak sagittal moments and
+  powers over each foot's stance on its plate),
 * ``report/index.html`` -- the clinicians' uncertainty report of the knee angles,
 * ``session/session.html`` -- the session report of the synthetic Plug-in Gait session
   (``walking.c3d`` and ``walking_noisy.c3d`` with ``static.c3d`` and ``subject.toml``;
-  angles only, ``report --uncertainty none``): the summary over every cycle of both
-  trials, ``session/index.html`` the trial index with a page per trial,
+  ``report --uncertainty none``: angles, and the kinetics of the cycles whose stance is on
+  a plate): the summary over every cycle of both trials, ``session/index.html`` the trial
+  index with a page per trial,
 
 and on the synthetic CGM 2.4 session (``cgm24_walking.c3d`` with ``cgm24_static.c3d``,
 clean, not low-passed) with the richest model version its markers support
@@ -36,7 +39,7 @@ import pandas as pd
 from rich.console import Console
 
 from fuzzygait.core.findings import FindingKind
-from fuzzygait.core.names import AngleComponent, angle_names
+from fuzzygait.core.names import AngleComponent, Side, angle_names
 from fuzzygait.core.options import Option
 from fuzzygait.io import read_c3d
 from fuzzygait.io.figure_files import save_figure
@@ -51,6 +54,7 @@ from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.sources import dominant_sentence
 from fuzzygait.workflows.angles import AXES, AngleOutputs, AnglesRun, Preprocessing, run_angles
 from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
+from fuzzygait.workflows.kinetics import JOINTS as KINETIC_JOINTS
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run
 from fuzzygait.workflows.report_folder import ReportItem, write_report
 
@@ -243,6 +247,41 @@ def uncertainty_lines(analysis: TrialAnalysis) -> list[str]:
     return lines
 
 
+SYNTHETIC_FORCES_TEXT = (
+    "The forces are synthetic: plausible in shape and size, drawn under the generator's feet, not measured "
+    '(`sample_data/README.md`, "Force plates"); the moments and powers are what Plug-in Gait computes from them'
+)
+
+
+def kinetics_lines(run: AnglesRun) -> list[str]:
+    """The summary's kinetics part: that the forces are synthetic, the plates used per
+    side and each contact, then per side the peak (max / min) sagittal (X) ankle, knee and
+    hip moments (N·m/kg, + plantarflexor/extensor) and powers (W/kg, + generation) over
+    the frames of that foot's stance on its plate; one line without kinetics."""
+    kinetics = run.kinetics
+    if kinetics is None:
+        return ["", "Kinetics: none computed (no force plates in the trial, or see the notes)."]
+    lines = ["", f"## Kinetics of `{run.raw.source.name if run.raw.source else 'the trial'}` (Plug-in Gait, "
+             "from the force plates)", "", f"- {SYNTHETIC_FORCES_TEXT}", f"- {kinetics.summary()}"]  # fmt: skip
+    lines += [f"- {contact.finding(run.trial.first_frame).message}" for contact in kinetics.contacts]
+    lines += ["", "Peaks over each foot's stance on its plate, max / min (moment X: + plantarflexor / extensor, "
+              "N·m/kg; power: + generation, W/kg):", "",
+              "| side | plate | ankle moment | knee moment | hip moment | ankle power | knee power | hip power |",
+              "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for side in Side:
+        stance = [np.arange(c.first, c.last + 1) for c in kinetics.contacts if c.side is side]
+        if not stance:
+            lines.append(f"| {side.word.lower()} | none |" + " – |" * 6)
+            continue
+        data = kinetics.data.sel(side=side.value).isel(frame=np.concatenate(stance))
+        series = [data["moment"].sel(joint=j, axis="X").values for j in KINETIC_JOINTS]
+        series += [data["power"].sel(joint=j).values for j in KINETIC_JOINTS]
+        cells = [f"{np.nanmax(v):.2f} / {np.nanmin(v):.2f}" for v in series]
+        plates = ", ".join(map(str, kinetics.plates_used(side)))
+        lines.append(f"| {side.word.lower()} | {plates} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     """Run the demo; returns the summary text (also written to ``summary.md``)."""
     data, out_dir = Path(data), Path(out_dir)
@@ -266,7 +305,7 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     analysis = analyse_run(run, settings)
     index = write_report([ReportItem(data / "walking_noisy.c3d", analysis)], out_dir / "report")
     if progress is not None:
-        progress.print("session report of both walking trials (angles only, about 6 s)...", markup=False)
+        progress.print("session report of both walking trials (no uncertainty, about 6 s)...", markup=False)
     session = write_batch_report(BatchReportRequest([data / "walking.c3d", data / "walking_noisy.c3d"],
                                                     out_dir / "session", static=data / "static.c3d",
                                                     subject_file=data / "subject.toml", uncertainty="none",
@@ -290,8 +329,10 @@ def run_demo(data: Path, out_dir: Path, progress: Console | None = None) -> str:
     lines += uncertainty_lines(analysis)
     lines += ["", "Computed angles against the known truth of the synthetic trial (degrees):", ""]
     lines += accuracy_lines(comparison)
+    lines += kinetics_lines(run)
     lines += ["", f"Uncertainty report (knee angles): `{index}`"]
-    lines += ["", f"Session report (walking.c3d and walking_noisy.c3d, angles only): `{session.session_pages[0]}` "
+    lines += ["", "Session report (walking.c3d and walking_noisy.c3d; angles and the kinetics of the cycles on a "
+              f"plate, no uncertainty bands): `{session.session_pages[0]}` "
               f"(mean ± SD over all cycles of both trials), trial pages from `{session.index}`"]
     lines += ["", "Notes:"] + [f"- {note.message}" for note in run.notes]
     lines += cgm24_lines
