@@ -78,6 +78,11 @@ def _basis(n: int) -> _Basis:
     return _Basis(v, np.clip(lam, 0.0, None), second @ v)
 
 
+def clear_basis_cache() -> None:
+    """Forget the cached eigenbases (to time their construction for a new trial length)."""
+    _basis.cache_clear()
+
+
 def gcv_log_lambda(x: Array) -> float:
     """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN):
     the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s heavy
