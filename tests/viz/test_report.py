@@ -172,13 +172,14 @@ def test_pages_index_figures_and_delta_phi_table(report_dir: Path, noisy_run: An
     page_path = report_dir / "walking_noisy.html"
     page = check_html(page_path)
     assert "index.html" in page.links
-    assert len(page.images) == 2
+    assert len(page.images) == 4  # angles over the cycle, kinetics and GRF (the sample's plates), whole trial
     for url in page.images + [u for u in page.links if not u.startswith("#")]:
         target = (page_path.parent / url.split("#")[0]).resolve()
         assert target.is_file() and target.stat().st_size > 1000 or url == "index.html", url
     files = report_dir / "walking_noisy_files"
     assert sorted(p.name for p in files.iterdir()) == [
-        "cycles.png", "cycles.svg", "time_series.png", "time_series.svg",
+        "cycles.png", "cycles.svg", "grf.png", "grf.svg", "kinetics.png", "kinetics.svg", "time_series.png",
+        "time_series.svg",
     ]  # fmt: skip
     text = page_path.read_text(encoding="utf-8")
     # ΔΦ of the fake: 100 * 2 (1 - α) spread / max Φ; e.g. left knee flexion at α = 0
@@ -280,7 +281,8 @@ def test_report_command_end_to_end(tmp_path: Path) -> None:
     assert row is not None and ">failed<" in row.group(0)
     assert "corrupt.c3d" in result.stderr
     page = check_html(out / "walking.html")
-    assert page.images == ["walking_files/cycles.png", "walking_files/sources.png", "walking_files/time_series.png"]
+    assert page.images == ["walking_files/cycles.png", "walking_files/kinetics.png", "walking_files/grf.png",
+                           "walking_files/sources.png", "walking_files/time_series.png"]  # fmt: skip
     text = (out / "walking.html").read_text(encoding="utf-8")
     assert "α = 0.5" in text and "LKneeAngles_X" in text
     assert "No uncertainty band (not analysed)" in text  # the other angles: curves only

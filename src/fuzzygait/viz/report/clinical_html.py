@@ -62,8 +62,9 @@ def footnotes_section() -> str:
     return f'<section class="footnotes small"><h2 id="references">References</h2><ol>{items}</ol></section>'
 
 
-def reading_guide(has_bands: bool, has_normative: bool) -> str:
-    """“How to read this page”, in plain words for clinicians."""
+def reading_guide(has_bands: bool, has_normative: bool, has_kinetics: bool = False) -> str:
+    """“How to read this page”, in plain words for clinicians (``has_kinetics``: the page
+    shows moments and powers computed from force plates)."""
     lines = ["<b>Lines</b> are the patient's joint angles averaged over the walking cycles of this trial "
              "(left red and solid, right green and dashed); the <b>dotted lines</b> beside them show the "
              "usual stride-to-stride spread (mean ± 1 standard deviation); the <b>vertical lines</b> mark "
@@ -88,6 +89,12 @@ def reading_guide(has_bands: bool, has_normative: bool) -> str:
             "group). The <b>Gait Profile Score</b> (GPS) says, in degrees, how far the patient's curves are "
             "from the normative mean on average; the bars of the Movement Analysis Profile say it for each "
             "joint." + footnote("gps"))  # fmt: skip
+    if has_kinetics:
+        lines.append(
+            "<b>Kinetics</b> (joint moments and powers) need the foot on a force plate: only the walking cycles "
+            "whose foot stood on one are shown (thin lines, their mean thick). Moments are per kg body mass "
+            "(N·m/kg; positive: the muscles extend the hip and knee, plantarflex the ankle); power is positive "
+            "when the joint generates energy, negative when it absorbs it.")  # fmt: skip
     items = "".join(f"<li>{line}</li>" for line in lines)
     return f'<div class="guide"><h2 id="guide">How to read this page</h2><ul>{items}</ul></div>'
 

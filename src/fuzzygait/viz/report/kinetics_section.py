@@ -110,7 +110,7 @@ def kinetics_section(page: KineticsPage | None, clinical: ClinicalData, figs: st
         return HEAD + (reason or "<p>No kinetics: they were not computed for this trial.</p>")
     notes = "".join(f"<li>{_esc(n)}</li>" for n in page.notes)
     return (HEAD + "<p>Computed by fuzzygait from the force plates as Plug-in Gait does (inverse dynamics from "
-            "the foot up, Dempster's segment parameters as Vicon tabulates them; docs: Kinetics): moments in "
+            "the foot up, Dempster's segment parameters as Vicon tabulates them): moments in "
             "N·m per kg body mass — positive X is an internal extensor moment at hip and knee and a "
             "plantarflexor moment at the ankle — powers in W/kg, the ground reaction in % body weight. No "
             "uncertainty band is drawn for them.</p>" + _figures(page, figs) + _contacts_table(page)

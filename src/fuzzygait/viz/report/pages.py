@@ -223,6 +223,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
         cycles_caption = " with α-bands; hatched strips along the top of a panel: undetermined there (no band drawn)"
         frame_bands = ", with the α-bands frame by frame"
     assumptions = _assumptions_section(analysis) if fuzzy is not None else ""
+    has_kinetics = kinetics is not None and kinetics.cycles is not None and kinetics.cycles.any()
     body = f"""
 <nav><a href="index.html">← All trials (index)</a> · {nav}</nav>
 <header>
@@ -232,7 +233,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
 <main>
 {warnings_box(list(warnings))}{lead_box(entry.allowable)}<div class="cols">{kv_table(facts)}
 <div class="box">{'<br>'.join(key)}</div></div>
-{reading_guide(bool(len(data.alphas)), clinical.normative is not None)}
+{reading_guide(bool(len(data.alphas)), clinical.normative is not None, has_kinetics)}
 {spatiotemporal_section(clinical)}
 <h2 id="cycles">Kinematics over the gait cycle</h2>
 {bands_text}
@@ -314,6 +315,10 @@ def _key_lines(entry: TrialEntry, clinical: ClinicalData, run: ReportRun) -> lis
     filled = sum(g.filled for g in gaps)
     key.append(f"Gaps in the model's markers: {filled} filled, {len(gaps) - filled} left open; "
                f"{len(run.result.unavailable)} angle(s) not computed.")  # fmt: skip
+    kinetics = getattr(run, "kinetics", None)  # computed from the force plates (AnglesRun.kinetics)
+    if kinetics is not None:
+        summary = str(kinetics.summary())
+        key.append(f"{_esc(summary[:1].upper() + summary[1:])} (<a href=\"#kinetics\">Kinetics</a>).")
     return key
 
 
