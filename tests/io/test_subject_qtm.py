@@ -223,7 +223,7 @@ def test_foot_flat_default_follows_session_xml(tmp_path: Path) -> None:
     static = SAMPLE_DATA / "static.c3d"
     default = calibrate_static(static, by_file)
     assert default.flat_foot is True and "foot flat on" in default.describe()
-    assert ("foot flat on as session.xml sets it (feet normalised to the static trial); --no-flat-foot "
+    assert ("foot flat on as session.xml sets it (feet normalised to the static trial); flat_foot=False "
             "overrides it") in messages(default.notes)  # fmt: skip
     overridden = calibrate_static(static, by_file, flat_foot=False)
     assert overridden.flat_foot is False and not any("sets it" in n for n in messages(overridden.notes))
@@ -232,7 +232,7 @@ def test_foot_flat_default_follows_session_xml(tmp_path: Path) -> None:
     xml.write_text(session_xml(VISIT, feet=("False", "False")), encoding="utf-16")
     off = calibrate_static(static, read_subject(xml))
     assert off.flat_foot is False
-    assert ("foot flat off as session.xml sets it (feet not normalised to the static trial); --flat-foot "
+    assert ("foot flat off as session.xml sets it (feet not normalised to the static trial); flat_foot=True "
             "overrides it") in messages(off.notes)  # fmt: skip
 
 

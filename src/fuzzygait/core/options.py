@@ -72,7 +72,7 @@ class Option(StrEnum):
     def __str__(self) -> str:
         if os.environ.get(STYLE_VARIABLE) == _COMMAND_LINE:
             return self.flag
-        return f"{self.keyword}="
+        return _LIBRARY_TEXT.get(self, f"{self.keyword}=")
 
     def __format__(self, spec: str) -> str:
         return format(str(self), spec)
@@ -86,6 +86,12 @@ _KEYWORDS = {
     Option.VALUE: "deterministic_value",
     Option.DEBUG: "strict",
     Option.NO_FLAT_FOOT: "flat_foot",
+}
+
+#: Switches: the library names the value too (``flat_foot=False`` for ``--no-flat-foot``).
+_LIBRARY_TEXT = {
+    Option.FLAT_FOOT: "flat_foot=True",
+    Option.NO_FLAT_FOOT: "flat_foot=False",
 }
 
 
