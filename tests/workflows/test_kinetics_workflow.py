@@ -235,3 +235,19 @@ def test_the_angles_command_prints_the_kinetics_line(tmp_path: Path) -> None:
     lines = result.stdout.splitlines()
     assert lines[1] == "  kinetics (4 force plates, 85 kg): left plate 1, 3; right plate 2, 4"
     assert "  note: force plate 2, frames 856-951: the right foot's" in lines
+
+
+def test_a_side_not_computed_leaves_the_inputs_outputs_in_the_c3d(tmp_path: Path, movement: AnglesRun) -> None:
+    assert movement.kinetics is not None
+    data = movement.kinetics.data.copy(deep=True)
+    for var in ("moment", "joint_force", "power", "ground_force", "grf"):
+        data[var].loc[{"side": "R"}] = np.nan
+    run = dataclasses.replace(movement, kinetics=dataclasses.replace(movement.kinetics, data=data))
+    AngleOutputs(c3d=tmp_path / "m.c3d").write(run)  # no suffix: ours take Nexus' names
+    back = read_c3d(tmp_path / "m.c3d")
+    for name in ("RAnkleMoment", "RHipPower", "RNormalisedGRF"):  # the input's (Nexus') own
+        np.testing.assert_array_equal(back.outputs[name], movement.raw.outputs[name])
+    np.testing.assert_allclose(back.outputs["LAnkleMoment"], movement.kinetics.nexus_outputs()["LAnkleMoment"][0],
+                               rtol=1e-6, atol=1e-3)  # fmt: skip
+    ours, nexus = np.nan_to_num(back.outputs["LAnkleMoment"]), np.nan_to_num(movement.raw.outputs["LAnkleMoment"])
+    assert np.abs(ours - nexus).max() > 10  # N·mm/kg: ours replaced Nexus' (the stair contacts differ)

@@ -298,14 +298,16 @@ def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
     <fuzzygait.workflows.kinetics.TrialKinetics.nexus_outputs>`: ``LAnkleMoment`` N·mm/kg
     in ``POINT:MOMENTS``, ``LAnklePower`` W/kg in ``POWERS``, ``LAnkleForce``,
     ``LGroundReactionForce`` N/kg and ``LNormalisedGRF`` % BW in ``FORCES``), suffixed like
-    the angles: with a suffix the input's own (Nexus') kinetic outputs are kept beside."""
+    the angles: with a suffix the input's own (Nexus') kinetic outputs are kept beside;
+    the outputs of a side not computed (all NaN) are not written."""
     out = run.trial.with_markers(run.trial.markers)
     suffix = output_suffix(suffix, run.model)
     for name, values in run.result.angles.items():
         out.outputs[name + suffix] = values
         out.output_kinds[name + suffix] = "angle"
     for name, (values, kind) in (run.kinetics.nexus_outputs(suffix) if run.kinetics is not None else {}).items():
-        out.outputs[name], out.output_kinds[name] = values, kind
+        if np.isfinite(values).any():  # a side not computed replaces nothing of the input's
+            out.outputs[name], out.output_kinds[name] = values, kind
     for name, values in run.result.virtual_markers.items():
         if name not in out.marker_labels:
             out.outputs[name] = values
