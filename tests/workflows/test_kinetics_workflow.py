@@ -251,3 +251,19 @@ def test_a_side_not_computed_leaves_the_inputs_outputs_in_the_c3d(tmp_path: Path
                                rtol=1e-6, atol=1e-3)  # fmt: skip
     ours, nexus = np.nan_to_num(back.outputs["LAnkleMoment"]), np.nan_to_num(movement.raw.outputs["LAnkleMoment"])
     assert np.abs(ours - nexus).max() > 10  # N·mm/kg: ours replaced Nexus' (the stair contacts differ)
+
+
+def test_a_leg_without_its_heel_marker_is_a_warning_and_nan(movement: AnglesRun) -> None:
+    trial = read_c3d(shared_file("vicon", "Movement_trial.c3d"))
+    markers = trial.markers.copy()
+    markers[:, trial.marker_labels.index("RHEE")] = np.nan
+    run = run_angles(trial.with_markers(markers), preprocessing=RAW)
+    assert run.kinetics is not None and Side.RIGHT in run.kinetics.unavailable
+    warned = [f for f in of_kind(run.notes, FindingKind.KINETICS) if f.side == "right"]
+    assert len(warned) == 1 and warned[0].severity is Severity.WARNING and "RHEE" in warned[0].message
+    assert np.isnan(run.kinetics.data["moment"].sel(side="R").values).all()
+    assert movement.kinetics is not None  # the left side as with every marker
+    np.testing.assert_array_equal(run.kinetics.data["moment"].sel(side="L").values,
+                                  movement.kinetics.data["moment"].sel(side="L").values)  # fmt: skip
+    assert run.kinetics.summary().startswith("kinetics (4 force plates, 85 kg): left plate 1, 3; right no plate "
+                                             "(not computed)")  # fmt: skip

@@ -247,10 +247,11 @@ def _dataset(out: KineticsResult, trial: Trial, plates: Sequence[ForcePlate], bo
 
 
 def _feet(trial: Trial) -> dict[Side, Foot]:
-    """The feet whose heel, toe and ankle markers the trial has."""
+    """The feet whose heel, toe and ankle markers the trial has (each seen at least once)."""
     labels = ("HEE", "TOE", "ANK")
-    return {side: Foot(*(trial.marker(side.value + m) for m in labels)) for side in Side
-            if all(trial.has_marker(side.value + m) for m in labels)}  # fmt: skip
+    seen = {side: all(trial.has_marker(side.value + m) and np.isfinite(trial.marker(side.value + m)).any()
+                      for m in labels) for side in Side}  # fmt: skip
+    return {side: Foot(*(trial.marker(side.value + m) for m in labels)) for side in Side if seen[side]}
 
 
 def _check_mass(body_mass: float, path: Path, subject_file: str | os.PathLike[str] | None) -> None:
