@@ -2,7 +2,7 @@
 inside the Graph Follower hull?  And their cost beside the fuzzy angles'.
 
 Run:  .venv/bin/python benchmarks/fuzzy_moments_soundness.py [--frames 20] [--samples 10000]
-      [--first 1000] [--skip-angles] [--allowable-only]
+      [--first 1000] [--skip-angles] [--allowable-only] [--sample]
 
 Trial: ``Movement_trial.c3d`` (Vicon Nexus 2, four plates) with its own PROCESSING subject;
 each foot gets the plate Nexus put under it (read back from its stored ground reaction,
@@ -27,6 +27,10 @@ whatever the deviation).
 Cost: the wall time of the fuzzy moments (both legs, nine components each) and of the fuzzy
 angles (:func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`, every angle, the same
 α-levels) on the same cut trial, one process; the issue's speed line asks for ≤ 2×.
+
+``--sample``: only the cost, on the whole sample trial (``sample_data/walking.c3d``, its two
+plates, the automatic foot-plate assignment, calibrated on ``static.c3d``): the issue's speed
+line, fuzzy moments of both legs against the fuzzy angles of every angle, CPU time.
 
 Allowable error: the right leg's sagittal moments at the α-levels :data:`FINE_ALPHAS`
 (small balls), and :func:`~fuzzygait.markererror.fuzzy_kinetics.allowable_kinetic_error`'s
@@ -131,7 +135,11 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=None, help="C3D frame of the first checked frame")
     parser.add_argument("--skip-angles", action="store_true", help="no fuzzy-angle timing")
     parser.add_argument("--allowable-only", action="store_true", help="only the allowable-error answer")
+    parser.add_argument("--sample", action="store_true", help="only the cost on the whole sample trial")
     args = parser.parse_args()
+    if args.sample:
+        sample_cost()
+        return
     path = VICON / "Movement_trial.c3d"
     if not path.is_file():
         print(f"(skipped: {path} is absent)")
@@ -171,6 +179,36 @@ def main() -> None:
     for side in Side:
         check_leg(ds, part, subject, side, feet[side], args.samples)
     allowable(part, subject, result, feet)
+
+
+def sample_cost() -> None:
+    """Fuzzy moments against fuzzy angles on the whole sample trial (printed, CPU time)."""
+    from _setup import ROOT
+
+    from fuzzygait.markererror.fuzzy_kinetics import contacts_ground
+    from fuzzygait.workflows.angles import run_angles
+    from fuzzygait.workflows.kinetics import trial_kinetics
+
+    data = ROOT / "sample_data"
+    run = run_angles(data / "walking.c3d", static=data / "static.c3d", subject_file=data / "subject.toml")
+    kinetics = trial_kinetics(run)
+    if kinetics is None:
+        print("(the sample trial has no force plates)")
+        return
+    plates = read_force_plates(data / "walking.c3d")
+    trial = run.trial
+    feet = {side: contacts_ground(plates, kinetics.contacts, side, trial.n_frames, trial.rate) for side in Side}
+    print(f"walking.c3d: {trial.n_frames} frames, contacts "
+          f"{[(c.plate, c.side.value if c.side else None, c.first, c.last) for c in kinetics.contacts]}")  # fmt: skip
+    cpu = time.process_time()
+    ds = fuzzy_joint_moments(trial, run.subject, run.result, feet, FuzzyKineticsOptions())
+    moments = time.process_time() - cpu
+    cpu = time.process_time()
+    fuzzy_joint_angles(trial, run.subject, run.result, FuzzyAngleOptions())
+    angles = time.process_time() - cpu
+    print(f"fuzzy moments (18 components): {moments:.1f} s CPU; fuzzy angles (every angle): {angles:.1f} s CPU; "
+          f"moments / angles = {moments / angles:.2f}; undetermined (component, α, frame): "
+          f"{int(ds['undetermined'].sum())}")  # fmt: skip
 
 
 def allowable(part: Trial, subject: object, result: object, feet: dict[Side, FootGround]) -> None:
