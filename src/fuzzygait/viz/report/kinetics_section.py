@@ -46,6 +46,10 @@ class KineticsPage:
     rate: float = 100.0
     normative: bool = False
 
+    def drawn(self) -> bool:
+        """Whether the section draws computed kinetics (some cycle stood on a plate)."""
+        return self.cycles is not None and self.cycles.any()
+
 
 def contact_rows(page: KineticsPage) -> list[list[tuple[str, bool]]]:
     """One table row per contact, in time order: plate, foot, C3D frames, duration (s),

@@ -223,7 +223,6 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
         cycles_caption = " with α-bands; hatched strips along the top of a panel: undetermined there (no band drawn)"
         frame_bands = ", with the α-bands frame by frame"
     assumptions = _assumptions_section(analysis) if fuzzy is not None else ""
-    has_kinetics = kinetics is not None and kinetics.cycles is not None and kinetics.cycles.any()
     body = f"""
 <nav><a href="index.html">← All trials (index)</a> · {nav}</nav>
 <header>
@@ -233,7 +232,7 @@ def trial_page(analysis: TrialAnalysis, data: TrialData, entry: TrialEntry, tabl
 <main>
 {warnings_box(list(warnings))}{lead_box(entry.allowable)}<div class="cols">{kv_table(facts)}
 <div class="box">{'<br>'.join(key)}</div></div>
-{reading_guide(bool(len(data.alphas)), clinical.normative is not None, has_kinetics)}
+{reading_guide(bool(len(data.alphas)), clinical.normative is not None, kinetics is not None and kinetics.drawn())}
 {spatiotemporal_section(clinical)}
 <h2 id="cycles">Kinematics over the gait cycle</h2>
 {bands_text}
