@@ -169,3 +169,28 @@ def test_normative_kinetics_from_two_synthetic_trials(tmp_path: Path) -> None:
     assert data.cycles["KneeMoment_X"] == 4
     mean, sd = data.curve("LNormalisedGRF_Z")  # over stance on the plate: 100 % BW (the spline rings at its ends)
     np.testing.assert_allclose(mean[30:71], 100.0, rtol=1e-3)
+
+
+def test_normative_band_where_the_file_has_the_variable() -> None:
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import to_rgba
+
+    from fuzzygait.gait.normative import NormativeData
+    from fuzzygait.viz.report.figures import NORMATIVE_COLOUR
+
+    mean, sd = np.linspace(-0.2, 0.8, 101), np.full(101, 0.15)
+    normative = NormativeData({"KneeMoment_X": (mean, sd)}, {"KneeMoment_X": 20}, "controls.csv")
+    cycles = KineticCycles({"LKneeMoment_X": np.zeros((2, 101)), "LHipMoment_X": np.zeros((2, 101))}, {"L": 2})
+    figure = kinetics_figure(cycles, "with norms", normative)
+    grey = to_rgba(NORMATIVE_COLOUR)
+
+    def bands(ax) -> list[np.ndarray]:
+        return [c.get_paths()[0].vertices for c in ax.collections
+                if isinstance(c, PolyCollection) and np.allclose(c.get_facecolor()[0], grey)]  # fmt: skip
+
+    knee, hip = figure.axes[len(KINETIC_COLUMNS)], figure.axes[0]
+    assert len(bands(knee)) == 1 and not bands(hip)  # only where the file has the variable
+    vertices = bands(knee)[0]
+    assert np.isclose(vertices[:, 1].max(), (mean + sd).max()) and np.isclose(vertices[:, 1].min(), (mean - sd).min())
+    labels = [t.get_text() for legend in figure.legends for t in legend.get_texts()]
+    assert "normative mean ± 1 SD" in labels
