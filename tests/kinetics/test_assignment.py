@@ -78,7 +78,7 @@ def test_the_override_assigns_a_plate_the_rule_leaves_unused() -> None:
     assert forced == PlateContact(1, 20, 79, Side.LEFT, ContactUse.ASSIGNED)
     ground = contact_ground([plate], [forced], Side.LEFT, 100, 100.0)
     assert np.all(ground.force[21:79, 2] == 700.0) and np.all(ground.force[:20] == 0.0)
-    assert forced.describe() == "the left foot's, as the subject file assigns the plate"
+    assert forced.describe() == "used by the left foot, as the subject file assigns the plate"
 
 
 def test_the_override_excludes_a_plate_and_leaves_the_others_to_the_rule() -> None:
@@ -110,7 +110,7 @@ def test_each_contact_is_a_finding_with_its_frames_and_foot() -> None:
     findings = contact_findings(contacts, first_frame=101)
     assert {f.kind for f in findings} == {FindingKind.FORCE_PLATE_ASSIGNMENT}
     assert [f.message for f in findings] == [
-        "force plate 1, frames 121-180: the left foot's",
+        "force plate 1, frames 121-180: used by the left foot",
         "force plate 2, frames 106-131: not used: right foot off the plate's edge",
         "force plate 3, frames 101-110: not used: no foot over the centre of pressure",
         "force plate 4, frames 102-103: not used: the subject file assigns the plate to no foot",

@@ -234,7 +234,7 @@ def test_the_angles_command_prints_the_kinetics_line(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[1] == "  kinetics (4 force plates, 85 kg): left plate 1, 3; right plate 2, 4"
-    assert "  note: force plate 2, frames 856-951: the right foot's" in lines
+    assert "  note: force plate 2, frames 856-951: used by the right foot" in lines
 
 
 def test_a_side_not_computed_leaves_the_inputs_outputs_in_the_c3d(tmp_path: Path, movement: AnglesRun) -> None:

@@ -141,8 +141,8 @@ class ContactUse(enum.Enum):
 
 #: The text of each reason, ``{foot}`` the foot's word in lower case.
 _REASON_TEXT = {
-    ContactUse.USED: "the {foot} foot's",
-    ContactUse.ASSIGNED: "the {foot} foot's, as the subject file assigns the plate",
+    ContactUse.USED: "used by the {foot} foot",
+    ContactUse.ASSIGNED: "used by the {foot} foot, as the subject file assigns the plate",
     ContactUse.EXCLUDED: "not used: the subject file assigns the plate to no foot",
     ContactUse.NO_FOOT: "not used: no foot over the centre of pressure",
     ContactUse.BOTH_FEET: "not used: both feet over the centre of pressure",
