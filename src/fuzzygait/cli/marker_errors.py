@@ -35,13 +35,47 @@ if TYPE_CHECKING:
     from fuzzygait.markererror.result import MarkerErrorResult
 
 
+#: ``--cop-error`` (mm) and ``--kinetic-tolerance`` (N·m/kg) defaults: the library's
+#: (:data:`fuzzygait.markererror.moment_model.DEFAULT_COP_ERROR_MM`,
+#: :data:`fuzzygait.markererror.fuzzy_kinetics.DEFAULT_TOLERANCE`; a test keeps them equal),
+#: written out so the command line starts without importing the engine.
+DEFAULT_COP_ERROR_MM = 10.0
+DEFAULT_KINETIC_TOLERANCE = 0.1
+
+
 @dataclass(frozen=True)
 class EngineOptions:
-    """How ``uncertainty`` computes the bands: ``--method`` of the marker deviations and
-    ``--workers`` processes."""
+    """How ``uncertainty`` computes the bands: ``--method`` of the marker deviations,
+    ``--workers`` processes, and the opt-in fuzzy kinetics (``--kinetics``, its
+    ``--cop-error`` ball and ``--kinetic-tolerance``)."""
 
     method: Annotated[str, typer.Option(help="cartesian or spherical marker deviations.")] = "cartesian"
     workers: Annotated[int, typer.Option(help="Processes for the angles.")] = 2
+    kinetics: Annotated[
+        bool, typer.Option("--kinetics/--no-kinetics",
+                           help="Also the fuzzy sagittal joint moments and the joint powers of ankle, knee and hip "
+                           "(both sides) when the trial has force plates: the same α-levels and error sources plus "
+                           "a centre-of-pressure error ball per loaded plate; about 14 times the fuzzy angles' time.")
+    ] = False
+    cop_error: Annotated[
+        float, typer.Option("--cop-error", metavar="MM",
+                            help="Centre-of-pressure error ball radius at α = 0, mm, in the plate's plane "
+                            "(with --kinetics; default: corrected plate accuracy, see docs/kinetics.md).")
+    ] = DEFAULT_COP_ERROR_MM
+    kinetic_tolerance: Annotated[
+        float, typer.Option("--kinetic-tolerance", metavar="NM_PER_KG",
+                            help="Moment tolerance, ± N·m/kg, of the allowable-error answer (with --kinetics).")
+    ] = DEFAULT_KINETIC_TOLERANCE
+
+    def check(self) -> None:
+        """One line for a bad ``--workers``, ``--cop-error`` or ``--kinetic-tolerance``."""
+        import math
+
+        _check_workers(self.workers)
+        if not (math.isfinite(self.cop_error) and self.cop_error >= 0):
+            raise FuzzyGaitError(f"--cop-error must be a distance ≥ 0 mm; got {self.cop_error}")
+        if not (math.isfinite(self.kinetic_tolerance) and self.kinetic_tolerance > 0):
+            raise FuzzyGaitError(f"--kinetic-tolerance must be a number of N·m/kg > 0; got {self.kinetic_tolerance}")
 
 
 @dataclass(frozen=True)
@@ -109,14 +143,16 @@ def uncertainty(
             raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
         if rrd is not None and rrd.suffix.lower() != ".rrd":
             raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
-        _check_workers(engine.workers)
+        engine.check()
         check_model(model)
         selected = parse_angles(marker_errors.angle_names)
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
                                               method=engine.method, workers=engine.workers,
                                               tolerance=marker_errors.tolerance_deg(),
-                                              per_source=marker_errors.per_source)  # fmt: skip
+                                              per_source=marker_errors.per_source, kinetics=engine.kinetics,
+                                              cop_error_mm=engine.cop_error,
+                                              kinetic_tolerance=engine.kinetic_tolerance)  # fmt: skip
         inputs = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
                              preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
                              marker_diameter=calibration.marker_diameter, model=model)  # fmt: skip
@@ -134,6 +170,8 @@ def uncertainty(
         out.print(allowable, markup=False)
     if (sources := _per_source_text(analysis.result)) is not None:
         out.print(sources, markup=False)
+    if analysis.result is not None and analysis.result.kinetics is not None:
+        out.print(kinetics_text(analysis.result.kinetics), markup=False)
     out.print(f"wrote {out_file}" + (f" and {rrd}" if rrd is not None else ""), markup=False)
 
 
@@ -203,6 +241,30 @@ def _per_source_text(result: MarkerErrorResult | None) -> str | None:
     title = (f"Widest α = {table.alpha:g} band per error source alone and all together (deg, determined frames; "
              "Fig. 5.9):")  # fmt: skip
     return "\n".join([title, *lines])
+
+
+def kinetics_text(kinetics: xr.Dataset) -> str:
+    """What ``uncertainty --kinetics`` prints: the ΔΦ table of the fuzzy moments and of the
+    powers (as the angles': % of the largest |value|, "undetermined" where a segment frame
+    can flip at that α-level) and each moment's allowable-error sentence."""
+    from fuzzygait.markererror.analysis import relative_envelope_width
+    from fuzzygait.markererror.fuzzy_kinetics import allowable_kinetic_error
+    from fuzzygait.markererror.result import UNITS_COORD, kinetic_part
+
+    lines = []
+    for units in dict.fromkeys(str(u) for u in kinetics[UNITS_COORD].to_numpy()):
+        part = kinetic_part(kinetics, units)
+        what = "joint moments" if units == "N·m/kg" else "joint powers"
+        lines += [f"Fuzzy {what} ({units}), ΔΦ, % of the largest |value|, over the determined frames:",
+                  _delta_phi_text(part, relative_envelope_width(part).rename_axis("output"))]  # fmt: skip
+    tolerance = float(kinetics.attrs["kinetic_tolerance"])
+    moments = kinetic_part(kinetics, "N·m/kg") if "N·m/kg" in kinetics[UNITS_COORD].to_numpy().astype(str) else None
+    if moments is not None:
+        lines.append(f"Allowable error for ±{tolerance:g} N·m/kg (the largest Table 3.1 and centre-of-pressure "
+                     f"balls, among the α-levels, for which the moment stays within it on every frame):")  # fmt: skip
+        lines += [f"  {allowable_kinetic_error(moments, str(c), tolerance).sentence}"
+                  for c in moments["component"].to_numpy()]  # fmt: skip
+    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- report

@@ -2,8 +2,9 @@
 :func:`fuzzygait.markererror.analysis.fuzzy_joint_angles`, layout described there): one
 builder and the read access every consumer (reports, Rerun recordings, comparisons)
 uses, so the layout is defined in this module only; and the whole marker-error result
-(:class:`MarkerErrorResult`: the bands, the allowable-error refinement and the per-source
-bands as three datasets, saved as the root and two groups of one file).
+(:class:`MarkerErrorResult`: the bands, the allowable-error refinement, the per-source
+bands and the fuzzy joint moments and powers as up to four datasets, saved as the root and
+groups of one file).
 """
 
 from __future__ import annotations
@@ -166,6 +167,8 @@ def ball_radius(fuzzy: xr.Dataset) -> xr.DataArray | None:
 LAYOUT_VERSION = 2
 #: The root attribute naming the layout version (absent in version 1).
 LAYOUT_ATTR = "layout_version"
+#: The coordinate of the kinetics group giving each component's units (N·m/kg, W/kg).
+UNITS_COORD = "units"
 
 
 @dataclass(frozen=True)
@@ -179,14 +182,28 @@ class MarkerErrorResult:
             :mod:`fuzzygait.markererror.allowable`), None without one.
         sources: the bands of each error source alone (group ``sources``; layout in
             :mod:`fuzzygait.markererror.per_source`), None without them.
+        kinetics: the fuzzy joint moments and powers (group ``kinetics``, optional in
+            layout version 2: a file without it reads as before, a reader before it
+            ignores it): :func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`'
+            layout, the moments and powers stacked along ``component`` with coordinate
+            ``units (component)`` (``"N·m/kg"``, ``"W/kg"``; :func:`kinetic_part` selects
+            one kind with its units), and the allowable-error answer per component
+            (``allowable_scale``, ``allowable_failing``, ``allowable_marker_mm``,
+            ``allowable_cop_mm``; NaN where not asked; attribute ``kinetic_tolerance``,
+            N·m/kg); None without them.
     """
 
     bands: xr.Dataset
     allowable: xr.Dataset | None = None
     sources: xr.Dataset | None = None
+    kinetics: xr.Dataset | None = None
 
     def __post_init__(self) -> None:
         _require_layout(self.bands)
+        if self.kinetics is not None:
+            _require_layout(self.kinetics)
+            if UNITS_COORD not in self.kinetics.coords:
+                raise ParameterError(f"the kinetics group needs the coordinate {UNITS_COORD!r} (per component)")
         known = set(angle_components(self.bands))
         for name, group in (("allowable", self.allowable), ("sources", self.sources)):
             if group is not None and not {str(c) for c in group["component"].to_numpy()} <= known:
@@ -198,18 +215,23 @@ class MarkerErrorResult:
         root = self.bands.copy()
         root.attrs[LAYOUT_ATTR] = LAYOUT_VERSION
         out = {"/": root}
-        out.update({f"/{k}": v for k, v in (("allowable", self.allowable), ("sources", self.sources)) if v is not None})
+        out.update({f"/{k}": v for k, v in (("allowable", self.allowable), ("sources", self.sources),
+                                            ("kinetics", self.kinetics)) if v is not None})  # fmt: skip
         return out
 
     def parts(self) -> dict[str, xr.Dataset]:
         """Every part in the fuzzy-result schema (for
         :func:`fuzzygait.testing.check_result`): the bands, the per-source bands and, per
-        refined component, its plain and refined levels merged along ``alpha``."""
+        refined component, its plain and refined levels merged along ``alpha``, and the
+        fuzzy moments and powers each in its units (``/kinetics/N·m/kg`` ...)."""
         from fuzzygait.markererror.allowable import refined_components, refined_levels
 
         out = {"/": self.bands}
         if self.sources is not None:
             out["/sources"] = self.sources
+        if self.kinetics is not None:
+            for units in dict.fromkeys(str(u) for u in self.kinetics[UNITS_COORD].to_numpy()):
+                out[f"/kinetics/{units}"] = kinetic_part(self.kinetics, units)
         for component in refined_components(self):
             out[f"/allowable/{component}"] = refined_levels(self, component).assign_attrs(units="deg")
         return out
@@ -239,4 +261,22 @@ def read_marker_result(path: str | os.PathLike[str]) -> MarkerErrorResult:
 
         return from_flat(root)
     root.attrs.pop(LAYOUT_ATTR)
-    return MarkerErrorResult(root, groups.get("/allowable"), groups.get("/sources"))
+    return MarkerErrorResult(root, groups.get("/allowable"), groups.get("/sources"), groups.get("/kinetics"))
+
+
+def kinetic_part(kinetics: xr.Dataset, units: str) -> xr.Dataset:
+    """The components of a kinetics group (:attr:`MarkerErrorResult.kinetics`) in
+    ``units`` (``"N·m/kg"``: the moments, ``"W/kg"``: the powers) as one fuzzy result
+    whose hull states those units (``part.fuzzy.units``).
+
+    Raises:
+        ParameterError: no component is in ``units``.
+    """
+    _require_layout(kinetics)
+    chosen = kinetics[UNITS_COORD].to_numpy().astype(str) == units
+    if not chosen.any():
+        raise ParameterError(f"the kinetics hold no component in {units!r}; they hold "
+                             f"{', '.join(dict.fromkeys(kinetics[UNITS_COORD].to_numpy().astype(str)))}")  # fmt: skip
+    part = kinetics.isel(component=np.flatnonzero(chosen))
+    part["hull"] = part["hull"].assign_attrs(units=units)
+    return part.assign_attrs(units=units)

@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict, Unpack
 
+import numpy as np
 import pandas as pd
 import xarray as xr
 
@@ -28,6 +30,8 @@ from fuzzygait.markererror.analysis import (
     fuzzy_joint_angles,
     relative_envelope_width,
 )
+from fuzzygait.markererror.fuzzy_kinetics import DEFAULT_TOLERANCE as DEFAULT_KINETIC_TOLERANCE
+from fuzzygait.markererror.moment_model import DEFAULT_COP_ERROR_MM
 from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, PerSourceRequest, per_source_bands
 from fuzzygait.markererror.result import MarkerErrorResult, angle_components, save_marker_result
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
@@ -86,6 +90,9 @@ class SettingsArguments(TypedDict, total=False):
     tolerance: float | None
     allowable_angles: Sequence[str] | None
     per_source: bool
+    kinetics: bool
+    cop_error_mm: float
+    kinetic_tolerance: float
 
 
 @dataclass(frozen=True)
@@ -106,6 +113,15 @@ class MarkerErrorSettings:
             hip/knee/ankle flexion components, at the smallest α-level (thesis Fig. 5.9;
             :func:`~fuzzygait.markererror.per_source.per_source_bands`); nothing when one
             source is selected or no flexion component is analysed.
+        kinetics: also the fuzzy sagittal joint moments and the joint powers of ankle,
+            knee and hip, both sides, when the trial has force plates
+            (:func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`, the same
+            α-levels and error sources; about 14 times the fuzzy angles' time on a whole
+            trial, hence off by default).
+        cop_error_mm: the centre-of-pressure error ball's radius at α = 0, mm
+            (:data:`~fuzzygait.markererror.moment_model.DEFAULT_COP_ERROR_MM`).
+        kinetic_tolerance: ± N·m/kg of the moments' allowable-error answer
+            (:func:`~fuzzygait.markererror.fuzzy_kinetics.allowable_kinetic_error`).
     """
 
     error_model: ErrorModel = field(default_factory=ErrorModel)
@@ -117,11 +133,19 @@ class MarkerErrorSettings:
     tolerance: float | None = DEFAULT_TOLERANCE
     allowable_angles: tuple[str, ...] | None = None
     per_source: bool = True
+    kinetics: bool = False
+    cop_error_mm: float = DEFAULT_COP_ERROR_MM
+    kinetic_tolerance: float = DEFAULT_KINETIC_TOLERANCE
 
     def __post_init__(self) -> None:
         if self.tolerance is not None and not (math.isfinite(self.tolerance) and self.tolerance > 0):
             raise ParameterError(f"tolerance must be a finite number of degrees > 0 (or None: no "
                                  f"allowable-error table); got {self.tolerance}")  # fmt: skip
+        if not (math.isfinite(self.cop_error_mm) and self.cop_error_mm >= 0):
+            raise ParameterError(f"the centre-of-pressure error must be a distance >= 0 mm; got {self.cop_error_mm}")
+        if not (math.isfinite(self.kinetic_tolerance) and self.kinetic_tolerance > 0):
+            raise ParameterError(f"the kinetic tolerance must be a finite number of N·m/kg > 0; got "
+                                 f"{self.kinetic_tolerance}")  # fmt: skip
 
     @classmethod
     def create(cls, **arguments: Unpack[SettingsArguments]) -> MarkerErrorSettings:
@@ -135,7 +159,9 @@ class MarkerErrorSettings:
         return cls(error_model, names, tuple(arguments.get("alphas", DEFAULT_ALPHAS)),
                    None if angles is None else tuple(angles), arguments.get("method", "cartesian"),
                    arguments.get("workers"), arguments.get("tolerance", DEFAULT_TOLERANCE),
-                   None if refined is None else tuple(refined), bool(arguments.get("per_source", True)))  # fmt: skip
+                   None if refined is None else tuple(refined), bool(arguments.get("per_source", True)),
+                   bool(arguments.get("kinetics", False)), float(arguments.get("cop_error_mm", DEFAULT_COP_ERROR_MM)),
+                   float(arguments.get("kinetic_tolerance", DEFAULT_KINETIC_TOLERANCE)))  # fmt: skip
 
     def options(self) -> FuzzyAngleOptions:
         """The options of :func:`~fuzzygait.markererror.analysis.fuzzy_joint_angles`."""
@@ -239,6 +265,8 @@ def analyse_run(
         runs, seconds = result.allowable.attrs["runs"], result.allowable.attrs["seconds"]
         notes.append(Finding(FindingKind.ALLOWABLE_ERROR, f"allowable marker error for ±{settings.tolerance:g}°"
                              f"{which}: {runs} refinement runs, {seconds:.1f} s"))  # fmt: skip
+    if settings.kinetics:
+        result = _with_kinetics(run, settings, result, notes)
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable, result)
@@ -311,3 +339,89 @@ def analyse_to_files(
         write_recording(rrd, run.trial, run.result, analysis.fuzzy,
                         kinetics=run.kinetics.data if run.kinetics is not None else None)  # fmt: skip
     return analysis
+
+
+def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings) -> tuple[xr.Dataset | None, Finding]:
+    """The fuzzy sagittal joint moments and the joint powers of ankle, knee and hip of both
+    legs (those the run's kinetics computed) at ``settings``' α-levels, error sources and
+    centre-of-pressure ball, with each moment's allowable-error answer at
+    ``settings.kinetic_tolerance`` (the kinetics group of
+    :class:`~fuzzygait.markererror.result.MarkerErrorResult`), and the note saying what
+    was computed; None and the note's reason when the trial has no force plates or the
+    fuzzy kinetics cannot be computed (the angle bands stand).  Each foot's load is the
+    one the run's kinetics used: the plates read again from the trial's file at the
+    analog rate, each contact of the automatic (or the subject file's) assignment."""
+    from fuzzygait.core.errors import FuzzyGaitError
+    from fuzzygait.core.findings import Severity
+    from fuzzygait.core.names import Side
+    from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
+    from fuzzygait.kinetics.plug_in_gait import JOINTS
+    from fuzzygait.markererror.fuzzy_kinetics import FuzzyKineticsOptions, contacts_ground, fuzzy_joint_moments
+
+    source = run.raw.source
+    if run.kinetics is None or source is None:
+        failed = any(n.kind is FindingKind.KINETICS and n.severity is Severity.WARNING for n in run.notes)
+        why = "the kinetics were not computed" if failed or source is None else f"no force plates in {source.name}"
+        return None, Finding(FindingKind.UNCERTAINTY, f"fuzzy kinetics: not computed ({why})")
+    sides = [side for side in Side if side not in run.kinetics.unavailable]
+    trial = run.trial
+    start = time.perf_counter()
+    try:
+        plates = read_force_plates(source, threshold_n=DEFAULT_THRESHOLD_N)
+        ground = {side: contacts_ground(plates, run.kinetics.contacts, side, trial.n_frames, trial.rate)
+                  for side in sides}  # fmt: skip
+        parts = []
+        for kind, axis in (("Moment", "_X"), ("Power", "_Z")):
+            options = FuzzyKineticsOptions(alphas=settings.alphas, sources=settings.sources,
+                                           error_model=settings.error_model, cop_error_mm=settings.cop_error_mm,
+                                           kind=kind)  # fmt: skip
+            outputs = [f"{side.value}{joint}{kind}{axis}" for side in sides for joint in JOINTS]
+            parts.append(fuzzy_joint_moments(trial, run.subject, run.result, ground, options, outputs))
+    except FuzzyGaitError as exc:
+        return None, Finding(FindingKind.UNCERTAINTY, f"fuzzy kinetics: not computed: {exc}", Severity.WARNING)
+    kinetics = kinetics_group(parts, settings.kinetic_tolerance)
+    kinetics.attrs["trial"] = Path(trial.name).name
+    return kinetics, Finding(FindingKind.UNCERTAINTY, (
+        f"fuzzy kinetics: sagittal moments and powers of {len(sides) * len(JOINTS)} joints with a "
+        f"{settings.cop_error_mm:g} mm centre-of-pressure ball per loaded plate (plates "
+        f"{', '.join(str(p.number) for p in plates if p.number in {c.plate for c in run.kinetics.contacts if c.side})}"
+        f"), {time.perf_counter() - start:.1f} s"))  # fmt: skip
+
+
+def _with_kinetics(run: AnglesRun, settings: MarkerErrorSettings, result: MarkerErrorResult,
+                   notes: list[Finding]) -> MarkerErrorResult:  # fmt: skip
+    """``result`` with the run's fuzzy kinetics (:func:`fuzzy_kinetics`), their note
+    appended to ``notes``."""
+    kinetics, note = fuzzy_kinetics(run, settings)
+    notes.append(note)
+    return replace(result, kinetics=kinetics)
+
+
+def kinetics_group(parts: Sequence[xr.Dataset], tolerance: float) -> xr.Dataset:
+    """The fuzzy moments and the fuzzy powers (``parts``: datasets of
+    :func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`) stacked along
+    ``component`` with their units as a coordinate, and each moment's allowable-error
+    answer at ``tolerance`` N·m/kg (layout: :attr:`MarkerErrorResult.kinetics
+    <fuzzygait.markererror.result.MarkerErrorResult>`)."""
+    from fuzzygait.markererror.fuzzy_kinetics import allowable_kinetic_error
+    from fuzzygait.markererror.moment_model import KINDS
+    from fuzzygait.markererror.result import UNITS_COORD
+
+    units = KINDS["Moment"]
+    stacked = [p.assign_coords({UNITS_COORD: ("component", [str(p.attrs["units"])] * p.sizes["component"])})
+               for p in parts]  # fmt: skip
+    group = xr.concat(stacked, dim="component", data_vars="minimal", coords="minimal", compat="override",
+                      join="outer", combine_attrs="drop_conflicts")  # fmt: skip
+    group["hull"].attrs["units"] = "per component (coordinate 'units')"
+    counts = ("forward_simulations", "node_evaluations", "node_gradients", "seconds")
+    group.attrs.update({key: sum(p.attrs[key] for p in parts) for key in counts})
+    group.attrs.update(output="joint moment and power", units=group["hull"].attrs["units"],
+                       kinetic_tolerance=float(tolerance))  # fmt: skip
+    names = [str(c) for c in group["component"].to_numpy()]
+    answers = {c: allowable_kinetic_error(p, c, tolerance) for p in parts if p.attrs["units"] == units
+               for c in p["component"].to_numpy().astype(str)}  # fmt: skip
+    for var, attr, unit in (("allowable_scale", "scale", "1"), ("allowable_failing", "failing", "1"),
+                            ("allowable_marker_mm", "marker_mm", "mm"), ("allowable_cop_mm", "cop_mm", "mm")):
+        values = [getattr(answers[c], attr) if c in answers else np.nan for c in names]
+        group[var] = ("component", np.asarray(values, dtype=float), {"units": unit})
+    return group
