@@ -20,20 +20,31 @@ acceleration they imply equals this spline's to 1e-4 m/s² RMS on the unfiltered
 ``PiG_Motion-FlatFoot-Full.c3d`` too, and on the filtered trials (where GCV all but
 interpolates) to 1e-4 as well.
 
-``K`` is diagonalised once per trial length (``O(n³)``, cached); each trajectory then
-costs ``O(n²)``.  Natural quintic splines with a knot at every frame: B-splines of
-degree 5, ``s'''`` and ``s''''`` zero at both ends.
+Banded, ``O(n)`` per trajectory and per λ (Reinsch's formulation for degree ``2m - 1``).
+A natural quintic spline's ``s'''`` is a quadratic spline vanishing with its slope at
+both ends: ``s''' = sum_k γ_k N(t - k)``, ``N`` the cardinal quadratic B-spline
+(support three frames, ``k = 0 … n - 4``).  By the Peano kernel of the third difference
+``Δu_j = u_{j+3} - 3u_{j+2} + 3u_{j+1} - u_j = ∫ N(t - j) s'''(t) dt``, i.e. ``Δu = G γ``
+with ``G`` the B-splines' Gram matrix (Toeplitz 11/20, 13/60, 1/120), so
+``K = Δᵀ G⁻¹ Δ``, and the smoothing is one banded SPD system of ``n - 3`` unknowns and
+half-bandwidth 3:
+
+``(G + λ Δ Δᵀ) γ = Δ x``,  ``u = x - λ Δᵀ γ``,  ``n - tr H = λ tr((G + λ Δ Δᵀ)⁻¹ Δ Δᵀ)``.
+
+``A = G + λ Δ Δᵀ`` is Toeplitz, so its inverse's band (all the trace needs) follows from
+its first column ``a = A⁻¹ e_0`` by the Gohberg–Semencul formula
+``A⁻¹ = (L(a) L(a)ᵀ - L(b) L(b)ᵀ) / a_0`` (``L(v)`` lower-triangular Toeplitz with first
+column ``v``, ``b = (0, a_{N-1}, …, a_1)``): band sums are weighted sums of lagged
+products, ``O(n)``.  The grid's λ are solved together as one block-diagonal banded
+system (LAPACK ``pbsv``), in chunks of bounded size.  ``s''`` at a frame follows from
+the second difference of ``u`` and ``γ`` (Peano kernel of the second difference).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import lru_cache
-
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import BSpline
-from scipy.linalg import null_space
+from scipy.linalg.lapack import dpbsv
 
 Array = NDArray[np.float64]
 
@@ -43,75 +54,133 @@ LOG_LAMBDA_RANGE = (8.0, -10.0)
 LOG_LAMBDA_STEP = 0.05
 #: Fewer frames than this: no spline (NaN), as too short to cross-validate.
 MIN_FRAMES = 12
+#: Unknowns (frames × λ) solved in one block-diagonal system: bounds the work memory
+#: (about 80 bytes each) whatever the trial's length.
+CHUNK_UNKNOWNS = 1 << 18
+
+#: Third difference ``Δ`` (frames j … j+3), the Gram matrix ``G`` of the cardinal
+#: quadratic B-splines and ``Δ Δᵀ`` by diagonal offset 0 … 3 (both Toeplitz).
+_DELTA = np.array([-1.0, 3.0, -3.0, 1.0])
+_GRAM = np.array([11.0 / 20.0, 13.0 / 60.0, 1.0 / 120.0, 0.0])
+_DDT = np.array([20.0, -15.0, 6.0, -1.0])
 
 
-@dataclass(frozen=True)
-class _Basis:
-    """The penalty's eigenvectors ``v`` (columns) and eigenvalues ``lam`` (>= 0) for ``n``
-    frames, and ``second_v``: the spline's second derivative at the frames (per frame²)
-    of each eigenvector's node values."""
+def _peano_second() -> Array:
+    """Weights ``w_d`` (d = -3 … 0) with ``s''(i) = Δ²u_i - sum_d w_d γ_{i+d}`` at an inner
+    frame ``i``: ``Δ²u_i = ∫ hat(t - i) s''(t) dt`` and ``s''(t) = s''(i) + ∫_i^t s'''``,
+    integrated exactly (3-point Gauss–Legendre on each frame interval: quartic pieces)."""
+    nodes, weights = np.polynomial.legendre.leggauss(3)
 
-    v: Array
-    lam: Array
-    second_v: Array
+    def bspline(t: Array) -> Array:  # cardinal quadratic B-spline on [0, 3]
+        return np.where((t >= 0) & (t < 1), t**2 / 2, np.where((t >= 1) & (t < 2), (-2 * t**2 + 6 * t - 3) / 2,
+                        np.where((t >= 2) & (t <= 3), (3 - t) ** 2 / 2, 0.0)))  # fmt: skip
 
-
-@lru_cache(maxsize=8)
-def _basis(n: int) -> _Basis:
-    """:class:`_Basis` for ``n`` frames (time in frames)."""
-    t = np.arange(n, dtype=float)
-    knots = np.r_[[0.0] * 5, t, [t[-1]] * 5]
-    size = n + 4
-    spline = BSpline(knots, np.eye(size), 5)
-    values = spline(t)
-    ends = np.array([t[0], t[-1]])
-    natural = np.vstack([spline.derivative(3)(ends), spline.derivative(4)(ends)])
-    null = null_space(natural)  # (size, n): the natural splines' coefficients
-    nodes, weights = np.polynomial.legendre.leggauss(3)  # exact for the quartic (s''')²
-    points = (t[:-1, None] + 0.5 + 0.5 * nodes[None, :]).ravel()
-    third = spline.derivative(3)(points) @ null
-    penalty = third.T @ (np.tile(0.5 * weights, n - 1)[:, None] * third)
-    to_nodes_inverse = np.linalg.inv(values @ null)  # node values -> natural-spline coordinates
-    k = to_nodes_inverse.T @ penalty @ to_nodes_inverse
-    lam, v = np.linalg.eigh(0.5 * (k + k.T))
-    second = spline.derivative(2)(t) @ null @ to_nodes_inverse
-    return _Basis(v, np.clip(lam, 0.0, None), second @ v)
+    out = np.zeros(4)
+    for left in (-1.0, 0.0):  # the frame intervals [i-1, i] and [i, i+1], i = 0
+        tau = left + 0.5 + 0.5 * nodes
+        kernel = np.where(tau >= 0, (1 - tau) ** 2 / 2, -((1 + tau) ** 2) / 2)  # ∫ hat · 1[τ between i and t]
+        for d in range(-3, 1):
+            out[d + 3] += float(np.sum(0.5 * weights * kernel * bspline(tau - d)))
+    return out
 
 
-def clear_basis_cache() -> None:
-    """Forget the cached eigenbases (to time their construction for a new trial length)."""
-    _basis.cache_clear()
+_SECOND = _peano_second()
+
+
+def _solve_grid(x: Array, lam: Array) -> tuple[Array, Array]:
+    """For the ``(n, c)`` samples ``x`` and each of the ``L`` values ``lam``: ``γ``
+    (``(L, n - 3, c)``) and the trace ``n - tr H`` (``(L,)``), by one block-diagonal banded
+    solve (right-hand sides ``Δx`` and ``e_0``)."""
+    size, count, columns = len(x) - 3, len(lam), x.shape[1] + 1
+    band = np.empty((count * size, 4))  # LAPACK's (4, count·size) upper band, Fortran order
+    blocks = band.reshape(count, size, 4)
+    for d in range(4):  # row 3 - d holds the d-th superdiagonal
+        blocks[:, :, 3 - d] = _GRAM[d] + lam[:, None] * _DDT[d]
+        blocks[:, :d, 3 - d] = 0.0  # no coupling between the blocks
+    rhs = np.zeros((columns, count, size))  # Fortran order (count·size, columns)
+    rhs[:-1] = (np.lib.stride_tricks.sliding_window_view(x, 4, axis=0) @ _DELTA).T[:, None, :]  # Δx
+    rhs[-1, :, 0] = 1.0
+    _, solution, info = dpbsv(band.T, rhs.reshape(columns, -1).T, lower=0, overwrite_ab=1, overwrite_b=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"banded smoothing system not positive definite (LAPACK info {info})")
+    solution = solution.T.reshape(columns, count, size)
+    a = solution[-1]
+    b = np.zeros_like(a)
+    b[:, 1:] = a[:, :0:-1]
+    trace = np.zeros(count)
+    for d in range(4):  # sum_i (A⁻¹)_{i,i+d} = sum_j (size - d - j) (a_j a_{j+d} - b_j b_{j+d}) / a_0
+        weight = np.arange(size - d, 0, -1, dtype=float)
+        lagged = a[:, : size - d] * a[:, d:] - b[:, : size - d] * b[:, d:]
+        trace += (1.0 if d == 0 else 2.0) * _DDT[d] * (lagged @ weight)
+    return np.moveaxis(solution[:-1], 0, -1), lam * trace / a[:, 0]
+
+
+def gcv_values(x: Array, log_lambda: Array) -> Array:
+    """GCV(λ) of the ``(n, c)`` samples ``x`` at each log10 λ of ``log_lambda``, solved in
+    chunks of at most :data:`CHUNK_UNKNOWNS` unknowns."""
+    lam = 10.0 ** np.atleast_1d(np.asarray(log_lambda, dtype=float))
+    step = max(1, CHUNK_UNKNOWNS // len(x))
+    out = np.empty(len(lam))
+    for start in range(0, len(lam), step):
+        part = lam[start : start + step]
+        gamma, shrink = _solve_grid(x, part)
+        residual = _transpose_delta(gamma) * part[:, None, None]  # x - u
+        out[start : start + step] = (residual**2).sum(axis=(1, 2)) / np.maximum(shrink, 1e-300) ** 2
+    return out
+
+
+def _transpose_delta(gamma: Array) -> Array:
+    """``Δᵀ γ`` along axis -2 (``n - 3`` → ``n`` frames)."""
+    out = np.zeros(gamma.shape[:-2] + (gamma.shape[-2] + 3, gamma.shape[-1]))
+    for k, weight in enumerate(_DELTA):
+        out[..., k : k + gamma.shape[-2], :] += weight * gamma
+    return out
 
 
 def gcv_log_lambda(x: Array) -> float:
-    """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN):
-    the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s heavy
-    smoothing downwards (the grid's last λ without one), refined to 1e-3 by
-    golden-section search between the grid's neighbours."""
-    basis = _basis(len(x))
-    projected_sq = ((basis.v.T @ x) ** 2).sum(axis=1)
-
-    def gcv(log_lambda: Array) -> Array:
-        lam = 10.0 ** np.asarray(log_lambda, dtype=float)[..., None] * basis.lam
-        shrink = lam / (1.0 + lam)  # 1 - H's eigenvalues; their sum is n - tr H
-        return ((shrink**2) @ projected_sq) / np.maximum(shrink.sum(axis=-1), 1e-300) ** 2
-
+    """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN,
+    ``n >= 4``): the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s
+    heavy smoothing downwards (the grid's last λ without one), refined to 1e-3 by
+    golden-section search between the grid's neighbours.  The grid is evaluated from the
+    top in chunks, stopping once its first local minimum is known."""
+    x = np.asarray(x, dtype=float).reshape(len(x), -1)
     top, bottom = LOG_LAMBDA_RANGE
     grid = np.arange(top, bottom - 1e-9, -LOG_LAMBDA_STEP)
-    values = gcv(grid)
-    minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
-    if not len(minima):
+    step = max(8, CHUNK_UNKNOWNS // len(x))
+    values = np.empty(0)
+    best = -1
+    while best < 0 and len(values) < len(grid):
+        values = np.r_[values, gcv_values(x, grid[len(values) : len(values) + step])]
+        minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
+        best = int(minima[0]) if len(minima) else -1
+    if best < 0:
         return float(grid[-1])
-    best = int(minima[0])
     lo, hi = float(grid[best + 1]), float(grid[best - 1])
     ratio = (np.sqrt(5.0) - 1.0) / 2.0
     while hi - lo > 1e-3:
         a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-        if gcv(np.array(a)) <= gcv(np.array(b)):
+        if gcv_values(x, np.array([a, b])) @ np.array([1.0, -1.0]) <= 0.0:
             hi = b
         else:
             lo = a
     return 0.5 * (lo + hi)
+
+
+def _second_derivative(x: Array, log_lambda: float) -> Array:
+    """``(n, c)``: the smoothing spline's second derivative (per frame²) at every frame of
+    the ``(n, c)`` samples ``x`` for the given log10 λ."""
+    lam = 10.0**log_lambda
+    gamma = _solve_grid(x, np.array([lam]))[0][0]  # (n - 3, c)
+    u = x - lam * _transpose_delta(gamma)
+    out = np.empty_like(x)
+    inner = u[2:] - 2.0 * u[1:-1] + u[:-2]  # Δ²u at frames 1 … n - 2
+    padded = np.concatenate([np.zeros((3, x.shape[1])), gamma, np.zeros((2, x.shape[1]))])  # γ_{k} at k + 3
+    for d, weight in enumerate(_SECOND):  # γ_{i+d-3} for inner frame i = 1 … n - 2
+        inner -= weight * padded[1 + d : len(x) - 1 + d]
+    out[1:-1] = inner
+    out[0] = inner[0] - gamma[0] / 6.0  # s''(0) = s''(1) - ∫_0^1 s''' (only γ_0 there: ∫ = 1/6)
+    out[-1] = inner[-1] + gamma[-1] / 6.0
+    return out
 
 
 def spline_second_derivative(x: Array, rate: float) -> Array:
@@ -128,8 +197,6 @@ def spline_second_derivative(x: Array, rate: float) -> Array:
         if stop - start < MIN_FRAMES:
             continue
         run = x[start:stop].reshape(stop - start, -1)
-        basis = _basis(stop - start)
-        lam = 10.0 ** gcv_log_lambda(run) * basis.lam
-        smoothed = (basis.v.T @ run) / (1.0 + lam)[:, None]
-        out[start:stop] = (basis.second_v @ smoothed * rate**2).reshape(x[start:stop].shape)
+        second = _second_derivative(run, gcv_log_lambda(run))
+        out[start:stop] = (second * rate**2).reshape(x[start:stop].shape)
     return out
