@@ -42,6 +42,7 @@ from fuzzygait.mocap.gaps import Gap
 from fuzzygait.mocap.sanity import check_trial
 from fuzzygait.workflows.crosscheck import CrossCheck, check_run
 from fuzzygait.workflows.kinetics import LONGEST_KINETIC_NAME, TrialKinetics, run_kinetics
+from fuzzygait.workflows.plate_events import with_plate_events
 from fuzzygait.workflows.preprocessing import (  # noqa: F401  (re-exported: the pipeline's options)
     DEFAULT_PREPROCESSING,
     Preprocessing,
@@ -252,7 +253,8 @@ def run_angles(
         notes.append(Finding(FindingKind.EVENTS, f"gait events {source}"))
     run = AnglesRun(raw, trial, subject, result, gaps, events, source, notes, clusters, warnings, check, diameter)
     run.kinetics, kinetic_notes = run_kinetics(run, subject_file)
-    run.notes += kinetic_notes
+    run.events, run.event_source, event_notes = with_plate_events(run)
+    run.notes += kinetic_notes + event_notes
     return run
 
 

@@ -42,6 +42,7 @@ from fuzzygait.kinetics.assignment import (
 from fuzzygait.kinetics.ground import frame_means, samples_per_frame
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
 from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait_kinetics
+from fuzzygait.workflows.plate_events import contact_edges
 
 if TYPE_CHECKING:
     from fuzzygait.workflows.angles import AnglesRun
@@ -103,12 +104,16 @@ class TrialKinetics:
         contacts: every contact of every plate, the foot it went to or why not used.
         findings: the plates' findings, one per contact, the sides not computed.
         unavailable: side -> why its kinetics were not computed.
+        edges: per contact (as ``contacts``), when it began and ended, s on the C3D clock,
+            from the plate's analog contact (NaN: with the trial's first or last frame;
+            :func:`~fuzzygait.workflows.plate_events.contact_edges`).
     """
 
     data: xr.Dataset
     contacts: tuple[PlateContact, ...] = ()
     findings: tuple[Finding, ...] = ()
     unavailable: Mapping[Side, str] = field(default_factory=dict)
+    edges: tuple[tuple[float, float], ...] = ()
 
     @property
     def body_mass(self) -> float:
@@ -312,8 +317,9 @@ def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *
             findings.append(Finding(FindingKind.KINETICS, f"the {side.word.lower()} foot is on no force plate: its "
                                     "moments hold no ground reaction (right in swing only)", Severity.WARNING,
                                     side=side.word.lower()))  # fmt: skip
+    edges = tuple(contact_edges(plates, contacts, trial.rate, trial.first_frame))
     return TrialKinetics(_dataset(out, trial, plates, run.subject.body_mass), tuple(contacts), tuple(findings),
-                         dict(out.unavailable))  # fmt: skip
+                         dict(out.unavailable), edges)  # fmt: skip
 
 
 def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = None,
