@@ -23,7 +23,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import read_subject_toml
 from fuzzygait.kinematics import compute_lower_body
-from fuzzygait.kinetics.inverse_dynamics import Load
+from fuzzygait.kinetics.inverse_dynamics import ComDerivative, Load
 from fuzzygait.kinetics.plug_in_gait import JOINTS, plug_in_gait_kinetics
 from fuzzygait.markererror.fuzzy_kinetics import (
     FootGround,
@@ -40,6 +40,9 @@ from support import SAMPLE_DATA, shared_file
 #: A level plate whose x, y run along the laboratory's and whose normal points down.
 LEVEL_PLATE = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
 FORCE_N = 700.0
+#: The model's centre-of-mass derivative (five-point, nine-frame windows): what its zero
+#: deviation is compared with (plug_in_gait_kinetics defaults to the GCV spline).
+FIVE = ComDerivative.FIVE_POINT
 
 
 def ground_under(trial: Trial, side: Side, force: np.ndarray) -> FootGround:
@@ -97,7 +100,7 @@ def test_static_foot_band_is_the_cop_ball_times_the_force(standing: tuple[Trial,
         np.testing.assert_allclose(hull.sel(alpha=alpha).to_numpy(), np.tile(expected[:, None], (1, 3)), rtol=1e-9)
     # the same M as the Plug-in Gait kinetics (N·mm/kg)
     load = Load(np.zeros((13, 3)), ground.force, ground.moment)
-    nexus_like = plug_in_gait_kinetics(result, trial, subject, {Side.RIGHT: load}).outputs["RAnkleMoment"]
+    nexus_like = plug_in_gait_kinetics(result, trial, subject, {Side.RIGHT: load}, FIVE).outputs["RAnkleMoment"]
     np.testing.assert_allclose(nexus_like[frames, 0] * 1e-3, measured, rtol=1e-9)
     # the allowable answer: half-width s x half <= 0.1 N·m/kg on the levels 0, 0.5, 1
     answer = allowable_kinetic_error(ds, "RAnkleMoment_X", tolerance=0.6 * half)
@@ -120,7 +123,8 @@ def test_zero_deviation_is_the_plug_in_gait_kinetics(sample: tuple[Trial, object
     values = model.evaluate(np.zeros(model.n_parameters)).values.reshape(model.blocks, -1)
     ground = ground_under(trial, Side.RIGHT, np.array([40.0, -15.0, FORCE_N]))
     load = Load(np.zeros((trial.n_frames, 3)), ground.force, ground.moment)
-    outputs = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {Side.RIGHT: load}).outputs
+    result = compute_lower_body(trial, subject)
+    outputs = plug_in_gait_kinetics(result, trial, subject, {Side.RIGHT: load}, FIVE).outputs
     scale = 1e-3 if kind == "Moment" else 1.0
     for b, (joint, axis) in enumerate(model.components):
         expected = outputs["R" + joint + kind][model.frames, axis] * scale
@@ -235,7 +239,7 @@ def test_movement_trial_plates_give_the_nexus_matched_kinetics() -> None:
                                                           trial.rate).plate, trial.rate) for side in Side}  # fmt: skip
     assert [p.number for p in ground[Side.LEFT].plates] == [1] and [p.number for p in ground[Side.RIGHT].plates] == [4]
     loads = {side: Load(np.zeros((trial.n_frames, 3)), g.force, g.moment) for side, g in ground.items()}
-    outputs = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, loads).outputs
+    outputs = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, loads, FIVE).outputs
     frames = np.arange(4, trial.n_frames - 4)
     for side, g in ground.items():
         np.testing.assert_array_equal(sum(p.force for p in g.plates), g.force)

@@ -19,8 +19,10 @@ Derivatives as Nexus' Plug-in Gait takes them (found on the shared Nexus trials,
 quintic smoothing spline, its smoothing chosen by generalised cross-validation
 (:attr:`ComDerivative.GCV_SPLINE`, :mod:`fuzzygait.kinetics.gcv_spline`), or by the
 five-point central difference of :func:`derivative` applied twice
-(:attr:`ComDerivative.FIVE_POINT`, the default: the same to 0.003 m/s² on filtered
-markers, local, and 0.2-1 m/s² apart on unfiltered ones); the angular velocity from the
+(:attr:`ComDerivative.FIVE_POINT`, these functions' default, as the fuzzy kinetics'
+nine-frame windows: the same to 0.003 m/s² on filtered markers, local, and 0.2-1 m/s²
+apart on unfiltered ones; :func:`fuzzygait.kinetics.plug_in_gait.plug_in_gait_kinetics`
+defaults to the spline); the angular velocity from the
 rotations two frames either side (:func:`angular_velocity`) and the angular acceleration
 by the same two-frame central difference of the angular velocity (:func:`wide_difference`).
 Four frames are lost at each end, as Nexus does.

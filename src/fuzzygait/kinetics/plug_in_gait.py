@@ -127,7 +127,7 @@ def normalised_grf(force: Array, progression: Array, side: Side, body_mass: floa
 
 
 def side_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, side: Side, ground: Load,
-                  out: KineticsResult, method: ComDerivative = ComDerivative.FIVE_POINT) -> None:  # fmt: skip
+                  out: KineticsResult, method: ComDerivative = ComDerivative.GCV_SPLINE) -> None:  # fmt: skip
     """One side's outputs into ``out`` (see :func:`plug_in_gait_kinetics`)."""
     mass = subject.body_mass
     segments = leg_segments(result, side, mass, foot_length(trial, side, subject.marker_radius))
@@ -149,7 +149,7 @@ def side_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, s
 
 
 def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, ground: Mapping[Side, Load],
-                          com_derivative: ComDerivative = ComDerivative.FIVE_POINT) -> KineticsResult:  # fmt: skip
+                          com_derivative: ComDerivative = ComDerivative.GCV_SPLINE) -> KineticsResult:  # fmt: skip
     """Plug-in Gait joint kinetics of both legs.
 
     Args:
@@ -160,9 +160,11 @@ def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParam
             :func:`fuzzygait.kinetics.ground.plate_load`; zero off the ground); a side
             absent here is taken as never on a plate (swing-only kinetics).
         com_derivative: how the segments' centres of mass are differentiated:
-            :attr:`~fuzzygait.kinetics.inverse_dynamics.ComDerivative.GCV_SPLINE` as Nexus
-            (agrees on unfiltered markers too), ``FIVE_POINT`` (the default; local, as the
-            fuzzy kinetics' nine-frame windows).
+            :attr:`~fuzzygait.kinetics.inverse_dynamics.ComDerivative.GCV_SPLINE` (the
+            default) as Nexus (the quintic GCV smoothing spline through each trajectory;
+            agrees with Nexus on unfiltered markers too), ``FIVE_POINT`` (local, nine
+            frames, as the fuzzy kinetics' windows; the same within 0.003 m/s² on filtered
+            markers, 0.2-1 m/s² apart on unfiltered ones).
 
     Returns:
         The outputs in Nexus' names and units; a side whose segments are not computed

@@ -40,6 +40,7 @@ from fuzzygait.kinetics.assignment import (
     over_plate,
 )
 from fuzzygait.kinetics.ground import frame_means, samples_per_frame
+from fuzzygait.kinetics.inverse_dynamics import ComDerivative
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
 from fuzzygait.kinetics.plug_in_gait import JOINTS, KineticsResult, plug_in_gait_kinetics
 from fuzzygait.workflows.plate_events import contact_edges
@@ -303,7 +304,7 @@ def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *
     override = read_force_plate_assignment(subject_file) if subject_file is not None else {}
     contacts = automatic_assignment(plates, _feet(trial), trial.rate, threshold_n, override=override)
     ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
-    out = plug_in_gait_kinetics(run.result, trial, run.subject, ground)
+    out = plug_in_gait_kinetics(run.result, trial, run.subject, ground, ComDerivative.GCV_SPLINE)  # as Nexus
     findings = [f for p in plates for f in p.findings] + contact_findings(contacts, trial.first_frame)
     if of_kind(run.raw.notes, FindingKind.UNITS) and not any(f.severity is Severity.WARNING
                                                              for f in of_kind(run.raw.notes, FindingKind.UNITS)):
