@@ -6,6 +6,9 @@
   joint centre, marker placement;
 * :mod:`~fuzzygait.synthetic.generate` -- trials, noise/gaps, the text of their files;
 * :mod:`~fuzzygait.synthetic.sample_data` -- the ``sample_data`` folder and its README;
+* :mod:`~fuzzygait.synthetic.force_plates` -- two type-2 force plates under the sample
+  walking trial's feet (synthetic, plausible loads, not measured) and the writer that adds
+  plates to a C3D file;
 * :mod:`~fuzzygait.synthetic.pig_options` -- opt-in knee alignment device, medial
   malleoli, misplaced wands and tibial torsion with known values;
 * :mod:`~fuzzygait.synthetic.cgm24` -- CGM 2.4 sessions (thigh/shank clusters, medial
