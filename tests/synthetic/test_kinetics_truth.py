@@ -223,5 +223,8 @@ def test_powers_are_zero_and_the_ground_reaction_is_the_plates(case, side):
     data = run.kinetics.data.sel(side=side)
     power = data["power"].values[:, INNER]  # W/kg
     assert np.all(np.isfinite(power)) and np.max(np.abs(power)) < 1e-9
-    truth = _statics(run, trial, recordings, side)["GroundForce"]
+    truth = _statics(run, trial, recordings, side)["GroundForce"]  # N/kg, laboratory frame
     _assert_relative(data["ground_force"].values.T[INNER], truth[INNER])
+    # % body weight along the progression frame (the pose faces +X): forward, medial, up
+    medial = -1.0 if side == "L" else 1.0
+    _assert_relative(data["grf"].values.T[INNER], truth[INNER] * [1.0, medial, 1.0] * 100.0 / G)
