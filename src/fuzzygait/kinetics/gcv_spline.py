@@ -36,15 +36,19 @@ its first column ``a = A⁻¹ e_0`` by the Gohberg–Semencul formula
 ``A⁻¹ = (L(a) L(a)ᵀ - L(b) L(b)ᵀ) / a_0`` (``L(v)`` lower-triangular Toeplitz with first
 column ``v``, ``b = (0, a_{N-1}, …, a_1)``): band sums are weighted sums of lagged
 products, ``O(n)``.  The grid's λ are solved together as one block-diagonal banded
-system (LAPACK ``pbsv``), in chunks of bounded size.  ``s''`` at a frame follows from
+system (LAPACK ``pbtrf``/``pbtrs``), in chunks of bounded size; for trials of up to
+729 frames the whole grid's factors are cached per length (shared by every trajectory).  ``s''`` at a frame follows from
 the second difference of ``u`` and ``γ`` (Peano kernel of the second difference).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg.lapack import dpbsv
+from scipy.linalg.lapack import dpbtrf, dpbtrs
 
 Array = NDArray[np.float64]
 
@@ -57,6 +61,8 @@ MIN_FRAMES = 12
 #: Unknowns (frames × λ) solved in one block-diagonal system: bounds the work memory
 #: (about 80 bytes each) whatever the trial's length.
 CHUNK_UNKNOWNS = 1 << 18
+#: The search grid: log10 λ from the range's top down, in steps of LOG_LAMBDA_STEP.
+_GRID = np.arange(LOG_LAMBDA_RANGE[0], LOG_LAMBDA_RANGE[1] - 1e-9, -LOG_LAMBDA_STEP)
 
 #: Third difference ``Δ`` (frames j … j+3), the Gram matrix ``G`` of the cardinal
 #: quadratic B-splines and ``Δ Δᵀ`` by diagonal offset 0 … 3 (both Toeplitz).
@@ -87,24 +93,31 @@ def _peano_second() -> Array:
 _SECOND = _peano_second()
 
 
-def _solve_grid(x: Array, lam: Array) -> tuple[Array, Array]:
-    """For the ``(n, c)`` samples ``x`` and each of the ``L`` values ``lam``: ``γ``
-    (``(L, n - 3, c)``) and the trace ``n - tr H`` (``(L,)``), by one block-diagonal banded
-    solve (right-hand sides ``Δx`` and ``e_0``)."""
-    size, count, columns = len(x) - 3, len(lam), x.shape[1] + 1
-    band = np.empty((count * size, 4))  # LAPACK's (4, count·size) upper band, Fortran order
+@dataclass(frozen=True)
+class _Factor:
+    """The Cholesky factors of the blocks ``A = G + λ ΔΔᵀ`` of ``n`` frames for ``L``
+    values λ (LAPACK's upper band, ``(4, L·(n - 3))``, the blocks one after the other) and
+    ``n - tr H`` per λ (``(L,)``)."""
+
+    cholesky: Array
+    shrink: Array
+
+
+def _factor(n: int, lam: Array) -> _Factor:
+    """:class:`_Factor` of ``n`` frames for the values ``lam``: one block-diagonal banded
+    Cholesky (LAPACK ``pbtrf``); the trace from ``a = A⁻¹ e_0`` (Gohberg–Semencul)."""
+    size, count = n - 3, len(lam)
+    band = np.empty((count * size, 4))  # Fortran order (4, count·size)
     blocks = band.reshape(count, size, 4)
     for d in range(4):  # row 3 - d holds the d-th superdiagonal
         blocks[:, :, 3 - d] = _GRAM[d] + lam[:, None] * _DDT[d]
         blocks[:, :d, 3 - d] = 0.0  # no coupling between the blocks
-    rhs = np.zeros((columns, count, size))  # Fortran order (count·size, columns)
-    rhs[:-1] = (np.lib.stride_tricks.sliding_window_view(x, 4, axis=0) @ _DELTA).T[:, None, :]  # Δx
-    rhs[-1, :, 0] = 1.0
-    _, solution, info = dpbsv(band.T, rhs.reshape(columns, -1).T, lower=0, overwrite_ab=1, overwrite_b=1)
+    cholesky, info = dpbtrf(band.T, lower=0, overwrite_ab=1)
     if info != 0:
         raise np.linalg.LinAlgError(f"banded smoothing system not positive definite (LAPACK info {info})")
-    solution = solution.T.reshape(columns, count, size)
-    a = solution[-1]
+    first = np.zeros((count, size))
+    first[:, 0] = 1.0
+    a = _solve(cholesky, first[None])[0]
     b = np.zeros_like(a)
     b[:, 1:] = a[:, :0:-1]
     trace = np.zeros(count)
@@ -112,7 +125,31 @@ def _solve_grid(x: Array, lam: Array) -> tuple[Array, Array]:
         weight = np.arange(size - d, 0, -1, dtype=float)
         lagged = a[:, : size - d] * a[:, d:] - b[:, : size - d] * b[:, d:]
         trace += (1.0 if d == 0 else 2.0) * _DDT[d] * (lagged @ weight)
-    return np.moveaxis(solution[:-1], 0, -1), lam * trace / a[:, 0]
+    return _Factor(cholesky, lam * trace / a[:, 0])
+
+
+def _solve(cholesky: Array, rhs: Array) -> Array:
+    """``A⁻¹ rhs`` per block: ``rhs`` ``(c, L, n - 3)``, the same shape back (``pbtrs``)."""
+    columns = len(rhs)
+    solution, info = dpbtrs(cholesky, np.ascontiguousarray(rhs).reshape(columns, -1).T, lower=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"banded smoothing solve failed (LAPACK info {info})")
+    return np.asarray(solution).T.reshape(rhs.shape)
+
+
+@lru_cache(maxsize=4)
+def _grid_factor(n: int) -> _Factor:
+    """:class:`_Factor` of the whole search grid for ``n`` frames (the same for every
+    trajectory of that length; cached only while ``361·(n - 3) <= CHUNK_UNKNOWNS``)."""
+    return _factor(n, 10.0**_GRID)
+
+
+def _gcv_of(x: Array, lam: Array, factor: _Factor) -> Array:
+    """GCV of the ``(n, c)`` samples ``x`` at the values ``lam`` of ``factor``."""
+    dx = (np.lib.stride_tricks.sliding_window_view(x, 4, axis=0) @ _DELTA).T  # (c, n - 3)
+    gamma = _solve(factor.cholesky, np.broadcast_to(dx[:, None, :], (x.shape[1], len(lam), len(x) - 3)))
+    residual = _transpose_delta(gamma) * lam[:, None]  # x - u: (c, L, n)
+    return (residual**2).sum(axis=(0, 2)) / np.maximum(factor.shrink, 1e-300) ** 2
 
 
 def gcv_values(x: Array, log_lambda: Array) -> Array:
@@ -123,17 +160,15 @@ def gcv_values(x: Array, log_lambda: Array) -> Array:
     out = np.empty(len(lam))
     for start in range(0, len(lam), step):
         part = lam[start : start + step]
-        gamma, shrink = _solve_grid(x, part)
-        residual = _transpose_delta(gamma) * part[:, None, None]  # x - u
-        out[start : start + step] = (residual**2).sum(axis=(1, 2)) / np.maximum(shrink, 1e-300) ** 2
+        out[start : start + step] = _gcv_of(x, part, _factor(len(x), part))
     return out
 
 
 def _transpose_delta(gamma: Array) -> Array:
-    """``Δᵀ γ`` along axis -2 (``n - 3`` → ``n`` frames)."""
-    out = np.zeros(gamma.shape[:-2] + (gamma.shape[-2] + 3, gamma.shape[-1]))
+    """``Δᵀ γ`` along the last axis (``n - 3`` → ``n`` frames)."""
+    out = np.zeros(gamma.shape[:-1] + (gamma.shape[-1] + 3,))
     for k, weight in enumerate(_DELTA):
-        out[..., k : k + gamma.shape[-2], :] += weight * gamma
+        out[..., k : k + gamma.shape[-1]] += weight * gamma
     return out
 
 
@@ -141,14 +176,17 @@ def gcv_log_lambda(x: Array) -> float:
     """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN,
     ``n >= 4``): the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s
     heavy smoothing downwards (the grid's last λ without one), refined to 1e-3 by
-    golden-section search between the grid's neighbours.  The grid is evaluated from the
-    top in chunks, stopping once its first local minimum is known."""
+    golden-section search between the grid's neighbours.  Short trajectories: the whole
+    grid at once, its factors cached per length; long ones: from the top in chunks,
+    stopping once the first local minimum is known."""
     x = np.asarray(x, dtype=float).reshape(len(x), -1)
-    top, bottom = LOG_LAMBDA_RANGE
-    grid = np.arange(top, bottom - 1e-9, -LOG_LAMBDA_STEP)
+    grid = _GRID
     step = max(8, CHUNK_UNKNOWNS // len(x))
     values = np.empty(0)
-    best = -1
+    if len(grid) * (len(x) - 3) <= CHUNK_UNKNOWNS:  # short: the grid's factors cached per length
+        values = _gcv_of(x, 10.0**grid, _grid_factor(len(x)))
+    minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
+    best = int(minima[0]) if len(minima) else -1
     while best < 0 and len(values) < len(grid):
         values = np.r_[values, gcv_values(x, grid[len(values) : len(values) + step])]
         minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
@@ -170,8 +208,9 @@ def _second_derivative(x: Array, log_lambda: float) -> Array:
     """``(n, c)``: the smoothing spline's second derivative (per frame²) at every frame of
     the ``(n, c)`` samples ``x`` for the given log10 λ."""
     lam = 10.0**log_lambda
-    gamma = _solve_grid(x, np.array([lam]))[0][0]  # (n - 3, c)
-    u = x - lam * _transpose_delta(gamma)
+    dx = (np.lib.stride_tricks.sliding_window_view(x, 4, axis=0) @ _DELTA).T  # (c, n - 3)
+    gamma = _solve(_factor(len(x), np.array([lam])).cholesky, dx[:, None, :])[:, 0].T  # (n - 3, c)
+    u = x - lam * _transpose_delta(gamma.T).T
     out = np.empty_like(x)
     inner = u[2:] - 2.0 * u[1:-1] + u[:-2]  # Δ²u at frames 1 … n - 2
     padded = np.concatenate([np.zeros((3, x.shape[1])), gamma, np.zeros((2, x.shape[1]))])  # γ_{k} at k + 3
