@@ -12,7 +12,7 @@ Runs:
   the centres of mass differentiated as Nexus does (quintic GCV smoothing spline,
   ``ComDerivative.GCV_SPLINE``);
 * ``five-point``: the same with the five-point differences (``ComDerivative.FIVE_POINT``,
-  plug_in_gait_kinetics' default);
+  local, as the fuzzy kinetics' nine-frame windows);
 * ``contact``: only the samples above the reader's contact threshold (10 N);
 * ``automatic assignment``: the contacts (10 N) assigned by our own rule
   (:func:`fuzzygait.kinetics.assignment.automatic_assignment`), as the pipeline will run.
