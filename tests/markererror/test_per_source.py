@@ -205,7 +205,7 @@ def test_progress_of_the_per_source_runs(sparse_run: AnglesRun, options: FuzzyAn
     per_source_bands(sparse_run.trial, sparse_run.subject, sparse_run.result, plain,
                      PerSourceRequest(options, components=["LKneeAngles_X"]),
                      progress=lambda done, total: calls.append((done, total)))  # fmt: skip
-    assert calls == [(1, 3), (2, 3), (3, 3)]  # serial: per run, one run per source
+    assert calls == [(3, 3)]  # serial: the three sources of the one component in one run (side by side)
 
 
 def test_progress_of_the_allowable_refinement(sparse_run: AnglesRun, options: FuzzyAngleOptions,

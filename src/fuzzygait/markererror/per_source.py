@@ -55,9 +55,9 @@ from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
-from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks, run_component_task
+from fuzzygait.markererror.analysis import ComponentTask, FuzzyAngleOptions, component_tasks, run_component_task
 from fuzzygait.markererror.angle_model import undetermined
-from fuzzygait.markererror.refinement import evaluator_or_own
+from fuzzygait.markererror.refinement import BlockJob, Run, evaluator_or_own, map_blocks
 from fuzzygait.markererror.result import (
     MarkerErrorResult,
     angle_components,
@@ -307,7 +307,7 @@ def per_source_bands(
             (:class:`PerSourceRequest`; default ``PerSourceRequest()``).
         evaluator: where the Graph Follower runs (default: ``options.workers`` processes).
         progress: called as ``progress(done, total)`` over the runs (source × component),
-            at least once per source.
+            at least once per angle (its components and sources run side by side).
 
     Raises:
         ParameterError: as :meth:`PerSourceRequest.chosen`, or ``fuzzy`` of other frames
@@ -320,33 +320,46 @@ def per_source_bands(
     sample_frames = np.array([frame_index.get(int(f), -1) for f in trial.frames])
     if np.any(sample_frames < 0) or len(frame_index) != trial.n_frames:
         raise ParameterError("fuzzy: its frames are not the trial's; compute it from the same trial")
-    total, done = len(chosen) * len(wanted), 0
-    hulls: dict[str, dict[str, np.ndarray]] = {}
+    total = len(chosen) * len(wanted)
+    hulls: dict[str, dict[str, np.ndarray]] = {source: {} for source in chosen}
     radii: dict[str, np.ndarray] = {}
     counts = {"forward_simulations": 0, "node_evaluations": 0}
     markers = [str(m) for m in fuzzy["marker"].to_numpy()]
     start = time.perf_counter()
+    runs: list[tuple[str, ComponentTask]] = []
+    for source in chosen:
+        alone = replace(options, sources=(source,), alphas=tuple(float(a) for a in levels))
+        runs += [(source, task) for task in component_tasks(trial, subject, result, alone, wanted, clusters)[0]]
+        radii[source] = np.array([alone.error_model.radius(m, (source,)) for m in markers])
     with evaluator_or_own(evaluator, options.workers) as runner:
-        for source in chosen:
-            alone = replace(options, sources=(source,), alphas=tuple(float(a) for a in levels))
-            run, _ = component_tasks(trial, subject, result, alone, wanted, clusters)
-
-            def step(k: int, _n: int, offset: int = done) -> None:
-                if progress is not None:
-                    progress(offset + k, total)
-
-            outputs = runner.map(run_component_task, run, step)
-            done += len(run)
-            hulls[source] = {}
-            for task, (column, values, _norms, work) in zip(run, outputs, strict=True):
-                full = np.full((levels.size, 2, trial.n_frames), np.nan)
-                full[:, :, sample_frames[task.frames]] = values
-                hulls[source][column] = full
-                for key in counts:
-                    counts[key] += int(work[key])
-            radii[source] = np.array([alone.error_model.radius(m, (source,)) for m in markers])
+        outputs = _run_sources([task for _, task in runs], levels, runner, progress)
+    for (source, task), (column, values, _norms, work) in zip(runs, outputs, strict=True):
+        full = np.full((levels.size, 2, trial.n_frames), np.nan)
+        full[:, :, sample_frames[task.frames]] = values
+        hulls[source][column] = full
+        for key in counts:
+            counts[key] += int(work[key])
     attrs = {"seconds": round(time.perf_counter() - start, 3), "runs": total, **counts}
     return source_bands_dataset(fuzzy, hulls, levels, radii=radii, attrs=attrs)
+
+
+def _run_sources(tasks: list[ComponentTask], levels: np.ndarray, runner: Evaluator,
+                 progress: Progress | None) -> list[Run]:  # fmt: skip
+    """Every task's run at ``levels``: the tasks of one angle (its components, each source's
+    radii) side by side in one optimisation (:func:`~fuzzygait.markererror.refinement.run_component_blocks`,
+    Cartesian deviations; the same hulls as one run each up to rounding); ``progress(done,
+    total)`` in tasks."""
+    if tasks[0].options.method != "cartesian":
+        return runner.map(run_component_task, tasks, progress)
+    groups: dict[str, list[int]] = {}
+    for i, task in enumerate(tasks):
+        groups.setdefault(task.name, []).append(i)
+    jobs = [BlockJob(tuple(tasks[i] for i in group), (1.0,) * len(group), tuple(float(a) for a in levels))
+            for group in groups.values()]  # fmt: skip
+    grouped = map_blocks(jobs, runner, progress)
+    by_task = {i: run for group, out in zip(groups.values(), grouped, strict=True)
+               for i, run in zip(group, out, strict=True)}  # fmt: skip
+    return [by_task[i] for i in range(len(tasks))]
 
 
 # ---------------------------------------------------------------------------- the table

@@ -3,6 +3,15 @@
 one per component at the error scale its :class:`~fuzzygait.markererror.scale_search.ScaleSearch`
 proposes (the components of a round side by side on the evaluator), each run's excursion
 recorded in its search, until every search has converged or used its runs.
+
+The runs of a round that are components of one angle share their model calls
+(:func:`run_component_blocks`, as :func:`~fuzzygait.markererror.analysis.run_angle_task`
+does for the bands): each component at its own α-level is one block of a
+:class:`ScaledComponentsModel` whose parameters are deviations in unit balls, scaled per
+block to that component's ball radii ``(1 − α)·Σ`` — the same optimisation as alone up
+to the rounding of the scaling (the batched optimiser's steps, projections and random
+points are equivariant under it), in a third of the model calls.  The per-source bands
+(:mod:`fuzzygait.markererror.per_source`) group the sources of one component the same way.
 """
 
 from __future__ import annotations
@@ -11,7 +20,8 @@ import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,8 +31,9 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import ComponentTask, FuzzyAngleOptions, component_tasks, run_component_task
-from fuzzygait.markererror.angle_model import AXES, undetermined
+from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, undetermined
 from fuzzygait.markererror.scale_search import ScaleSearch
+from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 
 Progress = Callable[[int, int], None]
@@ -41,13 +52,92 @@ def component_setups(trial: Trial, subject: SubjectParameters, result: CGMResult
 Run = tuple[str, np.ndarray, np.ndarray, dict[str, int]]
 
 
+@dataclass
+class ScaledComponentsModel(AngleComponentsModel):
+    """An :class:`AngleComponentsModel` whose block ``b``'s marker deviations (mm) are its
+    parameters times ``factors[b]`` (``(blocks, n_p)``): unit balls become the balls of
+    radius ``factors`` per marker, so blocks with different ball radii (α-levels, error
+    sources) share the optimiser's calls."""
+
+    factors: np.ndarray = field(default_factory=lambda: np.ones((1, 0)))
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """The components (degrees) at ``nodes`` (k,) for unit-ball parameters ``P`` (k, n_p)."""
+        block = np.asarray(nodes, dtype=int) // self.angle.frames.size
+        return super().evaluate_nodes(P * self.factors[block], nodes)
+
+
+class BlockJob(NamedTuple):
+    """Components of one angle optimised side by side (:func:`run_component_blocks`): the
+    tasks (one angle's, the same frames and markers; their options' optimiser settings are
+    the first's), each one's ball radii scaled by ``shrink`` (``1 − α`` of its level, or 1)
+    and the α-levels ``levels`` (ascending, 1 included) of the scaled balls."""
+
+    tasks: tuple[ComponentTask, ...]
+    shrink: tuple[float, ...]
+    levels: tuple[float, ...]
+
+
+def run_component_blocks(job: BlockJob) -> list[Run]:
+    """Per task, as :func:`~fuzzygait.markererror.analysis.run_component_task` gives it for
+    the task's radii ``shrink``-scaled at ``levels``: ``(component name, hull (level, bound,
+    n_valid) deg, deviation norms (level, bound, n_valid, n_markers) mm, work counts)``,
+    all tasks in one α-level optimisation (the counts the first's, the others zero)."""
+    first = job.tasks[0]
+    options, markers = first.options, first.markers
+    model = first.angle_model()
+    factors = np.stack([np.repeat(np.asarray(t.radii, dtype=float) * s, 3) for t, s in zip(job.tasks, job.shrink,
+                                                                                             strict=True)])  # fmt: skip
+    node_model = ScaledComponentsModel(model, tuple(t.axis for t in job.tasks),
+                                       np.stack([t.reference for t in job.tasks]), factors)  # fmt: skip
+    params = FuzzyBalls(np.zeros((len(markers), 3)), np.ones(len(markers)), tuple(markers))
+    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
+                             stride=options.stride, follow=options.follow, gradients=options.gradients)  # fmt: skip
+    result = graph_follower(node_model, params, job.levels, strategy=strategy)
+    hull = result["hull"].to_numpy()  # (level, bound, blocks x frames)
+    n_frames = first.frames.size
+    extremiser = result["extremiser"].to_numpy().reshape(*hull.shape[:2], len(job.tasks), n_frames, len(markers), 3)
+    seen = model.seen()
+    counts = {key: int(result.attrs[key]) for key in ("forward_simulations", "node_evaluations", "node_gradients")}
+    outputs: list[Run] = []
+    for b, task in enumerate(job.tasks):
+        norms = np.linalg.norm(extremiser[:, :, b] * factors[b].reshape(-1, 3), axis=-1)
+        outputs.append((f"{task.name}_{AXES[task.axis]}", hull[..., b * n_frames : (b + 1) * n_frames],
+                        np.where(seen, norms, np.nan), counts if b == 0 else dict.fromkeys(counts, 0)))  # fmt: skip
+    return outputs
+
+
+def map_blocks(jobs: Sequence[BlockJob], evaluator: Evaluator, progress: Progress | None = None) -> list[list[Run]]:
+    """:func:`run_component_blocks` of every job on ``evaluator``; ``progress(done, n)`` in
+    tasks (not jobs)."""
+    sizes = np.cumsum([0] + [len(j.tasks) for j in jobs])
+
+    def step(k: int, _n: int) -> None:
+        if progress is not None:
+            progress(int(sizes[k]), int(sizes[-1]))
+
+    return evaluator.map(run_component_blocks, list(jobs), step)
+
+
 def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator: Evaluator,
               progress: Progress | None = None) -> list[Run]:  # fmt: skip
     """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
     deg, deviation norms (2, bound, n_valid, n_markers) mm, counts; ``progress(done, n)``
-    as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it."""
-    runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0))) for t, a in zip(tasks, alphas, strict=True)]
-    return evaluator.map(run_component_task, runs, progress)
+    as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it.  The components of
+    one angle (Cartesian deviations) run side by side (:func:`run_component_blocks`)."""
+    if tasks and tasks[0].options.method != "cartesian":
+        runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0)))
+                for t, a in zip(tasks, alphas, strict=True)]  # fmt: skip
+        return evaluator.map(run_component_task, runs, progress)
+    groups: dict[str, list[int]] = {}
+    for i, task in enumerate(tasks):
+        groups.setdefault(task.name, []).append(i)
+    jobs = [BlockJob(tuple(tasks[i] for i in group), tuple(1.0 - float(alphas[i]) for i in group), (0.0, 1.0))
+            for group in groups.values()]  # fmt: skip
+    grouped = map_blocks(jobs, evaluator, progress)
+    by_task = {i: run for group, runs in zip(groups.values(), grouped, strict=True)
+               for i, run in zip(group, runs, strict=True)}  # fmt: skip
+    return [by_task[i] for i in range(len(tasks))]
 
 
 def _run_excursion(values: np.ndarray, setup: ComponentTask) -> float:

@@ -14,7 +14,8 @@ they are solved side by side (:class:`BatchedObjective`'s bound nodes): every it
 evaluates the gradients of all nodes' current points, lower and upper, in one call
 (the model's exact ones, or forward differences: ``1 + n_p`` rows per point), moves
 each towards the optimum of its linearisation over the α-level set (a point on the ball
-surfaces or a box vertex, closed form) with a line search (Frank–Wolfe steps,
+surfaces or a box vertex, closed form; a point that did not move in the last iteration
+keeps its value and gradient, no new evaluation) with a line search (Frank–Wolfe steps,
 ``τ ∈ {1, 1/2, …, 1/16}``), and keeps a node's point only if it improves. Starting
 points (multistart): the deterministic parameters, the higher α-level's optimum of the
 same node (admissible, since the α-level sets are nested — this also makes the hulls
@@ -28,7 +29,7 @@ because whole trajectories are not needed).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -47,11 +48,24 @@ MIN_REACH = 1e-6
 
 @dataclass
 class BatchCounts:
-    """Work done: node evaluations (rows), exact node gradients (rows) and iterations."""
+    """Work done: node evaluations (rows), exact node gradients (rows) and iterations, and
+    where :func:`maximise`'s iterations go (``benchmarks/markererror_work.py`` prints them):
+    starting points, point-iterations (an active point's iteration), points still active
+    after the last iteration, iterations without gain, the step taken (``steps``: Frank–Wolfe
+    fractions 1 … 1/16, then the projected-gradient ones), and per node the starts that end
+    within 1e-3 of the best value (``same_optimum``, the best not counted) and which start
+    wins (``winner``: index in ``starts``)."""
 
     node_evaluations: int = 0
     node_gradients: int = 0
     iterations: int = 0
+    points: int = 0
+    point_iterations: int = 0
+    unconverged: int = 0
+    no_gain: int = 0
+    same_optimum: int = 0
+    steps: np.ndarray = field(default_factory=lambda: np.zeros(2 * STEP_FRACTIONS.size, dtype=int))
+    winner: np.ndarray = field(default_factory=lambda: np.zeros(16, dtype=int))
 
 
 class BatchedObjective:
@@ -124,13 +138,21 @@ def maximise(
     value = np.full(P.shape[0], -np.inf)
     reach = np.ones(P.shape[0])  # per-point step scale: shrinks after failures, grows after full steps
     active = np.ones(P.shape[0], dtype=bool)
+    counts = objective.counts
+    counts.points += P.shape[0]
+    gradient = np.empty_like(P)
+    known = np.zeros(P.shape[0], dtype=bool)  # gradient (and value) of the point as it is: kept while it does not move
     for _ in range(iterations):
-        objective.counts.iterations += 1
+        counts.iterations += 1
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        v0, g = objective.values_and_gradients(P[idx], rows[idx])
-        value[idx] = v0
+        counts.point_iterations += idx.size
+        need = idx[~known[idx]]
+        if need.size:
+            value[need], gradient[need] = objective.values_and_gradients(P[need], rows[need])
+            known[need] = True
+        v0, g = value[idx], gradient[idx]
         target = domain.linear_argmax(g)
         tau = STEP_FRACTIONS[None, :, None] * reach[idx, None, None]
         chord = target - P[idx]  # Frank-Wolfe: towards the linear model's optimum
@@ -143,14 +165,21 @@ def maximise(
         best = np.argmax(tried, axis=1)
         gain = tried[np.arange(idx.size), best] - v0
         better = gain > 0
+        counts.no_gain += int(idx.size - np.count_nonzero(better))
+        counts.steps += np.bincount(best[better], minlength=counts.steps.size)
         P[idx[better]] = trial[better, best[better]]
         value[idx[better]] = tried[better, best[better]]
+        known[idx[better]] = False
         full_step = better & (best % STEP_FRACTIONS.size == 0)
         reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
         active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH)]] = False
+    counts.unconverged += int(np.count_nonzero(active))
     per_start = value.reshape(len(starts), k)
     pick = np.argmax(per_start, axis=0)
+    counts.same_optimum += int(np.count_nonzero(per_start >= per_start[pick, np.arange(k)] - 1e-3)) - k
+    n_win = min(len(starts), counts.winner.size)
+    counts.winner[:n_win] += np.bincount(pick, minlength=len(starts))[:n_win]
     points = P.reshape(len(starts), k, -1)[pick, np.arange(k)]
     return points, per_start[pick, np.arange(k)]
 
