@@ -8,6 +8,7 @@ The folder's layout is described in :mod:`fuzzygait.viz.report`."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import shutil
@@ -16,6 +17,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -40,6 +42,7 @@ from fuzzygait.viz.report.kinetics import (
     KineticCycles,
     dataset_components,
     grf_figure,
+    kinetic_bands,
     kinetics_figure,
     session_kinetics_figure,
 )
@@ -47,6 +50,9 @@ from fuzzygait.viz.report.kinetics_section import NO_PLATES, KineticsPage
 from fuzzygait.viz.report.pages import PageSource, index_page, trial_page
 from fuzzygait.viz.report.session import SESSION_DPI, SessionKinetics, session_cycles_figure
 from fuzzygait.viz.report.sources import has_source_bands, source_figure
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["ReportItem", "ReportWriter", "kinetics_page", "run_kinetic_cycles", "write_report", "write_session_cycles",
            "write_session_kinetics"]
@@ -209,7 +215,7 @@ class ReportWriter:
         save_figure_files(cycle_figure(data, title + " (mean over gait cycles)", clinical), folder / "cycles", dpi=DPI)
         save_figure_files(time_series_figure(data, title + " (whole trial)", clinical), folder / "time_series",
                           dpi=DPI)  # fmt: skip
-        kinetics = kinetics_page(analysis.run, data.cycles, self.normative)
+        kinetics = kinetics_page(analysis.run, data.cycles, self.normative, fuzzy_kinetics(analysis))
         if kinetics.cycles is not None and kinetics.cycles.any():
             self._kinetic_figures(kinetics.cycles, source, folder)
         elif clinical.has_kinetics():
@@ -297,17 +303,30 @@ def write_session_cycles(cycles: Mapping[str, np.ndarray], stem: Path, title: st
     return True
 
 
-def run_kinetic_cycles(run: ReportRun, cycles: Mapping[str, list[GaitCycle]]) -> KineticCycles | None:
+def fuzzy_kinetics(analysis: TrialAnalysis) -> xr.Dataset | None:
+    """The analysis' fuzzy kinetics (the kinetics group of its marker-error result), or None."""
+    result = getattr(analysis, "result", None)
+    return getattr(result, "kinetics", None)
+
+
+def run_kinetic_cycles(run: ReportRun, cycles: Mapping[str, list[GaitCycle]],
+                       fuzzy: xr.Dataset | None = None) -> KineticCycles | None:  # fmt: skip
     """The run's computed kinetics (``AnglesRun.kinetics``) cut into ``cycles`` (per
-    side), or None when it has none."""
+    side), with the α-bands of ``fuzzy`` (fuzzy kinetics, :func:`fuzzy_kinetics`) over
+    the same cycles; None when it has none."""
     kinetics = getattr(run, "kinetics", None)  # the report's ReportRun protocol does not require it
     if kinetics is None:
         return None
-    return KineticCycles.of(dataset_components(kinetics.data), cycles)
+    components = dataset_components(kinetics.data)
+    out = KineticCycles.of(components, cycles)
+    if fuzzy is None:
+        return out
+    frames = np.asarray(kinetics.data["frame"].to_numpy())
+    return dataclasses.replace(out, fuzzy=kinetic_bands(fuzzy, components, cycles, frames))
 
 
-def kinetics_page(run: ReportRun, cycles: Mapping[str, list[GaitCycle]],
-                  normative: NormativeData | None = None) -> KineticsPage:  # fmt: skip
+def kinetics_page(run: ReportRun, cycles: Mapping[str, list[GaitCycle]], normative: NormativeData | None = None,
+                  fuzzy: xr.Dataset | None = None) -> KineticsPage:  # fmt: skip
     """What the trial page's kinetics section shows: the computed kinetics, their contacts
     and notes; without them, why (the run's kinetics warning, else :data:`NO_PLATES` when
     the pipeline noted a file without force plates)."""
@@ -318,7 +337,7 @@ def kinetics_page(run: ReportRun, cycles: Mapping[str, list[GaitCycle]],
         reason = warned[0] if warned else (NO_PLATES if notes else None)
         return KineticsPage(None, missing=reason)
     has_norm = normative is not None and any(normative.curve(f"L{j}Moment_X") is not None for j in KINETIC_ROWS)
-    return KineticsPage(run_kinetic_cycles(run, cycles), tuple(kinetics.contacts),
+    return KineticsPage(run_kinetic_cycles(run, cycles, fuzzy), tuple(kinetics.contacts),
                         tuple(dict.fromkeys(f.message for f in kinetics.findings if f.kind is not
                                             FindingKind.FORCE_PLATE_ASSIGNMENT)),
                         None, run.trial.first_frame, run.trial.rate, has_norm)  # fmt: skip

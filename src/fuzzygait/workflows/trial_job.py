@@ -43,7 +43,7 @@ from fuzzygait.workflows.marker_uncertainty import (
     analyse_run,
 )
 from fuzzygait.workflows.report_entries import EntryFormatError, read_entry, write_entry
-from fuzzygait.workflows.report_folder import ReportItem, ReportWriter, run_kinetic_cycles
+from fuzzygait.workflows.report_folder import ReportItem, ReportWriter, fuzzy_kinetics, run_kinetic_cycles
 
 __all__ = ["UNCERTAINTY_MODES", "TrialJob", "TrialOutcome", "finished_outcome", "mode_settings", "run_trial_job"]
 
@@ -175,7 +175,9 @@ def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     ``kinetics/<component>`` (n_cycles, 101) -- the computed kinetics of each cycle whose
     stance was on a force plate (``LKneeMoment_X`` N·m/kg, ``LKneePower_Z`` W/kg over the
     gait cycle, ``LNormalisedGRF_Z`` % body weight over stance;
-    :func:`~fuzzygait.workflows.report_folder.run_kinetic_cycles`) -- and, when analysed,
+    :func:`~fuzzygait.workflows.report_folder.run_kinetic_cycles`), with fuzzy kinetics
+    ``kinetic_band/<component>`` (alpha, 2, 101) the bands the kinetics figure draws and
+    their ``kinetic_alpha`` levels -- and, when analysed,
     ``hull`` (component, alpha, bound, frame) deg with its ``alpha``
     levels and ``component`` names."""
     run = analysis.run
@@ -192,9 +194,13 @@ def page_data(analysis: MarkerErrorAnalysis) -> dict[str, np.ndarray]:
     for code, side in (parameters.sides.items() if parameters is not None else ()):
         if side.complete_cycles:
             data[f"spatiotemporal/{code}"] = np.array([[c.values[n] for n in NAMES] for c in side.complete_cycles])
-    kinetic = run_kinetic_cycles(run, {side: gait_cycles(run.trial, run.events, side) for side in "LR"})
+    kinetic = run_kinetic_cycles(run, {side: gait_cycles(run.trial, run.events, side) for side in "LR"},
+                                 fuzzy_kinetics(analysis))  # fmt: skip
     for name, stack in (kinetic.cycles.items() if kinetic is not None else ()):
         data[f"kinetics/{name}"] = stack
+    if kinetic is not None and kinetic.fuzzy is not None:  # the figure's fuzzy kinetic bands
+        data["kinetic_alpha"] = kinetic.fuzzy.alphas
+        data.update({f"kinetic_band/{name}": band for name, band in kinetic.fuzzy.bands.items()})
     fuzzy = analysis.fuzzy
     if fuzzy.sizes.get("component", 0):
         hull = fuzzy["hull"].transpose("component", "alpha", "bound", "frame")

@@ -12,6 +12,14 @@ cycles whose stance was on a force plate count
 (:func:`fuzzygait.gait.normative.kinetic_cycles`); the normative mean ± 1 SD is grey
 where a normative file has the variable (``KneeMoment_X``, ``KneePower_Z``,
 ``NormalisedGRF_Z``).
+
+When the trial's marker-error analysis carries fuzzy kinetics
+(:attr:`~fuzzygait.markererror.result.MarkerErrorResult.kinetics`), a trial's figure draws
+their α-bands around each side's mean as the angle figures draw theirs (left filled, right
+hatched, widest first; :func:`kinetic_bands`: the mean over the counted cycles of each
+α-level's bounds), leaves a band out where a cycle's band is undetermined and marks those
+points with the hatched strip along the top of the panel; nothing where the analysis did
+not cover every counted cycle.
 """
 
 from __future__ import annotations
@@ -31,11 +39,27 @@ from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from fuzzygait.gait.cycles import GaitCycle, cycle_statistics, percent_points  # noqa: E402
-from fuzzygait.gait.normative import N_POINTS, STANCE_OUTPUT, NormativeData, kinetic_cycles  # noqa: E402
+from fuzzygait.gait.cycles import GaitCycle, cycle_statistics, normalise_cycles, percent_points  # noqa: E402
+from fuzzygait.gait.normative import N_POINTS, STANCE_OUTPUT, NormativeData, kinetic_cycles, loaded_cycles  # noqa: E402
 from fuzzygait.viz.layout import SIDE_STYLE  # noqa: E402
-from fuzzygait.viz.report.figures import NORMATIVE_COLOUR, SIDE_LINE, _add_legend, _right_hatch  # noqa: E402
+from fuzzygait.viz.report.bands import alpha_text  # noqa: E402
+from fuzzygait.viz.report.figures import (  # noqa: E402
+    HATCH,
+    HATCH_WIDTH,
+    NORMATIVE_COLOUR,
+    SIDE_LINE,
+    _add_legend,
+    _band_opacity,
+    _draw_undetermined,
+    _right_hatch,
+)
 from fuzzygait.viz.report.grid import GridMargins  # noqa: E402
+from fuzzygait.viz.report.normalised_bands import (  # noqa: E402
+    _cycle_flags,
+    band_undetermined,
+    component_levels,
+    cycle_bands,
+)
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -44,8 +68,10 @@ __all__ = [
     "GRF_COLUMNS",
     "KINETIC_COLUMNS",
     "KINETIC_ROWS",
+    "KineticBands",
     "KineticCycles",
     "dataset_components",
+    "kinetic_bands",
     "grf_figure",
     "kinetics_figure",
     "session_kinetics_figure",
@@ -116,6 +142,78 @@ def _counted(cycles: Mapping[str, np.ndarray], side: str) -> int:
 
 
 @dataclass(frozen=True)
+class KineticBands:
+    """The fuzzy kinetics' α-bands over the gait cycle of a trial's counted cycles.
+
+    Attributes:
+        alphas: α-levels < 1, ascending (the widest band first).
+        bands: sided component (``"LKneeMoment_X"``) -> ``(n_alpha, 2 [lower, upper],
+            101)`` N·m/kg or W/kg: the mean over the side's counted cycles of each bound;
+            NaN where undetermined in some cycle or not analysed in every one.
+        undetermined: sided component -> ``(n_alpha, 101)`` True where the band is left
+            out as undetermined (a segment frame can flip inside the balls).
+        allowable: the moments' allowable-error sentences
+            (:func:`~fuzzygait.markererror.fuzzy_kinetics.allowable_kinetic_error`).
+        cop_error_mm: the centre-of-pressure ball's radius at α = 0, mm.
+    """
+
+    alphas: np.ndarray
+    bands: dict[str, np.ndarray]
+    undetermined: dict[str, np.ndarray]
+    allowable: tuple[str, ...] = ()
+    cop_error_mm: float = float("nan")
+
+
+def _counted_cycles(signal: np.ndarray, vertical: np.ndarray, cycles: Sequence[GaitCycle]) -> list[GaitCycle]:
+    """The cycles :func:`~fuzzygait.gait.normative.kinetic_cycles` counts for ``signal``:
+    on a plate in mid-stance and with a value on every point of the cycle."""
+    kept = loaded_cycles(cycles, vertical)
+    return [c for c in kept if np.isfinite(normalise_cycles(signal, [c], N_POINTS)).all()]
+
+
+def kinetic_bands(fuzzy: xr.Dataset, components: Mapping[str, Mapping[str, np.ndarray]],
+                  cycles: Mapping[str, Sequence[GaitCycle]], frames: np.ndarray) -> KineticBands | None:  # fmt: skip
+    """The α-bands of every fuzzy kinetic component of ``fuzzy`` (a kinetics group) over
+    the cycles the figures count (``components``: :func:`dataset_components` of the
+    trial's kinetics; ``frames``: its C3D frame numbers); None without a level < 1."""
+    from fuzzygait.markererror.fuzzy_kinetics import allowable_kinetic_error
+    from fuzzygait.markererror.result import UNITS_COORD, kinetic_part
+
+    alphas: np.ndarray | None = None
+    bands, flags = {}, {}
+    for name in (str(c) for c in fuzzy["component"].to_numpy()):
+        side, base = name[:1], name[1:]
+        signal, vertical = components.get(side, {}).get(base), components.get(side, {}).get(f"{STANCE_OUTPUT}_Z")
+        levels = component_levels(fuzzy, name, frames)
+        if signal is None or vertical is None or levels is None:
+            continue
+        alphas, hull, mask = levels
+        kept = _counted_cycles(signal, vertical, cycles.get(side, ()))
+        if not kept:
+            continue
+        # frames not analysed (a partial analysis) hold the measured value, so a cycle's
+        # spline runs through them; the points next to them are left out below
+        analysed = np.isfinite(hull).all(axis=(0, 1))
+        filled = np.where(analysed, hull, np.asarray(signal, dtype=float))
+        curve, band, _ = cycle_bands(signal, filled, kept, undetermined=mask & analysed)
+        covered = ~_cycle_flags(~analysed[:, None], kept, N_POINTS)[..., 0].any(axis=0)
+        undetermined = band_undetermined(curve, band)
+        assert undetermined is not None
+        band[:, :, ~covered] = np.nan
+        bands[name], flags[name] = band, undetermined & covered
+    if alphas is None:
+        return None
+    units = fuzzy[UNITS_COORD].to_numpy().astype(str)
+    tolerance = float(fuzzy.attrs.get("kinetic_tolerance", 0.1))
+    allowable: tuple[str, ...] = ()
+    if "N·m/kg" in units:
+        moments = kinetic_part(fuzzy, "N·m/kg")
+        allowable = tuple(allowable_kinetic_error(moments, str(c), tolerance).sentence
+                          for c in moments["component"].to_numpy())  # fmt: skip
+    return KineticBands(alphas, bands, flags, allowable, float(fuzzy.attrs.get("cop_error_mm", np.nan)))
+
+
+@dataclass(frozen=True)
 class KineticCycles:
     """A trial's kinetics cut into its gait cycles.
 
@@ -125,17 +223,21 @@ class KineticCycles:
             kinetic_cycles`).
         counted: side -> its cycles with force-plate data; ``total`` -> all its cycles.
         foot_off: side -> mean foot off (% of the cycle) of its counted cycles.
+        fuzzy: the fuzzy kinetics' bands over those cycles, None without them.
     """
 
     cycles: dict[str, np.ndarray]
     counted: dict[str, int] = field(default_factory=dict)
     total: dict[str, int] = field(default_factory=dict)
     foot_off: dict[str, float] = field(default_factory=dict)
+    fuzzy: KineticBands | None = None
 
     @classmethod
     def of(cls, components: Mapping[str, Mapping[str, np.ndarray]],
            cycles: Mapping[str, Sequence[GaitCycle]]) -> KineticCycles:  # fmt: skip
-        """Cut ``components`` (:func:`dataset_components`) into ``cycles`` (per side)."""
+        """Cut ``components`` (:func:`dataset_components`) into ``cycles`` (per side);
+        the fuzzy bands are added with :func:`dataclasses.replace` and
+        :func:`kinetic_bands`."""
         stacks = kinetic_cycles(components, cycles)
         counted = {side: _counted(stacks, side) for side in SIDE_STYLE}
         foot_off = {}
@@ -183,6 +285,42 @@ def _draw_side(ax: Axes, x: np.ndarray, stack: np.ndarray, side: str, spread: st
     ax.plot(x, mean, color=colour, lw=MEAN_WIDTH, ls=SIDE_LINE[side], zorder=3, gid=f"mean-{side}")
 
 
+def _draw_fuzzy(ax: Axes, x: np.ndarray, band: np.ndarray, side: str, layer: float) -> None:
+    """α-bands of one side (``(n_alpha, 2, n_points)``, widest first) as the angle figures
+    draw them: left filled in its colour, right hatched, the widest band's edges thin."""
+    colour = SIDE_STYLE[side][1]
+    for k in range(band.shape[0]):
+        if side == "R":
+            hatched = ax.fill_between(x, band[k, 0], band[k, 1], facecolor="none", edgecolor=colour,
+                                      hatch=_right_hatch(k), lw=0, zorder=1.5)  # fmt: skip
+            hatched.set_hatch_linewidth(HATCH_WIDTH)
+        else:
+            ax.fill_between(x, band[k, 0], band[k, 1], color=colour, alpha=layer, lw=0, zorder=1.5)
+    for bound in (0, 1):
+        ax.plot(x, band[0, bound], color=colour, lw=0.6, ls=SIDE_LINE[side], alpha=0.9, zorder=1.6)
+
+
+def _band_handles(fuzzy: KineticBands, undetermined: set[int]) -> list[Artist]:
+    """Legend entries of the α-bands (per side and level) and of the undetermined strips."""
+    from matplotlib.colors import to_rgba
+
+    handles: list[Artist] = []
+    layer = _band_opacity(len(fuzzy.alphas))
+    for side, (name, colour) in SIDE_STYLE.items():
+        if not any(c.startswith(side) and np.isfinite(b).any() for c, b in fuzzy.bands.items()):
+            continue  # no band of this side drawn
+        for k, alpha in enumerate(fuzzy.alphas):
+            text = f"{name} α = {alpha_text(alpha)}" + (" (worst case)" if k == 0 and alpha == 0 else "")
+            face = ({"facecolor": "white", "hatch": _right_hatch(k)} if side == "R"
+                    else {"facecolor": to_rgba(colour, 1.0 - (1.0 - layer) ** (k + 1))})  # fmt: skip
+            handles.append(Patch(edgecolor=colour, lw=0.5, label=text, **face))
+    for n, k in enumerate(sorted(undetermined)):
+        what = "undetermined: no band" if n == 0 else "undetermined too"
+        handles.append(Patch(facecolor=(0.25, 0.25, 0.25, 1.0 - 0.75 * 0.7**n), edgecolor="0.3", hatch=HATCH, lw=0,
+                             label=f"α = {alpha_text(fuzzy.alphas[k])} {what}"))  # fmt: skip
+    return handles
+
+
 def _panel(ax: Axes, title: str | None, ylabel: str) -> None:
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.grid(alpha=0.3)
@@ -221,14 +359,15 @@ def _handles(counts: Mapping[str, int], spread: str, normative: bool, foot_off: 
 
 
 def _kinetics_grid(cycles: Mapping[str, np.ndarray], title: str, normative: NormativeData | None, spread: str,
-                   foot_off: Mapping[str, float]) -> Figure:  # fmt: skip
+                   foot_off: Mapping[str, float], fuzzy: KineticBands | None = None) -> Figure:  # fmt: skip
     """Hip, knee and ankle (rows) moments in three planes and power (columns) over the
-    gait cycle (axes row-major in ``fig.axes``)."""
+    gait cycle (axes row-major in ``fig.axes``), with ``fuzzy``'s α-bands where given."""
     x = percent_points(N_POINTS)
     fig, axes = plt.subplots(len(KINETIC_ROWS), len(KINETIC_COLUMNS), figsize=KINETICS_SIZE, sharex=True,
                              squeeze=False)  # fmt: skip
     fig.suptitle(title, fontsize=13)
     counts: dict[str, int] = {}
+    seen: set[int] = set()
     any_norm = False
     for r, joint in enumerate(KINETIC_ROWS):
         for c, (output, axis, column, unit) in enumerate(KINETIC_COLUMNS):
@@ -239,29 +378,40 @@ def _kinetics_grid(cycles: Mapping[str, np.ndarray], title: str, normative: Norm
             for side, percent in foot_off.items():
                 ax.axvline(percent, color=SIDE_STYLE[side][1], lw=1.0, ls=SIDE_LINE[side], alpha=0.85, zorder=1)
             drawn = False
-            for side in SIDE_STYLE:
+            strips: list[tuple[int, str, np.ndarray]] = []
+            for slot, side in enumerate(SIDE_STYLE):
                 stack = cycles.get(f"{side}{joint}{output}_{axis}")
                 if stack is None or not len(stack):
                     continue
+                if fuzzy is not None and (band := fuzzy.bands.get(f"{side}{joint}{output}_{axis}")) is not None:
+                    _draw_fuzzy(ax, x, band, side, _band_opacity(len(fuzzy.alphas)))
+                    flags = fuzzy.undetermined[f"{side}{joint}{output}_{axis}"]
+                    if flags.any():
+                        strips.append((slot, SIDE_STYLE[side][1], flags))
+                        seen.update(int(k) for k in np.flatnonzero(flags.any(axis=1)))
                 _draw_side(ax, x, stack, side, spread)
                 counts[side] = max(counts.get(side, 0), len(stack))
                 drawn = True
+            _draw_undetermined(ax, x, strips)
             if not drawn:
                 _empty(ax, "no cycle on a force plate")
             ax.set_xlim(0, 100)
             if r == len(KINETIC_ROWS) - 1:
                 ax.set_xlabel("gait cycle (%)", fontsize=8)
     handles = _handles(counts, spread, any_norm, bool(foot_off))
+    if fuzzy is not None and fuzzy.bands:
+        handles += _band_handles(fuzzy, seen)
     return _add_legend(fig, handles, ncol=3, margins=KINETIC_GRID)
 
 
 def kinetics_figure(kinetics: KineticCycles, title: str, normative: NormativeData | None = None) -> Figure:
     """A trial's joint moments and powers over the gait cycle: per side every cycle on a
     force plate (thin) and their mean (thick; left solid, right dashed), the sides' mean
-    foot off, the normative band where given.  Axes ``fig.axes`` row-major (rows
+    foot off, the normative band where given, the fuzzy kinetics' α-bands where analysed
+    (:attr:`KineticCycles.fuzzy`).  Axes ``fig.axes`` row-major (rows
     :data:`KINETIC_ROWS`, columns :data:`KINETIC_COLUMNS`); each mean line carries the
     gid ``"mean-L"``/``"mean-R"``."""
-    return _kinetics_grid(kinetics.cycles, title, normative, "cycles", kinetics.foot_off)
+    return _kinetics_grid(kinetics.cycles, title, normative, "cycles", kinetics.foot_off, kinetics.fuzzy)
 
 
 def session_kinetics_figure(cycles: Mapping[str, np.ndarray], title: str,

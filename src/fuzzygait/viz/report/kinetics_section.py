@@ -104,6 +104,33 @@ def _figures(page: KineticsPage, figs: str) -> str:
             f"(<a href=\"{figs}/grf.svg\">SVG</a>).</figcaption></figure>")  # fmt: skip
 
 
+def _uncertainty(page: KineticsPage) -> str:
+    """The sentence on the moments' uncertainty bands (drawn or not)."""
+    fuzzy = page.cycles.fuzzy if page.cycles is not None else None
+    if fuzzy is None or not fuzzy.bands:
+        return (" No uncertainty band is drawn for them (the marker-error analysis did not include the kinetics: "
+                "fuzzygait uncertainty --kinetics computes them).")  # fmt: skip
+    levels = ", ".join(f"{a:g}" for a in fuzzy.alphas)
+    return (f" The shaded bands (α = {levels}) around the sagittal moments and the powers are their fuzzy "
+            "uncertainty: how far they can move when every marker moves within its Table 3.1 error ball and the "
+            f"centre of pressure within {fuzzy.cop_error_mm:g} mm on the plate (the widest band: the full errors). "
+            "Hatched strips along the top of a panel mark where a band is undetermined (a segment's frame can "
+            "flip within the errors): no band is drawn there. Frontal and transverse moments carry no band "
+            "(not analysed).")  # fmt: skip
+
+
+def _allowable(page: KineticsPage) -> str:
+    """The moments' allowable-error sentences (nothing without fuzzy kinetics)."""
+    fuzzy = page.cycles.fuzzy if page.cycles is not None else None
+    if fuzzy is None or not fuzzy.allowable:
+        return ""
+    items = "".join(f"<li>{_esc(text)}</li>" for text in fuzzy.allowable)
+    return ("<h3>How small the errors must be (allowable error of the sagittal moments)</h3><p class=\"small\">"
+            "The largest errors, among the α-levels analysed, for which each moment stays within the tolerance "
+            "of the measured value on every analysed frame (markers: the largest error ball; centre of "
+            f"pressure: its ball).</p><ul>{items}</ul>")  # fmt: skip
+
+
 def kinetics_section(page: KineticsPage | None, clinical: ClinicalData, figs: str) -> str:
     """The kinetics section: computed kinetics (``page``), else the trial's reason for
     none and the kinetics stored in the file, if any."""
@@ -116,8 +143,8 @@ def kinetics_section(page: KineticsPage | None, clinical: ClinicalData, figs: st
     return (HEAD + "<p>Computed by fuzzygait from the force plates as Plug-in Gait does (inverse dynamics from "
             "the foot up, Dempster's segment parameters as Vicon tabulates them): moments in "
             "N·m per kg body mass — positive X is an internal extensor moment at hip and knee and a "
-            "plantarflexor moment at the ankle — powers in W/kg, the ground reaction in % body weight. No "
-            "uncertainty band is drawn for them.</p>" + _figures(page, figs) + _contacts_table(page)
+            "plantarflexor moment at the ankle — powers in W/kg, the ground reaction in % body weight."
+            + _uncertainty(page) + "</p>" + _figures(page, figs) + _allowable(page) + _contacts_table(page)
             + (f"<h3>Kinetics notes</h3><ul class=\"notes small\">{notes}</ul>" if notes else ""))  # fmt: skip
 
 
