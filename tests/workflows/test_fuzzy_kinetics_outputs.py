@@ -224,5 +224,16 @@ def test_the_page_draws_the_bands_and_gives_the_allowable_answer(
     out = write_report([ReportItem(SAMPLE_DATA / "walking.c3d", analysis)], tmp_path / "report")
     html = (out.parent / "walking.html").read_text()
     assert "How small the errors must be (allowable error of the sagittal moments)" in html
+    # ΔΦ of every moment and power on the page, as the dataset gives it
+    assert "Relative band width ΔΦ of the moments and powers (%)" in html
+    delta, flags = kinetic_part(kinetics, "N·m/kg").fuzzy.delta_phi(), kinetic_part(kinetics, "N·m/kg").fuzzy
+    rows = {label: (units, cells) for label, units, cells in fuzzy.delta_phi}
+    assert len(rows) == 12 and rows["Right hip moment, sagittal (+ extensor)"][0] == "N·m/kg"
+    for name, label in (("RHipMoment_X", "Right hip moment, sagittal (+ extensor)"),
+                        ("LAnkleMoment_X", "Left ankle moment, sagittal (+ plantarflexor)")):  # fmt: skip
+        undetermined_half = bool(flags.undetermined(0.5).sel(component=name).any())
+        value = float(delta.sel(component=name, alpha=0.5))
+        assert rows[label][1][0] == ("undetermined" if undetermined_half else f"{value:.0f}")
+        assert rows[label][1][1] == "undetermined"  # α = 0
     assert "Left hip moment, sagittal (+ extensor): " in html and "centre of pressure within 10 mm" in html
     assert (out.parent / "walking_files" / "kinetics.png").is_file()

@@ -155,6 +155,9 @@ class KineticBands:
         allowable: the moments' allowable-error sentences
             (:func:`~fuzzygait.markererror.fuzzy_kinetics.allowable_kinetic_error`).
         cop_error_mm: the centre-of-pressure ball's radius at α = 0, mm.
+        delta_phi: per analysed component ``(label, units, cells)``: ΔΦ (Eq. 5.3, % of the
+            largest |value|, over the determined frames) at each α-level < 1 from the
+            highest down, "undetermined" where a frame is, "–" where none has a band.
     """
 
     alphas: np.ndarray
@@ -162,6 +165,7 @@ class KineticBands:
     undetermined: dict[str, np.ndarray]
     allowable: tuple[str, ...] = ()
     cop_error_mm: float = float("nan")
+    delta_phi: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
 
 
 def _counted_cycles(signal: np.ndarray, vertical: np.ndarray, cycles: Sequence[GaitCycle]) -> list[GaitCycle]:
@@ -210,7 +214,25 @@ def kinetic_bands(fuzzy: xr.Dataset, components: Mapping[str, Mapping[str, np.nd
         moments = kinetic_part(fuzzy, "N·m/kg")
         allowable = tuple(allowable_kinetic_error(moments, str(c), tolerance).sentence
                           for c in moments["component"].to_numpy())  # fmt: skip
-    return KineticBands(alphas, bands, flags, allowable, float(fuzzy.attrs.get("cop_error_mm", np.nan)))
+    return KineticBands(alphas, bands, flags, allowable, float(fuzzy.attrs.get("cop_error_mm", np.nan)),
+                        _delta_phi_rows(fuzzy))  # fmt: skip
+
+
+def _delta_phi_rows(fuzzy: xr.Dataset) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    """:attr:`KineticBands.delta_phi` of a kinetics group."""
+    from fuzzygait.markererror.analysis import relative_envelope_width, undetermined_levels
+    from fuzzygait.markererror.result import UNITS_COORD, kinetic_part
+
+    rows = []
+    for units in dict.fromkeys(fuzzy[UNITS_COORD].to_numpy().astype(str)):
+        part = kinetic_part(fuzzy, str(units))
+        table, flags = relative_envelope_width(part), undetermined_levels(part)
+        labels = dict(zip(part["component"].to_numpy().astype(str), part["label"].to_numpy().astype(str), strict=True))
+        for name in table.index:
+            cells = tuple("undetermined" if flags.loc[name, a] else f"{table.loc[name, a]:.0f}"
+                          if np.isfinite(table.loc[name, a]) else "–" for a in table.columns)  # fmt: skip
+            rows.append((labels[str(name)], str(units), cells))
+    return tuple(rows)
 
 
 @dataclass(frozen=True)

@@ -119,6 +119,22 @@ def _uncertainty(page: KineticsPage) -> str:
             "(not analysed).")  # fmt: skip
 
 
+def _delta_phi(page: KineticsPage) -> str:
+    """The fuzzy kinetics' ΔΦ table (nothing without them)."""
+    fuzzy = page.cycles.fuzzy if page.cycles is not None else None
+    if fuzzy is None or not fuzzy.delta_phi:
+        return ""
+    levels = [a for a in fuzzy.alphas[::-1]]
+    header = [("Moment or power", False), ("Units", False)] + [(f"α = {a:g}", True) for a in levels]
+    rows = [[(_esc(label), False), (_esc(units), False)]
+            + [(f"<i>{c}</i>" if c == "undetermined" else c, True) for c in cells]
+            for label, units, cells in fuzzy.delta_phi]  # fmt: skip
+    return ("<h3>Relative band width ΔΦ of the moments and powers (%)</h3><p class=\"small\">As for the angles: "
+            "the widest α-band anywhere in the analysed frames relative to the largest measured |value|, over the "
+            "frames where the band is determined; “undetermined”: some frame's band is.</p>"
+            + _table(header, rows))  # fmt: skip
+
+
 def _allowable(page: KineticsPage) -> str:
     """The moments' allowable-error sentences (nothing without fuzzy kinetics)."""
     fuzzy = page.cycles.fuzzy if page.cycles is not None else None
@@ -144,7 +160,8 @@ def kinetics_section(page: KineticsPage | None, clinical: ClinicalData, figs: st
             "the foot up, Dempster's segment parameters as Vicon tabulates them): moments in "
             "N·m per kg body mass — positive X is an internal extensor moment at hip and knee and a "
             "plantarflexor moment at the ankle — powers in W/kg, the ground reaction in % body weight."
-            + _uncertainty(page) + "</p>" + _figures(page, figs) + _allowable(page) + _contacts_table(page)
+            + _uncertainty(page) + "</p>" + _figures(page, figs) + _delta_phi(page) + _allowable(page)
+            + _contacts_table(page)
             + (f"<h3>Kinetics notes</h3><ul class=\"notes small\">{notes}</ul>" if notes else ""))  # fmt: skip
 
 
