@@ -102,6 +102,11 @@ class _Factor:
     cholesky: Array
     shrink: Array
 
+    def part(self, start: int, stop: int) -> _Factor:
+        """The factors of the λ ``start … stop - 1`` only (a view)."""
+        size = self.cholesky.shape[1] // len(self.shrink)
+        return _Factor(self.cholesky[:, start * size : stop * size], self.shrink[start:stop])
+
 
 def _factor(n: int, lam: Array) -> _Factor:
     """:class:`_Factor` of ``n`` frames for the values ``lam``: one block-diagonal banded
@@ -176,19 +181,20 @@ def gcv_log_lambda(x: Array) -> float:
     """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN,
     ``n >= 4``): the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s
     heavy smoothing downwards (the grid's last λ without one), refined to 1e-3 by
-    golden-section search between the grid's neighbours.  Short trajectories: the whole
-    grid at once, its factors cached per length; long ones: from the top in chunks,
-    stopping once the first local minimum is known."""
+    golden-section search between the grid's neighbours.  The grid is evaluated from the
+    top in chunks (short trajectories: of the grid's factors cached per length), stopping
+    once its first local minimum is known."""
     x = np.asarray(x, dtype=float).reshape(len(x), -1)
     grid = _GRID
-    step = max(8, CHUNK_UNKNOWNS // len(x))
+    cached = _grid_factor(len(x)) if len(grid) * (len(x) - 3) <= CHUNK_UNKNOWNS else None
+    step = 40 if cached is not None else max(8, CHUNK_UNKNOWNS // len(x))
     values = np.empty(0)
-    if len(grid) * (len(x) - 3) <= CHUNK_UNKNOWNS:  # short: the grid's factors cached per length
-        values = _gcv_of(x, 10.0**grid, _grid_factor(len(x)))
-    minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
-    best = int(minima[0]) if len(minima) else -1
+    best = -1
     while best < 0 and len(values) < len(grid):
-        values = np.r_[values, gcv_values(x, grid[len(values) : len(values) + step])]
+        start, stop = len(values), min(len(values) + step, len(grid))
+        part = (gcv_values(x, grid[start:stop]) if cached is None
+                else _gcv_of(x, 10.0 ** grid[start:stop], cached.part(start, stop)))  # fmt: skip
+        values = np.r_[values, part]
         minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
         best = int(minima[0]) if len(minima) else -1
     if best < 0:
