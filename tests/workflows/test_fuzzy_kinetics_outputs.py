@@ -237,3 +237,27 @@ def test_the_page_draws_the_bands_and_gives_the_allowable_answer(
         assert rows[label][1][1] == "undetermined"  # α = 0
     assert "Left hip moment, sagittal (+ extensor): " in html and "centre of pressure within 10 mm" in html
     assert (out.parent / "walking_files" / "kinetics.png").is_file()
+
+
+@pytest.mark.parametrize("switch", [(), ("--kinetics",)])
+def test_report_passes_the_switch_to_its_trials(switch: tuple[str, ...], tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    """``report --kinetics``: the trials' marker-error settings ask for the fuzzy kinetics
+    (the jobs run :func:`analyse_run` with them and the pages draw what it returns)."""
+    from fuzzygait.core.errors import FuzzyGaitError
+    from fuzzygait.workflows import batch_report, trial_job
+
+    seen = []
+
+    def stop(request: batch_report.BatchReportRequest, **kwargs: object) -> None:
+        seen.append(request)
+        raise FuzzyGaitError("stopped before any trial")
+
+    monkeypatch.setattr(batch_report, "write_batch_report", stop)
+    result = run_here("report", SAMPLE_DATA / "walking.c3d", "--out", tmp_path / "r", "--workers", "1", *switch)
+    assert "stopped before any trial" in result.stderr
+    (request,) = seen
+    settings = request.analysis()
+    assert settings is not None and settings.kinetics is bool(switch)
+    fast = trial_job.mode_settings("fast", settings)
+    assert fast is not None and fast.kinetics is bool(switch)

@@ -80,8 +80,8 @@ class EngineOptions:
 
 @dataclass(frozen=True)
 class ReportContentOptions:
-    """What ``report`` shows: the ``--uncertainty`` bands, a ``--pdf`` beside the pages and
-    the ``--normative`` reference curves."""
+    """What ``report`` shows: the ``--uncertainty`` bands, a ``--pdf`` beside the pages,
+    the ``--normative`` reference curves and the fuzzy ``--kinetics``."""
 
     uncertainty: Annotated[
         str, typer.Option(help="none: the angles only (seconds per trial); fast: the α = 0 and 0.5 bands of hip, "
@@ -92,6 +92,12 @@ class ReportContentOptions:
         Path | None, typer.Option("--normative", metavar="NORM.csv",
                                   help="Normative mean/SD per % gait cycle (see README 'Normative data').")
     ] = None
+    kinetics: Annotated[
+        bool, typer.Option("--kinetics/--no-kinetics",
+                           help="With --uncertainty fast or full: also the fuzzy sagittal joint moments and powers of "
+                           "trials with force plates, their bands on the kinetic figures (as uncertainty --kinetics, "
+                           "default centre-of-pressure error and tolerance); about 14 times the fuzzy angles' time.")
+    ] = False
 
 
 @dataclass(frozen=True)
@@ -312,7 +318,8 @@ def report(
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=batch.workers, tolerance=marker_errors.tolerance_deg(),
-                                              per_source=marker_errors.per_source)  # fmt: skip
+                                              per_source=marker_errors.per_source,
+                                              kinetics=contents.kinetics)  # fmt: skip
         # checked when made: one clear line for a bad --uncertainty, --marker-diameter..., before any work
         request = BatchReportRequest(
             inputs, out_dir, static=calibration.static, subject_file=calibration.subject,
