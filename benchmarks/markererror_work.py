@@ -1,11 +1,12 @@
 """Where the marker-error analysis' work goes (issue 40, item 1): counts, not wall times.
 
-Run:  .venv/bin/python benchmarks/markererror_work.py [--trial walking|cgm24] [--profile] [--row-costs]
+Run:  .venv/bin/python benchmarks/markererror_work.py [--trial walking|cgm24] [--frames N] [--profile] [--row-costs]
 
 The default analysis of ``fuzzygait uncertainty sample_data/walking.c3d`` (Table 3.1,
 all sources, α = 0, 0.25, 0.5, 0.75, 1, the allowable error for ±2.5°, the per-source
 bands of the flexion angles; :func:`~fuzzygait.workflows.marker_uncertainty.analyse_run`)
-in this process (one worker, so every Graph Follower run is counted here).  Per stage (main bands, allowable refinement,
+in this process (one worker, so every Graph Follower run is counted here); ``--frames N``:
+on the trial's first N frames.  Per stage (main bands, allowable refinement,
 per-source bands): the Graph Follower runs, the nodes (components x frames) and α-levels
 < 1 they optimise, the model rows (values, exact gradients) per node and α-level and
 bound, the first-order iterations of :func:`~fuzzygait.uncertainty.gfa.batched.maximise`
@@ -29,10 +30,13 @@ import cProfile  # noqa: E402
 import pstats  # noqa: E402
 import time  # noqa: E402
 from collections import defaultdict  # noqa: E402
-from dataclasses import dataclass, field  # noqa: E402
+from dataclasses import dataclass, field, replace  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from fuzzygait.core.trial import Trial  # noqa: E402
+from fuzzygait.io.c3d import read_c3d  # noqa: E402
 from fuzzygait.uncertainty.gfa import batched  # noqa: E402
 from fuzzygait.workflows.angles import AnglesRun, run_angles  # noqa: E402
 from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings, analyse_run  # noqa: E402
@@ -131,11 +135,18 @@ def table(recorder: Recorder) -> list[str]:
     return rows
 
 
-def trial_run(name: str) -> AnglesRun:
+def trial_run(name: str, frames: int | None = None) -> AnglesRun:
+    """The sample trial's joint-angle run (``frames``: its first ``frames`` frames only,
+    events after them dropped, without its force plates)."""
     prefix = "" if name == "walking" else "cgm24_"
     model = "cgm1.0" if name == "walking" else "cgm2.4"
-    return run_angles(DATA / f"{prefix}walking.c3d", static=DATA / f"{prefix}static.c3d",
-                      subject_file=DATA / f"{prefix}subject.toml", model=model)  # fmt: skip
+    dynamic: Path | Trial = DATA / f"{prefix}walking.c3d"
+    if frames is not None:
+        trial = read_c3d(dynamic)
+        dynamic = replace(trial, markers=trial.markers[:frames], source=None,
+                          events=[e for e in trial.events if e.time < frames / trial.rate])  # fmt: skip
+    return run_angles(dynamic, static=DATA / f"{prefix}static.c3d", subject_file=DATA / f"{prefix}subject.toml",
+                      model=model)  # fmt: skip
 
 
 def row_costs(run: AnglesRun) -> None:
@@ -165,9 +176,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trial", default="walking", choices=("walking", "cgm24"))
     parser.add_argument("--profile", action="store_true")
+    parser.add_argument("--frames", type=int, default=None, help="the trial's first N frames only")
     parser.add_argument("--row-costs", action="store_true", help="also the model's CPU per call and per row")
     args = parser.parse_args()
-    run = trial_run(args.trial)
+    run = trial_run(args.trial, args.frames)
     if args.row_costs:
         row_costs(run)
     recorder = Recorder()

@@ -81,7 +81,7 @@ def test_default_per_source_with_progress_through_every_stage(sparse_run: Angles
     assert recorder.updates("fuzzy angles")[-1] == (1, 1) and components[-1] == (1, 1)
     runs = fuzzy.allowable.attrs["runs"]
     assert recorder.updates("allowable marker error")[-1] == (runs, runs)
-    assert recorder.updates("per-source bands") == [(1, 3), (2, 3), (3, 3)]
+    assert recorder.updates("per-source bands") == [(3, 3)]  # the three sources of the one component side by side
     (note,) = [n for n in messages(analysis.notes) if n.startswith("per-source bands")]
     assert note.startswith("per-source bands (Fig. 5.9): measurement, placement, sta each alone for 1 flexion "
                            "components at α = 0: 3 runs, ")  # fmt: skip
