@@ -261,3 +261,32 @@ def test_report_passes_the_switch_to_its_trials(switch: tuple[str, ...], tmp_pat
     assert settings is not None and settings.kinetics is bool(switch)
     fast = trial_job.mode_settings("fast", settings)
     assert fast is not None and fast.kinetics is bool(switch)
+
+
+def test_a_band_whose_wider_level_is_undetermined_keeps_its_shade() -> None:
+    """Left α = 0.5 drawn where α = 0 is left out: two layers there (the legend swatch of
+    α = 0.5 is two layers), one where α = 0 is drawn beneath it; the strip marks α = 0."""
+    from matplotlib.collections import PolyCollection
+
+    from fuzzygait.viz.report.kinetics import KineticBands, KineticCycles, kinetics_figure
+
+    x = np.arange(101.0)
+    curve = np.sin(x / 16.0)
+    band = np.stack([np.stack([curve - 0.4, curve + 0.4]), np.stack([curve - 0.2, curve + 0.2])])
+    band[0, :, 50:] = np.nan  # α = 0 undetermined on the second half
+    flags = np.zeros((2, 101), dtype=bool)
+    flags[0, 50:] = True
+    fuzzy = KineticBands(np.array([0.0, 0.5]), {"LKneeMoment_X": band}, {"LKneeMoment_X": flags})
+    cycles = KineticCycles({"LKneeMoment_X": curve[None, :]}, {"L": 1}, {"L": 1}, fuzzy=fuzzy)
+    figure = kinetics_figure(cycles, "t")
+    ax = figure.axes[1 * 4 + 0]  # knee row, sagittal column
+    fills = [c for c in ax.collections if isinstance(c, PolyCollection) and c.get_facecolor()[0][3] > 0]
+    layers = np.zeros(101)
+    for fill in fills:
+        for path in fill.get_paths():
+            xs = path.vertices[:, 0]
+            layers[(x >= xs.min()) & (x <= xs.max())] += 1
+    assert (layers[:49] == 2).all() and (layers[51:] == 2).all()  # α = 0 + α = 0.5, or α = 0.5 twice
+    labels = [t.get_text() for t in figure.legends[0].get_texts()]
+    assert "Left α = 0.5" in labels and "α = 0 undetermined: no band" in labels
+    assert not any(t.startswith("Right α") for t in labels)  # no right band drawn

@@ -309,7 +309,9 @@ def _draw_side(ax: Axes, x: np.ndarray, stack: np.ndarray, side: str, spread: st
 
 def _draw_fuzzy(ax: Axes, x: np.ndarray, band: np.ndarray, side: str, layer: float) -> None:
     """α-bands of one side (``(n_alpha, 2, n_points)``, widest first) as the angle figures
-    draw them: left filled in its colour, right hatched, the widest band's edges thin."""
+    draw them: left filled in its colour (each level one more layer; where a wider level is
+    left out, its layer is added, so a level's shade is its legend swatch's), right hatched,
+    the widest band's edges thin."""
     colour = SIDE_STYLE[side][1]
     for k in range(band.shape[0]):
         if side == "R":
@@ -318,6 +320,11 @@ def _draw_fuzzy(ax: Axes, x: np.ndarray, band: np.ndarray, side: str, layer: flo
             hatched.set_hatch_linewidth(HATCH_WIDTH)
         else:
             ax.fill_between(x, band[k, 0], band[k, 1], color=colour, alpha=layer, lw=0, zorder=1.5)
+            for wider in range(k):  # a wider level left out (undetermined): its layer too, so the
+                gap = ~np.isfinite(band[wider]).all(axis=0)  # shade stays the legend's of level k
+                if gap.any():
+                    ax.fill_between(x, np.where(gap, band[k, 0], np.nan), np.where(gap, band[k, 1], np.nan),
+                                    color=colour, alpha=layer, lw=0, zorder=1.5)  # fmt: skip
     for bound in (0, 1):
         ax.plot(x, band[0, bound], color=colour, lw=0.6, ls=SIDE_LINE[side], alpha=0.9, zorder=1.6)
 
