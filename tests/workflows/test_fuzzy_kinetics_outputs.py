@@ -52,9 +52,25 @@ def stance_run(angles_run: AnglesRun) -> AnglesRun:
     return cut(angles_run)
 
 
+class Stages:
+    """Records the stages and updates a workflow reports."""
+
+    def __init__(self) -> None:
+        self.seen: list[tuple[str, int | None]] = []
+
+    def stage(self, description: str, total: int | None = None) -> None:
+        self.seen.append((description, total))
+
+    def update(self, completed: int, total: int | None = None) -> None:
+        self.seen.append(("update", completed))
+
+
+STAGES = Stages()
+
+
 @pytest.fixture(scope="module")
 def analysis(stance_run: AnglesRun) -> MarkerErrorAnalysis:
-    return analyse_run(stance_run, SETTINGS)
+    return analyse_run(stance_run, SETTINGS, stages=STAGES)
 
 
 def test_defaults_are_the_librarys() -> None:
@@ -102,6 +118,8 @@ def test_the_group_holds_moments_and_powers_at_the_measured_kinetics(analysis: M
         assert float(kinetics["allowable_scale"].sel(component=name)) == answer.scale
         assert float(kinetics["allowable_cop_mm"].sel(component=name)) == answer.cop_mm
     assert np.isnan(kinetics["allowable_scale"].sel(component=POWERS).to_numpy()).all()
+    start = STAGES.seen.index(("fuzzy kinetics", 2))  # after the angles, the moments then the powers
+    assert STAGES.seen[start:] == [("fuzzy kinetics", 2), ("update", 1), ("update", 2)]
     (note,) = [n for n in messages(analysis.notes) if n.startswith("fuzzy kinetics")]
     assert note.startswith("fuzzy kinetics: sagittal moments and powers of 6 joints with a 10 mm centre-of-pressure "
                            "ball per loaded plate (plates 1, 2), ")  # fmt: skip

@@ -266,7 +266,7 @@ def analyse_run(
         notes.append(Finding(FindingKind.ALLOWABLE_ERROR, f"allowable marker error for ±{settings.tolerance:g}°"
                              f"{which}: {runs} refinement runs, {seconds:.1f} s"))  # fmt: skip
     if settings.kinetics:
-        result = _with_kinetics(run, settings, result, notes)
+        result = _with_kinetics(run, settings, result, notes, stages)
     fuzzy.attrs["trial"] = Path(run.trial.name).name
     fuzzy.attrs["model"] = run.model
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable, result)
@@ -341,7 +341,8 @@ def analyse_to_files(
     return analysis
 
 
-def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings) -> tuple[xr.Dataset | None, Finding]:
+def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
+                   stages: StageProgress = SILENT) -> tuple[xr.Dataset | None, Finding]:  # fmt: skip
     """The fuzzy sagittal joint moments and the joint powers of ankle, knee and hip of both
     legs (those the run's kinetics computed) at ``settings``' α-levels, error sources and
     centre-of-pressure ball, with each moment's allowable-error answer at
@@ -350,7 +351,8 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings) -> tuple[xr.Da
     was computed; None and the note's reason when the trial has no force plates or the
     fuzzy kinetics cannot be computed (the angle bands stand).  Each foot's load is the
     one the run's kinetics used: the plates read again from the trial's file at the
-    analog rate, each contact of the automatic (or the subject file's) assignment."""
+    analog rate, each contact of the automatic (or the subject file's) assignment.
+    ``stages`` sees the stage ``"fuzzy kinetics"`` (the moments, then the powers)."""
     from fuzzygait.core.errors import FuzzyGaitError
     from fuzzygait.core.findings import Severity
     from fuzzygait.core.names import Side
@@ -371,12 +373,14 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings) -> tuple[xr.Da
         ground = {side: contacts_ground(plates, run.kinetics.contacts, side, trial.n_frames, trial.rate)
                   for side in sides}  # fmt: skip
         parts = []
+        stages.stage("fuzzy kinetics", 2)
         for kind, axis in (("Moment", "_X"), ("Power", "_Z")):
             options = FuzzyKineticsOptions(alphas=settings.alphas, sources=settings.sources,
                                            error_model=settings.error_model, cop_error_mm=settings.cop_error_mm,
                                            kind=kind)  # fmt: skip
             outputs = [f"{side.value}{joint}{kind}{axis}" for side in sides for joint in JOINTS]
             parts.append(fuzzy_joint_moments(trial, run.subject, run.result, ground, options, outputs))
+            stages.update(len(parts), 2)
     except FuzzyGaitError as exc:
         return None, Finding(FindingKind.UNCERTAINTY, f"fuzzy kinetics: not computed: {exc}", Severity.WARNING)
     kinetics = kinetics_group(parts, settings.kinetic_tolerance)
@@ -389,10 +393,10 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings) -> tuple[xr.Da
 
 
 def _with_kinetics(run: AnglesRun, settings: MarkerErrorSettings, result: MarkerErrorResult,
-                   notes: list[Finding]) -> MarkerErrorResult:  # fmt: skip
+                   notes: list[Finding], stages: StageProgress) -> MarkerErrorResult:  # fmt: skip
     """``result`` with the run's fuzzy kinetics (:func:`fuzzy_kinetics`), their note
     appended to ``notes``."""
-    kinetics, note = fuzzy_kinetics(run, settings)
+    kinetics, note = fuzzy_kinetics(run, settings, stages)
     notes.append(note)
     return replace(result, kinetics=kinetics)
 
