@@ -308,3 +308,20 @@ def test_a_band_whose_wider_level_is_undetermined_keeps_its_shade() -> None:
     labels = [t.get_text() for t in figure.legends[0].get_texts()]
     assert "Left α = 0.5" in labels and "α = 0 undetermined: no band" in labels
     assert not any(t.startswith("Right α") for t in labels)  # no right band drawn
+
+
+def test_legs_without_kinetics_are_left_out(stance_run: AnglesRun) -> None:
+    """A leg whose kinetics were not computed gets no fuzzy kinetics; neither: one note."""
+    from fuzzygait.core.names import Side
+    from fuzzygait.workflows.marker_uncertainty import fuzzy_kinetics as run_fuzzy_kinetics
+
+    assert stance_run.kinetics is not None
+    neither = dataclasses.replace(stance_run, kinetics=dataclasses.replace(
+        stance_run.kinetics, unavailable={Side.LEFT: "no LHEE", Side.RIGHT: "no RHEE"}))  # fmt: skip
+    group, note = run_fuzzy_kinetics(neither, SETTINGS)
+    assert group is None and note.message == "fuzzy kinetics: not computed (neither leg's kinetics were)"
+    right = dataclasses.replace(stance_run, kinetics=dataclasses.replace(
+        stance_run.kinetics, unavailable={Side.LEFT: "no LHEE"}))  # fmt: skip
+    group, note = run_fuzzy_kinetics(right, dataclasses.replace(SETTINGS, alphas=(0.5,)))
+    assert group is not None and {str(c)[0] for c in group["component"].to_numpy()} == {"R"}
+    assert "of 3 joints" in note.message

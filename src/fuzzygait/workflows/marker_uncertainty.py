@@ -366,6 +366,8 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
         why = "the kinetics were not computed" if failed or source is None else f"no force plates in {source.name}"
         return None, Finding(FindingKind.UNCERTAINTY, f"fuzzy kinetics: not computed ({why})")
     sides = [side for side in Side if side not in run.kinetics.unavailable]
+    if not sides:
+        return None, Finding(FindingKind.UNCERTAINTY, "fuzzy kinetics: not computed (neither leg's kinetics were)")
     trial = run.trial
     start = time.perf_counter()
     try:
