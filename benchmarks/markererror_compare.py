@@ -76,6 +76,8 @@ def compare(before: Path, after: Path) -> None:
             scale, _ = _largest(old.allowable["scale"].to_numpy(), new.allowable["scale"].to_numpy())
             runs = (old.allowable.attrs.get("runs"), new.allowable.attrs.get("runs"))
             status = int(np.count_nonzero(old.allowable["status"].to_numpy() != new.allowable["status"].to_numpy()))
+            rh, rnan = _largest(old.allowable["hull"].to_numpy(), new.allowable["hull"].to_numpy())
+            print(f"  refined levels' hulls: largest difference {rh:.2e} deg (NaN pattern differs at {rnan})")
             print(f"  allowable: largest difference {mm:.2e} mm (scale {scale:.2e}); status differing {status}; "
                   f"runs {runs[0]} -> {runs[1]}")  # fmt: skip
         if old.sources is not None and new.sources is not None:

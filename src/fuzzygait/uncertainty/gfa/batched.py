@@ -44,6 +44,9 @@ from fuzzygait.uncertainty.protocol import declared_blocks, declared_time_step
 STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
 MIN_REACH = 1e-6
+#: A node's point stops once an iteration gains less than this fraction of the largest
+#: deterministic output magnitude of its block (at least 1).
+STOP_FRACTION = 1e-7
 
 
 @dataclass
@@ -297,7 +300,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     hull = np.empty((levels.size, 2, n_time))
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
-    tolerance = np.concatenate([np.full(n_block, 1e-7 * max(float(np.max(np.abs(deterministic[span]))), 1.0))
+    tolerance = np.concatenate([np.full(n_block, STOP_FRACTION * max(float(np.max(np.abs(deterministic[span]))), 1.0))
                                 for span in spans])  # fmt: skip
     previous_domain = params.domain(1.0)
     below_one = np.arange(levels.size - 1)[::-1]
