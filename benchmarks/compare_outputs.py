@@ -27,8 +27,11 @@ The two folders are compared file by file:
   dimension, and from one flat dataset with ``refined_*``/``allowable_*``/``source_*``
   variables (layout version 1) to the bands at the root and the groups ``allowable`` and
   ``sources`` (layout version 2, issue 38; mapped with
-  :func:`fuzzygait.markererror.legacy.from_flat`): when the two files differ in just
-  that way the old layout is mapped onto the new one and the values are compared (.nc);
+  :func:`fuzzygait.markererror.legacy.from_flat`), and the bands' and kinetics' error
+  sources from the comma-joined attribute ``sources`` to the coordinate ``error_source``
+  (issue 38 item 2; :func:`fuzzygait.markererror.legacy.upgrade_sources`): when the two
+  files differ in just that way the old layout is mapped onto the new one and the values
+  are compared (.nc);
 * PNG: decoded pixels (matplotlib.image.imread), exactly;
 * SVG, HTML, Markdown, text and the printed stdout: text after masking dates, times,
   timing numbers, versions, matplotlib's random SVG ids and absolute temporary paths;
@@ -367,6 +370,23 @@ def to_marker_error_groups(ds: Any) -> dict[str, Any]:
     return from_flat(ds).groups()
 
 
+def map_error_sources(x_groups: dict[str, Any], y_groups: dict[str, Any]) -> bool:
+    """Where a group of one file names the error sources in the old comma-joined attribute
+    and the same group of the other has the coordinate, give the old one the coordinate
+    (in place); True when any was mapped."""
+    from fuzzygait.markererror.legacy import SOURCES_ATTR, upgrade_sources
+    from fuzzygait.markererror.result import SOURCES_COORD
+
+    mapped = False
+    for groups, other in ((x_groups, y_groups), (y_groups, x_groups)):
+        for name in set(groups) & set(other):
+            ds = groups[name]
+            if SOURCES_ATTR in ds.attrs and SOURCES_COORD not in ds.coords and SOURCES_COORD in other[name].coords:
+                groups[name] = upgrade_sources(ds)
+                mapped = True
+    return mapped
+
+
 def compare_variables(x: Any, y: Any, where: str, allow_transpose: bool = False) -> list[str]:
     """Differences of two xarray Datasets (all variables, attributes)."""
     problems = []
@@ -414,6 +434,11 @@ def compare_netcdf(a: Path, b: Path) -> Outcome:
         except Exception as error:  # noqa: BLE001 - any failure: the layouts cannot be mapped
             return Outcome(False, f"marker-error groups cannot be mapped: {error}")
         notes.append("marker-error layout mapped: base flat refined_/allowable_/source_ variables -> new groups")
+    try:
+        if map_error_sources(x_groups, y_groups):
+            notes.append("marker-error sources mapped: attribute 'sources' -> coordinate 'error_source'")
+    except Exception as error:  # noqa: BLE001 - any failure: the sources cannot be mapped
+        return Outcome(False, f"marker-error sources cannot be mapped: {error}")
     problems = []
     if set(x_groups) != set(y_groups):
         problems.append(f"groups: base {sorted(x_groups)} vs new {sorted(y_groups)}")

@@ -31,6 +31,7 @@ from fuzzygait.markererror.result import (
     ball_radius,
     component_deviation,
     component_hull,
+    error_sources,
     fuzzy_angles_dataset,
 )
 from fuzzygait.markererror.sources import TABLE_3_1, ErrorModel, parse_sources, read_error_model
@@ -239,7 +240,7 @@ def test_larger_source_sets_give_wider_envelopes(
     for sources in (("measurement",), ("placement",), ("measurement", "placement"), all_three):
         options = FuzzyAngleOptions(alphas=(0.0,), sources=sources)
         fuzzy = fuzzy_joint_angles(sparse_trial, angles_run.subject, angles_run.result, options, ["LKneeAngles"])
-        assert fuzzy.attrs["sources"] == ",".join(sources)
+        assert error_sources(fuzzy) == sources and fuzzy["error_source"].dims == ("error_source",)
         assert fuzzy["ball_radius"].sel(marker="LKNE") == ErrorModel().radius("LKNE", sources)
         hulls[sources] = {name: component_hull(fuzzy, name).sel(alpha=0.0).isel(frame=frames)
                           for name in ("LKneeAngles_X", "LKneeAngles_Y")}  # fmt: skip
@@ -312,7 +313,9 @@ def test_dataset_layout_and_missing_markers(angles_run: AnglesRun, frames: np.nd
         assert component_hull(fuzzy, c).dims == ("alpha", "bound", "frame")
         assert component_deviation(fuzzy, c).dims == ("alpha", "bound", "frame", "marker")
     assert fuzzy["ball_radius"].to_numpy().tolist() == [32, 32, 32, 32, 32, 32, 30, 20]
-    assert {"trial", "sources", "method", "units", "strategy", "forward_simulations", "node_evaluations",
+    assert "sources" not in fuzzy.attrs
+    assert fuzzy["error_source"].to_numpy().tolist() == ["measurement", "placement", "sta"]
+    assert {"trial", "method", "units", "strategy", "forward_simulations", "node_evaluations",
             "seconds"} <= set(fuzzy.attrs)  # fmt: skip
     assert fuzzy.attrs["method"] == "cartesian" and fuzzy.attrs["node_evaluations"] > 0
 

@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 
 from fuzzygait.core.findings import Finding, FindingKind
-from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset, with_error_sources
 from fuzzygait.viz.report import component_label, cycle_bands
 from fuzzygait.workflows.angles import AnglesRun, run_angles
 from fuzzygait.workflows.report_folder import ReportItem, write_report
@@ -54,7 +54,8 @@ def fake_analysis(run_: AnglesRun, alphas: np.ndarray = ALPHAS) -> FakeAnalysis:
     fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=alphas, frames=run_.trial.frames, times=run_.trial.times,
                                  markers=markers, ball_radius=np.linspace(7.0, 32.0, len(markers))),
                                  deviations={name: deviation for name in names},
-                                 attrs={"trial": run_.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
+                                 attrs={"trial": run_.trial.name})  # fmt: skip
+    fuzzy = with_error_sources(fuzzy, ("measurement", "placement", "sta"))
     keep = alphas < 1
     frame = pd.DataFrame({n: v[keep] for n, v in delta_phi.items()}, index=alphas[keep]).T
     note = Finding(FindingKind.UNCERTAINTY, "fake analysis for the report tests")
@@ -193,7 +194,8 @@ def test_pages_index_figures_and_delta_phi_table(report_dir: Path, noisy_run: An
     # header, subject, data quality
     for needle in ("512 (C3D frames 1–512)", "100 Hz", "Static plantarflexion offset", "23.20",
                    "static offsets calibrated from static.c3d", "LANK", "not filled: longer than max_gap=10",
-                   "Foot strikes", "fake analysis for the report tests", "(1 − α)"):  # fmt: skip
+                   "Foot strikes", "fake analysis for the report tests", "(1 − α)",
+                   "selected error sources: measurement system, marker placement, soft-tissue artefact)"):  # fmt: skip
         assert needle in text, needle
     # no files left behind by the atomic writing
     assert not list(report_dir.parent.glob(".out.*"))

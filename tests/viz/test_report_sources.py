@@ -22,7 +22,7 @@ import pytest
 
 from fuzzygait.markererror.analysis import relative_envelope_width
 from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, source_bands_dataset, widest_source_bands
-from fuzzygait.markererror.result import AngleAxes, MarkerErrorResult, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, MarkerErrorResult, fuzzy_angles_dataset, with_error_sources
 from fuzzygait.viz.report.bands import TrialData
 from fuzzygait.viz.report.sources import _tint, dominant_sentence, source_figure
 from fuzzygait.workflows.angles import AnglesRun
@@ -52,7 +52,8 @@ def source_analysis(run: AnglesRun, per_source: bool = True) -> FakeAnalysis:
     hulls = {n: _hull(table[n].to_numpy(), ALPHAS, ALL_HALF) for n in names}
     fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
                                  markers=list(run.trial.marker_labels), ball_radius=np.full(run.trial.n_markers, 32.0)),
-                                 attrs={"trial": run.trial.name, "sources": "measurement,placement,sta"})  # fmt: skip
+                                 attrs={"trial": run.trial.name})  # fmt: skip
+    fuzzy = with_error_sources(fuzzy, ("measurement", "placement", "sta"))
     if per_source:
         bands = {s: {n: _hull(table[n].to_numpy(), SOURCE_ALPHAS, h,
                               STRETCH if (s, n) == ("sta", "LKneeAngles_X") else None)

@@ -17,7 +17,7 @@ import pytest
 from fuzzygait.core.findings import Finding, FindingKind
 from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.markererror.analysis import relative_envelope_width
-from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset, with_error_sources
 from fuzzygait.viz.report import cycle_bands
 from fuzzygait.viz.report.bands import TrialData, delta_phi_table, headline
 from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
@@ -59,8 +59,8 @@ def undetermined_analysis(run: AnglesRun) -> FakeAnalysis:
     fuzzy = fuzzy_angles_dataset(hulls, AngleAxes(alphas=ALPHAS, frames=run.trial.frames, times=run.trial.times,
                                  markers=list(run.trial.marker_labels),
                                  ball_radius=np.full(run.trial.n_markers, 20.0)),
-                                 attrs={"trial": run.trial.name, "sources": "measurement,placement,sta"},
-                                 undetermined=flags)  # fmt: skip
+                                 attrs={"trial": run.trial.name}, undetermined=flags)  # fmt: skip
+    fuzzy = with_error_sources(fuzzy, ("measurement", "placement", "sta"))
     note = Finding(FindingKind.UNCERTAINTY, "fake undetermined analysis")
     return FakeAnalysis(run, fuzzy, relative_envelope_width(fuzzy), [note])
 

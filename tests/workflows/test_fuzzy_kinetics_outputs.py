@@ -27,7 +27,7 @@ from fuzzygait.gait.cycles import gait_cycles
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.markererror import fuzzy_kinetics, moment_model
 from fuzzygait.markererror.fuzzy_kinetics import allowable_kinetic_error
-from fuzzygait.markererror.result import kinetic_part, read_marker_result, save_marker_result
+from fuzzygait.markererror.result import error_sources, kinetic_part, read_marker_result, save_marker_result
 from fuzzygait.testing import check_result
 from fuzzygait.workflows import trial_inputs
 from fuzzygait.workflows.angles import AnglesRun, run_angles
@@ -133,6 +133,7 @@ def test_the_group_is_written_and_read_back_equal(analysis: MarkerErrorAnalysis,
         assert again.kinetics is not None and analysis.result.kinetics is not None
         xr.testing.assert_identical(again.kinetics, analysis.result.kinetics)
         xr.testing.assert_identical(again.bands, analysis.result.bands)
+        assert error_sources(again.kinetics) == error_sources(again.bands) == ("measurement", "placement", "sta")
     report = check_result(analysis.result)
     assert report["largest_violation"] == 0.0
     assert {"/", "/kinetics/N·m/kg", "/kinetics/W/kg"} <= set(analysis.result.parts())

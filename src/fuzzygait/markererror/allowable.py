@@ -75,6 +75,7 @@ from fuzzygait.markererror.result import (
     angle_components,
     component_hull,
     component_undetermined,
+    error_sources,
 )
 from fuzzygait.markererror.scale_search import ScaleSearch
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
@@ -344,9 +345,10 @@ def _components(fuzzy: xr.Dataset, angles: Sequence[str] | None) -> list[str]:
 
 
 def _check_consistent(fuzzy: xr.Dataset, options: FuzzyAngleOptions, sources: Sequence[str]) -> None:
-    if fuzzy.attrs.get("sources") != ",".join(sources):
-        raise ParameterError(f"the fuzzy result used sources {fuzzy.attrs.get('sources')!r}, the options "
-                             f"{','.join(sources)!r}: refine it with the options it was computed with")  # fmt: skip
+    used = error_sources(fuzzy)
+    if used != tuple(sources):
+        raise ParameterError(f"the fuzzy result used sources {', '.join(used) or 'none named'}, the options "
+                             f"{', '.join(sources)}: refine it with the options it was computed with")  # fmt: skip
     for marker, radius in zip(fuzzy["marker"].to_numpy(), fuzzy["ball_radius"].to_numpy(), strict=True):
         if not math.isclose(options.error_model.radius(str(marker), sources), float(radius), abs_tol=1e-9):
             raise ParameterError(f"the fuzzy result's ball radius of {marker} ({radius} mm) is not the error "

@@ -24,7 +24,9 @@ a ``component`` dimension, on the trial's frames:
   (the Cardan singularity; the middle band is closed at ±90° there,
   :func:`~fuzzygait.markererror.angle_model.gimbal_undetermined`);
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
-* attributes: ``trial``, ``model`` (the model version), ``sources``, ``method``,
+* coordinate ``error_source`` (its own dim): the error sources summed into the balls, in
+  order (read with :func:`~fuzzygait.markererror.result.error_sources`);
+* attributes: ``trial``, ``model`` (the model version), ``method``,
   ``starts``, ``output``, ``units``, ``strategy``, ``forward_simulations``,
   ``node_evaluations`` and ``node_gradients`` (exact gradient rows; in total), ``seconds``.
 
@@ -65,6 +67,7 @@ from fuzzygait.markererror.result import (
     component_hull,
     component_undetermined,
     fuzzy_angles_dataset,
+    with_error_sources,
 )
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
@@ -347,7 +350,7 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
         deviations[column][:, :, frames[:, None], columns[None, :]] = norms
         for key in totals:
             totals[key] += counts[key]
-    attrs = {"trial": trial.name, "sources": ",".join(sources), "method": options.method,
+    attrs = {"trial": trial.name, "method": options.method,
              "starts": options.starts, "gradients": options.gradients, "output": "joint angle",
              "strategy": BatchedDirect.name, **totals,
              "seconds": round(seconds, 3)}  # fmt: skip
@@ -357,7 +360,8 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
     gimbal_undetermined(hulls, flags, measured_index)
     axes = AngleAxes(alphas=alphas, frames=trial.frames, times=trial.times, markers=markers,
                      ball_radius=[options.error_model.radius(m, sources) for m in markers])  # fmt: skip
-    return fuzzy_angles_dataset(hulls, axes, deviations=deviations, attrs=attrs, undetermined=flags)
+    return with_error_sources(fuzzy_angles_dataset(hulls, axes, deviations=deviations, attrs=attrs, undetermined=flags),
+                              sources)  # fmt: skip
 
 
 def undetermined_levels(fuzzy: xr.Dataset) -> pd.DataFrame:

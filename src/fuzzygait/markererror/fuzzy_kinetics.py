@@ -57,7 +57,7 @@ from fuzzygait.markererror.moment_model import (
     PlateShare,
     plate_shares,
 )
-from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset
+from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset, with_error_sources
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 
@@ -243,10 +243,10 @@ def fuzzy_joint_moments(trial: Trial, subject: SubjectParameters, result: CGMRes
         radii = np.array([options.error_model.radius(m, sources) for m in model.markers]
                          + [options.cop_error_mm] * len(model.plates))  # fmt: skip
         runs.append(run_leg(model, radii, options, alphas))
-    attrs = {"trial": trial.name, "sources": ",".join(sources), "model": result.model, "method": "cartesian",
+    attrs = {"trial": trial.name, "model": result.model, "method": "cartesian",
              "starts": options.starts, "output": f"joint {options.kind.lower()}", "strategy": BatchedDirect.name,
              "cop_error_mm": float(options.cop_error_mm), "seconds": round(time.perf_counter() - start, 3)}  # fmt: skip
-    return _assemble(trial, runs, alphas, KINDS[options.kind], attrs)
+    return with_error_sources(_assemble(trial, runs, alphas, KINDS[options.kind], attrs), sources)
 
 
 def kinetic_label(side: Side, joint: str, axis: int, kind: str) -> str:

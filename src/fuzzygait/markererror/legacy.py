@@ -5,16 +5,23 @@ bands (``refined_*``, ``allowable_*``, ``segment_radius``; ``source_*`` over the
 attribute). :func:`from_flat` turns one into a :class:`MarkerErrorResult` (layout
 version 2), the numbers unchanged; :data:`ALLOWABLE_NAMES` and :data:`SOURCE_NAMES` are
 the mapping (also what ``benchmarks/compare_outputs.py`` maps an older revision's file
-with).
+with). The bands and kinetics of files written before issue 38 item 2 (version 1 and
+early version 2) name their error sources in a comma-joined attribute ``sources``:
+:func:`upgrade_sources` turns it into the coordinate
+:data:`~fuzzygait.markererror.result.SOURCES_COORD`.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import xarray as xr
 
-from fuzzygait.markererror.result import MarkerErrorResult
+from fuzzygait.core.errors import ParameterError
+from fuzzygait.markererror.result import SOURCES_COORD, MarkerErrorResult, with_error_sources
+from fuzzygait.markererror.sources import parse_sources
 
-__all__ = ["ALLOWABLE_ATTRS", "ALLOWABLE_NAMES", "SOURCE_ATTRS", "SOURCE_DIMS", "SOURCE_NAMES", "from_flat"]
+__all__ = ["ALLOWABLE_ATTRS", "ALLOWABLE_NAMES", "SOURCES_ATTR", "SOURCE_ATTRS", "SOURCE_DIMS", "SOURCE_NAMES",
+           "from_flat", "upgrade_sources"]  # fmt: skip
 
 #: Version-1 variable -> its name in the group ``allowable`` (``allowable_alpha``, which
 #: is ``1 − allowable_scale``, is dropped: the table computes it).
@@ -39,6 +46,9 @@ SOURCE_ATTRS = {
     "source_seconds": "seconds", "source_runs": "runs", "source_forward_simulations": "forward_simulations",
     "source_node_evaluations": "node_evaluations", "source_nesting_excess_deg": "nesting_excess_deg",
 }  # fmt: skip
+#: The attribute that named the error sources, comma-joined, before the coordinate
+#: :data:`~fuzzygait.markererror.result.SOURCES_COORD` (on the bands and the kinetics).
+SOURCES_ATTR = "sources"
 _DROPPED = ("allowable_alpha", "source_alphas")
 _SHARED = ("bound", "frame", "time", "marker")
 
@@ -70,4 +80,26 @@ def from_flat(flat: xr.Dataset) -> MarkerErrorResult:
     bands = flat.drop_vars(moved)
     bands = bands.drop_dims([d for d in ("refinement", "segment", "source", *SOURCE_DIMS) if d in bands.dims])
     bands.attrs = {k: v for k, v in flat.attrs.items() if k not in {*ALLOWABLE_ATTRS, *SOURCE_ATTRS, *_DROPPED}}
-    return MarkerErrorResult(bands, allowable, sources)
+    return MarkerErrorResult(upgrade_sources(bands), allowable, sources)
+
+
+def upgrade_sources(dataset: xr.Dataset) -> xr.Dataset:
+    """``dataset`` (bands or kinetics) with its old :data:`SOURCES_ATTR` attribute
+    (``"measurement,placement,sta"``) as the coordinate
+    :data:`~fuzzygait.markererror.result.SOURCES_COORD` and the attribute dropped;
+    ``dataset`` itself when it has the coordinate or no such attribute.
+
+    Raises:
+        ParameterError: the attribute names no known error source.
+    """
+    old = dataset.attrs.get(SOURCES_ATTR)
+    if SOURCES_COORD in dataset.coords or old is None:
+        return dataset
+    try:
+        names = parse_sources(str(old) if isinstance(old, str) else [str(n) for n in np.atleast_1d(old)])
+    except ParameterError as error:
+        trial = dataset.attrs.get("trial", "the dataset")
+        raise ParameterError(f"{trial}: its attribute {SOURCES_ATTR!r} = {old!r}: {error}") from None
+    upgraded = with_error_sources(dataset, names)
+    upgraded.attrs = {k: v for k, v in dataset.attrs.items() if k != SOURCES_ATTR}
+    return upgraded

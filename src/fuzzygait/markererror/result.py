@@ -111,6 +111,42 @@ def fuzzy_angles_dataset(
     )
 
 
+#: The coordinate, and its dimension, naming the error sources (Table 3.1:
+#: ``measurement``, ``placement``, ``sta``) summed into every marker's ball, in order, on
+#: the bands and the kinetics (before issue 38 item 2 a comma-joined attribute ``sources``,
+#: converted on read: :func:`error_sources`, :func:`fuzzygait.markererror.legacy.upgrade_sources`).
+SOURCES_COORD = "error_source"
+
+
+def with_error_sources(dataset: xr.Dataset, sources: Sequence[str]) -> xr.Dataset:
+    """``dataset`` with the coordinate :data:`SOURCES_COORD` (dimension of the same name)
+    naming ``sources`` in order (the error sources its marker balls sum).
+
+    Raises:
+        ParameterError: no source, or a name that is not a non-empty string.
+    """
+    names = list(sources)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise ParameterError(f"the error sources must be one or more names; got {names}")
+    coordinate = (SOURCES_COORD, names, {"long_name": "error sources summed into each marker's ball (Table 3.1)"})
+    return dataset.assign_coords({SOURCES_COORD: coordinate})
+
+
+def error_sources(dataset: xr.Dataset) -> tuple[str, ...]:
+    """The error sources summed into the marker balls of ``dataset`` (the bands, the
+    kinetics), in order, e.g. ``("measurement", "placement", "sta")``: the coordinate
+    :data:`SOURCES_COORD`, or, for a dataset written before it, its ``sources``
+    attribute converted (:func:`fuzzygait.markererror.legacy.upgrade_sources`); empty
+    when it names none."""
+    if SOURCES_COORD not in dataset.coords:
+        from fuzzygait.markererror.legacy import upgrade_sources
+
+        dataset = upgrade_sources(dataset)
+    if SOURCES_COORD not in dataset.coords:
+        return ()
+    return tuple(str(s) for s in dataset[SOURCES_COORD].to_numpy())
+
+
 def _require_layout(fuzzy: xr.Dataset) -> None:
     if "component" not in fuzzy.dims or "hull" not in fuzzy.data_vars:
         name = fuzzy.attrs.get("trial", "the dataset")
@@ -176,7 +212,8 @@ class MarkerErrorResult:
     """The marker-error analysis' result: three datasets, each with plain names.
 
     Attributes:
-        bands: the fuzzy joint angles (:func:`fuzzy_angles_dataset` layout; the
+        bands: the fuzzy joint angles (:func:`fuzzy_angles_dataset` layout, with the
+            coordinate :data:`SOURCES_COORD`, read by :func:`error_sources`; the
             ``dataset.fuzzy`` schema; saved at the root).
         allowable: the allowable-error refinement (group ``allowable``; layout in
             :mod:`fuzzygait.markererror.allowable`), None without one.
@@ -186,8 +223,9 @@ class MarkerErrorResult:
             layout version 2: a file without it reads as before, a reader before it
             ignores it): :func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`'
             layout, the moments and powers stacked along ``component`` with coordinate
-            ``units (component)`` (``"N·m/kg"``, ``"W/kg"``; :func:`kinetic_part` selects
-            one kind with its units), and the allowable-error answer per component
+            ``units (component)`` (``"N·m/kg"``, ``"W/kg"``) and :data:`SOURCES_COORD`
+            (:func:`kinetic_part` selects one kind with its units), and the
+            allowable-error answer per component
             (``allowable_scale``, ``allowable_failing``, ``allowable_marker_mm``,
             ``allowable_cop_mm``; NaN where not asked; attribute ``kinetic_tolerance``,
             N·m/kg); None without them.
@@ -245,7 +283,9 @@ def save_marker_result(result: MarkerErrorResult, path: str | os.PathLike[str]) 
 
 def read_marker_result(path: str | os.PathLike[str]) -> MarkerErrorResult:
     """Read a result written by :func:`save_marker_result`, or a version-1 file (one flat
-    dataset, converted: :func:`fuzzygait.markererror.legacy.from_flat`).
+    dataset, converted: :func:`fuzzygait.markererror.legacy.from_flat`); the bands and
+    kinetics of a file written before the coordinate :data:`SOURCES_COORD` get it from
+    their ``sources`` attribute (:func:`~fuzzygait.markererror.legacy.upgrade_sources`).
 
     Raises:
         FuzzyGaitError: a file of a newer layout version, or not a marker-error result.
@@ -260,8 +300,12 @@ def read_marker_result(path: str | os.PathLike[str]) -> MarkerErrorResult:
         from fuzzygait.markererror.legacy import from_flat
 
         return from_flat(root)
+    from fuzzygait.markererror.legacy import upgrade_sources
+
     root.attrs.pop(LAYOUT_ATTR)
-    return MarkerErrorResult(root, groups.get("/allowable"), groups.get("/sources"), groups.get("/kinetics"))
+    kinetics = groups.get("/kinetics")
+    return MarkerErrorResult(upgrade_sources(root), groups.get("/allowable"), groups.get("/sources"),
+                             None if kinetics is None else upgrade_sources(kinetics))  # fmt: skip
 
 
 def kinetic_part(kinetics: xr.Dataset, units: str) -> xr.Dataset:

@@ -33,7 +33,7 @@ from fuzzygait.markererror.analysis import (
 from fuzzygait.markererror.fuzzy_kinetics import DEFAULT_TOLERANCE as DEFAULT_KINETIC_TOLERANCE
 from fuzzygait.markererror.moment_model import DEFAULT_COP_ERROR_MM
 from fuzzygait.markererror.per_source import FLEXION_COMPONENTS, PerSourceRequest, per_source_bands
-from fuzzygait.markererror.result import MarkerErrorResult, angle_components, save_marker_result
+from fuzzygait.markererror.result import MarkerErrorResult, angle_components, error_sources, save_marker_result
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources, read_error_model
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.workflows.angles import AnglesRun
@@ -293,7 +293,7 @@ def _per_source_note(fuzzy: xr.Dataset, sources: xr.Dataset, n_components: int) 
     ``fuzzy``): what, how many, how long, and whether a source's band reaches beyond the
     all-sources band (it should not: nested balls)."""
     alpha = float(sources["alpha"].to_numpy()[0])
-    text = (f"per-source bands (Fig. 5.9): {str(fuzzy.attrs['sources']).replace(',', ', ')} each alone for "
+    text = (f"per-source bands (Fig. 5.9): {', '.join(error_sources(fuzzy))} each alone for "
             f"{n_components} flexion components at α = {alpha:g}: {sources.attrs['runs']} runs, "
             f"{float(sources.attrs['seconds']):.1f} s")  # fmt: skip
     excess = float(sources.attrs["nesting_excess_deg"])

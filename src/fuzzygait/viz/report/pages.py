@@ -13,7 +13,7 @@ import numpy as np
 
 from fuzzygait.core.names import is_flexion
 from fuzzygait.kinematics.labels import PLANES, ROW_TITLES, component_label, parse_component
-from fuzzygait.markererror.result import MarkerErrorResult, ball_radius
+from fuzzygait.markererror.result import MarkerErrorResult, ball_radius, error_sources
 from fuzzygait.markererror.sources import SOURCE_TITLES
 from fuzzygait.mocap.marker_placement import moved_angles
 from fuzzygait.viz.report.allowable import allowable_section, index_cell, lead_box
@@ -69,10 +69,9 @@ def _fmt(value: float | None, digits: int = 1) -> str:
 
 
 def _sources_text(fuzzy: xr.Dataset) -> str:
-    """``"measurement,sta"`` attribute -> ``"measurement system, soft-tissue artefact"``."""
-    sources = fuzzy.attrs.get("sources", "")
-    names = sources.split(",") if isinstance(sources, str) else list(np.atleast_1d(sources))
-    return ", ".join(SOURCE_TITLES.get(str(n).strip(), str(n).strip()) for n in names if str(n).strip())
+    """The bands' error sources as words: ``("measurement", "sta")`` -> ``"measurement
+    system, soft-tissue artefact"`` ("" when the bands name none)."""
+    return ", ".join(SOURCE_TITLES.get(name, name) for name in error_sources(fuzzy))
 
 
 
