@@ -28,9 +28,9 @@ from fuzzygait.io.c3d_backends import (
     BackendError,
     ParamGetter,
     _c3d_param_value,
-    _clean_strings,
     _first_sentence,
     _lenient_reader,
+    open_ezc3d,
 )
 
 __all__ = ["AnalogData", "read_analog"]
@@ -91,24 +91,7 @@ class _Block:
 
 
 def _ezc3d_block(path: Path) -> _Block:
-    import ezc3d
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            c = ezc3d.c3d(str(path), extract_forceplat_data=False)
-    except Exception as exc:  # ezc3d raises OSError, ValueError, RuntimeError, ...
-        raise BackendError(_first_sentence(str(exc))) from exc
-    params = c["parameters"]
-
-    def get(group: str, name: str) -> Any:
-        try:
-            value = params[group][name]["value"]
-        except (KeyError, TypeError):
-            return None
-        if isinstance(value, list):
-            return _clean_strings(value) if value and isinstance(value[0], str) else value
-        return np.asarray(value)
+    c, _, get = open_ezc3d(path)  # ezc3d's warnings: the marker reader reports them
 
     analogs = np.asarray(c["data"]["analogs"], dtype=float)  # (1, channels, samples)
     header = c["header"]

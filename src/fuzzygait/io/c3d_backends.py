@@ -75,7 +75,14 @@ def _clean_strings(values: Any) -> list[str]:
 
 
 # --------------------------------------------------------------------------- ezc3d
-def _decode_ezc3d(path: Path) -> RawC3D:
+def open_ezc3d(path: Path) -> tuple[Any, list[str], ParamGetter]:
+    """``path`` opened by ezc3d (force-platform extraction off): the ezc3d object, the
+    warnings it gave, and a getter of its parameters (string lists cleaned, numbers as
+    arrays, None for a parameter the file lacks).
+
+    Raises:
+        BackendError: ezc3d refused the file (its first sentence).
+    """
     import ezc3d
 
     try:
@@ -95,6 +102,12 @@ def _decode_ezc3d(path: Path) -> RawC3D:
             return _clean_strings(value) if value and isinstance(value[0], str) else value
         return np.asarray(value)
 
+    return c, [str(w.message) for w in caught], get
+
+
+def _decode_ezc3d(path: Path) -> RawC3D:
+    c, caught, get = open_ezc3d(path)
+    params = c["parameters"]
     header = c["header"]
     points = np.asarray(c["data"]["points"], dtype=float)[:3].transpose(2, 1, 0)
     analogs = np.shape(c["data"]["analogs"])  # (1, channels, samples)
@@ -118,7 +131,7 @@ def _decode_ezc3d(path: Path) -> RawC3D:
             if g != "__METADATA__"
         },
         backend="ezc3d",
-        warnings=[str(w.message) for w in caught] + event_notes,
+        warnings=caught + event_notes,
         analog_per_frame=analogs[1] * analogs[2] // points.shape[0] if points.shape[0] and len(analogs) == 3 else None,
     )
 

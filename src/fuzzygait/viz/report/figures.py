@@ -25,6 +25,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from fuzzygait.gait.cycles import percent_points  # noqa: E402
+from fuzzygait.gait.normative import NormativeData  # noqa: E402
 from fuzzygait.kinematics.labels import SIDE_NAMES  # noqa: E402
 from fuzzygait.viz.layout import ANGLE_ROWS, PLANES, SIDE_STYLE  # noqa: E402
 from fuzzygait.viz.report.bands import TrialData, alpha_text  # noqa: E402
@@ -222,13 +223,20 @@ def _not_computed(ax: Axes, text: str = "not computed") -> None:
 
 
 def _normative(ax: Axes, x: np.ndarray, clinical: ClinicalData | None, base: str, axis: str) -> bool:
-    """The normative mean ± 1 SD band (grey, below everything); per side when the file
-    has sided curves (drawn once when both sides share the pooled one)."""
-    if clinical is None or clinical.normative is None:
+    """:func:`draw_normative` of the angle component ``base``/``axis``."""
+    return draw_normative(ax, x, None if clinical is None else clinical.normative, f"{base}_{axis}")
+
+
+def draw_normative(ax: Axes, x: np.ndarray, normative: NormativeData | None, variable: str) -> bool:
+    """The normative mean ± 1 SD band of ``variable`` (named without side, e.g.
+    ``KneeAngles_X``; grey, below everything) over ``x`` (% gait cycle); per side when the
+    file has sided curves (drawn once when both sides share the pooled one). Whether a
+    band was drawn."""
+    if normative is None:
         return False
     drawn: list[int] = []
     for side in SIDE_STYLE:
-        found = clinical.normative.curve(f"{side}{base}_{axis}")
+        found = normative.curve(side + variable)
         if found is None or id(found) in drawn:
             continue
         drawn.append(id(found))

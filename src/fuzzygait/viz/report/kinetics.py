@@ -52,6 +52,7 @@ from fuzzygait.viz.report.figures import (  # noqa: E402
     _band_opacity,
     _draw_undetermined,
     _right_hatch,
+    draw_normative,
 )
 from fuzzygait.viz.report.grid import GridMargins  # noqa: E402
 from fuzzygait.viz.report.normalised_bands import (  # noqa: E402
@@ -274,23 +275,6 @@ class KineticCycles:
         return bool(self.cycles)
 
 
-def _normative(ax: Axes, x: np.ndarray, normative: NormativeData | None, variable: str) -> bool:
-    """The normative mean ± 1 SD (grey, below everything) of ``variable`` without side;
-    per side when the file has sided curves (drawn once when both share one)."""
-    if normative is None:
-        return False
-    drawn: list[int] = []
-    for side in SIDE_STYLE:
-        found = normative.curve(side + variable)
-        if found is None or id(found) in drawn:
-            continue
-        drawn.append(id(found))
-        mean, sd = found
-        ax.fill_between(x, mean - sd, mean + sd, color=NORMATIVE_COLOUR, lw=0, zorder=0)
-        ax.plot(x, mean, color="0.6", lw=0.8, zorder=0.5)
-    return bool(drawn)
-
-
 def _draw_side(ax: Axes, x: np.ndarray, stack: np.ndarray, side: str, spread: str) -> None:
     """One side's curves: ``spread`` ``"cycles"`` each cycle thin, ``"sd"`` the mean ±
     1 SD (left filled, right hatched), and the mean thick on top."""
@@ -403,7 +387,7 @@ def _kinetics_grid(cycles: Mapping[str, np.ndarray], title: str, normative: Norm
             ax = axes[r, c]
             label = f"{joint} {output.lower()} ({unit})\n{_meaning(joint, output, axis)}"
             _panel(ax, column if r == 0 else None, label)
-            any_norm = _normative(ax, x, normative, f"{joint}{output}_{axis}") or any_norm
+            any_norm = draw_normative(ax, x, normative, f"{joint}{output}_{axis}") or any_norm
             for side, percent in foot_off.items():
                 ax.axvline(percent, color=SIDE_STYLE[side][1], lw=1.0, ls=SIDE_LINE[side], alpha=0.85, zorder=1)
             drawn = False
@@ -469,7 +453,7 @@ def grf_figure(cycles: Mapping[str, np.ndarray], title: str, normative: Normativ
     for c, (axis, column, meaning) in enumerate(GRF_COLUMNS):
         ax = axes[0, c]
         _panel(ax, column, f"ground reaction (% body weight)\n{meaning}")
-        any_norm = _normative(ax, x, normative, f"{STANCE_OUTPUT}_{axis}") or any_norm
+        any_norm = draw_normative(ax, x, normative, f"{STANCE_OUTPUT}_{axis}") or any_norm
         for side in SIDE_STYLE:
             stack = cycles.get(f"{side}{STANCE_OUTPUT}_{axis}")
             if stack is not None and len(stack):
