@@ -16,12 +16,20 @@ import pytest
 from scipy.interpolate import BSpline
 from scipy.linalg import null_space
 
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import Side
 from fuzzygait.io import read_c3d
 from fuzzygait.io.subject import subject_from_processing
 from fuzzygait.kinematics import compute_lower_body
 from fuzzygait.kinetics import gcv_spline
-from fuzzygait.kinetics.gcv_spline import MIN_FRAMES, gcv_log_lambda, gcv_values, spline_second_derivative
+from fuzzygait.kinetics.gcv_spline import (
+    MIN_FRAMES,
+    gcv_log_lambda,
+    gcv_log_lambdas,
+    gcv_values,
+    spline_second_derivative,
+    spline_second_derivatives,
+)
 from fuzzygait.kinetics.inverse_dynamics import GRAVITY, derivative
 from fuzzygait.kinetics.plug_in_gait import FORCE_AXES
 from fuzzygait.kinetics.segments import PLUG_IN_GAIT_TABLE, long_segment
@@ -78,6 +86,29 @@ def test_runs_between_gaps_are_their_own_splines() -> None:
     np.testing.assert_array_equal(out[:50], spline_second_derivative(x[:50], RATE))
     np.testing.assert_array_equal(out[55:110], spline_second_derivative(x[55:110], RATE))
     assert np.isnan(out[50:55]).all() and np.isnan(out[110:]).all() and 120 - 111 < MIN_FRAMES
+
+
+def test_trajectories_searched_together_give_each_ones_own_values() -> None:
+    """Six trajectories of a trial at once (as the six centres of mass): three of one length
+    (GCV's first minimum found at different depths of the grid, and none: a noise-free
+    sine), one with a gap, one longer than the cached lengths, a 2-component one:
+    bit-for-bit the values each gives alone."""
+    rng = np.random.default_rng(5)
+    t = np.arange(200) / RATE
+    smooth = np.stack([np.sin(2 * t), np.cos(3 * t), t**2], axis=1)
+    xs = [smooth + rng.normal(0.0, noise, smooth.shape) for noise in (1e-3, 1e-5)] + [smooth]
+    gappy = xs[0].copy()
+    gappy[90:95] = np.nan
+    long_run = np.cumsum(np.cumsum(rng.normal(0.0, 1e-4, (900, 3)), axis=0), axis=0)
+    xs += [gappy, long_run, xs[1][:, :2]]
+    alone = [spline_second_derivative(x, RATE) for x in xs]
+    for together, single in zip(spline_second_derivatives(xs, RATE), alone, strict=True):
+        np.testing.assert_array_equal(together, single)
+    lambdas = gcv_log_lambdas(xs[:3])
+    assert lambdas == [gcv_log_lambda(x) for x in xs[:3]]
+    assert lambdas[2] == GRID[-1] and len({round(v, 6) for v in lambdas}) == 3
+    with pytest.raises(ParameterError, match="one shape"):
+        gcv_log_lambdas([xs[0], xs[5]])
 
 
 def test_it_is_the_acceleration_nexus_used_on_pigkad() -> None:
