@@ -130,3 +130,18 @@ def test_the_alpha_limit(levels: int) -> None:
     else:
         with pytest.raises(FuzzyGaitError, match="alphas= gives 21 α-levels below 1; at most 20"):
             check_alpha_count(alphas)
+
+
+def test_the_estimate_counts_the_fuzzy_kinetics() -> None:
+    """With kinetics the estimate names their components and their cost relative to an
+    angle component's, and labels their progress stage."""
+    from fuzzygait.workflows.work_estimate import FUZZY_KINETICS_STAGE, KINETIC_COMPONENTS, marker_error_work
+
+    frames = {"LKneeAngles_X": 40}
+    plain = marker_error_work(frames, MarkerErrorSettings(alphas=(0.0, 0.5), tolerance=None, per_source=False))
+    with_kinetics = marker_error_work(frames, MarkerErrorSettings(alphas=(0.0, 0.5), tolerance=None, per_source=False,
+                                                                  kinetics=True))  # fmt: skip
+    assert "fuzzy kinetics" not in plain.text
+    assert with_kinetics.text.startswith(plain.text)
+    assert f"the fuzzy kinetics of {KINETIC_COMPONENTS} moment or power components" in with_kinetics.text
+    assert with_kinetics.stages[FUZZY_KINETICS_STAGE] == f"{KINETIC_COMPONENTS} components"

@@ -359,6 +359,7 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
     from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
     from fuzzygait.kinetics.plug_in_gait import JOINTS
     from fuzzygait.markererror.fuzzy_kinetics import FuzzyKineticsOptions, contacts_ground, fuzzy_joint_moments
+    from fuzzygait.workflows.work_estimate import FUZZY_KINETICS_STAGE
 
     source = run.raw.source
     if run.kinetics is None or source is None:
@@ -375,7 +376,7 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
         ground = {side: contacts_ground(plates, run.kinetics.contacts, side, trial.n_frames, trial.rate)
                   for side in sides}  # fmt: skip
         parts = []
-        stages.stage("fuzzy kinetics", 2)
+        stages.stage(FUZZY_KINETICS_STAGE, 2)
         for kind, axis in (("Moment", "_X"), ("Power", "_Z")):
             options = FuzzyKineticsOptions(alphas=settings.alphas, sources=settings.sources,
                                            error_model=settings.error_model, cop_error_mm=settings.cop_error_mm,

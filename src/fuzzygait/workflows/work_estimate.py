@@ -261,6 +261,15 @@ def frv_work(scenario: str, specs: Sequence[FRVSpec], disc: int | Sequence[int],
                         {stage: f"{_sign(certainty)}{count:,} forward simulations"})  # fmt: skip
 
 
+#: The fuzzy kinetics' components (sagittal moment and power of ankle, knee and hip, both
+#: sides; :func:`~fuzzygait.workflows.marker_uncertainty.fuzzy_kinetics`), their progress
+#: stage, and their cost per component and frame relative to an angle component's
+#: (measured on the whole sample trial: 13.9, ``benchmarks/RESULTS.md``, fuzzy moments).
+KINETIC_COMPONENTS = 12
+FUZZY_KINETICS_STAGE = "fuzzy kinetics"
+KINETIC_COST_FACTOR = 14
+
+
 @dataclass(frozen=True)
 class MarkerErrorWork:
     """The marker-error analysis' work: ``optimisations`` = Σ over the analysed components
@@ -277,6 +286,7 @@ class MarkerErrorWork:
     sources: int
     flexion: int
     runs_per_component: int
+    kinetic_components: int = 0
 
     def text(self, frames: str, components: str, per_trial: str = "") -> str:
         """The estimate's line (``frames``/``components``: how to name those factors)."""
@@ -292,6 +302,10 @@ class MarkerErrorWork:
                          f"{_plural(self.flexion, 'flexion component')})")  # fmt: skip
         if later:
             text += f", then{per_trial} " + " and ".join(later) + ", each one α-level over the frames"
+        if self.kinetic_components:
+            text += (f"; where the trial has force plates, the fuzzy kinetics of "
+                     f"{_plural(self.kinetic_components, 'moment or power component')} over the same frames and "
+                     f"α-levels, each about {KINETIC_COST_FACTOR} times an angle component's work")  # fmt: skip
         return text
 
 
@@ -324,6 +338,7 @@ def _marker_work(frames: Mapping[str, int], settings: MarkerErrorSettings) -> Ma
         allowable_runs=MAX_EVALUATIONS * len(refined) if settings.tolerance is not None else 0,
         source_runs=len(settings.sources) * len(flexion) if per_source else 0, sources=len(settings.sources),
         flexion=len(flexion), runs_per_component=MAX_EVALUATIONS,
+        kinetic_components=KINETIC_COMPONENTS if settings.kinetics else 0,
     )  # fmt: skip
 
 
@@ -338,7 +353,8 @@ def marker_error_work(frames: Mapping[str, int], settings: MarkerErrorSettings,
     text = work.text(f"{'' if same else '≤ '}{_plural(work.frames, 'frame')}",
                      _plural(work.components, 'angle component'))  # fmt: skip
     labels = {stages[0]: f"{work.optimisations:,} α-level optimisations",
-              stages[1]: f"≤ {work.allowable_runs:,} runs", stages[2]: f"{work.source_runs:,} runs"}  # fmt: skip
+              stages[1]: f"≤ {work.allowable_runs:,} runs", stages[2]: f"{work.source_runs:,} runs",
+              FUZZY_KINETICS_STAGE: f"{work.kinetic_components} components"}  # fmt: skip
     return WorkEstimate(work.optimisations, "α-level optimisations", EXACTLY, text, labels)
 
 
