@@ -85,7 +85,7 @@ def _flat(result: MarkerErrorResult) -> xr.Dataset:
 def test_groups_with_plain_names(result: MarkerErrorResult, tmp_path: Path) -> None:
     path = save_marker_result(result, tmp_path / "fuzzy.nc")
     groups = load_groups(path)
-    assert list(groups) == ["/", "/allowable", "/sources"] and groups["/"].attrs["layout_version"] == 2
+    assert list(groups) == ["/", "/allowable", "/sources"] and groups["/"].attrs["layout_version"] == 3
     assert set(groups["/allowable"].data_vars) >= {"alpha", "hull", "undetermined", "scale", "status"}
     assert groups["/sources"]["hull"].dims == ("source", "component", "alpha", "bound", "frame")
     assert groups["/sources"]["alpha"].to_numpy().tolist() == [0.0, 1.0]  # a coordinate, not "0,1"
@@ -110,9 +110,9 @@ def test_version_1_file_reads_as_the_same_result(result: MarkerErrorResult, tmp_
 
 def test_newer_version_refused_in_one_line(result: MarkerErrorResult, tmp_path: Path) -> None:
     future = result.bands.copy()
-    future.attrs["layout_version"] = 3
+    future.attrs["layout_version"] = 4
     path = save_result(future, tmp_path / "future.nc")
-    with pytest.raises(FuzzyGaitError, match=r"layout version 3.*update fuzzygait") as error:
+    with pytest.raises(FuzzyGaitError, match=r"layout version 4.*update fuzzygait") as error:
         read_marker_result(path)
     assert "\n" not in str(error.value)
 

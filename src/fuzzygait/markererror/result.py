@@ -199,8 +199,11 @@ def ball_radius(fuzzy: xr.Dataset) -> xr.DataArray | None:
 #: the per-source bands as ``refined_*``/``allowable_*``/``source_*`` variables beside the
 #: bands (before issue 38); 2 = the bands at the root, the refinement in the group
 #: ``allowable`` and the per-source bands in the group ``sources``, each with its own plain
-#: names and dimensions. :func:`read_marker_result` reads both.
-LAYOUT_VERSION = 2
+#: names and dimensions; 3 = version 2 with the error sources as the coordinate
+#: :data:`SOURCES_COORD` of the bands (and the kinetics) instead of a comma-joined
+#: ``sources`` attribute (so a reader of version 2 refuses it in one line instead of
+#: misreading it). :func:`read_marker_result` reads all three.
+LAYOUT_VERSION = 3
 #: The root attribute naming the layout version (absent in version 1).
 LAYOUT_ATTR = "layout_version"
 #: The coordinate of the kinetics group giving each component's units (N·m/kg, W/kg).
