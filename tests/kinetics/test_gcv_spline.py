@@ -225,6 +225,22 @@ def test_gcv_equals_the_dense_one_over_the_whole_search() -> None:
     assert relative.max() < 1e-6 and relative[grid <= 1.0].max() < 1e-10
 
 
+@pytest.mark.parametrize("n", [12, 40, 323, 729])
+def test_the_grid_in_the_sine_basis_equals_the_banded_gcv(n: int) -> None:
+    """The search's grid (up to 729 frames: GCV in the sine basis, the corners by
+    Woodbury) against the banded solves of :func:`gcv_values` at all 361 λ: within 1e-12
+    relative where λ ≤ 1, 1e-6 above (where the banded system's condition, up to 6e9,
+    limits it), and the same first local minimum."""
+    rng = np.random.default_rng(n + 1)
+    x = np.cumsum(np.cumsum(rng.normal(0.0, 1e-4, (n, 3)), axis=0), axis=0) + rng.normal(0.0, 2e-4, (n, 3))
+    banded = gcv_values(x, GRID)
+    values, best = gcv_spline._grid_search([x])
+    relative = np.abs(values[0] / banded - 1.0)
+    assert relative[GRID <= 0.0].max() < 1e-12 and relative.max() < 1e-6
+    minima = np.flatnonzero((banded[1:-1] <= banded[:-2]) & (banded[1:-1] <= banded[2:])) + 1
+    assert best[0] == (minima[0] if len(minima) else -1) and (best[0] > 0 or n == 12)  # 12: no minimum
+
+
 def long_segment_com(file: tuple[str, str], segment: str) -> np.ndarray:
     """The right thigh's or tibia's centre of mass (m) through a shared Nexus trial."""
     trial = read_c3d(shared_file(*file))

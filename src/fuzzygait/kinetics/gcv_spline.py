@@ -48,6 +48,7 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.fft import dst
 from scipy.linalg.lapack import dpbtrf, dpbtrs
 
 from fuzzygait.core.errors import ParameterError
@@ -197,6 +198,86 @@ def _transpose_delta(gamma: Array) -> Array:
     return out
 
 
+@dataclass(frozen=True)
+class _SineGrid:
+    """The search grid's GCV parts for ``n`` frames in the sine basis (see
+    :func:`_sine_grid`): the basis' rows at the corner indices ``rows`` (``(q, n - 3)``),
+    ``1/p`` and ``μ³/p²`` per λ and mode (``(L, n - 3)``), the capacitance solve ``F``, the
+    corner blocks ``Z`` and ``Σ μ³/p² s_q s_r`` (``(L, q, q)``), and ``K_D`` (``(q, q)``)."""
+
+    basis: Array
+    inverse: Array
+    weight: Array
+    capacitance: Array
+    corner: Array
+    weighted: Array
+    corner_ddt: Array
+
+
+def _corner_blocks() -> tuple[int, Array, Array]:
+    """``(a, C_G, C_D)``: ``G`` and ``ΔΔᵀ`` minus the polynomials in ``T = tridiag(-1, 2, -1)``
+    with their symbols differ only in the ``a × a`` blocks at both ends of the diagonal:
+    those blocks (from 16 unknowns; the same for any size), the first at both ends."""
+    m = 16
+    t = np.diag(np.full(m, 2.0)) - np.diag(np.ones(m - 1), 1) - np.diag(np.ones(m - 1), -1)
+    cosine = np.eye(m) - t / 2.0
+    toeplitz = [sum(np.diag(np.full(m - d, v), d) + (np.diag(np.full(m - d, v), -d) if d else 0) for d, v in
+                 enumerate(band)) for band in (_GRAM, _DDT)]  # fmt: skip
+    gram = toeplitz[0] - (0.55 - 1.0 / 60.0) * np.eye(m) - (13.0 / 30.0) * cosine - (1.0 / 30.0) * cosine @ cosine
+    ddt = toeplitz[1] - t @ t @ t
+    a = 2
+    assert np.abs(gram[a:-a, :]).max() < 1e-15 and np.abs(ddt[a:-a, :]).max() == 0.0
+    return a, gram[:a, :a], ddt[:a, :a]
+
+
+@lru_cache(maxsize=4)
+def _sine_grid(n: int) -> _SineGrid:
+    """:class:`_SineGrid` of the whole search grid for ``n`` frames.  ``A = G + λΔΔᵀ`` is
+    ``P(T) + C``: ``P(T)`` diagonal in the orthonormal sine basis ``S`` (DST-I, eigenvalues
+    ``p = g(θ) + λ μ³``, ``μ = 4 sin²(θ/2)``, ``g`` the Gram symbol) and ``C = U K Uᵀ`` two
+    ``2 × 2`` corner blocks (Woodbury: ``A⁻¹ = P⁻¹ - P⁻¹ U F Uᵀ P⁻¹``, ``F = (I + K Z)⁻¹ K``,
+    ``Z = Uᵀ P⁻¹ U``)."""
+    size = n - 3
+    a, gram, ddt = _corner_blocks()
+    index = np.r_[np.arange(a), np.arange(size - a, size)]
+    modes = np.arange(1, size + 1)
+    theta = modes * np.pi / (size + 1)
+    basis = np.sqrt(2.0 / (size + 1)) * np.sin(np.outer(index + 1, modes) * np.pi / (size + 1))
+    mu3 = (4.0 * np.sin(theta / 2.0) ** 2) ** 3
+    symbol = (0.55 - 1.0 / 60.0) + (13.0 / 30.0) * np.cos(theta) + (1.0 / 30.0) * np.cos(theta) ** 2
+    lam = 10.0**_GRID
+    inverse = 1.0 / (symbol[None, :] + lam[:, None] * mu3[None, :])
+    weight = mu3 * inverse**2
+    pairs = (basis[:, None, :] * basis[None, :, :]).reshape(-1, size).T  # (size, q²)
+    q = len(index)
+    corner = (inverse @ pairs).reshape(-1, q, q)
+    k_ddt = np.zeros((q, q))
+    k_ddt[:a, :a], k_ddt[a:, a:] = ddt, ddt[::-1, ::-1]
+    k_gram = np.zeros((q, q))
+    k_gram[:a, :a], k_gram[a:, a:] = gram, gram[::-1, ::-1]
+    k = k_gram[None] + lam[:, None, None] * k_ddt[None]
+    capacitance = np.linalg.solve(np.eye(q)[None] + k @ corner, k)
+    return _SineGrid(basis, inverse, weight, capacitance, corner, (weight @ pairs).reshape(-1, q, q), k_ddt)
+
+
+def _sine_rss(dx: Array) -> Array:
+    """``(L, c)``: ``RSS(λ) = λ² γᵀ ΔΔᵀ γ`` of each column of ``dx`` (``(c, n - 3)``, third
+    differences) at every λ of the grid, by :func:`_sine_grid`: a few matrix products."""
+    size = dx.shape[1]
+    sine = _sine_grid(size + 3)
+    hat = dst(dx.T, type=1, norm="ortho", axis=0)  # S Δx: (size, c)
+    q, c = len(sine.basis), dx.shape[0]
+    spread = (sine.basis[:, :, None] * hat[None]).transpose(1, 0, 2).reshape(size, q * c)
+    w = (sine.inverse @ spread).reshape(-1, q, c)  # Uᵀ P⁻¹ Δx
+    h = sine.capacitance @ w
+    cross = (sine.weight @ spread).reshape(-1, q, c)
+    quad = sine.weight @ hat**2 - 2.0 * np.einsum("lqc,lqc->lc", h, cross) + np.einsum("lqc,lqr,lrc->lc", h,
+                                                                                        sine.weighted, h)  # fmt: skip
+    ends = w - sine.corner @ h  # Uᵀ γ
+    quad += np.einsum("lqc,qr,lrc->lc", ends, sine.corner_ddt, ends)
+    return (10.0**_GRID)[:, None] ** 2 * quad
+
+
 def _first_minimum(values: Array) -> int:
     """Index of the first local minimum (``<=`` both neighbours) of ``values``; -1: none."""
     minima = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
@@ -204,16 +285,21 @@ def _first_minimum(values: Array) -> int:
 
 
 def _grid_search(xs: list[Array]) -> tuple[Array, Array]:
-    """The grid's GCV of the ``(n, c)`` trajectories ``xs`` (all of one shape), from the
-    top in chunks (of the grid's factors cached per length for short trajectories), until
-    each one's first local minimum is known: ``(t, grid)`` values (NaN past a
-    trajectory's stop) and each one's minimum's index (-1: none).  A chunk's
-    factors are made (or taken from the cache) once for all the pending trajectories."""
+    """The grid's GCV of the ``(n, c)`` trajectories ``xs`` (all of one shape) and each
+    one's first local minimum's index (-1: none): ``(t, grid)`` values.  Up to 729 frames
+    the whole grid at once in the sine basis (:func:`_sine_rss`, ``n - tr H`` from the
+    cached banded factors); longer: banded, from the top in chunks until each one's first
+    local minimum is known (NaN past a trajectory's stop), a chunk's factors made once
+    for all the pending trajectories."""
     n, width = xs[0].shape
     dx = np.concatenate([_third_differences(x) for x in xs])
     grid = _GRID
     cached = _grid_factor(n) if len(grid) * (n - 3) <= CHUNK_UNKNOWNS else None
-    step = 40 if cached is not None else max(8, CHUNK_UNKNOWNS // n)
+    step = max(8, CHUNK_UNKNOWNS // n)
+    if cached is not None and n >= MIN_FRAMES:  # the whole grid at once, in the sine basis
+        rss = _sine_rss(dx).reshape(len(grid), len(xs), width).sum(axis=2)
+        values = (rss / np.maximum(cached.shrink, 1e-300)[:, None] ** 2).T
+        return values, np.array([_first_minimum(v) for v in values])
     values = np.full((len(xs), len(grid)), np.nan)
     best = np.full(len(xs), -1)
     stop = 0
@@ -221,13 +307,12 @@ def _grid_search(xs: list[Array]) -> tuple[Array, Array]:
         start, stop = stop, min(stop + step, len(grid))
         pending = np.flatnonzero(best < 0)
         lam = 10.0 ** grid[start:stop]
-        inner = stop - start if cached is not None else max(1, CHUNK_UNKNOWNS // n)  # as gcv_values
-        bounds = [(first, min(first + inner, stop)) for first in range(start, stop, inner)]
-        for first, last in bounds:
+        inner = max(1, CHUNK_UNKNOWNS // n)  # as gcv_values
+        for first in range(start, stop, inner):
+            last = min(first + inner, stop)
             part = lam[first - start : last - start]
-            factor = cached.part(first, last) if cached is not None else _factor(n, part)
-            for t in pending:  # one trajectory per LAPACK call: pbtrs solves column by column, and
-                # a few columns' work stays in cache (all 18 of a trial in one call: 1.3-1.5 × slower)
+            factor = _factor(n, part)
+            for t in pending:  # one trajectory per LAPACK call (pbtrs solves column by column)
                 values[t, first:last] = _gcv_batch(dx[t * width : (t + 1) * width], width, part, factor)[0]
         for t in pending:
             best[t] = _first_minimum(values[t, :stop])
