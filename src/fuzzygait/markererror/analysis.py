@@ -80,15 +80,14 @@ Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
-class FuzzyAngleOptions:
-    """Options of the fuzzy joint-angle analysis.
+class SearchOptions:
+    """The marker-error analysis' search, shared by the fuzzy joint angles and the fuzzy
+    kinetics (:class:`~fuzzygait.markererror.fuzzy_kinetics.FuzzyKineticsOptions`).
 
     Attributes:
         alphas: α-levels (1 is added).
         sources: error sources summed into each marker's radius (Table 3.1).
         error_model: segment values and per-marker overrides.
-        method: ``"cartesian"`` (deviation vectors with the norm constraint) or
-            ``"spherical"`` (radius and two angles per marker, box constraints).
         starts: multistart points per frame (deterministic, higher α-level's optimum,
             then random).
         iterations: optimiser iterations per start at most.
@@ -96,25 +95,36 @@ class FuzzyAngleOptions:
             followed from their neighbours' optima (the Graph Follower's warm starts,
             :class:`~fuzzygait.uncertainty.BatchedDirect`) with ``follow`` iterations.
         follow: optimiser iterations at the followed frames.
+        seed: seed of the random starting points.
+    """
+
+    alphas: Sequence[float] = DEFAULT_ALPHAS
+    sources: Sequence[str] = SOURCES
+    error_model: ErrorModel = field(default_factory=ErrorModel)
+    starts: int = 5
+    iterations: int = 25
+    stride: int = 8
+    follow: int = 5
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class FuzzyAngleOptions(SearchOptions):
+    """Options of the fuzzy joint-angle analysis: the search (:class:`SearchOptions`) and
+
+    Attributes:
+        method: ``"cartesian"`` (deviation vectors with the norm constraint) or
+            ``"spherical"`` (radius and two angles per marker, box constraints).
         workers: processes for the angles (1: in this process), when no
             :class:`~fuzzygait.uncertainty.execution.Evaluator` is given.
-        seed: seed of the random starting points.
         gradients: ``"auto"``: the optimiser takes the exact gradients of the angle with
             respect to the marker deviations (reverse-mode differentiation of the
             kinematic model); ``"differences"``: forward differences (``1 + n_p``
             evaluations per gradient; for comparison).
     """
 
-    alphas: Sequence[float] = DEFAULT_ALPHAS
-    sources: Sequence[str] = SOURCES
-    error_model: ErrorModel = field(default_factory=ErrorModel)
     method: str = "cartesian"
-    starts: int = 5
-    iterations: int = 25
-    stride: int = 8
-    follow: int = 5
     workers: int = 1
-    seed: int = 0
     gradients: str = "auto"
 
 

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -48,6 +48,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinetics.assignment import PlateContact, assigned_ground
 from fuzzygait.kinetics.plug_in_gait import JOINTS
+from fuzzygait.markererror.analysis import SearchOptions
 from fuzzygait.markererror.angle_model import UNDETERMINED_DEG
 from fuzzygait.markererror.moment_model import (
     DEFAULT_COP_ERROR_MM,
@@ -58,7 +59,7 @@ from fuzzygait.markererror.moment_model import (
     plate_shares,
 )
 from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset, with_error_sources
-from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
+from fuzzygait.markererror.sources import parse_sources
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 
 Array = NDArray[np.float64]
@@ -103,30 +104,19 @@ def contacts_ground(plates: Sequence[object], contacts: Sequence[PlateContact], 
 
 
 @dataclass(frozen=True)
-class FuzzyKineticsOptions:
-    """Options of the fuzzy kinetics.
+class FuzzyKineticsOptions(SearchOptions):
+    """Options of the fuzzy kinetics: the search of the fuzzy angles
+    (:class:`~fuzzygait.markererror.analysis.SearchOptions`: α-levels, marker error
+    sources and model, the batched Graph Follower's settings) and
 
     Attributes:
-        alphas: α-levels (1 is added).
-        sources: marker error sources summed into each marker's radius (Table 3.1).
-        error_model: segment values and per-marker overrides.
         cop_error_mm: the centre-of-pressure error ball's radius at α = 0, mm, in the
             plate's plane (:data:`~fuzzygait.markererror.moment_model.DEFAULT_COP_ERROR_MM`).
         kind: ``"Moment"`` (N·m/kg) or ``"Power"`` (W/kg).
-        starts, iterations, stride, follow, seed: the batched Graph Follower's settings
-            (:class:`~fuzzygait.markererror.analysis.FuzzyAngleOptions`).
     """
 
-    alphas: Sequence[float] = DEFAULT_ALPHAS
-    sources: Sequence[str] = SOURCES
-    error_model: ErrorModel = field(default_factory=ErrorModel)
     cop_error_mm: float = DEFAULT_COP_ERROR_MM
     kind: str = "Moment"
-    starts: int = 5
-    iterations: int = 25
-    stride: int = 8
-    follow: int = 5
-    seed: int = 0
 
 
 def requested_components(names: Sequence[str] | None, kind: str) -> dict[Side, list[tuple[str, int]]]:
