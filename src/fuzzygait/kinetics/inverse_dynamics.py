@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from fuzzygait.kinetics.gcv_spline import spline_second_derivative
+from fuzzygait.kinetics.gcv_spline import spline_second_derivative, spline_second_derivatives
 from fuzzygait.kinetics.segments import Segment
 
 #: Gravity (m/s²) along the laboratory's vertical (z up): Plug-in Gait's 9.81.
@@ -129,11 +129,23 @@ def com_acceleration(com: Array, rate: float, method: ComDerivative = ComDerivat
     return derivative(derivative(com, rate), rate)
 
 
-def segment_motion(segment: Segment, rate: float, method: ComDerivative = ComDerivative.FIVE_POINT) -> SegmentMotion:
-    """Centre-of-mass acceleration (by ``method``), angular velocity and acceleration of
-    ``segment``."""
+def com_accelerations(coms: list[Array], rate: float, method: ComDerivative = ComDerivative.FIVE_POINT) -> list[Array]:
+    """:func:`com_acceleration` of each of the ``(n, 3)`` positions ``coms``; by the spline,
+    their runs of one length searched together
+    (:func:`fuzzygait.kinetics.gcv_spline.spline_second_derivatives`: the same values)."""
+    if method is ComDerivative.GCV_SPLINE:
+        return spline_second_derivatives(coms, rate)
+    return [com_acceleration(com, rate, method) for com in coms]
+
+
+def segment_motion(segment: Segment, rate: float, method: ComDerivative = ComDerivative.FIVE_POINT,
+                   acceleration: Array | None = None) -> SegmentMotion:  # fmt: skip
+    """Centre-of-mass acceleration (``acceleration`` when given, else by ``method``),
+    angular velocity and acceleration of ``segment``."""
     omega = angular_velocity(segment.frame, rate)
-    return SegmentMotion(com_acceleration(segment.com, rate, method), omega, wide_difference(omega, rate))
+    if acceleration is None:
+        acceleration = com_acceleration(segment.com, rate, method)
+    return SegmentMotion(acceleration, omega, wide_difference(omega, rate))
 
 
 def _local(frame: Array, v: Array) -> Array:
@@ -159,6 +171,7 @@ def newton_euler(segment: Segment, motion: SegmentMotion, distal: Load, proximal
 
 def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, ...], ground: Load, rate: float,
                            gravity: Array = GRAVITY, method: ComDerivative = ComDerivative.FIVE_POINT,
+                           accelerations: tuple[Array, ...] | None = None,
                            ) -> tuple[list[Load], list[SegmentMotion]]:  # fmt: skip
     """Inverse dynamics from the distal end up.
 
@@ -170,6 +183,9 @@ def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, .
         rate: frames per second.
         gravity: ``(3,)`` m/s².
         method: how the centres of mass are differentiated (:class:`ComDerivative`).
+        accelerations: the centres of mass' accelerations (``(n, 3)`` m/s² per segment)
+            when already made (as both legs' together, :func:`com_accelerations`); else
+            by ``method``, the chain's together.
 
     Returns:
         The load at each joint (of the proximal segment on the distal one, about the
@@ -178,8 +194,10 @@ def chain_inverse_dynamics(segments: tuple[Segment, ...], joints: tuple[Array, .
     loads: list[Load] = []
     motions: list[SegmentMotion] = []
     distal = ground
-    for segment, joint in zip(segments, joints, strict=True):
-        motion = segment_motion(segment, rate, method)
+    if accelerations is None:
+        accelerations = tuple(com_accelerations([segment.com for segment in segments], rate, method))
+    for segment, joint, acceleration in zip(segments, joints, accelerations, strict=True):
+        motion = segment_motion(segment, rate, method, acceleration)
         load = newton_euler(segment, motion, distal, joint, gravity)
         loads.append(load)
         motions.append(motion)

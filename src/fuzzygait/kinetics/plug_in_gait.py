@@ -44,6 +44,7 @@ from fuzzygait.kinetics.inverse_dynamics import (
     SegmentMotion,
     angular_velocity,
     chain_inverse_dynamics,
+    com_accelerations,
     joint_power,
 )
 from fuzzygait.kinetics.segments import MM, leg_segments
@@ -127,12 +128,15 @@ def normalised_grf(force: Array, progression: Array, side: Side, body_mass: floa
 
 
 def side_kinetics(result: CGMResult, trial: Trial, subject: SubjectParameters, side: Side, ground: Load,
-                  out: KineticsResult, method: ComDerivative = ComDerivative.GCV_SPLINE) -> None:  # fmt: skip
-    """One side's outputs into ``out`` (see :func:`plug_in_gait_kinetics`)."""
+                  out: KineticsResult, method: ComDerivative = ComDerivative.GCV_SPLINE,
+                  accelerations: tuple[Array, ...] | None = None) -> None:  # fmt: skip
+    """One side's outputs into ``out`` (see :func:`plug_in_gait_kinetics`); its foot's,
+    tibia's and thigh's centre-of-mass ``accelerations`` (m/s²) when already made."""
     mass = subject.body_mass
     segments = leg_segments(result, side, mass, foot_length(trial, side, subject.marker_radius))
     joints = tuple(result.joint_centres[side.value + name] * MM for name in ("AJC", "KJC", "HJC"))
-    loads, motions = chain_inverse_dynamics(segments, joints, ground, trial.rate, method=method)
+    loads, motions = chain_inverse_dynamics(segments, joints, ground, trial.rate, method=method,
+                                            accelerations=accelerations)  # fmt: skip
     pelvis = SegmentMotion(np.zeros(0), angular_velocity(result.segment_frames["pelvis"], trial.rate), np.zeros(0))
     proximal = [*motions[1:], pelvis]
     for joint, segment, load, motion, above in zip(JOINTS, segments, loads, motions, proximal, strict=True):
@@ -181,9 +185,20 @@ def plug_in_gait_kinetics(result: CGMResult, trial: Trial, subject: SubjectParam
             raise ParameterError(f"the {side.word.lower()} foot's ground load has {len(load.force)} frames; "
                                  f"the trial has {trial.n_frames}")  # fmt: skip
     out = KineticsResult()
-    for side in Side:
+    coms: dict[Side, list[Array]] = {}
+    for side in Side:  # both legs' six centres of mass differentiated together (the spline's search shared)
         try:
-            side_kinetics(result, trial, subject, side, ground.get(side, no_load(trial.n_frames)), out, com_derivative)
+            segments = leg_segments(result, side, subject.body_mass, foot_length(trial, side, subject.marker_radius))
+        except ParameterError as exc:
+            out.unavailable[side] = str(exc)
+            continue
+        coms[side] = [segment.com for segment in segments]
+    accelerations = iter(com_accelerations([com for side in coms for com in coms[side]], trial.rate, com_derivative))
+    for side in coms:
+        made = tuple(next(accelerations) for _ in coms[side])
+        try:
+            side_kinetics(result, trial, subject, side, ground.get(side, no_load(trial.n_frames)), out,
+                          com_derivative, made)  # fmt: skip
         except ParameterError as exc:
             out.unavailable[side] = str(exc)
     return out
