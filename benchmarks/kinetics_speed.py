@@ -21,7 +21,9 @@ plates if it has any), one core (BLAS and OpenMP threads pinned to 1), best of
   the quintic GCV smoothing spline: the pipeline's default), and the same two with the
   five-point differences (``ComDerivative.FIVE_POINT``);
 * the spline alone: one centre-of-mass-like trajectory of the trial (the left knee joint
-  centre, 3 components), and a synthetic 6,000-frame one (a 1 Hz swing with 0.1 mm noise:
+  centre, 3 components), the six centres of mass of both legs together
+  (:func:`~fuzzygait.kinetics.gcv_spline.spline_second_derivatives`, as the kinetics
+  call it), and a synthetic 6,000-frame one (a 1 Hz swing with 0.1 mm noise:
   banded, ``O(n)``, nothing cached per trial length).
 
 Prints seconds, marker frames per second and the ratio of each time to the angles'.
@@ -46,10 +48,11 @@ from fuzzygait.io import read_c3d  # noqa: E402
 from fuzzygait.io.subject import read_subject, subject_from_processing  # noqa: E402
 from fuzzygait.kinematics import compute_lower_body  # noqa: E402
 from fuzzygait.kinetics.assignment import Foot, automatic_assignment, contact_ground  # noqa: E402
-from fuzzygait.kinetics.gcv_spline import spline_second_derivative  # noqa: E402
+from fuzzygait.kinetics.gcv_spline import spline_second_derivative, spline_second_derivatives  # noqa: E402
 from fuzzygait.kinetics.inverse_dynamics import ComDerivative  # noqa: E402
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
-from fuzzygait.kinetics.plug_in_gait import plug_in_gait_kinetics  # noqa: E402
+from fuzzygait.kinetics.plug_in_gait import foot_length, plug_in_gait_kinetics  # noqa: E402
+from fuzzygait.kinetics.segments import leg_segments  # noqa: E402
 
 
 def best_of(call: Callable[[], object], repeats: int) -> float:
@@ -92,6 +95,8 @@ def main() -> None:
     t = np.arange(6000) / trial.rate
     long_run = 50.0 * np.sin(2 * np.pi * t)[:, None] + rng.normal(0.0, 0.1, (t.size, 3))
 
+    coms = [segment.com for side in Side for segment in leg_segments(
+        result, side, subject.body_mass, foot_length(trial, side, subject.marker_radius))]  # fmt: skip
     contacts = automatic_assignment(plates, feet, trial.rate, DEFAULT_THRESHOLD_N)
     ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
     rows = [
@@ -105,6 +110,8 @@ def main() -> None:
             result, trial, subject, ground, ComDerivative.FIVE_POINT), repeats)),
         ("GCV spline alone: one trajectory (LKJC)", best_of(
             lambda: spline_second_derivative(result.joint_centres["LKJC"], trial.rate), repeats)),
+        ("GCV spline alone: both legs' six centres of mass together", best_of(
+            lambda: spline_second_derivatives(coms, trial.rate), repeats)),
     ]  # fmt: skip
     long_seconds = best_of(lambda: spline_second_derivative(long_run, trial.rate), max(1, repeats // 10))
     frames = trial.n_frames
