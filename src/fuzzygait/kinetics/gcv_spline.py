@@ -105,11 +105,6 @@ class _Factor:
     cholesky: Array
     shrink: Array
 
-    def part(self, start: int, stop: int) -> _Factor:
-        """The factors of the λ ``start … stop - 1`` only (a view)."""
-        size = self.cholesky.shape[1] // len(self.shrink)
-        return _Factor(self.cholesky[:, start * size : stop * size], self.shrink[start:stop])
-
 
 def _factor(n: int, lam: Array) -> _Factor:
     """:class:`_Factor` of ``n`` frames for the values ``lam``: one block-diagonal banded
@@ -143,13 +138,6 @@ def _solve(cholesky: Array, rhs: Array) -> Array:
     if info != 0:
         raise np.linalg.LinAlgError(f"banded smoothing solve failed (LAPACK info {info})")
     return np.asarray(solution).T.reshape(rhs.shape)
-
-
-@lru_cache(maxsize=4)
-def _grid_factor(n: int) -> _Factor:
-    """:class:`_Factor` of the whole search grid for ``n`` frames (the same for every
-    trajectory of that length; cached only while ``361·(n - 3) <= CHUNK_UNKNOWNS``)."""
-    return _factor(n, 10.0**_GRID)
 
 
 def _third_differences(x: Array) -> Array:
@@ -203,7 +191,8 @@ class _SineGrid:
     """The search grid's GCV parts for ``n`` frames in the sine basis (see
     :func:`_sine_grid`): the basis' rows at the corner indices ``rows`` (``(q, n - 3)``),
     ``1/p`` and ``μ³/p²`` per λ and mode (``(L, n - 3)``), the capacitance solve ``F``, the
-    corner blocks ``Z`` and ``Σ μ³/p² s_q s_r`` (``(L, q, q)``), and ``K_D`` (``(q, q)``)."""
+    corner blocks ``Z`` and ``Σ μ³/p² s_q s_r`` (``(L, q, q)``), ``K_D`` (``(q, q)``), and
+    ``n - tr H`` per λ (``(L,)``)."""
 
     basis: Array
     inverse: Array
@@ -212,6 +201,7 @@ class _SineGrid:
     corner: Array
     weighted: Array
     corner_ddt: Array
+    shrink: Array
 
 
 def _corner_blocks() -> tuple[int, Array, Array]:
@@ -236,7 +226,8 @@ def _sine_grid(n: int) -> _SineGrid:
     ``P(T) + C``: ``P(T)`` diagonal in the orthonormal sine basis ``S`` (DST-I, eigenvalues
     ``p = g(θ) + λ μ³``, ``μ = 4 sin²(θ/2)``, ``g`` the Gram symbol) and ``C = U K Uᵀ`` two
     ``2 × 2`` corner blocks (Woodbury: ``A⁻¹ = P⁻¹ - P⁻¹ U F Uᵀ P⁻¹``, ``F = (I + K Z)⁻¹ K``,
-    ``Z = Uᵀ P⁻¹ U``)."""
+    ``Z = Uᵀ P⁻¹ U``); ``n - tr H = λ tr(A⁻¹ΔΔᵀ) = λ (Σ μ³/p + tr(Z K_D) - tr(F (W + Z K_D Z)))``,
+    ``W = Uᵀ P⁻¹ S diag(μ³) S P⁻¹ U``."""
     size = n - 3
     a, gram, ddt = _corner_blocks()
     index = np.r_[np.arange(a), np.arange(size - a, size)]
@@ -257,7 +248,10 @@ def _sine_grid(n: int) -> _SineGrid:
     k_gram[:a, :a], k_gram[a:, a:] = gram, gram[::-1, ::-1]
     k = k_gram[None] + lam[:, None, None] * k_ddt[None]
     capacitance = np.linalg.solve(np.eye(q)[None] + k @ corner, k)
-    return _SineGrid(basis, inverse, weight, capacitance, corner, (weight @ pairs).reshape(-1, q, q), k_ddt)
+    weighted = (weight @ pairs).reshape(-1, q, q)
+    trace = (inverse @ mu3 + np.einsum("lqr,rq->l", corner, k_ddt)
+             - np.einsum("lqr,lrq->l", capacitance, weighted + corner @ k_ddt @ corner))  # fmt: skip
+    return _SineGrid(basis, inverse, weight, capacitance, corner, weighted, k_ddt, lam * trace)
 
 
 def _sine_rss(dx: Array) -> Array:
@@ -286,19 +280,18 @@ def _first_minimum(values: Array) -> int:
 
 def _grid_search(xs: list[Array]) -> tuple[Array, Array]:
     """The grid's GCV of the ``(n, c)`` trajectories ``xs`` (all of one shape) and each
-    one's first local minimum's index (-1: none): ``(t, grid)`` values.  Up to 729 frames
-    the whole grid at once in the sine basis (:func:`_sine_rss`, ``n - tr H`` from the
-    cached banded factors); longer: banded, from the top in chunks until each one's first
+    one's first local minimum's index (-1: none): ``(t, grid)`` values.  12 … 729 frames:
+    the whole grid at once in the sine basis (:func:`_sine_grid`, cached per length, and
+    :func:`_sine_rss`); else banded, from the top in chunks until each one's first
     local minimum is known (NaN past a trajectory's stop), a chunk's factors made once
     for all the pending trajectories."""
     n, width = xs[0].shape
     dx = np.concatenate([_third_differences(x) for x in xs])
     grid = _GRID
-    cached = _grid_factor(n) if len(grid) * (n - 3) <= CHUNK_UNKNOWNS else None
     step = max(8, CHUNK_UNKNOWNS // n)
-    if cached is not None and n >= MIN_FRAMES:  # the whole grid at once, in the sine basis
+    if MIN_FRAMES <= n and len(grid) * (n - 3) <= CHUNK_UNKNOWNS:  # the whole grid at once, in the sine basis
         rss = _sine_rss(dx).reshape(len(grid), len(xs), width).sum(axis=2)
-        values = (rss / np.maximum(cached.shrink, 1e-300)[:, None] ** 2).T
+        values = (rss / np.maximum(_sine_grid(n).shrink, 1e-300)[:, None] ** 2).T
         return values, np.array([_first_minimum(v) for v in values])
     values = np.full((len(xs), len(grid)), np.nan)
     best = np.full(len(xs), -1)
