@@ -268,6 +268,22 @@ def test_banded_equals_the_dense_reference_on_real_trajectories(file: tuple[str,
     assert_matches_dense(x)
 
 
+@pytest.mark.parametrize(("file", "segment"), [
+    (("pig-options", "PiGKad_Motion.c3d"), "tibia"),  # unfiltered: a minimum mid-grid
+    (("vicon", "Movement_trial.c3d"), "thigh"),  # filtered: no minimum, the whole grid
+    (("vicon", "Static_trial.c3d"), "thigh"),  # standing: a minimum near the heavy end
+])  # fmt: skip
+def test_the_sine_search_picks_the_banded_searchs_lambda(file: tuple[str, str], segment: str) -> None:
+    """On real centres of mass the search (its grid in the sine basis) picks exactly the λ
+    that the banded solves' GCV over the whole grid (:func:`gcv_values`) and the same
+    golden section give, so the accelerations are the banded spline's bit for bit."""
+    com = long_segment_com(file, segment)
+    x = com[np.all(np.isfinite(com), axis=1)][:729]
+    banded = gcv_values(x, GRID)
+    minima = np.flatnonzero((banded[1:-1] <= banded[:-2]) & (banded[1:-1] <= banded[2:])) + 1
+    assert gcv_log_lambda(x) == gcv_spline._refined(x, int(minima[0]) if len(minima) else -1)
+
+
 def test_banded_equals_the_dense_reference_on_a_long_marker_trajectory() -> None:
     """The 499 frames of a dancer's marker (``Dance.c3d``, mm): the longest shared real run."""
     trial = read_c3d(shared_file("c3d-formats", "Dance.c3d"))

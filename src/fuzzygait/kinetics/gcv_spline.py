@@ -36,9 +36,20 @@ its first column ``a = A⁻¹ e_0`` by the Gohberg–Semencul formula
 ``A⁻¹ = (L(a) L(a)ᵀ - L(b) L(b)ᵀ) / a_0`` (``L(v)`` lower-triangular Toeplitz with first
 column ``v``, ``b = (0, a_{N-1}, …, a_1)``): band sums are weighted sums of lagged
 products, ``O(n)``.  The grid's λ are solved together as one block-diagonal banded
-system (LAPACK ``pbtrf``/``pbtrs``), in chunks of bounded size; for trials of up to
-729 frames the whole grid's factors are cached per length (shared by every trajectory).  ``s''`` at a frame follows from
-the second difference of ``u`` and ``γ`` (Peano kernel of the second difference).
+system (LAPACK ``pbtrf``/``pbtrs``), in chunks of bounded size.  ``s''`` at a frame
+follows from the second difference of ``u`` and ``γ`` (Peano kernel of the second
+difference).
+
+The grid search of trajectories of 12 … 729 frames runs in the sine basis instead (all
+361 λ and all of a trial's trajectories in a few matrix products, the per-length parts
+cached): ``G`` and ``ΔΔᵀ`` are polynomials in ``T = tridiag(-1, 2, -1)``, which the
+orthonormal DST-I diagonalises (eigenvalues ``μ = 4 sin²(θ/2)``, ``ΔΔᵀ`` ↔ ``μ³``), except
+for ``2 × 2`` blocks at both ends of the diagonal, which Woodbury's identity adds back
+(:func:`_sine_grid`).  Its GCV equals the banded solves' within 1e-12 where λ ≤ 1 and
+1e-6 above (where the banded system's condition, up to 6e9, limits them); the chosen
+λ's golden-section refinement and the second derivative stay banded, so on every shared
+trial's centres of mass the λ and accelerations are bit-for-bit those of the banded
+search (``tests/kinetics/test_gcv_spline.py``; all 46 shared trajectories checked once).
 """
 
 from __future__ import annotations
@@ -346,9 +357,8 @@ def gcv_log_lambda(x: Array) -> float:
     """log10 of the λ (frame units) GCV picks for the ``(n, c)`` samples ``x`` (no NaN,
     ``n >= 4``): the first local minimum of GCV on a grid from :data:`LOG_LAMBDA_RANGE`'s
     heavy smoothing downwards (the grid's last λ without one), refined to 1e-3 by
-    golden-section search between the grid's neighbours.  The grid is evaluated from the
-    top in chunks (short trajectories: of the grid's factors cached per length), stopping
-    once its first local minimum is known."""
+    golden-section search between the grid's neighbours.  The grid: see
+    :func:`_grid_search`."""
     return gcv_log_lambdas([x])[0]
 
 
