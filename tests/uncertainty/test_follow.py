@@ -155,7 +155,8 @@ def test_blocks_are_optimised_as_they_would_be_alone_in_shared_calls() -> None:
     extremisers of a run of that block alone — its own followed runs (the gap),
     neighbours, stopping tolerance and seeded random starts; equal up to the rounding of
     batched array operations (measured: bit for bit) — in fewer model calls than the
-    runs alone together (measured 139 against 198)."""
+    runs alone together (measured 139 against 198; 139 against 183 since a point that did
+    not move keeps its gradient, which saves the runs alone more calls)."""
     strategy = BatchedDirect(starts=4, stride=8, follow=5, seed=7)
     model = BlocksModel()
     stacked = graph_follower(model, balls(), (0.0, 0.5), strategy=strategy)
@@ -169,7 +170,7 @@ def test_blocks_are_optimised_as_they_would_be_alone_in_shared_calls() -> None:
                                    rtol=0, atol=1e-12)  # fmt: skip
         np.testing.assert_allclose(stacked.extremiser.to_numpy()[:, :, block * n:(block + 1) * n],
                                    alone.extremiser.to_numpy(), rtol=0, atol=1e-12)  # fmt: skip
-    assert model.calls < 0.75 * calls_alone
+    assert model.calls < 0.8 * calls_alone
 
 
 def test_blocks_must_divide_the_nodes() -> None:

@@ -36,6 +36,7 @@ class Option(StrEnum):
     FORCE = "force"
     FRV = "frv"
     FUZZY = "fuzzy"
+    KINETICS = "kinetics"
     MARKER_DIAMETER = "marker-diameter"
     MODEL = "model"
     NO_FLAT_FOOT = "no-flat-foot"
@@ -92,6 +93,7 @@ _KEYWORDS = {
 _LIBRARY_TEXT = {
     Option.FLAT_FOOT: "flat_foot=True",
     Option.NO_FLAT_FOOT: "flat_foot=False",
+    Option.KINETICS: "kinetics=True",
 }
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from fuzzygait.core.options import Option
 from fuzzygait.kinetics.assignment import ContactUse, PlateContact
 from fuzzygait.viz.report.clinical import ClinicalData
 from fuzzygait.viz.report.clinical_html import kinetics_section as stored_kinetics_section
@@ -108,8 +109,8 @@ def _uncertainty(page: KineticsPage) -> str:
     """The sentence on the moments' uncertainty bands (drawn or not)."""
     fuzzy = page.cycles.fuzzy if page.cycles is not None else None
     if fuzzy is None or not fuzzy.bands:
-        return (" No uncertainty band is drawn for them (the marker-error analysis did not include the kinetics: "
-                "fuzzygait uncertainty --kinetics computes them).")  # fmt: skip
+        return (" No uncertainty band is drawn for them (the marker-error analysis did not include the kinetics; "
+                f"{Option.KINETICS} adds them).")  # fmt: skip
     levels = ", ".join(f"{a:g}" for a in fuzzy.alphas)
     return (f" The shaded bands (α = {levels}) around the sagittal moments and the powers are their fuzzy "
             "uncertainty: how far they can move when every marker moves within its Table 3.1 error ball and the "
