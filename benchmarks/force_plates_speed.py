@@ -16,13 +16,11 @@ Reported as marker frames per second (6,000 frames per file).
 
 from __future__ import annotations
 
-from _setup import one_thread
+from _setup import best_of, one_thread
 
 one_thread()
 
 import tempfile  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import ezc3d  # noqa: E402
@@ -74,26 +72,16 @@ def write_trial(path: Path) -> int:
     return n_frames
 
 
-def best_of(call: Callable[[], object], repeats: int = REPEATS) -> float:
-    call()  # warm-up
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
 def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "plates.c3d"
         frames = write_trial(path)
         rows = [
-            ("read_force_plates(path) (analog rate, unfiltered)", best_of(lambda: read_force_plates(path))),
+            ("read_force_plates(path) (analog rate, unfiltered)", best_of(lambda: read_force_plates(path), REPEATS)),
             ("read_force_plates(path, marker_rate=100) (20 Hz low-pass, resampled)",
-             best_of(lambda: read_force_plates(path, marker_rate=POINT_RATE))),
+             best_of(lambda: read_force_plates(path, marker_rate=POINT_RATE), REPEATS)),
             ("ezc3d.c3d(path, extract_forceplat_data=True)",
-             best_of(lambda: ezc3d.c3d(str(path), extract_forceplat_data=True), repeats=2)),
+             best_of(lambda: ezc3d.c3d(str(path), extract_forceplat_data=True), 2)),
         ]  # fmt: skip
     print(f"## Force-plate reading ({SECONDS} s, {frames} marker frames, {PLATES} type-2 plates, "
           f"{ANALOG_RATE:g} Hz analog; one core, best of {REPEATS})")  # fmt: skip

@@ -13,13 +13,11 @@ Takes about 20 s on 2 cores.
 
 from __future__ import annotations
 
-from _setup import one_thread
+from _setup import best_of, one_thread
 
 one_thread()
 
 import argparse  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 
 import numpy as np  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
@@ -48,15 +46,6 @@ def global_spline_fill(markers: np.ndarray) -> np.ndarray:
     return out
 
 
-def best_of(func: Callable[[], object], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="runs per method; the best is shown")
@@ -66,12 +55,12 @@ def main() -> None:
     _, gaps = fill_gaps(markers, labels)
     filled = sum(g.filled for g in gaps)
     print(f"## Gap-filling speed: 10 min at 120 Hz, 60 markers, {len(gaps)} gaps, {filled} filled (max_gap=10)")
-    baseline = best_of(lambda: global_spline_fill(markers), args.repeat)
+    baseline = best_of(lambda: global_spline_fill(markers), args.repeat, warm_up=False)
     print(f"| fill | seconds (best of {args.repeat}) | ratio to baseline |")
     print("|---|---|---|")
     print(f"| baseline: global cubic spline per marker | {baseline:.2f} | 1.00 |")
     for method in ("spline", "pattern", "auto"):
-        seconds = best_of(lambda m=method: fill_gaps(markers, labels, 10, m), args.repeat)
+        seconds = best_of(lambda m=method: fill_gaps(markers, labels, 10, m), args.repeat, warm_up=False)
         default = " (default)" if method == "auto" else ""
         print(f"| fill_gaps method={method}{default} | {seconds:.2f} | {seconds / baseline:.2f} |")
 

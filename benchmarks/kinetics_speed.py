@@ -32,13 +32,11 @@ The issue's target: both sides' kinetics >= 20,000 frames/s on one core.
 
 from __future__ import annotations
 
-from _setup import ROOT, VICON, one_thread
+from _setup import ROOT, VICON, best_of, one_thread
 
 one_thread()
 
 import argparse  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -53,17 +51,6 @@ from fuzzygait.kinetics.inverse_dynamics import ComDerivative  # noqa: E402
 from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates  # noqa: E402
 from fuzzygait.kinetics.plug_in_gait import foot_length, plug_in_gait_kinetics  # noqa: E402
 from fuzzygait.kinetics.segments import leg_segments  # noqa: E402
-
-
-def best_of(call: Callable[[], object], repeats: int) -> float:
-    """The shortest of ``repeats`` timed calls (s), after one untimed call."""
-    call()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main() -> None:
