@@ -108,6 +108,8 @@ class TrialKinetics:
         edges: per contact (as ``contacts``), when it began and ended, s on the C3D clock,
             from the plate's analog contact (NaN: with the trial's first or last frame;
             :func:`~fuzzygait.workflows.plate_events.contact_edges`).
+        force_plates: the plates as read (analog rate; :func:`~fuzzygait.kinetics.plates.read_force_plates`),
+            for the analyses that need their samples again (the fuzzy kinetics).
     """
 
     data: xr.Dataset
@@ -115,6 +117,7 @@ class TrialKinetics:
     findings: tuple[Finding, ...] = ()
     unavailable: Mapping[Side, str] = field(default_factory=dict)
     edges: tuple[tuple[float, float], ...] = ()
+    force_plates: tuple[ForcePlate, ...] = ()
 
     @property
     def body_mass(self) -> float:
@@ -320,7 +323,7 @@ def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *
                                     side=side.word.lower()))  # fmt: skip
     edges = tuple(contact_edges(plates, contacts, trial.rate, trial.first_frame))
     return TrialKinetics(_dataset(out, trial, plates, run.subject.body_mass), tuple(contacts), tuple(findings),
-                         dict(out.unavailable), edges)  # fmt: skip
+                         dict(out.unavailable), edges, tuple(plates))  # fmt: skip
 
 
 def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = None,

@@ -350,13 +350,12 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
     :class:`~fuzzygait.markererror.result.MarkerErrorResult`), and the note saying what
     was computed; None and the note's reason when the trial has no force plates or the
     fuzzy kinetics cannot be computed (the angle bands stand).  Each foot's load is the
-    one the run's kinetics used: the plates read again from the trial's file at the
-    analog rate, each contact of the automatic (or the subject file's) assignment.
+    one the run's kinetics used: its plates (analog rate) and each contact of the
+    automatic (or the subject file's) assignment.
     ``stages`` sees the stage ``"fuzzy kinetics"`` (the moments, then the powers)."""
     from fuzzygait.core.errors import FuzzyGaitError
     from fuzzygait.core.findings import Severity
     from fuzzygait.core.names import Side
-    from fuzzygait.kinetics.plates import DEFAULT_THRESHOLD_N, read_force_plates
     from fuzzygait.kinetics.plug_in_gait import JOINTS
     from fuzzygait.markererror.fuzzy_kinetics import FuzzyKineticsOptions, contacts_ground, fuzzy_joint_moments
     from fuzzygait.workflows.work_estimate import FUZZY_KINETICS_STAGE
@@ -372,7 +371,7 @@ def fuzzy_kinetics(run: AnglesRun, settings: MarkerErrorSettings,
     trial = run.trial
     start = time.perf_counter()
     try:
-        plates = read_force_plates(source, threshold_n=DEFAULT_THRESHOLD_N)
+        plates = run.kinetics.force_plates
         ground = {side: contacts_ground(plates, run.kinetics.contacts, side, trial.n_frames, trial.rate)
                   for side in sides}  # fmt: skip
         parts = []
