@@ -9,8 +9,8 @@ in this process (one worker, so every Graph Follower run is counted here); ``--f
 on the trial's first N frames.  Per stage (main bands, allowable refinement,
 per-source bands): the Graph Follower runs, the nodes (components x frames) and α-levels
 < 1 they optimise, the model rows (values, exact gradients) per node and α-level and
-bound, the first-order iterations of :func:`~fuzzygait.uncertainty.gfa.batched.maximise`
-(calls, starting points, point-iterations per point, points still active after the
+bound, the solver's iterations (:func:`~fuzzygait.uncertainty.gfa.spectral.maximise_spectral`,
+or :func:`~fuzzygait.uncertainty.gfa.batched.maximise`: calls, starting points, point-iterations per point, points still active after the
 last iteration, iterations without gain, the step fractions taken), how many starts per
 node end at the same optimum (within 1e-3°) and which start wins, and the frames that
 flip (undetermined).  ``--profile``: a cProfile of the whole analysis, the functions by
@@ -76,31 +76,34 @@ class Recorder:
 
 
 def instrument(recorder: Recorder) -> None:
-    """Record every run_batched call's counts and size in ``recorder``."""
-    original = batched.run_batched
-
-    def counted(model, params, levels, strategy, progress):  # type: ignore[no-untyped-def]
-        made: list[batched.BatchCounts] = []
-        factory = batched.BatchCounts
-
-        def make() -> batched.BatchCounts:
-            made.append(factory())
-            return made[-1]
-
-        batched.BatchCounts = make  # type: ignore[assignment,misc]
-        try:
-            out = original(model, params, levels, strategy, progress)
-        finally:
-            batched.BatchCounts = factory  # type: ignore[misc]
-        stage = recorder.stages[recorder.current]
-        stage.runs += 1
-        stage.node_levels += int(model.n_time) * (np.asarray(levels).size - 1) * 2
-        stage.counts += made
-        return out
-
+    """Record every batched run's counts and size in ``recorder`` (level by level,
+    ``run_batched``, and all levels together, ``run_levels_together``)."""
     import fuzzygait.uncertainty.gfa.api as api
 
-    api.run_batched = counted  # type: ignore[assignment]
+    def counting(original):  # type: ignore[no-untyped-def]
+        def counted(model, params, levels, strategy, progress):  # type: ignore[no-untyped-def]
+            made: list[batched.BatchCounts] = []
+            factory = batched.BatchCounts
+
+            def make() -> batched.BatchCounts:
+                made.append(factory())
+                return made[-1]
+
+            batched.BatchCounts = make  # type: ignore[assignment,misc]
+            try:
+                out = original(model, params, levels, strategy, progress)
+            finally:
+                batched.BatchCounts = factory  # type: ignore[misc]
+            stage = recorder.stages[recorder.current]
+            stage.runs += 1
+            stage.node_levels += int(model.n_time) * (np.asarray(levels).size - 1) * 2
+            stage.counts += made
+            return out
+
+        return counted
+
+    api.run_batched = counting(api.run_batched)  # type: ignore[assignment]
+    api.run_levels_together = counting(api.run_levels_together)  # type: ignore[assignment]
 
 
 def table(recorder: Recorder) -> list[str]:

@@ -30,9 +30,16 @@ def sparse_run(angles_run: AnglesRun) -> AnglesRun:
     return sparse_angles_run(angles_run, 6)
 
 
+@pytest.mark.parametrize("solver, iterations, tolerance", [("frank-wolfe", 25, 1e-9), ("spectral", 50, 1e-3)])
 @pytest.mark.parametrize("name", ["LKneeAngles", "RPelvisAngles"])
-def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, name: str) -> None:
-    options = FuzzyAngleOptions(alphas=(0.0, 1.0), workers=1)
+def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, name: str, solver: str,
+                                                          iterations: int, tolerance: float) -> None:  # fmt: skip
+    """Frank–Wolfe (its settings before issue 40): the same within 1e-9 deg.  The spectral solver's Barzilai–Borwein
+    steps and non-monotone search amplify the rounding of the scaling along the points
+    still moving at the iteration cap: measured up to 1.6e-4 deg (knee, α = 0, 50
+    iterations), so 1e-3 deg."""
+    options = FuzzyAngleOptions(alphas=(0.0, 1.0), workers=1, solver=solver, iterations=iterations,
+                                follow=iterations // 5)  # fmt: skip
     tasks, _ = component_tasks(sparse_run.trial, sparse_run.subject, sparse_run.result, options, [name])
     alphas = (0.9, 0.3, 0.0)
     together = run_component_blocks(BlockJob(tuple(tasks), tuple(1.0 - a for a in alphas), (0.0, 1.0)))
@@ -40,8 +47,9 @@ def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, 
         alone = run_component_task(task._replace(options=replace(task.options, alphas=(alpha, 1.0))))
         assert column == alone[0]
         assert hull.shape == alone[1].shape and np.all(np.isfinite(hull) == np.isfinite(alone[1]))
-        np.testing.assert_allclose(hull, alone[1], rtol=0, atol=1e-9, equal_nan=True)  # degrees
-        np.testing.assert_allclose(norms, alone[2], rtol=0, atol=1e-9, equal_nan=True)  # mm
+        np.testing.assert_allclose(hull, alone[1], rtol=0, atol=tolerance, equal_nan=True)  # degrees
+        if solver == "frank-wolfe":  # the same optimum: the same deviations
+            np.testing.assert_allclose(norms, alone[2], rtol=0, atol=1e-9, equal_nan=True)  # mm
         finite = np.isfinite(norms[0])
         assert np.all(norms[0][finite] <= (1.0 - alpha) * np.max(task.radii) + 1e-9)  # inside the α balls
     assert together[0][3]["node_evaluations"] > 0 and together[1][3]["node_evaluations"] == 0

@@ -8,6 +8,15 @@ with respect to marker deviations that way (exact gradients, one reverse sweep f
 deviation at once).  Code on that path must not turn its inputs into plain arrays:
 :func:`floats` is ``np.asarray(x, dtype=float)`` for anything but a traced array, which
 it leaves as it is.
+
+Indexing a traced array with basic indices (integers, slices, ``None``, ``...``; e.g. a
+marker's column of the positions) has a reverse sweep that adds the gradient into a
+zero array at the indexed place.  autograd does that with ``numpy.add.at`` whatever the
+index, which is made for repeated fancy indices and is slow; a basic index cannot
+repeat an element, so here it is an in-place ``+=`` of the view (the same numbers).
+Measured on the joint-angle gradients of the marker-error analysis
+(``benchmarks/RESULTS.md``, issue 40): ``add.at`` was about a quarter of the CPU of a
+knee angle's gradients.
 """
 
 from __future__ import annotations
@@ -15,6 +24,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from autograd.extend import SparseObject, defvjp, primitive, vspace
+from autograd.numpy.numpy_boxes import ArrayBox
+from autograd.numpy.numpy_vjps import untake
 from autograd.tracer import getval, isbox
 
 __all__ = ["floats", "plain"]
@@ -32,3 +44,26 @@ def plain(x: Any) -> np.ndarray:
     """The values of ``x`` as a plain float array (a traced array's current values; for
     decisions such as convergence tests, which are not differentiated)."""
     return np.asarray(getval(x), dtype=float)
+
+
+def _basic(index: Any) -> bool:
+    """True for a basic index: no element can be selected twice."""
+    parts = index if isinstance(index, tuple) else (index,)
+    return all(isinstance(p, int | slice | type(None) | type(Ellipsis)) and not isinstance(p, bool) for p in parts)
+
+
+@primitive
+def _untake_basic(x: Any, index: Any, space: Any) -> SparseObject:
+    """The reverse sweep of ``A[index]`` for a basic ``index``: ``x`` added at ``index``
+    of a zero array of ``A``'s space."""
+
+    def add(out: np.ndarray) -> np.ndarray:
+        out[index] += x
+        return out
+
+    return SparseObject(space, add)
+
+
+defvjp(_untake_basic, lambda ans, x, index, _space: lambda g: g[index])
+defvjp(ArrayBox.__getitem__,
+       lambda ans, A, index: lambda g: (_untake_basic if _basic(index) else untake)(g, index, vspace(A)))  # fmt: skip

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -88,24 +88,33 @@ class SearchOptions:
         alphas: α-levels (1 is added).
         sources: error sources summed into each marker's radius (Table 3.1).
         error_model: segment values and per-marker overrides.
-        starts: multistart points per frame (deterministic, higher α-level's optimum,
-            then random).
-        iterations: optimiser iterations per start at most.
+        starts: multistart points per frame and α-level (the deterministic deviations,
+            then screened random ones; the levels then exchange their optima,
+            :mod:`fuzzygait.uncertainty.gfa.levels`).
+        iterations: optimiser iterations (model calls) per start at most.
         stride: frames between full multistart optimisations; the frames in between are
             followed from their neighbours' optima (the Graph Follower's warm starts,
             :class:`~fuzzygait.uncertainty.BatchedDirect`) with ``follow`` iterations.
         follow: optimiser iterations at the followed frames.
         seed: seed of the random starting points.
+        solver: the batched Graph Follower's local solver (``"spectral"``, or
+            ``"frank-wolfe"`` for comparison; :class:`~fuzzygait.uncertainty.BatchedDirect`).
     """
 
     alphas: Sequence[float] = DEFAULT_ALPHAS
     sources: Sequence[str] = SOURCES
     error_model: ErrorModel = field(default_factory=ErrorModel)
     starts: int = 5
-    iterations: int = 25
+    iterations: int = 50
     stride: int = 8
-    follow: int = 5
+    follow: int = 10
     seed: int = 0
+    solver: str = "spectral"
+
+    def strategy(self) -> BatchedDirect:
+        """The batched Graph Follower strategy of these settings."""
+        return BatchedDirect(starts=self.starts, iterations=self.iterations, seed=self.seed, stride=self.stride,
+                             follow=self.follow, solver=self.solver)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -126,6 +135,10 @@ class FuzzyAngleOptions(SearchOptions):
     method: str = "cartesian"
     workers: int = 1
     gradients: str = "auto"
+
+    def strategy(self) -> BatchedDirect:
+        """The batched Graph Follower strategy of these settings (and gradient source)."""
+        return replace(super().strategy(), gradients=self.gradients)
 
 
 class ComponentTask(NamedTuple):
@@ -202,9 +215,7 @@ def run_angle_task(tasks: Sequence[ComponentTask]) -> list[tuple[str, np.ndarray
                 FuzzyNumber(np.array([0.0, 1.0]), np.array([-np.pi, -np.pi]), np.array([np.pi, np.pi]), f"{label}_phi"),
             ]
         params, fuzzy_model = FuzzyVector(numbers), SphericalDeviationModel(node_model)
-    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
-                             stride=options.stride, follow=options.follow, gradients=options.gradients)  # fmt: skip
-    result = graph_follower(fuzzy_model, params, options.alphas, strategy=strategy)
+    result = graph_follower(fuzzy_model, params, options.alphas, strategy=options.strategy())
     hull = result["hull"].to_numpy()  # (alpha, bound, components x frames)
     extremiser = result["extremiser"].to_numpy().reshape(*hull.shape, len(markers), 3)
     if options.method == "spherical":

@@ -180,9 +180,7 @@ def run_leg(model: LegKineticsModel, radii: Array, options: FuzzyKineticsOptions
     ``radii`` mm, one per :attr:`~LegKineticsModel.ball_names`)."""
     balls = model.ball_names
     params = FuzzyBalls(np.zeros((len(balls), 3)), radii, tuple(balls))
-    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
-                             stride=options.stride, follow=options.follow)  # fmt: skip
-    result = graph_follower(model, params, tuple(alphas), strategy=strategy)
+    result = graph_follower(model, params, tuple(alphas), strategy=options.strategy())
     hull = result["hull"].to_numpy()
     extremiser = result["extremiser"].to_numpy()  # (alpha, bound, nodes, n_p)
     coordinates = extremiser.reshape(*hull.shape, len(balls), 3).copy()

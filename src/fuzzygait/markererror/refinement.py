@@ -33,7 +33,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import ComponentTask, FuzzyAngleOptions, component_tasks, run_component_task
 from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, undetermined
 from fuzzygait.markererror.scale_search import ScaleSearch
-from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
+from fuzzygait.uncertainty import FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 
 Progress = Callable[[int, int], None]
@@ -91,9 +91,7 @@ def run_component_blocks(job: BlockJob) -> list[Run]:
     node_model = ScaledComponentsModel(model, tuple(t.axis for t in job.tasks),
                                        np.stack([t.reference for t in job.tasks]), factors)  # fmt: skip
     params = FuzzyBalls(np.zeros((len(markers), 3)), np.ones(len(markers)), tuple(markers))
-    strategy = BatchedDirect(starts=options.starts, iterations=options.iterations, seed=options.seed,
-                             stride=options.stride, follow=options.follow, gradients=options.gradients)  # fmt: skip
-    result = graph_follower(node_model, params, job.levels, strategy=strategy)
+    result = graph_follower(node_model, params, job.levels, strategy=options.strategy())
     hull = result["hull"].to_numpy()  # (level, bound, blocks x frames)
     n_frames = first.frames.size
     extremiser = result["extremiser"].to_numpy().reshape(*hull.shape[:2], len(job.tasks), n_frames, len(markers), 3)

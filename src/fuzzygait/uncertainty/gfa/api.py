@@ -23,6 +23,7 @@ from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.fuzzy import FuzzyNumber
 from fuzzygait.uncertainty.gfa.batched import run_batched
 from fuzzygait.uncertainty.gfa.follower import run_follower
+from fuzzygait.uncertainty.gfa.levels import run_levels_together
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect, Direct, Linearised, Strategy
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
 from fuzzygait.uncertainty.postprocess import repair_nesting
@@ -95,7 +96,9 @@ def graph_follower(
         )
     levels = alpha_levels(alphas)
     counted = CountedModel(fuzzy_model, scale=parameters.scale)
-    if isinstance(strategy, BatchedDirect):
+    if isinstance(strategy, BatchedDirect) and strategy.solver == "spectral" and isinstance(parameters, FuzzyBalls):
+        run = run_levels_together(counted, parameters, levels, strategy, progress)
+    elif isinstance(strategy, BatchedDirect):
         run = run_batched(counted, parameters, levels, strategy, progress)
     else:
         run = run_follower(counted, parameters, levels, strategy, progress)

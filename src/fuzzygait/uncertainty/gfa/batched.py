@@ -29,7 +29,7 @@ because whole trajectories are not needed).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -37,11 +37,17 @@ from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.schema import BOUNDS, SENSES
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
+from fuzzygait.uncertainty.gfa.objective import (
+    STEP_FRACTIONS,
+    BatchCounts,
+    BatchedObjective,
+    NodeObjective,
+    best_of_starts,
+)
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
 from fuzzygait.uncertainty.protocol import declared_blocks, declared_time_step
 
-STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
 MIN_REACH = 1e-6
 #: A node's point stops once an iteration gains less than this fraction of the largest
@@ -49,71 +55,8 @@ MIN_REACH = 1e-6
 STOP_FRACTION = 1e-7
 
 
-@dataclass
-class BatchCounts:
-    """Work done: node evaluations (rows), exact node gradients (rows) and iterations, and
-    where :func:`maximise`'s iterations go (``benchmarks/markererror_work.py`` prints them):
-    starting points, point-iterations (an active point's iteration), points still active
-    after the last iteration, iterations without gain, the step taken (``steps``: Frank–Wolfe
-    fractions 1 … 1/16, then the projected-gradient ones), and per node the starts that end
-    within 1e-3 of the best value (``same_optimum``, the best not counted) and which start
-    wins (``winner``: index in ``starts``)."""
-
-    node_evaluations: int = 0
-    node_gradients: int = 0
-    iterations: int = 0
-    points: int = 0
-    point_iterations: int = 0
-    unconverged: int = 0
-    no_gain: int = 0
-    same_optimum: int = 0
-    steps: np.ndarray = field(default_factory=lambda: np.zeros(2 * STEP_FRACTIONS.size, dtype=int))
-    winner: np.ndarray = field(default_factory=lambda: np.zeros(16, dtype=int))
-
-
-class BatchedObjective:
-    """``sense · f(P, nodes)`` for both bounds at once, with counting and gradients.
-
-    The objective's nodes are *bound nodes* ``b · n_time + t``: time node ``t`` of bound
-    ``b`` (:data:`~fuzzygait.core.schema.BOUNDS` order, sense ``senses[b]``), so one call
-    serves the lower and the upper bound's optimisations side by side.  Gradients are the
-    model's exact ones when ``exact`` (it declares ``"node_gradients"``), else forward
-    differences of step ``fd_step · scale``."""
-
-    def __init__(self, model: CountedModel, senses: np.ndarray, n_time: int, scale: np.ndarray, fd_step: float,
-                 counts: BatchCounts, exact: bool = False):  # fmt: skip
-        self.model, self.counts, self.exact = model, counts, exact
-        self.senses, self.n_time = np.asarray(senses, dtype=float), int(n_time)
-        self.h = fd_step * np.asarray(scale, dtype=float)
-
-    def _split(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(sense per row, time node per row)`` of bound nodes."""
-        nodes = np.asarray(nodes, dtype=int)
-        return self.senses[nodes // self.n_time], nodes % self.n_time
-
-    def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        if P.shape[0] == 0:  # e.g. no neighbours at this shift: nothing to evaluate
-            return np.empty(0)
-        self.counts.node_evaluations += int(P.shape[0])
-        sense, times = self._split(nodes)
-        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, times), dtype=float)  # type: ignore[attr-defined]
-        return sense * out
-
-    def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if self.exact:
-            self.counts.node_gradients += int(P.shape[0])
-            sense, times = self._split(nodes)
-            values, gradients = self.model.model.evaluate_nodes_gradients(P, times)  # type: ignore[attr-defined]
-            return sense * np.asarray(values, dtype=float), sense[:, None] * np.asarray(gradients, dtype=float)
-        k, n_p = P.shape
-        shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
-        shifted[:, 1:, :] += np.diag(self.h)[None]
-        values = self.values(shifted.reshape(-1, n_p), np.repeat(nodes, n_p + 1)).reshape(k, n_p + 1)
-        return values[:, 0], (values[:, 1:] - values[:, :1]) / self.h
-
-
 def maximise(
-    objective: BatchedObjective,
+    objective: NodeObjective,
     domain: BoxDomain | BallsDomain,
     nodes: np.ndarray,
     starts: list[np.ndarray],
@@ -178,16 +121,10 @@ def maximise(
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
         active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH)]] = False
     counts.unconverged += int(np.count_nonzero(active))
-    per_start = value.reshape(len(starts), k)
-    pick = np.argmax(per_start, axis=0)
-    counts.same_optimum += int(np.count_nonzero(per_start >= per_start[pick, np.arange(k)] - 1e-3)) - k
-    n_win = min(len(starts), counts.winner.size)
-    counts.winner[:n_win] += np.bincount(pick, minlength=len(starts))[:n_win]
-    points = P.reshape(len(starts), k, -1)[pick, np.arange(k)]
-    return points, per_start[pick, np.arange(k)]
+    return best_of_starts(counts, P, value, len(starts))
 
 
-def neighbour_pass(objective: BatchedObjective, curves: list[np.ndarray], points: np.ndarray, values: np.ndarray,
+def neighbour_pass(objective: NodeObjective, curves: list[np.ndarray], points: np.ndarray, values: np.ndarray,
                    window: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Evaluate each node's optimum at up to ``window`` neighbouring nodes on either side
     within its curve and keep, per node, the best value found (library post-processing).
@@ -212,7 +149,7 @@ def neighbour_pass(objective: BatchedObjective, curves: list[np.ndarray], points
     return points, values
 
 
-def screened_starts(objective: BatchedObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
+def screened_starts(objective: NodeObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
                     rng: np.random.Generator, n_starts: int, n_screen: int) -> list[np.ndarray]:  # fmt: skip
     """``n_starts`` starting points per node: the best of ``n_screen`` seeded random
     points per node (half inside the set, half on its boundary, where extremes of angle
@@ -231,6 +168,8 @@ def screened_starts(objective: BatchedObjective, domain: BoxDomain | BallsDomain
 
 
 Progress = Callable[[int, int], None]
+Solver = Callable[[NodeObjective, BoxDomain | BallsDomain, np.ndarray, list[np.ndarray], int, float | np.ndarray],
+                  tuple[np.ndarray, np.ndarray]]  # fmt: skip
 
 
 def optimisation_nodes(n_time: int, stride: int) -> np.ndarray:
@@ -254,14 +193,16 @@ def followed_nodes(times: np.ndarray, stride: int, time_step: float | None = Non
     return np.concatenate([run[optimisation_nodes(run.size, stride)] for run in runs])
 
 
-def follow_nodes(objective: BatchedObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
+def follow_nodes(objective: NodeObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
                  points: np.ndarray, others: np.ndarray, extra: list[np.ndarray], iterations: int,
-                 tolerance: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                 tolerance: float | np.ndarray,
+                 solver: Solver = maximise) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Optima at the nodes ``others`` between the optimisation nodes ``nodes`` (optima
     ``points``): each starts from the best of its two bracketing optima and the
     candidates ``extra`` (``(len(others), n_p)`` each, e.g. the higher α-level's optimum
     there) and is refined by ``iterations`` first-order iterations (0: the best start as
-    it is) — the Graph Follower's idea of starting a node from its neighbours' optima."""
+    it is) — the Graph Follower's idea of starting a node from its neighbours' optima —
+    by ``solver``."""
     right = np.minimum(np.searchsorted(nodes, others), nodes.size - 1)
     left = np.maximum(right - 1, 0)
     candidates = [points[left], points[right]] + [domain.project(c) for c in extra]
@@ -270,20 +211,56 @@ def follow_nodes(objective: BatchedObjective, domain: BoxDomain | BallsDomain, n
     start = np.stack(candidates)[pick, np.arange(others.size)]
     if iterations == 0:
         return start, values[pick, np.arange(others.size)]
-    return maximise(objective, domain, others, [start], iterations, tolerance)
+    return solver(objective, domain, others, [start], iterations, tolerance)
 
 
-def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
-                strategy: BatchedDirect, progress: Progress | None) -> dict[str, object]:  # fmt: skip
-    """The :class:`BatchedDirect` strategy: hulls ``(alpha, bound, time)`` (before the
-    nesting repair), extremisers, the deterministic trajectory and the counts.
+@dataclass(frozen=True)
+class Layout:
+    """What a batched run optimises: the deterministic trajectory, the model's ``blocks``
+    of ``n_block`` nodes (``spans``), the multistart ``nodes`` and the followed ``others``
+    (time nodes), the per-node stopping ``tolerance``, the bounds' ``senses`` and the
+    objective of the bound nodes ``b · n_time + t``."""
 
-    A model whose nodes are ``blocks`` independent outputs of the same parameters, one
-    after the other (capability ``"blocks"``; without it 1: e.g. the components of one
-    joint angle) has each block optimised as it would be alone — its own runs of followed
-    nodes, neighbours, stopping tolerance and seeded random starts, so the same result
-    up to the rounding of the model's batched array operations — while every model call
-    serves all blocks."""
+    deterministic: np.ndarray
+    n_time: int
+    n_block: int
+    spans: list[slice]
+    nodes: np.ndarray
+    others: np.ndarray
+    tolerance: np.ndarray
+    senses: np.ndarray
+    objective: BatchedObjective
+    exact: bool
+
+    @property
+    def blocks(self) -> int:
+        return len(self.spans)
+
+    def bound_nodes(self, time_nodes: np.ndarray) -> np.ndarray:
+        """``time_nodes`` of every bound, as bound nodes (lower bound's first)."""
+        return np.concatenate([time_nodes + b * self.n_time for b in range(self.senses.size)])
+
+    def finish(self, model: CountedModel, n_levels: int) -> dict[str, object]:
+        """Add the run's work to ``model``'s counts; the run's attributes for ``n_levels``
+        α-levels below 1."""
+        counts = self.objective.counts
+        model.node_evaluations += counts.node_evaluations
+        model.node_gradients += counts.node_gradients
+        return {"optimisations": int(self.senses.size * n_levels * self.nodes.size),
+                "solver_iterations": counts.iterations, "node_gradients": counts.node_gradients,
+                "gradient_source": "exact" if self.exact else "forward differences"}  # fmt: skip
+
+    def curves(self) -> list[np.ndarray]:
+        """The bound nodes of each bound's curve of each block, in time order."""
+        return [np.arange(span.start, span.stop) + b * self.n_time
+                for b in range(self.senses.size) for span in self.spans]  # fmt: skip
+
+
+def layout(model: CountedModel, params: FuzzyVector | FuzzyBalls, strategy: BatchedDirect) -> Layout:
+    """The :class:`Layout` of ``model``'s batched run with ``strategy``'s stride.
+
+    Raises:
+        ParameterError: the model's declared blocks do not divide its nodes."""
     deterministic = model.trajectory(params.deterministic)
     n_time = model.n_time
     blocks = declared_blocks(model.model)
@@ -294,21 +271,39 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
     time_step = declared_time_step(model.model)
     spans = [slice(i * n_block, (i + 1) * n_block) for i in range(blocks)]
     nodes = np.concatenate([followed_nodes(times[span], strategy.stride, time_step) + span.start for span in spans])
-    others = np.setdiff1d(np.arange(n_time), nodes)
-    counts = BatchCounts()
+    tolerance = np.concatenate([np.full(n_block, STOP_FRACTION * max(float(np.max(np.abs(deterministic[span]))), 1.0))
+                                for span in spans])  # fmt: skip
+    senses = np.array([SENSES[bound] for bound in BOUNDS])
     exact = strategy.gradients == "auto" and model.has_node_gradients
+    objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, BatchCounts(), exact)
+    return Layout(deterministic, n_time, n_block, spans, nodes, np.setdiff1d(np.arange(n_time), nodes), tolerance,
+                  senses, objective, exact)  # fmt: skip
+
+
+def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: np.ndarray,
+                strategy: BatchedDirect, progress: Progress | None) -> dict[str, object]:  # fmt: skip
+    """The :class:`BatchedDirect` strategy level by level with the Frank–Wolfe solver
+    (``solver="frank-wolfe"``, and box-shaped α-cuts whatever the solver): hulls
+    ``(alpha, bound, time)`` (before the nesting repair), extremisers, the deterministic trajectory and the counts.
+
+    A model whose nodes are ``blocks`` independent outputs of the same parameters, one
+    after the other (capability ``"blocks"``; without it 1: e.g. the components of one
+    joint angle) has each block optimised as it would be alone — its own runs of followed
+    nodes, neighbours, stopping tolerance and seeded random starts, so the same result
+    up to the rounding of the model's batched array operations — while every model call
+    serves all blocks."""
+    plan = layout(model, params, strategy)
+    deterministic, n_time, n_block = plan.deterministic, plan.n_time, plan.n_block
+    nodes, others, tolerance, senses, objective = plan.nodes, plan.others, plan.tolerance, plan.senses, plan.objective
+    blocks = plan.blocks
     hull = np.empty((levels.size, 2, n_time))
     extremiser = np.empty((levels.size, 2, n_time, params.dim))
     hull[-1], extremiser[-1] = deterministic, params.deterministic
-    tolerance = np.concatenate([np.full(n_block, STOP_FRACTION * max(float(np.max(np.abs(deterministic[span]))), 1.0))
-                                for span in spans])  # fmt: skip
     previous_domain = params.domain(1.0)
     below_one = np.arange(levels.size - 1)[::-1]
-    senses = np.array([SENSES[bound] for bound in BOUNDS])
-    objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, counts, exact)
     both = senses.size
     # bound nodes (BatchedObjective): both bounds' optimisations in the same calls
-    nodes_b, others_b = (np.concatenate([n + b * n_time for b in range(both)]) for n in (nodes, others))
+    nodes_b, others_b = plan.bound_nodes(nodes), plan.bound_nodes(others)
     block_of = (nodes_b % n_time) // n_block  # each block's nodes in the order of a run of it alone
     rngs = [np.random.default_rng(strategy.seed) for _ in range(blocks)]
     previous: np.ndarray | None = None  # the higher level's optima, every bound node
@@ -333,17 +328,12 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
             points[others_b], values[others_b] = follow_nodes(objective, domain, nodes_b, points[nodes_b], others_b,
                                                               [h[others_b] for h in higher], strategy.follow,
                                                               tolerance[others_b % n_time])  # fmt: skip
-        # neighbours within each bound's curve of each block
-        curves = [np.arange(span.start, span.stop) + b * n_time for b in range(both) for span in spans]
-        points, values = neighbour_pass(objective, curves, points, values, strategy.window)
+        points, values = neighbour_pass(objective, plan.curves(), points, values, strategy.window)
         previous = points
         hull[a] = senses[:, None] * values.reshape(both, n_time)
         extremiser[a] = points.reshape(both, n_time, params.dim)
         if progress is not None:
             progress(step + 1, below_one.size)
         previous_domain = domain
-    model.node_evaluations += counts.node_evaluations
-    model.node_gradients += counts.node_gradients
-    attrs = {"optimisations": int(2 * below_one.size * nodes.size), "solver_iterations": counts.iterations,
-             "node_gradients": counts.node_gradients, "gradient_source": "exact" if exact else "forward differences"}
-    return {"hull": hull, "extremiser": extremiser, "deterministic": deterministic, "attrs": attrs}
+    return {"hull": hull, "extremiser": extremiser, "deterministic": deterministic,
+            "attrs": plan.finish(model, below_one.size)}  # fmt: skip

@@ -109,6 +109,8 @@ class Direct:
 
 #: Where :class:`BatchedDirect` takes its gradients from.
 GRADIENT_SOURCES = ("auto", "differences")
+#: :class:`BatchedDirect`'s local solvers.
+BATCHED_SOLVERS = ("spectral", "frank-wolfe")
 
 
 @dataclass(frozen=True)
@@ -129,7 +131,8 @@ class BatchedDirect:
             better bracketing optimum as it is).
         starts: starting points per node (the deterministic parameters, the higher
             α-level's optimum as it is and scaled out, then screened random points).
-        iterations: first-order iterations at most.
+        iterations: first-order iterations at most (``"spectral"``: model calls per
+            start at most).
         window: neighbouring nodes (each side) at which each node's optimum is
             re-evaluated.
         screen: random points per node screened for the random starts.
@@ -137,6 +140,15 @@ class BatchedDirect:
         gradients: ``"auto"``: the model's exact gradients where it declares
             ``"node_gradients"``, else forward differences; ``"differences"``: forward
             differences always (``1 + n_p`` evaluations per gradient).
+        solver: ``"spectral"``: for fuzzy balls, every α-level in one optimisation
+            (:mod:`fuzzygait.uncertainty.gfa.levels`) by spectral projected-gradient
+            ascent, one model call per iteration (:mod:`fuzzygait.uncertainty.gfa.spectral`);
+            box-shaped α-cuts (:class:`~fuzzygait.uncertainty.parameters.FuzzyVector`,
+            e.g. the spherical marker-error formulation, whose seams at φ = ±π stall the
+            spectral steps — measured wider bands with Frank–Wolfe there) are solved level
+            by level by Frank–Wolfe either way.  ``"frank-wolfe"``: level by level,
+            Frank–Wolfe and projected-gradient steps with a ten-point line search
+            (:func:`fuzzygait.uncertainty.gfa.batched.maximise`, the solver before).
     """
 
     stride: int = 1
@@ -147,6 +159,7 @@ class BatchedDirect:
     seed: int = 0
     follow: int = 0
     gradients: str = "auto"
+    solver: str = "spectral"
 
     name = "batched-direct"
 
@@ -154,6 +167,9 @@ class BatchedDirect:
         if self.gradients not in GRADIENT_SOURCES:
             raise ParameterError(f"BatchedDirect gradients must be one of {', '.join(GRADIENT_SOURCES)}; "
                                  f"got {self.gradients!r}")  # fmt: skip
+        if self.solver not in BATCHED_SOLVERS:
+            raise ParameterError(f"BatchedDirect solver must be one of {', '.join(BATCHED_SOLVERS)}; "
+                                 f"got {self.solver!r}")  # fmt: skip
         _whole("stride", self.stride, 1)
         _whole("follow", self.follow, 0)
         _whole("starts", self.starts, 1)

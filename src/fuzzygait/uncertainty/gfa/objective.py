@@ -1,0 +1,104 @@
+"""The objective of the batched α-level optimisations (:mod:`~fuzzygait.uncertainty.gfa.batched`,
+:mod:`~fuzzygait.uncertainty.gfa.spectral`): both bounds' nodes in one model call, exact or
+forward-difference gradients, the work counted, and the best of several starts per node."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from fuzzygait.uncertainty.counting import CountedModel
+
+#: Frank–Wolfe step fractions of :func:`~fuzzygait.uncertainty.gfa.batched.maximise` (counted in ``steps``).
+STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
+
+
+@dataclass
+class BatchCounts:
+    """Work done: node evaluations (rows), exact node gradients (rows) and iterations, and
+    where the solvers' iterations go (``benchmarks/markererror_work.py`` prints them):
+    starting points, point-iterations (an active point's iteration), points still active
+    after the last iteration, iterations without gain, the step taken (``steps``: Frank–Wolfe
+    fractions 1 … 1/16, then the projected-gradient ones), and per node the starts that end
+    within 1e-3 of the best value (``same_optimum``, the best not counted) and which start
+    wins (``winner``: index in ``starts``)."""
+
+    node_evaluations: int = 0
+    node_gradients: int = 0
+    iterations: int = 0
+    points: int = 0
+    point_iterations: int = 0
+    unconverged: int = 0
+    no_gain: int = 0
+    same_optimum: int = 0
+    steps: np.ndarray = field(default_factory=lambda: np.zeros(2 * STEP_FRACTIONS.size, dtype=int))
+    winner: np.ndarray = field(default_factory=lambda: np.zeros(16, dtype=int))
+
+
+class BatchedObjective:
+    """``sense · f(P, nodes)`` for both bounds at once, with counting and gradients.
+
+    The objective's nodes are *bound nodes* ``b · n_time + t``: time node ``t`` of bound
+    ``b`` (:data:`~fuzzygait.core.schema.BOUNDS` order, sense ``senses[b]``), so one call
+    serves the lower and the upper bound's optimisations side by side.  Gradients are the
+    model's exact ones when ``exact`` (it declares ``"node_gradients"``), else forward
+    differences of step ``fd_step · scale``."""
+
+    def __init__(self, model: CountedModel, senses: np.ndarray, n_time: int, scale: np.ndarray, fd_step: float,
+                 counts: BatchCounts, exact: bool = False):  # fmt: skip
+        self.model, self.counts, self.exact = model, counts, exact
+        self.senses, self.n_time = np.asarray(senses, dtype=float), int(n_time)
+        self.h = fd_step * np.asarray(scale, dtype=float)
+
+    def _split(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(sense per row, time node per row)`` of bound nodes."""
+        nodes = np.asarray(nodes, dtype=int)
+        return self.senses[nodes // self.n_time], nodes % self.n_time
+
+    def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        if P.shape[0] == 0:  # e.g. no neighbours at this shift: nothing to evaluate
+            return np.empty(0)
+        self.counts.node_evaluations += int(P.shape[0])
+        sense, times = self._split(nodes)
+        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, times), dtype=float)  # type: ignore[attr-defined]
+        return sense * out
+
+    def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.exact:
+            self.counts.node_gradients += int(P.shape[0])
+            sense, times = self._split(nodes)
+            values, gradients = self.model.model.evaluate_nodes_gradients(P, times)  # type: ignore[attr-defined]
+            return sense * np.asarray(values, dtype=float), sense[:, None] * np.asarray(gradients, dtype=float)
+        k, n_p = P.shape
+        shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
+        shifted[:, 1:, :] += np.diag(self.h)[None]
+        values = self.values(shifted.reshape(-1, n_p), np.repeat(nodes, n_p + 1)).reshape(k, n_p + 1)
+        return values[:, 0], (values[:, 1:] - values[:, :1]) / self.h
+
+
+class NodeObjective(Protocol):
+    """What the batched solvers optimise: values and gradients of ``(point, node)`` rows
+    in the sense of a maximisation, the work counted in ``counts``."""
+
+    counts: BatchCounts
+
+    def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray: ...
+
+    def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+def best_of_starts(counts: BatchCounts, P: np.ndarray, value: np.ndarray,
+                   n_starts: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Per node the best of its ``n_starts`` optimised points: ``P`` ``(n_starts k, n_p)``
+    and ``value`` ``(n_starts k,)`` start-major; counts the starts that end at the best
+    optimum and which start wins."""
+    per_start = value.reshape(n_starts, -1)
+    k = per_start.shape[1]
+    pick = np.argmax(per_start, axis=0)
+    counts.same_optimum += int(np.count_nonzero(per_start >= per_start[pick, np.arange(k)] - 1e-3)) - k
+    n_win = min(n_starts, counts.winner.size)
+    counts.winner[:n_win] += np.bincount(pick, minlength=n_starts)[:n_win]
+    points = P.reshape(n_starts, k, -1)[pick, np.arange(k)]
+    return points, per_start[pick, np.arange(k)]
