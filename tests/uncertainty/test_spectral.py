@@ -19,12 +19,14 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.uncertainty import FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 from fuzzygait.uncertainty.gfa.batched import maximise
 from fuzzygait.uncertainty.gfa.levels import LevelObjective, exchange_levels
 from fuzzygait.uncertainty.gfa.objective import BatchCounts, BatchedObjective
 from fuzzygait.uncertainty.gfa.spectral import frank_wolfe_gap, maximise_spectral
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
+from fuzzygait.uncertainty.protocol import Evaluation, Output
 
 
 class Quadratic:
@@ -147,3 +149,46 @@ def test_levels_exchange_their_optima_at_the_same_relative_position() -> None:
     np.testing.assert_allclose(exchanged[0], optimum)
     _, gradients = levels.values_and_gradients(points, np.arange(2))
     np.testing.assert_allclose(gradients, [c, 0.5 * c])  # the chain rule of the shrink
+
+
+class KinkModel:
+    """``f(p, t) = −|p_x − c(t)| − |p_y| − 0.1 |p_z|`` (one 3-vector, no gradient at the
+    maximum 0, reached at ``(c(t), 0, 0)`` inside a ball of radius 2): an extreme on a kink,
+    as the middle angle of a Cardan sequence can have one."""
+
+    times = np.arange(40) / 100.0
+    time_step = 0.01
+    parameter_names = ("m_x", "m_y", "m_z")
+    output = Output("f", "1")
+    capabilities = frozenset({"nodes", "node_gradients"})
+
+    def centre(self, nodes: np.ndarray) -> np.ndarray:
+        return 0.8 * np.sin(2 * np.pi * self.times[nodes])
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(p, (nodes.size, 1)), nodes))
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        return -np.abs(P[:, 0] - self.centre(nodes)) - np.abs(P[:, 1]) - 0.1 * np.abs(P[:, 2])
+
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        gradient = -np.stack([np.sign(P[:, 0] - self.centre(nodes)), np.sign(P[:, 1]), 0.1 * np.sign(P[:, 2])], axis=1)
+        return self.evaluate_nodes(P, nodes), gradient
+
+
+def test_an_extreme_on_a_kink_is_reached_at_every_level() -> None:
+    """The upper hull of the kinked model is 0 at α = 0 and 0.5 (the maximum lies inside
+    both balls): the spectral steps stall on the kink, the Frank–Wolfe polish of the
+    optima that are not stationary (:func:`~fuzzygait.uncertainty.gfa.levels.polish_kinks`)
+    gets there.  Measured: within 4.3e-3 everywhere (4.3e-2 without the polish); bound
+    1e-2 (of a range of 2.8)."""
+    model = KinkModel()
+    params = FuzzyBalls(np.zeros((1, 3)), np.array([2.0]), ("m",))
+    result = graph_follower(model, params, (0.0, 0.5), strategy=BatchedDirect(starts=3, stride=8, follow=5))
+    upper = result.hull.sel(bound="upper").sel(alpha=[0.0, 0.5]).to_numpy()
+    assert np.all(upper <= 1e-12) and np.all(upper >= -1e-2)
+    extremiser = result["extremiser"].sel(bound="upper", alpha=0.0).to_numpy()
+    assert np.all(np.linalg.norm(extremiser, axis=1) <= 2.0 + 1e-12)  # inside the ball
+    # the hull is at least the value at the extremiser (more where the nesting repair lifts it)
+    assert np.all(model.evaluate_nodes(extremiser, np.arange(40)) <= upper[0] + 1e-12)

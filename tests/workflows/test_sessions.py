@@ -52,6 +52,27 @@ def test_synthetic_session_found(session: Path) -> None:
     assert all(t.warnings == () for t in found.trials)  # the TOML names no subject: no check
 
 
+def test_a_static_of_another_marker_set_is_not_paired(tmp_path: Path) -> None:
+    """A Plug-in Gait walking trial beside a Plug-in Gait and a CGM 2.4 static whose names
+    say nothing (``walk.c3d``, ``cal-a.c3d``, ``cal-b.c3d``): the static with the walking
+    trial's marker set is paired, whichever comes first by name."""
+    import shutil
+
+    folder = tmp_path / "visit"
+    folder.mkdir()
+    shutil.copy(SAMPLE_DATA / "walking.c3d", folder / "walk.c3d")
+    for name, source in (("cal-a.c3d", "cgm24_static.c3d"), ("cal-b.c3d", "static.c3d")):
+        shutil.copy(SAMPLE_DATA / source, folder / name)
+    (found,) = find_sessions([folder])
+    assert sorted(s.path.name for s in found.statics) == ["cal-a.c3d", "cal-b.c3d"]
+    (trial,) = found.trials
+    assert trial.static == folder / "cal-b.c3d"  # static.c3d's Plug-in Gait markers
+    labels = set(read_c3d(folder / "walk.c3d").marker_labels)
+    shared = {name: len(labels & set(read_c3d(folder / name).marker_labels)) / len(labels | set(
+        read_c3d(folder / name).marker_labels)) for name in ("cal-a.c3d", "cal-b.c3d")}  # fmt: skip
+    assert shared["cal-b.c3d"] > shared["cal-a.c3d"]
+
+
 def test_files_given_directly_keep_static_and_subject(session: Path) -> None:
     (found,) = find_sessions([session / "walk01.c3d", session / "walk01.c3d"], SAMPLE_DATA / "static.c3d",
                              SAMPLE_DATA / "subject.toml")  # fmt: skip

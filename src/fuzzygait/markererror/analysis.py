@@ -105,9 +105,9 @@ class SearchOptions:
     sources: Sequence[str] = SOURCES
     error_model: ErrorModel = field(default_factory=ErrorModel)
     starts: int = 5
-    iterations: int = 50
+    iterations: int = 40
     stride: int = 8
-    follow: int = 10
+    follow: int = 8
     seed: int = 0
     solver: str = "spectral"
 

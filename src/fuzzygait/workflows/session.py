@@ -19,10 +19,10 @@ In a session folder a C3D file is a **static trial** by the first rule that fire
 Every other C3D file is a walking trial.  Each walking trial gets the static trial of
 the same subject (C3D ``SUBJECTS:NAMES``) whose name shares the longest start with its
 own (a folder may hold several calibrations: ``PiGKad_Calibration`` for
-``PiGKad_Motion``), and the subject file (``.vsk``, ``.toml``, pyCGM2 ``.mp``, QTM ``session.xml``)
-named after its subject, else the folder's only one.  A subject file or static trial of
-another subject than the trial's is used but gives a warning (on the trial's page and
-in the index).
+``PiGKad_Motion``), then the most marker labels in common, and the subject file
+(``.vsk``, ``.toml``, pyCGM2 ``.mp``, QTM ``session.xml``) named after its subject, else
+the folder's only one.  A subject file or static trial of another subject than the
+trial's is used but gives a warning (on the trial's page and in the index).
 """
 
 from __future__ import annotations
@@ -66,6 +66,7 @@ class StaticTrial:
     rule: str  # one of STATIC_RULES
     detail: str  # what the rule saw, e.g. "LKAX, LMED; no gait events"
     subject: str = ""
+    labels: frozenset[str] = frozenset()  # its marker labels
 
 
 @dataclass(frozen=True)
@@ -158,6 +159,10 @@ def subject_file_name(path: Path) -> str | None:
     return None
 
 
+def _labels(trial: Trial | None) -> frozenset[str]:
+    return frozenset(trial.marker_labels) if trial is not None else frozenset()
+
+
 def _same(a: str, b: str) -> bool:
     return a.strip().lower() == b.strip().lower()
 
@@ -171,13 +176,22 @@ def _common_start(a: str, b: str) -> int:
     return n
 
 
-def _pick_static(trial: Path, subject: str, statics: Sequence[StaticTrial]) -> StaticTrial | None:
-    """The static trial of ``trial``: same subject first, then the longest common start
-    of the file names, then the first by name."""
+def _shared_labels(a: frozenset[str], b: frozenset[str]) -> float:
+    """The share of the marker labels of either that both have (Jaccard): 1 for the same set."""
+    return len(a & b) / len(a | b) if a or b else 0.0
+
+
+def _pick_static(trial: Path, subject: str, labels: frozenset[str],
+                 statics: Sequence[StaticTrial]) -> StaticTrial | None:  # fmt: skip
+    """The static trial of ``trial`` (marker ``labels``): same subject first, then the
+    longest common start of the file names, then the most marker labels in common (e.g.
+    a Plug-in Gait walking trial beside a Plug-in Gait and a CGM 2.4 static), then the
+    first by name."""
     if not statics:
         return None
     return max(statics, key=lambda s: (bool(subject) and _same(s.subject, subject),
-                                       _common_start(s.path.stem, trial.stem), -statics.index(s)))  # fmt: skip
+                                       _common_start(s.path.stem, trial.stem), _shared_labels(s.labels, labels),
+                                       -statics.index(s)))  # fmt: skip
 
 
 def _pick_subject_file(subject: str, files: Sequence[Path]) -> Path | None:
@@ -220,7 +234,8 @@ def find_session(folder: Path, output: str) -> Session:
         if found is None:
             walking.append(path)
         else:
-            statics.append(StaticTrial(path, found[0], found[1], trial.subject if trial is not None else ""))
+            statics.append(StaticTrial(path, found[0], found[1], trial.subject if trial is not None else "",
+                                       _labels(trial)))  # fmt: skip
     notes: list[Finding] = []
     if not walking:
         raise FuzzyGaitError(f"{folder}: no walking trials in this session folder (every C3D file looks like a "
@@ -234,7 +249,7 @@ def find_session(folder: Path, output: str) -> Session:
     for path in walking:
         trial = read[path]
         subject = trial.subject if trial is not None else ""
-        static = _pick_static(path, subject, statics)
+        static = _pick_static(path, subject, _labels(trial), statics)
         subject_file = _pick_subject_file(subject, subject_files)
         warned: list[str | None] = []
         if subject_file is None and len(subject_files) > 1:

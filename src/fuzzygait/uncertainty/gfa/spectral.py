@@ -25,9 +25,11 @@ model could still gain anywhere in the set, zero at a first-order optimum — or
 step's change of value falls to the node's tolerance, when its step fraction has shrunk
 below 10⁻⁶, or at the iteration cap.
 
-Measured against the Frank–Wolfe solver on the joint angles of ``sample_data/walking.c3d``
-(``benchmarks/markererror_solvers.py``, ``benchmarks/RESULTS.md``): closer to the widest
-band any run found, at about half the CPU.
+On an extreme that lies on a kink of the objective (the gradient does not vanish there)
+the steps crawl; :func:`~fuzzygait.uncertainty.gfa.levels.polish_kinks` finishes such
+optima with Frank–Wolfe iterations.  Measured against the Frank–Wolfe solver on the joint
+angles of the sample trials (``benchmarks/markererror_solvers.py``,
+``benchmarks/RESULTS.md``): closer to the widest band any run found, in less CPU.
 """
 
 from __future__ import annotations

@@ -142,7 +142,8 @@ class BatchedDirect:
             differences always (``1 + n_p`` evaluations per gradient).
         solver: ``"spectral"``: for fuzzy balls, every α-level in one optimisation
             (:mod:`fuzzygait.uncertainty.gfa.levels`) by spectral projected-gradient
-            ascent, one model call per iteration (:mod:`fuzzygait.uncertainty.gfa.spectral`);
+            ascent, one model call per iteration (:mod:`fuzzygait.uncertainty.gfa.spectral`),
+            the optima on kinks finished by a few Frank–Wolfe iterations;
             box-shaped α-cuts (:class:`~fuzzygait.uncertainty.parameters.FuzzyVector`,
             e.g. the spherical marker-error formulation, whose seams at φ = ±π stall the
             spectral steps — measured wider bands with Frank–Wolfe there) are solved level
