@@ -43,6 +43,7 @@ from fuzzygait.uncertainty.gfa.objective import (
     BatchedObjective,
     NodeObjective,
     best_of_starts,
+    stacked_starts,
 )
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
@@ -77,10 +78,7 @@ def maximise(
     Returns:
         ``(points (k, n_p), values (k,))`` in the objective's sense.
     """
-    k = nodes.size
-    P = np.concatenate([domain.project(s) for s in starts])  # (S k, n_p)
-    rows = np.tile(nodes, len(starts))
-    stop = np.tile(np.broadcast_to(np.asarray(tolerance, dtype=float), (k,)), len(starts))
+    P, rows, stop = stacked_starts(domain, nodes, starts, tolerance)  # (S k, n_p): start-major
     value = np.full(P.shape[0], -np.inf)
     reach = np.ones(P.shape[0])  # per-point step scale: shrinks after failures, grows after full steps
     active = np.ones(P.shape[0], dtype=bool)

@@ -10,6 +10,7 @@ from typing import Protocol
 import numpy as np
 
 from fuzzygait.uncertainty.counting import CountedModel
+from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
 
 #: Frank–Wolfe step fractions of :func:`~fuzzygait.uncertainty.gfa.batched.maximise` (counted in ``steps``).
 STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 0.0625])
@@ -87,6 +88,15 @@ class NodeObjective(Protocol):
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray: ...
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+def stacked_starts(domain: BoxDomain | BallsDomain, nodes: np.ndarray, starts: list[np.ndarray],
+                   tolerance: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """The solvers' points: every start projected onto ``domain``, start-major ``(S k,
+    n_p)``, with the node and the stopping tolerance of each row."""
+    P = np.concatenate([domain.project(s) for s in starts])
+    stop = np.broadcast_to(np.asarray(tolerance, dtype=float), (nodes.size,))
+    return P, np.tile(nodes, len(starts)), np.tile(stop, len(starts))
 
 
 def best_of_starts(counts: BatchCounts, P: np.ndarray, value: np.ndarray,

@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
-from fuzzygait.uncertainty.gfa.objective import NodeObjective, best_of_starts
+from fuzzygait.uncertainty.gfa.objective import NodeObjective, best_of_starts, stacked_starts
 
 #: Sufficient increase of the Armijo condition.
 ARMIJO = 1e-4
@@ -90,10 +90,7 @@ def maximise_spectral(
     """Best point and value per node over all starting points (the signature of
     :func:`~fuzzygait.uncertainty.gfa.batched.maximise`; ``iterations`` model calls at
     most, the first the starts' gradients)."""
-    k = nodes.size
-    P = np.concatenate([domain.project(s) for s in starts])  # (S k, n_p)
-    rows = np.tile(nodes, len(starts))
-    stop = np.tile(np.broadcast_to(np.asarray(tolerance, dtype=float), (k,)), len(starts))
+    P, rows, stop = stacked_starts(domain, nodes, starts, tolerance)  # (S k, n_p): start-major
     counts = objective.counts
     counts.points += P.shape[0]
     counts.iterations += 1
