@@ -318,6 +318,8 @@ def test_dataset_layout_and_missing_markers(angles_run: AnglesRun, frames: np.nd
     assert {"trial", "method", "units", "strategy", "forward_simulations", "node_evaluations",
             "seconds"} <= set(fuzzy.attrs)  # fmt: skip
     assert fuzzy.attrs["method"] == "cartesian" and fuzzy.attrs["node_evaluations"] > 0
+    settings = {key: fuzzy.attrs[key] for key in ("solver", "starts", "iterations", "stride", "follow")}
+    assert settings == {"solver": "spectral", "starts": 5, "iterations": 40, "stride": 8, "follow": 8}  # provenance
 
     knee_ok = keep.copy()
     knee_ok[cut] = False

@@ -372,8 +372,9 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
         for key in totals:
             totals[key] += counts[key]
     attrs = {"trial": trial.name, "method": options.method,
-             "starts": options.starts, "gradients": options.gradients, "output": "joint angle",
-             "strategy": BatchedDirect.name, **totals,
+             "starts": options.starts, "iterations": options.iterations, "stride": options.stride,
+             "follow": options.follow, "solver": options.solver, "gradients": options.gradients,
+             "output": "joint angle", "strategy": BatchedDirect.name, **totals,
              "seconds": round(seconds, 3)}  # fmt: skip
     measured_index = int(np.argmin(np.abs(alphas - 1.0)))
     flags = {column: undetermined(hull[:, 0], hull[:, 1], hull[measured_index, 1][None, :])
