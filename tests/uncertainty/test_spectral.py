@@ -143,7 +143,7 @@ def test_levels_exchange_their_optima_at_the_same_relative_position() -> None:
     points = np.stack([np.zeros(3), optimum])
     values = levels.values(points, np.arange(2))
     np.testing.assert_allclose(values, [0.0, 0.5 * r * 3.0])
-    exchanged, new_values, improved = exchange_levels(levels, points, values, 2)
+    exchanged, new_values, improved = exchange_levels(levels, points, values)
     np.testing.assert_array_equal(improved, [0])
     np.testing.assert_allclose(new_values, [r * 3.0, 0.5 * r * 3.0])
     np.testing.assert_allclose(exchanged[0], optimum)

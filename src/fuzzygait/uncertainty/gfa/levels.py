@@ -70,12 +70,12 @@ class LevelObjective:
         return values, factor * gradients
 
 
-def exchange_levels(objective: LevelObjective, points: np.ndarray, values: np.ndarray,
-                    n_levels: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def exchange_levels(objective: LevelObjective, points: np.ndarray,
+                    values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Each node's optimum of every other level evaluated at this level (one call); per
-    node the best kept.  ``points``/``values``: every stacked node, ``n_levels`` blocks of
-    ``objective.n_nodes``.  Returns ``(points, values, improved nodes)``."""
-    span = objective.n_nodes
+    node the best kept.  ``points``/``values``: every stacked node, one block of
+    ``objective.n_nodes`` per level.  Returns ``(points, values, improved nodes)``."""
+    span, n_levels = objective.n_nodes, objective.shrink.size
     points, values = points.copy(), values.copy()
     shifts = np.arange(1, n_levels)
     if shifts.size == 0:
@@ -147,7 +147,7 @@ def run_levels_together(model: CountedModel, params: FuzzyBalls, levels: np.ndar
         points[others], values[others] = follow_nodes(objective, unit, nodes, points[nodes], others, [],
                                                       strategy.follow, tolerance[others],
                                                       maximise_spectral)  # fmt: skip
-    points, values, improved = exchange_levels(objective, points, values, n_levels)
+    points, values, improved = exchange_levels(objective, points, values)
     if improved.size and strategy.follow:
         points[improved], values[improved] = maximise_spectral(objective, unit, improved, [points[improved]],
                                                                strategy.follow, tolerance[improved])  # fmt: skip
