@@ -44,6 +44,7 @@ hull is not a band any more; :func:`undetermined` marks it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -64,6 +65,7 @@ from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
+    EXCURSION_LIMIT,
     NODE_GRADIENTS,
     NODES,
     TIME_STEP,
@@ -193,7 +195,14 @@ class JointAngleModel:
     def output(self) -> Output:
         return Output(f"{self.name}_{AXES[self.axis]}", "deg")
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS, TIME_STEP})
+    capabilities = frozenset({NODES, NODE_GRADIENTS, TIME_STEP, EXCURSION_LIMIT})
+
+    @property
+    def excursion_limit(self) -> float:
+        """Degrees from the measured angle beyond which a bound makes the band undetermined
+        (:data:`EXCURSION_LIMIT_DEG`; the optimisers stop a bound there); ``inf`` without
+        ``reference`` (no continuous branch to measure it on)."""
+        return math.inf if self.reference is None else EXCURSION_LIMIT_DEG
 
     def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``
@@ -272,7 +281,13 @@ class AngleComponentsModel:
     axes: tuple[int, ...]
     references: np.ndarray
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP})
+    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP, EXCURSION_LIMIT})
+
+    @property
+    def excursion_limit(self) -> float:
+        """Degrees from the measured component beyond which a bound makes its band
+        undetermined (:data:`EXCURSION_LIMIT_DEG`; the optimisers stop a bound there)."""
+        return EXCURSION_LIMIT_DEG
 
     def __post_init__(self) -> None:
         self.axes = tuple(int(a) for a in self.axes)
@@ -341,6 +356,13 @@ def row_gradients(function: Callable[[np.ndarray, np.ndarray], np.ndarray], P: n
 #: then jumps by about 180°; a bound found on the far side of the jump is not an extreme
 #: of a continuous band).
 UNDETERMINED_DEG = 90.0
+#: Where the optimisers stop a bound (the angle models' ``excursion_limit``, degrees from
+#: the model's own angle at zero deviation): a bound beyond :data:`UNDETERMINED_DEG` makes
+#: the band undetermined whatever its value, so searching further only costs time (a
+#: quarter of the gradient rows of the sample trial's bands went into such bounds,
+#: ``benchmarks/RESULTS.md``).  The 1° margin keeps the flag where the measured angle
+#: and the model's angle at zero deviation differ by rounding.
+EXCURSION_LIMIT_DEG = UNDETERMINED_DEG + 1.0
 
 
 def undetermined(lower: np.ndarray, upper: np.ndarray, measured: np.ndarray) -> np.ndarray:
@@ -435,6 +457,11 @@ class SphericalDeviationModel:
     @property
     def times(self) -> np.ndarray:
         return self.cartesian.times
+
+    @property
+    def excursion_limit(self) -> float:
+        """The Cartesian model's (degrees)."""
+        return self.cartesian.excursion_limit
 
     @property
     def time_step(self) -> float:

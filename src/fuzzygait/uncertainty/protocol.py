@@ -25,6 +25,12 @@ and, only when it declares the capability in brackets::
     model.time_step -> float                    ["time_step"] the sampling period, in the unit
                                                 of ``times``: a longer step between nodes is
                                                 a gap (frames without data)
+    model.excursion_limit -> float              ["excursion_limit"] how far (output units) a
+                                                bound may lie from the deterministic output
+                                                at its node and still be a band: a bound
+                                                found beyond it means the same as any other
+                                                beyond it (a joint angle whose segment frame
+                                                can flip), so the optimisers stop there
 
 The engine uses a method or attribute of this list only when its capability is declared
 (an undeclared one is ignored, and :func:`fuzzygait.testing.check_model` rejects a model
@@ -61,7 +67,8 @@ NODE_GRADIENTS = "node_gradients"
 MANY = "many"
 BLOCKS = "blocks"
 TIME_STEP = "time_step"
-CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS, MANY, BLOCKS, TIME_STEP})
+EXCURSION_LIMIT = "excursion_limit"
+CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS, MANY, BLOCKS, TIME_STEP, EXCURSION_LIMIT})
 
 #: What each capability needs the model to have: methods (callable) and attributes.
 CAPABILITY_MEMBERS: dict[str, tuple[str, ...]] = {
@@ -70,6 +77,7 @@ CAPABILITY_MEMBERS: dict[str, tuple[str, ...]] = {
     MANY: ("evaluate_many",),
     BLOCKS: ("blocks",),
     TIME_STEP: ("time_step",),
+    EXCURSION_LIMIT: ("excursion_limit",),
 }
 
 
@@ -81,6 +89,13 @@ def declared_blocks(model: object) -> int:
 def declared_time_step(model: object) -> float | None:
     """A model's sampling period (``"time_step"``), or None without it."""
     return float(getattr(model, "time_step")) if TIME_STEP in getattr(model, "capabilities", ()) else None  # noqa: B009
+
+
+def declared_excursion_limit(model: object) -> float | None:
+    """A model's excursion limit (``"excursion_limit"``, output units), or None without it."""
+    if EXCURSION_LIMIT not in getattr(model, "capabilities", ()):
+        return None
+    return float(getattr(model, "excursion_limit"))  # noqa: B009
 
 
 def undeclared_capabilities(model: object) -> list[str]:

@@ -47,7 +47,7 @@ from fuzzygait.uncertainty.gfa.objective import (
 )
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
-from fuzzygait.uncertainty.protocol import declared_blocks, declared_time_step
+from fuzzygait.uncertainty.protocol import declared_blocks, declared_excursion_limit, declared_time_step
 
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
 MIN_REACH = 1e-6
@@ -86,6 +86,7 @@ def maximise(
     counts.points += P.shape[0]
     gradient = np.empty_like(P)
     known = np.zeros(P.shape[0], dtype=bool)  # gradient (and value) of the point as it is: kept while it does not move
+    ceiling = objective.ceilings(rows)  # a value there or beyond: no band, nothing more to find
     for _ in range(iterations):
         counts.iterations += 1
         idx = np.flatnonzero(active)
@@ -117,7 +118,7 @@ def maximise(
         full_step = better & (best % STEP_FRACTIONS.size == 0)
         reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
-        active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH)]] = False
+        active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH) | (value[idx] >= ceiling[idx])]] = False
     counts.unconverged += int(np.count_nonzero(active))
     return best_of_starts(counts, P, value, len(starts))
 
@@ -254,6 +255,16 @@ class Layout:
                 for b in range(self.senses.size) for span in self.spans]  # fmt: skip
 
 
+def ceilings(deterministic: np.ndarray, senses: np.ndarray, limit: float | None) -> np.ndarray | None:
+    """Per bound node ``b · n_time + t`` the objective's value ``senses[b] · deterministic[t]
+    + limit`` at which its optimisation stops (the model's excursion limit); None without
+    a limit, ``inf`` where the deterministic output is missing."""
+    if limit is None:
+        return None
+    values = senses[:, None] * np.asarray(deterministic, dtype=float)[None, :] + limit
+    return np.where(np.isfinite(values), values, np.inf).reshape(-1)
+
+
 def layout(model: CountedModel, params: FuzzyVector | FuzzyBalls, strategy: BatchedDirect) -> Layout:
     """The :class:`Layout` of ``model``'s batched run with ``strategy``'s stride.
 
@@ -273,7 +284,8 @@ def layout(model: CountedModel, params: FuzzyVector | FuzzyBalls, strategy: Batc
                                 for span in spans])  # fmt: skip
     senses = np.array([SENSES[bound] for bound in BOUNDS])
     exact = strategy.gradients == "auto" and model.has_node_gradients
-    objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, BatchCounts(), exact)
+    objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, BatchCounts(), exact,
+                                 ceilings(deterministic, senses, declared_excursion_limit(model.model)))  # fmt: skip
     return Layout(deterministic, n_time, n_block, spans, nodes, np.setdiff1d(np.arange(n_time), nodes), tolerance,
                   senses, objective, exact)  # fmt: skip
 

@@ -60,6 +60,9 @@ class LevelObjective:
         factor = self.shrink[nodes // self.n_nodes][:, None]
         return self.centre + factor * (P - self.centre), nodes % self.n_nodes, factor
 
+    def ceilings(self, nodes: np.ndarray) -> np.ndarray:
+        return self.objective.ceilings(np.asarray(nodes, dtype=int) % self.n_nodes)
+
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         x, inner, _ = self._at(P, nodes)
         return self.objective.values(x, inner)
@@ -96,12 +99,14 @@ def polish_kinks(objective: LevelObjective, domain: BallsDomain, points: np.ndar
     """:data:`POLISH_ITERATIONS` Frank–Wolfe iterations
     (:func:`~fuzzygait.uncertainty.gfa.batched.maximise`) at every node whose optimum is
     not first-order stationary (Frank–Wolfe gap above its ``tolerance``, one gradient call
-    to tell): an extreme on a kink of the angle function, where the gradient does not vanish
-    and the spectral steps crawl, but Frank–Wolfe's ten trial steps along the chord and the
-    projected gradient still move.  Values never fall (``maximise`` keeps a point's best)."""
+    to tell) and below its ceiling: an extreme on a kink of the angle function, where the
+    gradient does not vanish and the spectral steps crawl, but Frank–Wolfe's ten trial
+    steps along the chord and the projected gradient still move.  Values never fall
+    (``maximise`` keeps a point's best)."""
     every = np.arange(points.shape[0])
-    _, gradients = objective.values_and_gradients(points, every)
-    kinked = every[frank_wolfe_gap(domain, points, gradients) > tolerance]
+    below = every[values < objective.ceilings(every)]
+    _, gradients = objective.values_and_gradients(points[below], below)
+    kinked = below[frank_wolfe_gap(domain, points[below], gradients) > tolerance[below]]
     if kinked.size == 0:
         return points, values
     points, values = points.copy(), values.copy()

@@ -45,13 +45,22 @@ class BatchedObjective:
     ``b`` (:data:`~fuzzygait.core.schema.BOUNDS` order, sense ``senses[b]``), so one call
     serves the lower and the upper bound's optimisations side by side.  Gradients are the
     model's exact ones when ``exact`` (it declares ``"node_gradients"``), else forward
-    differences of step ``fd_step · scale``."""
+    differences of step ``fd_step · scale``.  ``ceiling`` (per bound node, in the
+    objective's sense; default none): a value there or above ends the node's optimisation
+    (:meth:`ceilings`)."""
 
     def __init__(self, model: CountedModel, senses: np.ndarray, n_time: int, scale: np.ndarray, fd_step: float,
-                 counts: BatchCounts, exact: bool = False):  # fmt: skip
+                 counts: BatchCounts, exact: bool = False, ceiling: np.ndarray | None = None):  # fmt: skip
         self.model, self.counts, self.exact = model, counts, exact
         self.senses, self.n_time = np.asarray(senses, dtype=float), int(n_time)
         self.h = fd_step * np.asarray(scale, dtype=float)
+        self.ceiling = np.full(self.senses.size * self.n_time, np.inf) if ceiling is None else ceiling
+
+    def ceilings(self, nodes: np.ndarray) -> np.ndarray:
+        """Per bound node the value from which on its optimisation may stop: the model's
+        output there is no band any more (capability ``"excursion_limit"``), so a wider
+        value means nothing more; ``inf`` where the model declares no limit."""
+        return self.ceiling[np.asarray(nodes, dtype=int)]
 
     def _split(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(sense per row, time node per row)`` of bound nodes."""
@@ -88,6 +97,8 @@ class NodeObjective(Protocol):
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray: ...
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def ceilings(self, nodes: np.ndarray) -> np.ndarray: ...
 
 
 def stacked_starts(domain: BoxDomain | BallsDomain, nodes: np.ndarray, starts: list[np.ndarray],

@@ -23,7 +23,9 @@ so the result is never worse than the start.
 A point stops when its Frank–Wolfe gap ``gᵀ(argmax_{y∈D} gᵀy − x)`` — the most a linear
 model could still gain anywhere in the set, zero at a first-order optimum — or an accepted
 step's change of value falls to the node's tolerance, when its step fraction has shrunk
-below 10⁻⁶, or at the iteration cap.
+below 10⁻⁶, at the iteration cap, or once its value reaches the node's ceiling (the
+model's output is no band there:
+:meth:`~fuzzygait.uncertainty.gfa.objective.BatchedObjective.ceilings`).
 
 On an extreme that lies on a kink of the objective (the gradient does not vanish there)
 the steps crawl; :func:`~fuzzygait.uncertainty.gfa.levels.polish_kinks` finishes such
@@ -105,7 +107,8 @@ def maximise_spectral(
     direction = np.zeros_like(P)
     fresh = np.ones(P.shape[0], dtype=bool)  # a new direction is due (the point moved)
     started = np.zeros(P.shape[0], dtype=bool)  # the point has a direction
-    active = frank_wolfe_gap(domain, P, gradient) > stop
+    ceiling = objective.ceilings(rows)  # a value there or beyond: no band, nothing more to find
+    active = (frank_wolfe_gap(domain, P, gradient) > stop) & (value < ceiling)
     recent = np.repeat(value[:, None], MEMORY, axis=1)  # the last accepted values: the line search's reference
     best_P, best_value = P.copy(), value.copy()
     for _ in range(iterations - 1):
@@ -146,7 +149,7 @@ def maximise_spectral(
                          SHRINK[0] * t[~accept])  # fmt: skip
         fraction[held] = np.clip(guess, SHRINK[0] * t[~accept], SHRINK[1] * t[~accept])
         gap = frank_wolfe_gap(domain, P[moved], gradient[moved])
-        converged = (gap <= stop[moved]) | (np.abs(gain[accept]) <= stop[moved])
+        converged = (gap <= stop[moved]) | (np.abs(gain[accept]) <= stop[moved]) | (value[moved] >= ceiling[moved])
         active[moved[converged]] = False
         active[held[(fraction[held] < MIN_FRACTION) | (slope[~accept] <= stop[held])]] = False
     counts.unconverged += int(np.count_nonzero(active))
