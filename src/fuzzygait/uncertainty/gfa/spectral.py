@@ -122,34 +122,38 @@ def maximise_spectral(
         opening = new[~started[new]]  # a start's first move: to the linear model's optimum
         direction[opening] = domain.linear_argmax(gradient[opening]) - P[opening]
         fraction[new], fresh[new], started[new] = 1.0, False, True
-        t = fraction[idx]
-        slope = _rows_dot(gradient[idx], direction[idx])  # >= 0: d is an ascent direction
-        trial = P[idx] + t[:, None] * direction[idx]
+        t, P_i, gradient_i = fraction[idx], P[idx], gradient[idx]  # gathered once: (active, n_p) copies
+        direction_i = direction[idx]
+        slope = _rows_dot(gradient_i, direction_i)  # >= 0: d is an ascent direction
+        trial = P_i + t[:, None] * direction_i
         tried, tried_gradient = objective.values_and_gradients(trial, rows[idx])
-        gain = tried - value[idx]
-        reference = recent[idx].min(axis=1) - value[idx]  # <= 0: the worst of the last accepted values
+        value_i = value[idx]
+        gain = tried - value_i
+        reference = recent[idx].min(axis=1) - value_i  # <= 0: the worst of the last accepted values
         accept = (gain > reference) & (gain >= reference + ARMIJO * t * slope)
         counts.no_gain += int(idx.size - np.count_nonzero(accept))
         moved = idx[accept]
-        s, y = trial[accept] - P[moved], tried_gradient[accept] - gradient[moved]
+        to_P, to_value, to_gradient = trial[accept], tried[accept], tried_gradient[accept]
+        s, y = to_P - P_i[accept], to_gradient - gradient_i[accept]
         sy, ss = _per_block(domain, s, y), _per_block(domain, s, s)  # per block: a diagonal scaling
         lo, hi = STEP_RANGE[0] * first[moved], STEP_RANGE[1] * first[moved]
         longer = np.minimum(2.0 * step[moved], hi)  # no curvature seen along the move: a longer step
         bb = np.where(sy < 0, np.clip(ss / np.where(sy < 0, -sy, 1.0), lo, hi), longer)
         step[moved] = np.where(ss > 0, bb, step[moved])  # a block that did not move keeps its step
-        P[moved], value[moved], gradient[moved] = trial[accept], tried[accept], tried_gradient[accept]
+        P[moved], value[moved], gradient[moved] = to_P, to_value, to_gradient
         recent[moved] = np.roll(recent[moved], 1, axis=1)
-        recent[moved, 0] = tried[accept]
-        up = moved[value[moved] > best_value[moved]]
-        best_P[up], best_value[up] = P[up], value[up]
+        recent[moved, 0] = to_value
+        gained = to_value > best_value[moved]
+        up = moved[gained]
+        best_P[up], best_value[up] = to_P[gained], to_value[gained]
         fresh[moved] = True
         held = idx[~accept]  # back along the same direction: the quadratic's maximiser
         curvature = 2.0 * (t[~accept] * slope[~accept] - gain[~accept])
         guess = np.where(curvature > 0, t[~accept] ** 2 * slope[~accept] / np.where(curvature > 0, curvature, 1.0),
                          SHRINK[0] * t[~accept])  # fmt: skip
         fraction[held] = np.clip(guess, SHRINK[0] * t[~accept], SHRINK[1] * t[~accept])
-        gap = frank_wolfe_gap(domain, P[moved], gradient[moved])
-        converged = (gap <= stop[moved]) | (np.abs(gain[accept]) <= stop[moved]) | (value[moved] >= ceiling[moved])
+        gap = frank_wolfe_gap(domain, to_P, to_gradient)
+        converged = (gap <= stop[moved]) | (np.abs(gain[accept]) <= stop[moved]) | (to_value >= ceiling[moved])
         active[moved[converged]] = False
         active[held[(fraction[held] < MIN_FRACTION) | (slope[~accept] <= stop[held])]] = False
     counts.unconverged += int(np.count_nonzero(active))
