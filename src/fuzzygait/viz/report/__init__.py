@@ -76,14 +76,14 @@ reuses by :mod:`fuzzygait.workflows.report_entries`.
 
 from fuzzygait.kinematics.labels import component_label
 from fuzzygait.viz.report.bands import TrialAnalysis, TrialEntry
-from fuzzygait.viz.report.figures import cycle_figure, time_series_figure
 from fuzzygait.viz.report.normalised_bands import cycle_bands
 
+# The figures (matplotlib, half a second to import) are imported where they are drawn,
+# from fuzzygait.viz.report.figures: the terminal's tables (``fuzzygait uncertainty``)
+# read the page data of this package without drawing anything.
 __all__ = [
     "TrialAnalysis",
     "TrialEntry",
     "component_label",
     "cycle_bands",
-    "cycle_figure",
-    "time_series_figure",
 ]
