@@ -13,7 +13,9 @@ a ``component`` dimension, on the trial's frames:
   ``upper``), ``frame`` (1-based C3D frame numbers; coordinate ``time`` in s),
   ``marker``;
 * ``hull (component, alpha, bound, frame)`` in degrees; NaN on frames where a needed
-  marker is missing;
+  marker is missing; where the band is undetermined by a bound beyond 90° the search of
+  that bound stopped once it passed 91° (the models' ``excursion_limit``), so the value
+  there only says "beyond", not how far;
 * ``deviation (component, alpha, bound, frame, marker)``: Euclidean norm (mm) of each
   marker's deviation that produces the hull value (Fig. 5.12); NaN for markers the
   component does not use;
