@@ -192,3 +192,21 @@ def test_an_extreme_on_a_kink_is_reached_at_every_level() -> None:
     assert np.all(np.linalg.norm(extremiser, axis=1) <= 2.0 + 1e-12)  # inside the ball
     # the hull is at least the value at the extremiser (more where the nesting repair lifts it)
     assert np.all(model.evaluate_nodes(extremiser, np.arange(40)) <= upper[0] + 1e-12)
+
+
+def test_a_looser_stop_ends_the_points_sooner_and_a_bad_one_is_named() -> None:
+    """``BatchedDirect.stop`` is the fraction of the block's largest |output| an iteration
+    must gain to go on: 1e-2 on the kinked model (range 2.8) does less work than the
+    default 1e-7 and its hull still holds values of the model (≤ 0, the maximum); outside
+    (0, 1) it is refused with its name."""
+    model = KinkModel()
+    params = FuzzyBalls(np.zeros((1, 3)), np.array([2.0]), ("m",))
+    runs = {stop: graph_follower(model, params, (0.0,), strategy=BatchedDirect(starts=3, stride=8, follow=5, stop=stop))
+            for stop in (1e-7, 1e-2)}  # fmt: skip
+    assert runs[1e-2].attrs["node_gradients"] < runs[1e-7].attrs["node_gradients"]
+    for result in runs.values():
+        assert np.all(result.hull.sel(alpha=0.0, bound="upper").to_numpy() <= 1e-12)
+    assert runs[1e-2].attrs["stop"] == 1e-2
+    for bad in (0.0, 1.0, -1e-3, True):
+        with pytest.raises(ParameterError, match="BatchedDirect stop must be a fraction in \\(0, 1\\)"):
+            BatchedDirect(stop=bad)

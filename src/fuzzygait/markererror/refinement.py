@@ -38,6 +38,16 @@ from fuzzygait.uncertainty.execution import Evaluator
 
 Progress = Callable[[int, int], None]
 
+#: Where the refinement runs stop a point: an iteration gaining less than this fraction of
+#: the angle's largest |value| (about 6e-4° on a 60° angle; the bands' runs: 1e-7).  A
+#: refinement run answers one number per component — the band's largest excursion over
+#: the frames, against the tolerance, to the scale resolution of 0.1 mm — so the last
+#: ten-thousandths of a degree of every bound buy nothing there.  Measured on walking.c3d
+#: (``benchmarks/RESULTS.md``): the allowable errors the same within 9e-7 mm, the refined
+#: levels' hulls within 0.004°, the whole analysis 9 % less CPU (the slowest 1 % of the
+#: points kept a third of the refinement's model calls going).
+REFINEMENT_STOP = 1e-5
+
 
 def component_setups(trial: Trial, subject: SubjectParameters, result: CGMResult, options: FuzzyAngleOptions,
                      components: Sequence[str],
@@ -70,12 +80,14 @@ class ScaledComponentsModel(AngleComponentsModel):
 class BlockJob(NamedTuple):
     """Components of one angle optimised side by side (:func:`run_component_blocks`): the
     tasks (one angle's, the same frames and markers; their options' optimiser settings are
-    the first's), each one's ball radii scaled by ``shrink`` (``1 − α`` of its level, or 1)
-    and the α-levels ``levels`` (ascending, 1 included) of the scaled balls."""
+    the first's), each one's ball radii scaled by ``shrink`` (``1 − α`` of its level, or 1),
+    the α-levels ``levels`` (ascending, 1 included) of the scaled balls, and the optimiser's
+    ``stop`` fraction (None: the options' strategy's)."""
 
     tasks: tuple[ComponentTask, ...]
     shrink: tuple[float, ...]
     levels: tuple[float, ...]
+    stop: float | None = None
 
 
 def run_component_blocks(job: BlockJob) -> list[Run]:
@@ -91,7 +103,8 @@ def run_component_blocks(job: BlockJob) -> list[Run]:
     node_model = ScaledComponentsModel(model, tuple(t.axis for t in job.tasks),
                                        np.stack([t.reference for t in job.tasks]), factors)  # fmt: skip
     params = FuzzyBalls(np.zeros((len(markers), 3)), np.ones(len(markers)), tuple(markers))
-    result = graph_follower(node_model, params, job.levels, strategy=options.strategy())
+    strategy = options.strategy() if job.stop is None else replace(options.strategy(), stop=job.stop)
+    result = graph_follower(node_model, params, job.levels, strategy=strategy)
     hull = result["hull"].to_numpy()  # (level, bound, blocks x frames)
     n_frames = first.frames.size
     extremiser = result["extremiser"].to_numpy().reshape(*hull.shape[:2], len(job.tasks), n_frames, len(markers), 3)
@@ -122,7 +135,8 @@ def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator
     """One Graph Follower run per component at its α-level (and 1): hull (2, bound, n_valid)
     deg, deviation norms (2, bound, n_valid, n_markers) mm, counts; ``progress(done, n)``
     as :meth:`~fuzzygait.uncertainty.execution.Evaluator.map` calls it.  The components of
-    one angle (Cartesian deviations) run side by side (:func:`run_component_blocks`)."""
+    one angle (Cartesian deviations) run side by side (:func:`run_component_blocks`),
+    stopping their points at :data:`REFINEMENT_STOP`."""
     if tasks and tasks[0].options.method != "cartesian":
         runs = [t._replace(options=replace(t.options, alphas=(float(a), 1.0)))
                 for t, a in zip(tasks, alphas, strict=True)]  # fmt: skip
@@ -130,8 +144,8 @@ def _evaluate(tasks: Sequence[ComponentTask], alphas: Sequence[float], evaluator
     groups: dict[str, list[int]] = {}
     for i, task in enumerate(tasks):
         groups.setdefault(task.name, []).append(i)
-    jobs = [BlockJob(tuple(tasks[i] for i in group), tuple(1.0 - float(alphas[i]) for i in group), (0.0, 1.0))
-            for group in groups.values()]  # fmt: skip
+    jobs = [BlockJob(tuple(tasks[i] for i in group), tuple(1.0 - float(alphas[i]) for i in group), (0.0, 1.0),
+                     REFINEMENT_STOP) for group in groups.values()]  # fmt: skip
     grouped = map_blocks(jobs, evaluator, progress)
     by_task = {i: run for group, runs in zip(groups.values(), grouped, strict=True)
                for i, run in zip(group, runs, strict=True)}  # fmt: skip

@@ -51,9 +51,6 @@ from fuzzygait.uncertainty.protocol import declared_blocks, declared_excursion_l
 
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
 MIN_REACH = 1e-6
-#: A node's point stops once an iteration gains less than this fraction of the largest
-#: deterministic output magnitude of its block (at least 1).
-STOP_FRACTION = 1e-7
 
 
 def maximise(
@@ -280,7 +277,7 @@ def layout(model: CountedModel, params: FuzzyVector | FuzzyBalls, strategy: Batc
     time_step = declared_time_step(model.model)
     spans = [slice(i * n_block, (i + 1) * n_block) for i in range(blocks)]
     nodes = np.concatenate([followed_nodes(times[span], strategy.stride, time_step) + span.start for span in spans])
-    tolerance = np.concatenate([np.full(n_block, STOP_FRACTION * max(float(np.max(np.abs(deterministic[span]))), 1.0))
+    tolerance = np.concatenate([np.full(n_block, strategy.stop * max(float(np.max(np.abs(deterministic[span]))), 1.0))
                                 for span in spans])  # fmt: skip
     senses = np.array([SENSES[bound] for bound in BOUNDS])
     exact = strategy.gradients == "auto" and model.has_node_gradients

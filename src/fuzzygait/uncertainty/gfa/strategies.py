@@ -150,6 +150,8 @@ class BatchedDirect:
             by level by Frank–Wolfe either way.  ``"frank-wolfe"``: level by level,
             Frank–Wolfe and projected-gradient steps with a ten-point line search
             (:func:`fuzzygait.uncertainty.gfa.batched.maximise`, the solver before).
+        stop: a node's point stops once a step gains less than this fraction of the
+            largest deterministic output magnitude of its block (at least 1).
     """
 
     stride: int = 1
@@ -161,6 +163,7 @@ class BatchedDirect:
     follow: int = 0
     gradients: str = "auto"
     solver: str = "spectral"
+    stop: float = 1e-7
 
     name = "batched-direct"
 
@@ -177,6 +180,8 @@ class BatchedDirect:
         _whole("iterations", self.iterations, 1)
         _whole("window", self.window, 0)
         _whole("screen", self.screen, 1)
+        if isinstance(self.stop, bool) or not isinstance(self.stop, int | float) or not 0.0 < self.stop < 1.0:
+            raise ParameterError(f"BatchedDirect stop must be a fraction in (0, 1); got {self.stop!r}")
 
     def options(self) -> dict[str, object]:
         return asdict(self)
