@@ -16,7 +16,8 @@ import time
 
 import numpy as np
 
-from fuzzygait.markererror.angle_model import JointAngleModel, SphericalDeviationModel, fixed_subject
+from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject
+from fuzzygait.markererror.spherical import SphericalDeviationModel
 from fuzzygait.markererror.sources import ErrorModel
 from fuzzygait.workflows.angles import run_angles
 from fuzzygait.uncertainty import (

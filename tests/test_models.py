@@ -48,7 +48,7 @@ def test_pendulum() -> None:
 
 
 def test_joint_angle_models(angles_run) -> None:
-    from fuzzygait.markererror.angle_model import SphericalDeviationModel
+    from fuzzygait.markererror.spherical import SphericalDeviationModel
 
     cartesian = joint_angle_model(angles_run)
     p = np.random.default_rng(1).uniform(-5.0, 5.0, cartesian.n_parameters)
@@ -65,7 +65,8 @@ def test_joint_angle_models(angles_run) -> None:
 def test_angle_components_model(angles_run) -> None:
     """The three components of one angle as one model: ``blocks`` and ``time_step``
     declared and kept (the frames are 6 of the trial's, whole numbers of its period)."""
-    from fuzzygait.markererror.angle_model import AngleComponentsModel, SphericalDeviationModel
+    from fuzzygait.markererror.angle_model import AngleComponentsModel
+    from fuzzygait.markererror.spherical import SphericalDeviationModel
 
     angle = joint_angle_model(angles_run)
     references = np.array([angles_run.result.angles["LKneeAngles"][angle.frames, axis] for axis in range(3)])

@@ -30,14 +30,18 @@ def sparse_run(angles_run: AnglesRun) -> AnglesRun:
     return sparse_angles_run(angles_run, 6)
 
 
-@pytest.mark.parametrize("solver, iterations, tolerance", [("frank-wolfe", 25, 1e-9), ("spectral", 50, 1e-3)])
+@pytest.mark.parametrize("solver, iterations, tolerance", [("frank-wolfe", 25, 1e-8), ("spectral", 50, 1e-2)])
 @pytest.mark.parametrize("name", ["LKneeAngles", "RPelvisAngles"])
 def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, name: str, solver: str,
                                                           iterations: int, tolerance: float) -> None:  # fmt: skip
-    """Frank–Wolfe (its settings before issue 40): the same within 1e-9 deg.  The spectral solver's Barzilai–Borwein
-    steps and non-monotone search amplify the rounding of the scaling along the points
-    still moving at the iteration cap: measured up to 1.6e-4 deg (knee, α = 0, 50
-    iterations), so 1e-3 deg."""
+    """The same up to the rounding of the scaling (a block's deviations are its unit-ball
+    parameters times ``1 - α``; the run alone has balls of radius ``(1 - α) r``), as the
+    solvers amplify it.  Frank–Wolfe (its settings before issue 40): measured up to 1.7e-10
+    deg with the numpy chain, and with the compiled model (a different rounding of the
+    same angles) 3e-14 deg and deviation norms up to 1.1e-9 mm apart, so 1e-8 (deg, mm).  The spectral solver's Barzilai–Borwein
+    steps and non-monotone search amplify more along the points still moving at the
+    iteration cap: measured up to 1.4e-4 deg (numpy chain) and 2.8e-3 deg (compiled; knee,
+    α = 0.9, 50 iterations), so 1e-2 deg."""
     options = FuzzyAngleOptions(alphas=(0.0, 1.0), workers=1, solver=solver, iterations=iterations,
                                 follow=iterations // 5)  # fmt: skip
     tasks, _ = component_tasks(sparse_run.trial, sparse_run.subject, sparse_run.result, options, [name])
@@ -49,7 +53,7 @@ def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, 
         assert hull.shape == alone[1].shape and np.all(np.isfinite(hull) == np.isfinite(alone[1]))
         np.testing.assert_allclose(hull, alone[1], rtol=0, atol=tolerance, equal_nan=True)  # degrees
         if solver == "frank-wolfe":  # the same optimum: the same deviations
-            np.testing.assert_allclose(norms, alone[2], rtol=0, atol=1e-9, equal_nan=True)  # mm
+            np.testing.assert_allclose(norms, alone[2], rtol=0, atol=tolerance, equal_nan=True)  # mm
         finite = np.isfinite(norms[0])
         assert np.all(norms[0][finite] <= (1.0 - alpha) * np.max(task.radii) + 1e-9)  # inside the α balls
     assert together[0][3]["node_evaluations"] > 0 and together[1][3]["node_evaluations"] == 0

@@ -24,12 +24,8 @@ from fuzzygait.kinematics import vectors
 from fuzzygait.kinematics.angles import capped_arcsin
 from fuzzygait.kinematics.rigid import polar_rotation
 from fuzzygait.kinematics.versions import MODEL_VERSIONS
-from fuzzygait.markererror.angle_model import (
-    AngleComponentsModel,
-    JointAngleModel,
-    SphericalDeviationModel,
-    fixed_subject,
-)
+from fuzzygait.markererror.angle_model import AngleComponentsModel, JointAngleModel, fixed_subject
+from fuzzygait.markererror.spherical import SphericalDeviationModel
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.counting import CountedModel
 from fuzzygait.uncertainty.gfa.batched import BatchCounts, BatchedObjective

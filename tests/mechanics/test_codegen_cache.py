@@ -1,4 +1,4 @@
-"""The compiled-library cache (mechanics/codegen.py): processes or threads that need the
+"""The compiled-library cache (core/codegen.py): processes or threads that need the
 same library at once compile it once — the others wait on its lock and load the file —
 and a library already cached is never recompiled."""
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import casadi as ca
 import pytest
 
-from fuzzygait.mechanics import codegen
+from fuzzygait.core import codegen
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler (gcc) on this machine")
 

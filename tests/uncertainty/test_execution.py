@@ -150,7 +150,7 @@ def test_shared_array_inputs_are_memory_mapped_by_the_workers(evaluators, tmp_pa
 
 
 def test_leg_model_in_parallel_is_bit_identical_and_not_recompiled(evaluators) -> None:
-    from fuzzygait.mechanics.codegen import cache_dir
+    from fuzzygait.core.codegen import cache_dir
     from fuzzygait.mechanics.scenarios import LegSimulator
 
     # the driver builds the simulator once: this populates the on-disk cache if needed

@@ -1,2 +1,2 @@
-"""The lowest layer: the trial data model and the package's error types. Imports no
-other part of fuzzygait."""
+"""The lowest layer: the trial data model, the package's error types and the compiled-code
+cache (:mod:`.codegen`). Imports no other part of fuzzygait."""

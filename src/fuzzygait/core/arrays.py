@@ -29,21 +29,49 @@ from autograd.numpy.numpy_boxes import ArrayBox
 from autograd.numpy.numpy_vjps import untake
 from autograd.tracer import getval, isbox
 
-__all__ = ["floats", "plain"]
+__all__ = ["floats", "plain", "signs", "symbolic", "undefined_above"]
+
+
+def symbolic(x: Any) -> bool:
+    """True for a symbolic array: numpy's ``object`` array of symbols, which the kinematic
+    model is traced with to compile it (:mod:`fuzzygait.markererror.symbols`)."""
+    return isinstance(x, np.ndarray) and x.dtype == object
 
 
 def floats(x: Any) -> np.ndarray:
     """``x`` as a float array: ``np.asarray(x, dtype=float)``, or ``x`` itself when it is
-    traced (its values are floats already)."""
-    if isbox(x):
+    traced (its values are floats already) or symbolic (:func:`symbolic`)."""
+    if isbox(x) or symbolic(x):
         return x
     return np.asarray(x, dtype=float)
 
 
 def plain(x: Any) -> np.ndarray:
     """The values of ``x`` as a plain float array (a traced array's current values; for
-    decisions such as convergence tests, which are not differentiated)."""
+    decisions such as convergence tests, which are not differentiated); a symbolic array
+    stays itself (a decision on it then refuses, :mod:`fuzzygait.markererror.symbols`)."""
+    if symbolic(x):
+        return x
     return np.asarray(getval(x), dtype=float)
+
+
+def signs(x: Any) -> np.ndarray:
+    """``np.sign`` of plain values (:func:`plain`: not differentiated); of a symbolic
+    array, each symbol's own ``sign()`` (numpy's object loop would compare symbols)."""
+    values = plain(x)
+    if symbolic(values):
+        return np.array([e.sign() for e in values.ravel()], dtype=object).reshape(values.shape)
+    return np.sign(values)
+
+
+def undefined_above(x: np.ndarray, limit: float) -> np.ndarray:
+    """0 where ``x <= limit``, NaN elsewhere (and where ``x`` is NaN): added to a result,
+    it marks the rows a fixed-step computation has not settled.  Of a symbolic array, each
+    symbol's own ``undefined_above(limit)``."""
+    if symbolic(x):
+        return np.array([e.undefined_above(limit) for e in x.ravel()], dtype=object).reshape(x.shape)
+    with np.errstate(invalid="ignore"):
+        return np.where(np.asarray(x) <= limit, 0.0, np.nan)
 
 
 def _basic(index: Any) -> bool:

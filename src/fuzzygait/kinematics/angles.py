@@ -41,6 +41,7 @@ import autograd.numpy as anp
 import numpy as np
 from autograd.extend import defvjp, primitive
 
+from fuzzygait.core.arrays import symbolic
 from fuzzygait.kinematics.vectors import relative_rotation
 
 #: Joint / segment name -> (component index per output X,Y,Z; right-side signs;
@@ -90,7 +91,10 @@ def capped_arcsin(x: np.ndarray) -> np.ndarray:
     """``arcsin`` (rad) of ``x`` clipped to [-1, 1] (a rotation matrix's entry may exceed
     1 by rounding).  Its reverse sweep stays finite at the cap, where the derivative is
     infinite: ``1 / sqrt(max(1 - x², 1e-12))``, a steep but usable ascent direction for
-    the α-level optimiser (the plain chain rule gives ``inf · 0 = NaN`` there)."""
+    the α-level optimiser (the plain chain rule gives ``inf · 0 = NaN`` there).  A
+    symbolic array's elements give their own (``element.capped_arcsin()``)."""
+    if symbolic(x):
+        return np.array([e.capped_arcsin() for e in x.ravel()], dtype=object).reshape(x.shape)
     return np.arcsin(np.clip(x, -1.0, 1.0))
 
 

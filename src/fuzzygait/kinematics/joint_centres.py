@@ -26,7 +26,7 @@ from __future__ import annotations
 import autograd.numpy as anp
 import numpy as np
 
-from fuzzygait.core.arrays import plain
+from fuzzygait.core.arrays import plain, signs, symbolic, undefined_above
 from fuzzygait.kinematics.vectors import cross, dot, norm, rotate_about, unit
 
 #: Davis et al. (1991) regression angles used by Plug-in Gait, rad.
@@ -134,6 +134,12 @@ def chord_joint_centre(
 #: after 5 or 6.
 ROTATED_CHORD_TOLERANCE_MM = 1e-10
 ROTATED_CHORD_MAX_ITERATIONS = 30
+#: Steps of the iteration when the chain is traced with symbols for a compiled model
+#: (:mod:`fuzzygait.markererror.angle_kernel`), where no convergence test can stop it: a
+#: fixed count, past where the test stops on adult legs (5 or 6 steps).  A row whose last
+#: step still moved the centre by more than the tolerance comes out NaN, which the
+#: compiled model hands back to this code (its numbers, its test).
+ROTATED_CHORD_SYMBOLIC_ITERATIONS = 8
 
 
 def rotated_chord_joint_centre(
@@ -176,14 +182,17 @@ def rotated_chord_joint_centre(
         return v - dot(v, axis)[:, None] * axis
 
     # signed radius: the side of the line the chord takes relative to the wand
-    radius = norm(radial) * np.sign(plain(dot(radial, across(wand))))
-    for _ in range(ROTATED_CHORD_MAX_ITERATIONS):
+    radius = norm(radial) * signs(dot(radial, across(wand)))
+    steps = ROTATED_CHORD_SYMBOLIC_ITERATIONS if symbolic(centre) else ROTATED_CHORD_MAX_ITERATIONS
+    for _ in range(steps):
         turned = rotate_about(wand, centre, unit(proximal - centre), -rotation)
         moved = foot + radius[:, None] * unit(across(turned))
         change = norm(moved - centre)
         centre = moved
-        if not np.any(plain(change) > ROTATED_CHORD_TOLERANCE_MM):  # NaN frames do not count
+        if not symbolic(change) and not np.any(plain(change) > ROTATED_CHORD_TOLERANCE_MM):  # NaN frames do not count
             break
+    if symbolic(change):
+        centre = centre + undefined_above(change, ROTATED_CHORD_TOLERANCE_MM)[:, None]
     return centre
 
 

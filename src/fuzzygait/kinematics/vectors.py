@@ -52,14 +52,14 @@ def _unbroadcast(gradient: np.ndarray, like: np.ndarray) -> np.ndarray:
 @primitive
 def norm(v: np.ndarray) -> np.ndarray:
     """Euclidean length of each vector of ``(n, 3)`` -> ``(n,)``."""
-    v = np.asarray(v, dtype=float)
+    v = floats(v)
     return np.sqrt(v[..., 0] ** 2 + v[..., 1] ** 2 + v[..., 2] ** 2)
 
 
 @primitive
 def unit(v: np.ndarray) -> np.ndarray:
     """Vectors scaled to unit length (NaN for zero-length or missing vectors)."""
-    v = np.asarray(v, dtype=float)
+    v = floats(v)
     with np.errstate(invalid="ignore", divide="ignore"):
         return v / norm(v)[..., None]
 
@@ -73,8 +73,8 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 @primitive
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product ``a x b`` of ``(n, 3)`` arrays (broadcasting)."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
+    a = floats(a)
+    b = floats(b)
     return np.stack(
         [
             a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],

@@ -58,7 +58,6 @@ from fuzzygait.markererror.angle_model import (
     AXES,
     AngleComponentsModel,
     JointAngleModel,
-    SphericalDeviationModel,
     fixed_subject,
     gimbal_undetermined,
     undetermined,
@@ -72,6 +71,7 @@ from fuzzygait.markererror.result import (
     with_error_sources,
 )
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
+from fuzzygait.markererror.spherical import SphericalDeviationModel
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 

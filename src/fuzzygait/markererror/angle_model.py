@@ -51,6 +51,7 @@ from dataclasses import dataclass, field, replace
 import autograd.numpy as anp
 import numpy as np
 from autograd import make_vjp
+from autograd.tracer import isbox
 
 from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import ParameterError
@@ -63,6 +64,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
+from fuzzygait.markererror.angle_kernel import AngleKernel, compile_kernel
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
     EXCURSION_LIMIT,
@@ -71,7 +73,6 @@ from fuzzygait.uncertainty.protocol import (
     TIME_STEP,
     Evaluation,
     Output,
-    declared_blocks,
 )
 
 AXES = ("X", "Y", "Z")
@@ -147,6 +148,8 @@ class JointAngleModel:
         model: the model version that computed the measured angles (``"cgm1.0"`` …
             ``"cgm2.4"``).
         clusters: the static cluster calibration (``cgm2.3``, ``cgm2.4``), held fixed.
+        compiled: evaluate by the compiled kernel where there is one (:mod:`.angle_kernel`);
+            False: always the numpy chain (the same numbers, slower).
     """
 
     trial: Trial
@@ -160,6 +163,7 @@ class JointAngleModel:
     reference: np.ndarray | None = None
     model: str = "cgm1.0"
     clusters: ClusterCalibration | None = None
+    compiled: bool = True
 
     def __post_init__(self) -> None:
         self.model = model_version(self.model).name
@@ -206,14 +210,41 @@ class JointAngleModel:
 
     def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``
-        (``fixed``: the positions ``(k, n_fixed, 3)`` of :attr:`fixed_markers`)."""
+        (``fixed``: the positions ``(k, n_fixed, 3)`` of :attr:`fixed_markers`): by the
+        compiled kernel where there is one (:mod:`.angle_kernel`; not for traced
+        positions, which autograd differentiates through the chain), else the chain."""
+        if self.fixed_markers and fixed is None:
+            raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
+        if fixed is None:
+            fixed = np.zeros((len(positions), 0, 3))
+        kernel = None if isbox(positions) else self.kernel()
+        if kernel is None:
+            return self.chain_angles(positions, fixed, self.progression)
+        everything = np.concatenate([positions, fixed], axis=1)
+        angles = kernel.angles(everything, self.progression)
+        redo = kernel.unsettled(everything, angles)
+        if redo.any():
+            angles[redo] = self.chain_angles(positions[redo], fixed[redo], self.progression)
+        return angles
+
+    def chain_angles(self, positions: np.ndarray, fixed: np.ndarray, progression: np.ndarray) -> np.ndarray:
+        """The chain of the model version: all three components (degrees) for positions
+        ``(k, n_markers, 3)`` and ``(k, n_fixed, 3)`` and the ``(3, 3)`` progression frame
+        (numbers, traced or symbolic arrays alike)."""
         if self.fixed_markers:
-            if fixed is None:
-                raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
             positions = anp.concatenate([positions, fixed], axis=1)
         rows = Trial(markers=positions, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
         chain = model_chain(rows, self.subject, self.model, self.clusters, use_medial_markers=self.use_medial_markers)
-        return angle_from_chain(chain, self.name, self.progression)
+        return angle_from_chain(chain, self.name, progression)
+
+    def kernel(self) -> AngleKernel | None:
+        """The compiled model (:func:`~.angle_kernel.compile_kernel`, once per process and
+        model structure), or None where it cannot be had."""
+        if not self.compiled:
+            return None
+        key = repr((self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers, self.subject,
+                    self.clusters, self.trial.rate))  # fmt: skip
+        return compile_kernel(key, self.chain_angles, len(self.markers), len(self.fixed_markers))
 
     def measured_angles(self) -> np.ndarray:
         """All three components (degrees) at zero deviation, ``(n_frames, 3)`` on
@@ -244,11 +275,38 @@ class JointAngleModel:
             return angle
         return reference + wrap_degrees(angle - reference)
 
+    def component_gradients(self, P: np.ndarray, nodes: np.ndarray, axes: int | np.ndarray,
+                            reference: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """:meth:`component_values` and the exact gradient of each row's value with
+        respect to its own row of ``P``, ``(k, n_p)`` degrees/mm: by the compiled kernel
+        where there is one, else one reverse sweep of autograd (:func:`row_gradients`).
+        The branch through ``reference`` has the angle's gradient (the wrap is a shift)."""
+        P = np.asarray(P, dtype=float)
+        nodes = np.asarray(nodes, dtype=int)
+        kernel = self.kernel()
+        if kernel is None or P.shape[0] == 0:
+            return row_gradients(lambda rows, at: self.component_values(rows, at, axes, reference), P, nodes)
+        positions = np.concatenate([self._base[nodes] + P.reshape(len(nodes), -1, 3), self._fixed[nodes]], axis=1)
+        rows = np.arange(len(nodes))
+        axes = np.broadcast_to(axes, rows.shape)
+        angles, gradients = kernel.gradients(positions, self.progression, axes)
+        angle = angles[rows, axes]
+        if reference is not None:
+            angle = reference + wrap_degrees(angle - reference)
+        redo = kernel.unsettled(positions, angles)
+        if redo.any():
+            at = None if reference is None else reference[redo]
+            angle[redo], gradients[redo] = row_gradients(
+                lambda p, n: self.component_values(p, n, axes[redo], at), P[redo], nodes[redo])  # fmt: skip
+        return angle, gradients
+
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The angle component (degrees) at ``nodes`` (k,) for deviations ``P`` (k, n_p) and
         its exact gradient with respect to each row's deviations, ``(k, n_p)`` degrees/mm
-        (:func:`row_gradients`)."""
-        return row_gradients(self.evaluate_nodes, P, nodes)
+        (:meth:`component_gradients`)."""
+        nodes = np.asarray(nodes, dtype=int)
+        reference = None if self.reference is None else np.asarray(self.reference, dtype=float)[nodes]
+        return self.component_gradients(P, nodes, self.axis, reference)
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """The angle component over all time nodes with one deviation ``p`` (n_p,); no
@@ -326,8 +384,11 @@ class AngleComponentsModel:
         return self.angle.component_values(P, frame, axes, self.references[block, frame])
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Values and exact gradients (degrees/mm) per row (:func:`row_gradients`)."""
-        return row_gradients(self.evaluate_nodes, P, nodes)
+        """Values and exact gradients (degrees/mm) per row
+        (:meth:`JointAngleModel.component_gradients`)."""
+        block, frame = np.divmod(np.asarray(nodes, dtype=int), self.angle.frames.size)
+        axes = np.asarray(self.axes, dtype=int)[block]
+        return self.angle.component_gradients(P, frame, axes, self.references[block, frame])
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
@@ -428,65 +489,3 @@ def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarra
         for column in columns:
             if column in flags:
                 flags[column] = flags[column] | lock
-
-
-def spherical_to_cartesian(P: np.ndarray) -> np.ndarray:
-    """Deviations given per marker as (r, θ, φ) — radius mm, polar and azimuthal angles
-    in rad — to Cartesian (x, y, z) mm; any leading shape, last axis 3 per marker."""
-    P = floats(P)
-    q = P.reshape(*P.shape[:-1], -1, 3)
-    r, theta, phi = q[..., 0], q[..., 1], q[..., 2]
-    xyz = anp.stack([r * anp.sin(theta) * anp.cos(phi), r * anp.sin(theta) * anp.sin(phi), r * anp.cos(theta)],
-                    axis=-1)  # fmt: skip
-    return xyz.reshape(P.shape)
-
-
-@dataclass
-class SphericalDeviationModel:
-    """The same model with each marker's deviation in spherical coordinates (thesis
-    §3.7.2: the α-level sets become boxes, no norm constraint)."""
-
-    cartesian: JointAngleModel | AngleComponentsModel
-
-    @property
-    def capabilities(self) -> frozenset[str]:
-        """The Cartesian model's (nodes and their gradients, its time step) and its blocks
-        (1 for a single component)."""
-        return frozenset(self.cartesian.capabilities) | {BLOCKS}
-
-    @property
-    def times(self) -> np.ndarray:
-        return self.cartesian.times
-
-    @property
-    def excursion_limit(self) -> float:
-        """The Cartesian model's (degrees)."""
-        return self.cartesian.excursion_limit
-
-    @property
-    def time_step(self) -> float:
-        return self.cartesian.time_step
-
-    @property
-    def blocks(self) -> int:
-        """Independent outputs (the components of :class:`AngleComponentsModel`)."""
-        return declared_blocks(self.cartesian)
-
-    @property
-    def parameter_names(self) -> tuple[str, ...]:
-        """``<marker>_r`` (mm), ``<marker>_theta``, ``<marker>_phi`` (rad) per marker."""
-        return tuple(f"{m}_{c}" for m in self.cartesian.markers for c in ("r", "theta", "phi"))
-
-    @property
-    def output(self) -> Output:
-        return self.cartesian.output
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        return self.cartesian.evaluate_nodes(spherical_to_cartesian(P), nodes)
-
-    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Values and exact gradients with respect to (r mm, θ, φ rad) per marker."""
-        return row_gradients(self.evaluate_nodes, P, nodes)
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        return self.cartesian.evaluate(spherical_to_cartesian(p))

@@ -76,6 +76,13 @@ class ScaledComponentsModel(AngleComponentsModel):
         block = np.asarray(nodes, dtype=int) // self.angle.frames.size
         return super().evaluate_nodes(P * self.factors[block], nodes)
 
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Values and exact gradients with respect to the unit-ball parameters (degrees per
+        unit: the deviations' gradients times ``factors``)."""
+        scale = self.factors[np.asarray(nodes, dtype=int) // self.angle.frames.size]
+        values, gradients = super().evaluate_nodes_gradients(P * scale, nodes)
+        return values, gradients * scale
+
 
 class BlockJob(NamedTuple):
     """Components of one angle optimised side by side (:func:`run_component_blocks`): the

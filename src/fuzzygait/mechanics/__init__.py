@@ -18,7 +18,8 @@ Modules, from the bottom up:
 * :mod:`.integrator` — time stepping: Newton with a kept sparse LU, forward parameter
   sensitivities (the compiled loop where there is one, else the same loop in Python),
 * :mod:`.trajectory` — the results: trajectory and energies,
-* :mod:`.codegen` — compiled CasADi code cached on disk by model structure,
+* :mod:`fuzzygait.core.codegen` (shared with the compiled joint-angle models) — compiled
+  CasADi code cached on disk by model structure,
 * :mod:`.leg`, :mod:`.scenarios` — the leg model and the swing/stance scenarios,
 * :mod:`.cantilever` — the clamped straight beam used for verification,
 * :mod:`.pendulum` — the ideal pendulum of the uncertainty-engine examples.

@@ -3,7 +3,7 @@
 :class:`DiscreteModel` holds the global functions (mass matrix, linear potential,
 constraints) and the per-element kernels of each element group (forces, tangents, parameter
 derivatives and energies for both schemes), compiled and cached on disk by model structure
-(:mod:`.codegen`).  :class:`BufferedFunction` evaluates one of them into numpy buffers
+(:mod:`fuzzygait.core.codegen`).  :class:`BufferedFunction` evaluates one of them into numpy buffers
 without copies.
 """
 
@@ -16,8 +16,8 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from fuzzygait.core.codegen import compile_functions, load_cached
 from fuzzygait.mechanics.assembly import ElementGroup, SystemBuilder
-from fuzzygait.mechanics.codegen import compile_functions, load_cached
 from fuzzygait.mechanics.native import ensure_stepper
 
 GLOBAL_FUNCTIONS = ("mass", "mass_sens", "linear", "constraints", "constraint_hessian", "potential")

@@ -6,7 +6,7 @@ variational, the later variational and the energy-momentum step) and the hand-wr
 that solves them — the modified Newton iteration, folding check and sensitivity recursion
 of :func:`.integrator.integrate`, with a sparse LU whose pivot order comes from one SuperLU
 factorisation and is reused (refreshed when a pivot becomes too small).  It is compiled
-once per structure and cached beside the kernel library (:mod:`.codegen`); Python calls it
+once per structure and cached beside the kernel library (:mod:`fuzzygait.core.codegen`); Python calls it
 once per chunk of steps (progress and Ctrl-C between chunks), never per iteration.
 """
 
@@ -23,8 +23,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from fuzzygait.core.codegen import build_library, cache_dir, compiler, library_key
 from fuzzygait.mechanics.assembly import SystemBuilder
-from fuzzygait.mechanics.codegen import build_library, cache_dir, compiler, library_key
 from fuzzygait.mechanics.solver import SolverSettings
 from fuzzygait.mechanics.step_functions import function_names, step_functions
 

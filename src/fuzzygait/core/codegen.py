@@ -77,11 +77,12 @@ def compile_functions(
 
 
 def build_library(target: Path, functions: Sequence[ca.Function], sources: Sequence[Path] = (),
-                  optimisation: str = "-O1", header: str | None = None) -> Path | None:  # fmt: skip
+                  optimisation: str = "-O1", header: str | None = None,
+                  purpose: str = "the simulator's generated code") -> Path | None:  # fmt: skip
     """Generate C code for ``functions``, compile it with the C files ``sources`` into the
     shared library ``target`` (written atomically) and return ``target``; None (with a
-    warning) without a compiler or when compilation fails.  ``header``: the generated
-    file's base name, for sources that include ``<header>.h``."""
+    warning naming ``purpose``) without a compiler or when compilation fails.
+    ``header``: the generated file's base name, for sources that include ``<header>.h``."""
     cc = compiler()
     if cc is None:
         return None
@@ -89,7 +90,7 @@ def build_library(target: Path, functions: Sequence[ca.Function], sources: Seque
     with _compiling(target):
         if target.exists():  # another process compiled it while this one waited
             return target
-        return _build(cc, target, functions, sources, optimisation, header)
+        return _build(cc, target, functions, sources, optimisation, header, purpose)
 
 
 @contextmanager
@@ -113,7 +114,7 @@ def _compiling(target: Path) -> Iterator[None]:
 
 
 def _build(cc: str, target: Path, functions: Sequence[ca.Function], sources: Sequence[Path], optimisation: str,
-           header: str | None) -> Path | None:  # fmt: skip
+           header: str | None, purpose: str) -> Path | None:  # fmt: skip
     """Generate, compile and move into place (:func:`build_library`, under its lock)."""
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         base = header or target.stem
@@ -127,7 +128,7 @@ def _build(cc: str, target: Path, functions: Sequence[ca.Function], sources: Seq
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
             warnings.warn(
-                f"compiling the simulator's generated code failed ({cc}: "
+                f"compiling {purpose} failed ({cc}: "
                 f"{result.stderr.strip().splitlines()[-1:] or ['?']}); running uncompiled (slower)",
                 stacklevel=4,
             )

@@ -1,0 +1,159 @@
+"""Symbolic scalars to trace the kinematic model once and compile it (:mod:`.angle_kernel`).
+
+The kinematic chain is written with numpy operations on ``(rows, 3)`` arrays.  Called
+with numpy ``object`` arrays whose elements are :class:`Symbol` (a CasADi ``SX``
+expression), the same code builds the expression graph of one row instead of numbers:
+numpy applies an operation on an object array element by element, calling the element's
+operator (``a + b``) or its method of the ufunc's name (``np.arctan2(a, b)`` calls
+``a.arctan2(b)``).  :func:`fuzzygait.core.arrays.floats` and ``plain`` pass such arrays
+through.
+
+A decision on the *values* — a comparison, ``bool``, ``float`` — has no answer for a
+symbol: it raises :class:`NotTraceable`, so a model whose chain branches on its data (the
+cluster fits' visibility masks, an iteration to convergence) is never compiled with a
+branch taken for one row and wrong for another; it runs on numpy instead.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+
+class NotTraceable(TypeError):
+    """The traced code took a decision on a symbolic value."""
+
+
+def _sx(value: Any) -> ca.SX:
+    if isinstance(value, Symbol):
+        return value.sx
+    if isinstance(value, int | float | np.floating | np.integer):
+        return ca.SX(float(value))
+    raise NotTraceable(f"cannot combine a symbol with {type(value).__name__}")
+
+
+class Symbol:
+    """One scalar of a traced computation: a CasADi ``SX`` expression with the operators
+    and numpy ufunc methods the kinematic chain uses."""
+
+    __slots__ = ("sx",)
+    __array_priority__ = 100.0
+
+    def __init__(self, sx: ca.SX) -> None:
+        self.sx = sx
+
+    # arithmetic
+    def __add__(self, other: Any) -> Symbol:
+        return Symbol(self.sx + _sx(other))
+
+    def __radd__(self, other: Any) -> Symbol:
+        return Symbol(_sx(other) + self.sx)
+
+    def __sub__(self, other: Any) -> Symbol:
+        return Symbol(self.sx - _sx(other))
+
+    def __rsub__(self, other: Any) -> Symbol:
+        return Symbol(_sx(other) - self.sx)
+
+    def __mul__(self, other: Any) -> Symbol:
+        return Symbol(self.sx * _sx(other))
+
+    def __rmul__(self, other: Any) -> Symbol:
+        return Symbol(_sx(other) * self.sx)
+
+    def __truediv__(self, other: Any) -> Symbol:
+        return Symbol(self.sx / _sx(other))
+
+    def __rtruediv__(self, other: Any) -> Symbol:
+        return Symbol(_sx(other) / self.sx)
+
+    def __pow__(self, other: Any) -> Symbol:
+        if other == 2:
+            return Symbol(self.sx * self.sx)
+        return Symbol(self.sx ** _sx(other))
+
+    def __neg__(self) -> Symbol:
+        return Symbol(-self.sx)
+
+    def __pos__(self) -> Symbol:
+        return self
+
+    def __mod__(self, other: Any) -> Symbol:
+        """Python's (and numpy's) modulo: the result has the divisor's sign."""
+        divisor = _sx(other)
+        return Symbol(self.sx - divisor * ca.floor(self.sx / divisor))
+
+    # numpy ufunc methods (``np.sqrt(array)`` calls ``element.sqrt()``)
+    def sqrt(self) -> Symbol:
+        return Symbol(ca.sqrt(self.sx))
+
+    def square(self) -> Symbol:
+        return Symbol(self.sx * self.sx)
+
+    def sin(self) -> Symbol:
+        return Symbol(ca.sin(self.sx))
+
+    def cos(self) -> Symbol:
+        return Symbol(ca.cos(self.sx))
+
+    def tan(self) -> Symbol:
+        return Symbol(ca.tan(self.sx))
+
+    def arcsin(self) -> Symbol:
+        return Symbol(ca.asin(self.sx))
+
+    def arccos(self) -> Symbol:
+        return Symbol(ca.acos(self.sx))
+
+    def arctan(self) -> Symbol:
+        return Symbol(ca.atan(self.sx))
+
+    def arctan2(self, other: Any) -> Symbol:
+        return Symbol(ca.atan2(self.sx, _sx(other)))
+
+    def degrees(self) -> Symbol:
+        return Symbol(self.sx * (180.0 / math.pi))
+
+    def radians(self) -> Symbol:
+        return Symbol(self.sx * (math.pi / 180.0))
+
+    def sign(self) -> Symbol:
+        return Symbol(ca.sign(self.sx))
+
+    def capped_arcsin(self) -> Symbol:
+        """``arcsin`` of the value clipped to [-1, 1]; NaN stays NaN."""
+        x = self.sx
+        return Symbol(ca.asin(ca.if_else(x > 1.0, 1.0, ca.if_else(x < -1.0, -1.0, x))))
+
+    def undefined_above(self, limit: float) -> Symbol:
+        """0 where the value is at most ``limit``, NaN above it (and for NaN)."""
+        return Symbol(ca.if_else(self.sx <= limit, 0.0, math.nan))
+
+    # decisions: no answer for a symbol
+    def _refuse(self, *_: Any) -> Any:
+        raise NotTraceable("the traced code decides on a symbolic value")
+
+    __bool__ = __float__ = __int__ = __index__ = _refuse
+    __lt__ = __le__ = __gt__ = __ge__ = __eq__ = __ne__ = _refuse
+    __hash__ = None  # type: ignore[assignment]  # unhashable, as its equality refuses
+
+
+def symbol_array(sx: ca.SX, shape: tuple[int, ...]) -> np.ndarray:
+    """The elements of the column ``sx`` as an object array of :class:`Symbol` of ``shape``
+    (C order)."""
+    count = int(np.prod(shape))
+    if sx.numel() != count:
+        raise ValueError(f"{sx.numel()} symbols for shape {shape}")
+    array = np.empty(count, dtype=object)
+    for i in range(count):
+        array[i] = Symbol(sx[i])
+    return array.reshape(shape)
+
+
+def expressions(values: Iterable[Any]) -> ca.SX:
+    """The column of the expressions of ``values`` (symbols or numbers)."""
+    return ca.vertcat(*[_sx(v) for v in values])
