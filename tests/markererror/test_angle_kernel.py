@@ -100,10 +100,10 @@ def test_unsettled_rows_are_recognised(offsets_run: AnglesRun) -> None:
     assert kernel is not None
     P = deviations(model, 100.0, 60)
     nodes = np.arange(P.shape[0]) % FRAMES.size
-    positions = np.concatenate([model._base[nodes] + P.reshape(len(nodes), -1, 3), model._fixed[nodes]], axis=1)
-    angles = kernel.angles(positions, model.progression)
-    unsettled = kernel.unsettled(positions, angles)
-    assert unsettled.any()
+    base = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1)
+    angles, status = kernel.angles(base, nodes, P, model.progression)
+    unsettled = status == angle_kernel.UNSETTLED
+    assert unsettled.any() and np.isnan(angles[unsettled]).all()
     assert np.all(np.isfinite(model.evaluate_nodes(P, nodes)[unsettled]))  # the chain's numbers there
 
 
@@ -115,6 +115,11 @@ def test_a_missing_marker_gives_nan_like_the_chain(angles_run: AnglesRun) -> Non
     P = deviations(model, 5.0, rows=FRAMES.size)
     values, gradients = model.evaluate_nodes_gradients(P, np.arange(FRAMES.size))
     assert np.isnan(values[2]) and np.isnan(gradients[2]).all()
+    kernel = model.kernel()
+    assert kernel is not None
+    base = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1)
+    _, status = kernel.angles(base, np.arange(FRAMES.size), P, model.progression)
+    assert status.tolist() == [0, 0, angle_kernel.MISSING, 0, 0]
     assert np.isfinite(np.delete(values, 2)).all() and np.isfinite(np.delete(gradients, 2, axis=0)).all()
     assert_same_as_chain(model, P)
 
@@ -144,11 +149,12 @@ def test_the_library_is_compiled_once(angles_run: AnglesRun, tmp_path: Path, mon
         raise AssertionError("compiled again")
 
     monkeypatch.setattr(angle_kernel, "build_library", refuse)
-    again = model.kernel()
+    again = model_of(angles_run, "LAnkleAngles", 2).kernel()
     assert again is not None and again is not first
     P = deviations(model, 5.0, rows=FRAMES.size)
-    positions = np.concatenate([model._base + P.reshape(FRAMES.size, -1, 3), model._fixed], axis=1)
-    np.testing.assert_array_equal(again.angles(positions, model.progression), first.angles(positions, model.progression))
+    base, nodes = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1), np.arange(FRAMES.size)
+    np.testing.assert_array_equal(again.angles(base, nodes, P, model.progression)[0],
+                                  first.angles(base, nodes, P, model.progression)[0])  # fmt: skip
 
 
 # ---------------------------------------------------------------------------- symbols
@@ -180,3 +186,16 @@ def test_symbolic_capped_arcsin(value: float) -> None:
     assert np.isnan(evaluate(Symbol(x).capped_arcsin(), x, np.nan))
     assert evaluate(Symbol(x).undefined_above(1.0), x, min(value, 1.0)) == 0.0
     assert np.isnan(evaluate(Symbol(x).undefined_above(1.0), x, 1.5))
+
+
+def test_a_model_with_its_kernel_pickles(angles_run: AnglesRun) -> None:
+    """Sent to a worker after use: the loaded library stays behind, the worker loads its own."""
+    import pickle
+
+    model = model_of(angles_run, "RKneeAngles", 1)
+    assert model.kernel() is not None
+    copy = pickle.loads(pickle.dumps(model))
+    P = deviations(model, 5.0)
+    nodes = np.arange(P.shape[0]) % FRAMES.size
+    np.testing.assert_array_equal(copy.evaluate_nodes(P, nodes), model.evaluate_nodes(P, nodes))
+    assert copy.kernel() is not None

@@ -40,6 +40,8 @@ OPTIMISATION = "-O2"
 VALUES, GRADIENTS = "fg_angles", "fg_angles_gradient"
 
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+_long_p = np.ctypeslib.ndpointer(dtype=np.int64, flags="C_CONTIGUOUS")
+_status_p = np.ctypeslib.ndpointer(dtype=np.int8, flags="C_CONTIGUOUS")
 
 #: ``angles(perturbed, fixed, progression)``: the model's chain on ``(rows, n, 3)`` and
 #: ``(rows, n_fixed, 3)`` positions (mm) and a ``(3, 3)`` progression frame -> ``(rows, 3)``
@@ -47,53 +49,54 @@ _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 Chain = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
+#: Row status of the kernel: its angles; a position missing (NaN angles and gradients,
+#: as the chain gives); angles NaN from measured positions — the chain decides those rows
+#: (an iteration the fixed steps did not settle, or an angle not defined there).
+SETTLED, MISSING, UNSETTLED = 0, 1, 2
+
+
 @dataclass(frozen=True)
 class AngleKernel:
-    """The compiled angle of one model: :meth:`angles` and :meth:`gradients` of rows of
-    marker positions ``(k, n_markers, 3)`` mm (the perturbed markers first, then the fixed
-    ones) with one ``(3, 3)`` progression frame.  A row with a position missing (NaN) has
-    NaN angles and gradients; so has a row the fixed-step code did not settle (the rotated
-    chord, :data:`~fuzzygait.kinematics.joint_centres.ROTATED_CHORD_SYMBOLIC_ITERATIONS`),
-    and a row where the angle is not defined: :meth:`unsettled` tells the caller which rows
-    to compute with the chain itself."""
+    """The compiled angle of one model.  A row is a frame's marker positions plus its
+    deviations: ``base`` ``(n_frames, 3 n_markers)`` mm (the perturbed markers' x, y, z
+    first, then the fixed markers'), ``nodes`` ``(k,)`` its frame per row, ``P``
+    ``(k, 3 n_perturbed)`` mm the deviations; one ``(3, 3)`` progression frame for all.
+    Each call also returns the rows' status (:data:`SETTLED`, :data:`MISSING`,
+    :data:`UNSETTLED`)."""
 
     library: ctypes.CDLL
     n_markers: int
     n_perturbed: int
 
-    def _inputs(self, positions: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(np.reshape(positions, (len(positions), 3 * self.n_markers)), dtype=float)
+    def _rows(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return (np.ascontiguousarray(base, dtype=float), np.ascontiguousarray(nodes, dtype=np.int64),
+                np.ascontiguousarray(P, dtype=float))  # fmt: skip
 
-    def angles(self, positions: np.ndarray, progression: np.ndarray) -> np.ndarray:
-        """``(k, 3)`` degrees, on the chain's own branch (wrapped into (-180°, 180°])."""
-        rows = self._inputs(positions)
-        out = np.empty((len(rows), 3))
+    def angles(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray,
+               progression: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """``(k, 3)`` degrees on the chain's own branch (wrapped into (-180°, 180°]) and the
+        ``(k,)`` status."""
+        base, nodes, P = self._rows(base, nodes, P)
+        k = len(nodes)
+        out, status = np.empty((k, 3)), np.empty(k, dtype=np.int8)
         q = np.ascontiguousarray(progression, dtype=float).ravel()
-        if self.library.fg_angle_rows(len(rows), rows.shape[1], rows, q, out):
+        if self.library.fg_angle_rows(k, base.shape[1], P.shape[1], base, nodes, P, q, out, status):
             raise MemoryError("the angle kernel could not allocate its workspace")
-        return out
+        return out, status
 
-    def gradients(self, positions: np.ndarray, progression: np.ndarray,
-                  axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-        """``(k, 3)`` angles (degrees) and ``(k, 3 n_perturbed)`` gradients (degrees/mm) of
-        component ``axes[i]`` of row ``i`` with respect to its perturbed markers' x, y, z."""
-        rows = self._inputs(positions)
-        k = len(rows)
-        weights = np.zeros((k, 3))
-        weights[np.arange(k), np.broadcast_to(np.asarray(axes, dtype=int), (k,))] = 1.0
-        out, gradients = np.empty((k, 3)), np.empty((k, 3 * self.n_perturbed))
+    def gradients(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray, progression: np.ndarray,
+                  axes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """``(k, 3)`` angles (degrees), ``(k, 3 n_perturbed)`` gradients (degrees/mm) of
+        component ``axes[i]`` of row ``i`` with respect to its deviations, and the status."""
+        base, nodes, P = self._rows(base, nodes, P)
+        k = len(nodes)
+        axes = np.ascontiguousarray(np.broadcast_to(axes, (k,)), dtype=np.int64)
+        out, gradients, status = np.empty((k, 3)), np.empty((k, P.shape[1])), np.empty(k, dtype=np.int8)
         q = np.ascontiguousarray(progression, dtype=float).ravel()
-        if self.library.fg_angle_gradient_rows(k, rows.shape[1], gradients.shape[1], rows, q, weights, out, gradients):
+        if self.library.fg_angle_gradient_rows(k, base.shape[1], P.shape[1], base, nodes, P, q, axes, out,
+                                               gradients, status):  # fmt: skip
             raise MemoryError("the angle kernel could not allocate its workspace")
-        return out, gradients
-
-    @staticmethod
-    def unsettled(positions: np.ndarray, angles: np.ndarray) -> np.ndarray:
-        """``(k,)`` True where a row's positions are all measured but its angles came out
-        NaN: the chain decides those rows (an iteration the fixed steps did not settle, or
-        an angle that is not defined there)."""
-        measured = np.isfinite(np.reshape(positions, (len(positions), -1))).all(axis=1)
-        return measured & ~np.isfinite(angles).all(axis=1)
+        return out, gradients, status
 
 
 def traced_functions(chain: Chain, n_perturbed: int, n_fixed: int) -> tuple[ca.Function, ca.Function]:
@@ -112,9 +115,11 @@ def traced_functions(chain: Chain, n_perturbed: int, n_fixed: int) -> tuple[ca.F
 
 def _load(path: Path) -> ctypes.CDLL:
     library = ctypes.CDLL(str(path))
-    library.fg_angle_rows.argtypes = [ctypes.c_long, ctypes.c_long, _double_p, _double_p, _double_p]
-    library.fg_angle_gradient_rows.argtypes = [ctypes.c_long, ctypes.c_long, ctypes.c_long, _double_p, _double_p,
-                                               _double_p, _double_p, _double_p]  # fmt: skip
+    long_ = ctypes.c_long
+    library.fg_angle_rows.argtypes = [long_, long_, long_, _double_p, _long_p, _double_p, _double_p, _double_p,
+                                      _status_p]  # fmt: skip
+    library.fg_angle_gradient_rows.argtypes = [long_, long_, long_, _double_p, _long_p, _double_p, _double_p, _long_p,
+                                               _double_p, _double_p, _status_p]  # fmt: skip
     return library
 
 
@@ -122,9 +127,9 @@ _KERNELS: dict[str, AngleKernel | None] = {}
 
 
 def compile_kernel(key: str, chain: Chain, n_perturbed: int, n_fixed: int) -> AngleKernel | None:
-    """The compiled kernel of ``chain`` (memoised per process under ``key``, a text that
-    identifies the model: version, angle, markers, subject), or None where it cannot be
-    had (module docstring)."""
+    """The compiled kernel of ``chain`` (memoised per process under ``key``, a digest of
+    what the chain is made of: version, angle, markers, subject, calibration), or None
+    where it cannot be had (module docstring)."""
     if key in _KERNELS:
         return _KERNELS[key]
     kernel = None

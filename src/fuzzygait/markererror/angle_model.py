@@ -44,7 +44,9 @@ hull is not a band any more; :func:`undetermined` marks it.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import pickle
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -64,7 +66,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.markererror.angle_kernel import AngleKernel, compile_kernel
+from fuzzygait.markererror.angle_kernel import UNSETTLED, AngleKernel, compile_kernel
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
     EXCURSION_LIMIT,
@@ -182,6 +184,9 @@ class JointAngleModel:
         self._base = np.stack([self.trial.marker(m)[self.frames] for m in self.markers], axis=1)
         self._fixed = np.stack([self.trial.marker(m)[self.frames] for m in self.fixed_markers], axis=1) \
             if self.fixed_markers else np.zeros((self.frames.size, 0, 3))
+        #: Per frame the perturbed then the fixed markers' x, y, z (mm): the compiled rows' base.
+        rows = np.concatenate([self._base, self._fixed], axis=1)
+        self._rows = np.ascontiguousarray(rows.reshape(len(self.frames), -1))
         self.times = self.trial.times[self.frames]
         #: Sampling period of the trial, s (frames further apart are not neighbours).
         self.time_step = 1.0 / self.trial.rate
@@ -211,21 +216,12 @@ class JointAngleModel:
     def angles_of(self, positions: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """All three components (degrees) for marker positions ``(k, n_markers, 3)``
         (``fixed``: the positions ``(k, n_fixed, 3)`` of :attr:`fixed_markers`): by the
-        compiled kernel where there is one (:mod:`.angle_kernel`; not for traced
-        positions, which autograd differentiates through the chain), else the chain."""
+        chain (:meth:`component_values` takes the compiled kernel where there is one)."""
         if self.fixed_markers and fixed is None:
             raise ParameterError(f"the positions of {', '.join(self.fixed_markers)} are needed too")
         if fixed is None:
             fixed = np.zeros((len(positions), 0, 3))
-        kernel = None if isbox(positions) else self.kernel()
-        if kernel is None:
-            return self.chain_angles(positions, fixed, self.progression)
-        everything = np.concatenate([positions, fixed], axis=1)
-        angles = kernel.angles(everything, self.progression)
-        redo = kernel.unsettled(everything, angles)
-        if redo.any():
-            angles[redo] = self.chain_angles(positions[redo], fixed[redo], self.progression)
-        return angles
+        return self.chain_angles(positions, fixed, self.progression)
 
     def chain_angles(self, positions: np.ndarray, fixed: np.ndarray, progression: np.ndarray) -> np.ndarray:
         """The chain of the model version: all three components (degrees) for positions
@@ -242,9 +238,17 @@ class JointAngleModel:
         model structure), or None where it cannot be had."""
         if not self.compiled:
             return None
-        key = repr((self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers, self.subject,
-                    self.clusters, self.trial.rate))  # fmt: skip
-        return compile_kernel(key, self.chain_angles, len(self.markers), len(self.fixed_markers))
+        if "_kernel" not in self.__dict__:
+            # what the chain is made of, exactly (its numbers pickled)
+            identity = (self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers,
+                        self.subject, self.clusters)  # fmt: skip
+            key = hashlib.sha256(pickle.dumps(identity)).hexdigest()
+            self._kernel = compile_kernel(key, self.chain_angles, len(self.markers), len(self.fixed_markers))
+        return self._kernel
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickled without the loaded kernel (a process loads its own)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
 
     def measured_angles(self) -> np.ndarray:
         """All three components (degrees) at zero deviation, ``(n_frames, 3)`` on
@@ -268,8 +272,17 @@ class JointAngleModel:
         at time nodes ``nodes`` (k,) for deviations ``P`` (k, n_p); with ``reference``
         ``(k,)`` (degrees) on the continuous branch through it.  One pass of the kinematic
         model serves every row, whichever component it asks for."""
-        positions = self._base[nodes] + floats(P).reshape(len(nodes), -1, 3)
-        angles = self.angles_of(positions, self._fixed[nodes])
+        kernel = None if isbox(P) else self.kernel()
+        if kernel is not None:
+            P, nodes = np.asarray(P, dtype=float), np.asarray(nodes, dtype=int)
+            angles, status = kernel.angles(self._rows, nodes, P, self.progression)
+            redo = status == UNSETTLED
+            if redo.any():
+                angles[redo] = self.angles_of(self._base[nodes[redo]] + P[redo].reshape(int(redo.sum()), -1, 3),
+                                              self._fixed[nodes[redo]])  # fmt: skip
+        else:
+            positions = self._base[nodes] + floats(P).reshape(len(nodes), -1, 3)
+            angles = self.angles_of(positions, self._fixed[nodes])
         angle = angles[:, axes] if np.ndim(axes) == 0 else angles[np.arange(len(nodes)), axes]
         if reference is None:
             return angle
@@ -286,14 +299,13 @@ class JointAngleModel:
         kernel = self.kernel()
         if kernel is None or P.shape[0] == 0:
             return row_gradients(lambda rows, at: self.component_values(rows, at, axes, reference), P, nodes)
-        positions = np.concatenate([self._base[nodes] + P.reshape(len(nodes), -1, 3), self._fixed[nodes]], axis=1)
         rows = np.arange(len(nodes))
         axes = np.broadcast_to(axes, rows.shape)
-        angles, gradients = kernel.gradients(positions, self.progression, axes)
+        angles, gradients, status = kernel.gradients(self._rows, nodes, P, self.progression, axes)
         angle = angles[rows, axes]
         if reference is not None:
             angle = reference + wrap_degrees(angle - reference)
-        redo = kernel.unsettled(positions, angles)
+        redo = status == UNSETTLED
         if redo.any():
             at = None if reference is None else reference[redo]
             angle[redo], gradients[redo] = row_gradients(

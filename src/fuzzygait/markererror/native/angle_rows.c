@@ -4,6 +4,7 @@
  * fg_angles (positions, progression -> 3 angles, degrees) and fg_angles_gradient
  * (positions, progression, component weights -> 3 angles and the gradient of the
  * weighted sum with respect to the perturbed markers' coordinates, degrees/mm). */
+#include <math.h>
 #include <stdlib.h>
 
 typedef long long int casadi_int;
@@ -35,37 +36,76 @@ static void release(workspace* space) {
     free(space->w);
 }
 
-/* angles (k, 3) of positions x (k, n_x) */
-int fg_angle_rows(long k, long n_x, const double* x, const double* progression, double* angles) {
+/* Row i's positions: the base positions of its frame, nodes[i], (n_frames, n_x; the
+ * perturbed markers' coordinates first, then the fixed markers') plus its deviations P[i]
+ * (n_p) on the first n_p coordinates.  Returns 0 (all finite) or 1 (a position missing). */
+static int positions(long i, long n_x, long n_p, const double* base, const long* nodes, const double* P,
+                     double* x) {
+    const double* b = base + nodes[i] * n_x;
+    const double* p = P + i * n_p;
+    int missing = 0;
+    for (long j = 0; j < n_x; ++j) {
+        x[j] = b[j] + (j < n_p ? p[j] : 0.0);
+        if (!(x[j] - x[j] == 0.0)) missing = 1; /* NaN or infinite */
+    }
+    return missing;
+}
+
+/* status per row: 0 the angles, 1 a position missing (angles and gradients NaN), 2 the
+ * angles came out NaN from measured positions (the caller asks the chain). */
+static void settle(long i, int missing, double* angles, double* gradients, long n_p, signed char* status) {
+    int defined = angles[3 * i] == angles[3 * i] && angles[3 * i + 1] == angles[3 * i + 1]
+                  && angles[3 * i + 2] == angles[3 * i + 2];
+    status[i] = missing ? 1 : (defined ? 0 : 2);
+    if (missing) {
+        for (int c = 0; c < 3; ++c) angles[3 * i + c] = NAN;
+        if (gradients) for (long j = 0; j < n_p; ++j) gradients[i * n_p + j] = NAN;
+    }
+}
+
+/* angles (k, 3) */
+int fg_angle_rows(long k, long n_x, long n_p, const double* base, const long* nodes, const double* P,
+                  const double* progression, double* angles, signed char* status) {
     casadi_int n_arg, n_res, n_iw, n_w;
     workspace space;
+    double* x = malloc(sizeof(double) * (size_t)(n_x > 0 ? n_x : 1));
     fg_angles_work(&n_arg, &n_res, &n_iw, &n_w);
-    if (reserve(&space, n_arg, n_res, n_iw, n_w)) { release(&space); return 1; }
+    if (!x || reserve(&space, n_arg, n_res, n_iw, n_w)) { free(x); release(&space); return 1; }
     for (long i = 0; i < k; ++i) {
-        space.arg[0] = x + i * n_x;
+        int missing = positions(i, n_x, n_p, base, nodes, P, x);
+        space.arg[0] = x;
         space.arg[1] = progression;
         space.res[0] = angles + 3 * i;
         fg_angles(space.arg, space.res, space.iw, space.w, 0);
+        settle(i, missing, angles, 0, n_p, status);
     }
+    free(x);
     release(&space);
     return 0;
 }
 
-/* angles (k, 3) and gradients (k, n_p) of weights[i] . angles[i] */
-int fg_angle_gradient_rows(long k, long n_x, long n_p, const double* x, const double* progression,
-                           const double* weights, double* angles, double* gradients) {
+/* angles (k, 3) and gradients (k, n_p) of component axes[i] of row i */
+int fg_angle_gradient_rows(long k, long n_x, long n_p, const double* base, const long* nodes, const double* P,
+                           const double* progression, const long* axes, double* angles, double* gradients,
+                           signed char* status) {
     casadi_int n_arg, n_res, n_iw, n_w;
     workspace space;
+    double* x = malloc(sizeof(double) * (size_t)(n_x > 0 ? n_x : 1));
+    double weights[3];
     fg_angles_gradient_work(&n_arg, &n_res, &n_iw, &n_w);
-    if (reserve(&space, n_arg, n_res, n_iw, n_w)) { release(&space); return 1; }
+    if (!x || reserve(&space, n_arg, n_res, n_iw, n_w)) { free(x); release(&space); return 1; }
     for (long i = 0; i < k; ++i) {
-        space.arg[0] = x + i * n_x;
+        int missing = positions(i, n_x, n_p, base, nodes, P, x);
+        for (int c = 0; c < 3; ++c) weights[c] = c == axes[i] ? 1.0 : 0.0;
+        space.arg[0] = x;
         space.arg[1] = progression;
-        space.arg[2] = weights + 3 * i;
+        space.arg[2] = weights;
         space.res[0] = angles + 3 * i;
         space.res[1] = gradients + n_p * i;
         fg_angles_gradient(space.arg, space.res, space.iw, space.w, 0);
+        settle(i, missing, angles, gradients, n_p, status);
     }
+    free(x);
     release(&space);
     return 0;
 }
