@@ -127,11 +127,10 @@ def _build(cc: str, target: Path, functions: Sequence[ca.Function], sources: Seq
                    *map(str, sources), "-o", str(library), "-lm"]  # fmt: skip
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
-            warnings.warn(
-                f"compiling {purpose} failed ({cc}: "
-                f"{result.stderr.strip().splitlines()[-1:] or ['?']}); running uncompiled (slower)",
-                stacklevel=4,
-            )
+            lines = result.stderr.strip().splitlines()
+            first_error = next((line for line in lines if "error" in line), lines[-1] if lines else "?")
+            warnings.warn(f"compiling {purpose} failed ({cc}: {first_error.strip()}); running uncompiled (slower)",
+                          stacklevel=4)  # fmt: skip
             return None
         os.replace(library, target)  # atomic: concurrent workers see a whole file or none
     return target

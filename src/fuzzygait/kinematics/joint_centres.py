@@ -135,7 +135,7 @@ def chord_joint_centre(
 ROTATED_CHORD_TOLERANCE_MM = 1e-10
 ROTATED_CHORD_MAX_ITERATIONS = 30
 #: Steps of the iteration when the chain is traced with symbols for a compiled model
-#: (:mod:`fuzzygait.markererror.angle_kernel`), where no convergence test can stop it: a
+#: (:mod:`fuzzygait.markererror.row_kernel`), where no convergence test can stop it: a
 #: fixed count, past where the test stops on adult legs (5 or 6 steps).  A row whose last
 #: step still moved the centre by more than the tolerance comes out NaN, which the
 #: compiled model hands back to this code (its numbers, its test).

@@ -66,7 +66,7 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.markererror.angle_kernel import UNSETTLED, AngleKernel, compile_kernel
+from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
     EXCURSION_LIMIT,
@@ -150,7 +150,7 @@ class JointAngleModel:
         model: the model version that computed the measured angles (``"cgm1.0"`` …
             ``"cgm2.4"``).
         clusters: the static cluster calibration (``cgm2.3``, ``cgm2.4``), held fixed.
-        compiled: evaluate by the compiled kernel where there is one (:mod:`.angle_kernel`);
+        compiled: evaluate by the compiled kernel where there is one (:mod:`.row_kernel`);
             False: always the numpy chain (the same numbers, slower).
     """
 
@@ -233,18 +233,28 @@ class JointAngleModel:
         chain = model_chain(rows, self.subject, self.model, self.clusters, use_medial_markers=self.use_medial_markers)
         return angle_from_chain(chain, self.name, progression)
 
-    def kernel(self) -> AngleKernel | None:
-        """The compiled model (:func:`~.angle_kernel.compile_kernel`, once per process and
-        model structure), or None where it cannot be had."""
+    def kernel(self) -> RowKernel | None:
+        """The compiled model (:func:`~.row_kernel.compile_kernel`, once per process and
+        model structure), or None where it cannot be had.  Its row: ``x`` a frame's
+        positions (the perturbed markers' x, y, z, then the fixed markers'), ``p`` the
+        deviations of the perturbed ones, ``q`` the progression frame; out the three
+        components (degrees, on the chain's own branch)."""
         if not self.compiled:
             return None
         if "_kernel" not in self.__dict__:
             # what the chain is made of, exactly (its numbers pickled)
-            identity = (self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers,
+            identity = ("angle", self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers,
                         self.subject, self.clusters)  # fmt: skip
             key = hashlib.sha256(pickle.dumps(identity)).hexdigest()
-            self._kernel = compile_kernel(key, self.chain_angles, len(self.markers), len(self.fixed_markers))
+            n, n_x = 3 * len(self.markers), self._rows.shape[1]
+            self._kernel = compile_kernel(key, self._row_angles, Shape(n_x, n, 9, 3), "a joint-angle model")
         return self._kernel
+
+    def _row_angles(self, x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The kernel's row function (:meth:`kernel`)."""
+        n = p.size
+        positions = (x[:n] + p).reshape(1, -1, 3)
+        return self.chain_angles(positions, x[n:].reshape(1, -1, 3), q.reshape(3, 3))[0]
 
     def __getstate__(self) -> dict[str, object]:
         """Pickled without the loaded kernel (a process loads its own)."""
@@ -275,7 +285,7 @@ class JointAngleModel:
         kernel = None if isbox(P) else self.kernel()
         if kernel is not None:
             P, nodes = np.asarray(P, dtype=float), np.asarray(nodes, dtype=int)
-            angles, status = kernel.angles(self._rows, nodes, P, self.progression)
+            angles, status = kernel.values(self._rows, nodes, P, self.progression)
             redo = status == UNSETTLED
             if redo.any():
                 angles[redo] = self.angles_of(self._base[nodes[redo]] + P[redo].reshape(int(redo.sum()), -1, 3),

@@ -1,4 +1,4 @@
-"""Symbolic scalars to trace the kinematic model once and compile it (:mod:`.angle_kernel`).
+"""Symbolic scalars to trace the kinematic model once and compile it (:mod:`.row_kernel`).
 
 The kinematic chain is written with numpy operations on ``(rows, 3)`` arrays.  Called
 with numpy ``object`` arrays whose elements are :class:`Symbol` (a CasADi ``SX``

@@ -1,5 +1,5 @@
 """The compiled joint-angle models (issue 40): the chain traced with symbols, its angles and
-gradients in C (:mod:`fuzzygait.markererror.angle_kernel`).
+gradients in C (:mod:`fuzzygait.markererror.row_kernel`).
 
 Independent truth: the numpy chain itself (``compiled=False``: the same code run on
 numbers) and autograd's reverse sweep through it, for every angle of every Plug-in Gait
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.kinematics.versions import MODEL_VERSIONS
-from fuzzygait.markererror import angle_kernel
+from fuzzygait.markererror import row_kernel
 from fuzzygait.markererror.angle_model import JointAngleModel, fixed_subject
 from fuzzygait.markererror.symbols import NotTraceable, Symbol, expressions, symbol_array
 from fuzzygait.workflows.angles import AnglesRun, run_angles
@@ -101,8 +101,8 @@ def test_unsettled_rows_are_recognised(offsets_run: AnglesRun) -> None:
     P = deviations(model, 100.0, 60)
     nodes = np.arange(P.shape[0]) % FRAMES.size
     base = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1)
-    angles, status = kernel.angles(base, nodes, P, model.progression)
-    unsettled = status == angle_kernel.UNSETTLED
+    angles, status = kernel.values(base, nodes, P, model.progression)
+    unsettled = status == row_kernel.UNSETTLED
     assert unsettled.any() and np.isnan(angles[unsettled]).all()
     assert np.all(np.isfinite(model.evaluate_nodes(P, nodes)[unsettled]))  # the chain's numbers there
 
@@ -118,8 +118,8 @@ def test_a_missing_marker_gives_nan_like_the_chain(angles_run: AnglesRun) -> Non
     kernel = model.kernel()
     assert kernel is not None
     base = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1)
-    _, status = kernel.angles(base, np.arange(FRAMES.size), P, model.progression)
-    assert status.tolist() == [0, 0, angle_kernel.MISSING, 0, 0]
+    _, status = kernel.values(base, np.arange(FRAMES.size), P, model.progression)
+    assert status.tolist() == [0, 0, row_kernel.MISSING, 0, 0]
     assert np.isfinite(np.delete(values, 2)).all() and np.isfinite(np.delete(gradients, 2, axis=0)).all()
     assert_same_as_chain(model, P)
 
@@ -127,7 +127,7 @@ def test_a_missing_marker_gives_nan_like_the_chain(angles_run: AnglesRun) -> Non
 def test_no_compiler_means_the_chain(angles_run: AnglesRun, monkeypatch: pytest.MonkeyPatch) -> None:
     """``FUZZYGAIT_NO_COMPILE=1``: no kernel, the chain's numbers."""
     monkeypatch.setenv("FUZZYGAIT_NO_COMPILE", "1")
-    monkeypatch.setattr(angle_kernel, "_KERNELS", {})
+    monkeypatch.setattr(row_kernel, "_KERNELS", {})
     model = model_of(angles_run, "RHipAngles")
     assert model.kernel() is None and dataclasses.replace(model, compiled=False).kernel() is None
     P = deviations(model, 5.0)
@@ -139,22 +139,22 @@ def test_no_compiler_means_the_chain(angles_run: AnglesRun, monkeypatch: pytest.
 def test_the_library_is_compiled_once(angles_run: AnglesRun, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A second process (here: an emptied memo) loads the cached library, compiling nothing."""
     monkeypatch.setenv("FUZZYGAIT_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(angle_kernel, "_KERNELS", {})
+    monkeypatch.setattr(row_kernel, "_KERNELS", {})
     model = model_of(angles_run, "LAnkleAngles", 2)
     first = model.kernel()
-    assert first is not None and len(list(tmp_path.glob("fg_angle_*.so"))) == 1
-    monkeypatch.setattr(angle_kernel, "_KERNELS", {})
+    assert first is not None and len(list(tmp_path.glob("fg_rows_*.so"))) == 1
+    monkeypatch.setattr(row_kernel, "_KERNELS", {})
 
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("compiled again")
 
-    monkeypatch.setattr(angle_kernel, "build_library", refuse)
+    monkeypatch.setattr(row_kernel, "build_library", refuse)
     again = model_of(angles_run, "LAnkleAngles", 2).kernel()
     assert again is not None and again is not first
     P = deviations(model, 5.0, rows=FRAMES.size)
     base, nodes = np.concatenate([model._base, model._fixed], axis=1).reshape(FRAMES.size, -1), np.arange(FRAMES.size)
-    np.testing.assert_array_equal(again.angles(base, nodes, P, model.progression)[0],
-                                  first.angles(base, nodes, P, model.progression)[0])  # fmt: skip
+    np.testing.assert_array_equal(again.values(base, nodes, P, model.progression)[0],
+                                  first.values(base, nodes, P, model.progression)[0])  # fmt: skip
 
 
 # ---------------------------------------------------------------------------- symbols

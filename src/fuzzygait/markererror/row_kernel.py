@@ -1,0 +1,165 @@
+"""Compiled marker-error models: a model's own code traced once into C, row by row.
+
+The α-level optimisation asks a model for millions of rows (one deviation at one frame
+each).  In numpy with autograd a joint-angle row costs about 1 µs for the values and
+2.3 µs with its gradient, plus 0.7 / 2.5 ms per call (``benchmarks/RESULTS.md``, issue 40);
+a joint-moment row, which runs the chain on nine frames, ten times that.  Here the model's
+row function — its own Python code, the kinematic chain and the dynamics — is called once
+with symbols instead of numbers (:mod:`.symbols`), giving a CasADi expression of one row;
+CasADi differentiates it (reverse mode) and generates C, compiled with the row loops of
+``native/rows.c`` into a library cached on disk (:mod:`fuzzygait.core.codegen`:
+``$FUZZYGAIT_CACHE_DIR``; once per model structure and subject, whichever process asks
+first).  The values equal the numpy code's to rounding; the gradients are the exact ones of
+the same expression.
+
+A row function ``f(x, p, q)`` takes three flat inputs:
+
+* ``x`` ``(n_x,)``: what the row's frame gives (marker positions, the ground's load), one
+  row of a ``base`` table per model frame, picked by the row's node;
+* ``p`` ``(n_p,)``: the row's deviations, the parameters the gradient is taken for;
+* ``q`` ``(n_q,)``: shared by every row (the progression frame, the sampling rate …), an
+  input rather than a constant so that one library serves every trial;
+
+and returns ``(n_out,)`` outputs; the gradient is that of the output a row selects.
+
+No kernel (the model runs on numpy, same numbers, slower): without a C compiler or with
+``FUZZYGAIT_NO_COMPILE=1``, and for code that decides on its data — the cluster fits of
+CGM 2.3/2.4 (visibility masks, an iteration) — where tracing stops with
+:class:`~.symbols.NotTraceable` or numpy refuses an operation on symbols.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from fuzzygait.core.codegen import build_library, cache_dir, compiler
+from fuzzygait.markererror.symbols import NotTraceable, expressions, symbol_array
+
+ROWS_SOURCE = Path(__file__).with_name("native") / "rows.c"
+#: Compiler optimisation of the kernels (part of the cache key).
+OPTIMISATION = "-O2"
+VALUES, GRADIENT = "fg_values", "fg_gradient"
+
+#: Row status: outputs; an input missing (NaN outputs and gradients, as numpy gives);
+#: outputs NaN from measured inputs — the caller computes those rows with the numpy code
+#: (an iteration the fixed steps did not settle, or an output not defined there).
+SETTLED, MISSING, UNSETTLED = 0, 1, 2
+
+#: ``f(x, p, q)`` on object arrays of symbols -> the ``(n_out,)`` outputs (module docstring).
+RowFunction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+_double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+_long_p = np.ctypeslib.ndpointer(dtype=np.int64, flags="C_CONTIGUOUS")
+_status_p = np.ctypeslib.ndpointer(dtype=np.int8, flags="C_CONTIGUOUS")
+
+
+@dataclass(frozen=True)
+class Shape:
+    """The sizes of a row function's inputs and outputs."""
+
+    n_x: int
+    n_p: int
+    n_q: int
+    n_out: int
+
+
+@dataclass(frozen=True)
+class RowKernel:
+    """A compiled row function.  ``base`` ``(n_frames, n_x)``: one ``x`` per model frame;
+    ``nodes`` ``(k,)``: each row's frame (an index into ``base``); ``P`` ``(k, n_p)``: the
+    rows' deviations; ``q`` ``(n_q,)``.  Each call returns the rows' status too
+    (:data:`SETTLED`, :data:`MISSING`, :data:`UNSETTLED`)."""
+
+    library: ctypes.CDLL
+    shape: Shape
+
+    def _rows(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray,
+              q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        base, P = np.ascontiguousarray(base, dtype=float), np.ascontiguousarray(P, dtype=float)
+        nodes, q = np.ascontiguousarray(nodes, dtype=np.int64), np.ascontiguousarray(q, dtype=float).ravel()
+        s = self.shape
+        if base.shape[1:] != (s.n_x,) or P.shape != (len(nodes), s.n_p) or q.shape != (s.n_q,):
+            raise ValueError(f"rows of {base.shape[1:]}, {P.shape[1:]}, {q.shape} for a kernel of {s}")
+        if len(nodes) and (nodes.min() < 0 or nodes.max() >= len(base)):
+            raise IndexError("a row's node lies outside the base table")
+        return base, nodes, P, q
+
+    def values(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray,
+               q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """``(k, n_out)`` outputs and the ``(k,)`` status."""
+        base, nodes, P, q = self._rows(base, nodes, P, q)
+        k, s = len(nodes), self.shape
+        out, status = np.empty((k, s.n_out)), np.empty(k, dtype=np.int8)
+        if self.library.fg_value_rows(k, s.n_x, s.n_p, s.n_out, base, nodes, P, q, out, status):
+            raise MemoryError("a compiled model could not allocate its workspace")
+        return out, status
+
+    def gradients(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray, q: np.ndarray,
+                  select: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """``(k, n_out)`` outputs, ``(k, n_p)`` gradients of output ``select[i]`` of row
+        ``i`` with respect to its deviations, and the ``(k,)`` status."""
+        base, nodes, P, q = self._rows(base, nodes, P, q)
+        k, s = len(nodes), self.shape
+        select = np.ascontiguousarray(np.broadcast_to(select, (k,)), dtype=np.int64)
+        if k and (select.min() < 0 or select.max() >= s.n_out):
+            raise IndexError(f"a row selects an output outside 0..{s.n_out - 1}")
+        out, gradients, status = np.empty((k, s.n_out)), np.empty((k, s.n_p)), np.empty(k, dtype=np.int8)
+        if self.library.fg_gradient_rows(k, s.n_x, s.n_p, s.n_out, base, nodes, P, q, select, out, gradients, status):
+            raise MemoryError("a compiled model could not allocate its workspace")
+        return out, gradients, status
+
+
+def traced_functions(function: RowFunction, shape: Shape) -> tuple[ca.Function, ca.Function]:
+    """The values and selected-gradient functions of ``function`` for one row (raises
+    :class:`~.symbols.NotTraceable`, or numpy a ``TypeError``, where it decides on its data)."""
+    x, p, q, w = (ca.SX.sym(name, size) for name, size in (("x", shape.n_x), ("p", shape.n_p), ("q", shape.n_q),
+                                                           ("w", shape.n_out)))  # fmt: skip
+    out = np.ravel(function(symbol_array(x, (shape.n_x,)), symbol_array(p, (shape.n_p,)),
+                            symbol_array(q, (shape.n_q,))))  # fmt: skip
+    if out.shape != (shape.n_out,):
+        raise NotTraceable(f"the row function gave {out.shape} outputs, not ({shape.n_out},)")
+    y = expressions(out)
+    return ca.Function(VALUES, [x, p, q], [y]), ca.Function(GRADIENT, [x, p, q, w], [y, ca.gradient(ca.dot(w, y), p)])
+
+
+def _load(path: Path) -> ctypes.CDLL:
+    library = ctypes.CDLL(str(path))
+    n = [ctypes.c_long] * 4
+    library.fg_value_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _double_p, _status_p]
+    library.fg_gradient_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _long_p, _double_p, _double_p,
+                                         _status_p]  # fmt: skip
+    return library
+
+
+_KERNELS: dict[str, RowKernel | None] = {}
+
+
+def compile_kernel(key: str, function: RowFunction, shape: Shape, purpose: str) -> RowKernel | None:
+    """The compiled kernel of ``function`` (memoised per process under ``key``, a digest of
+    what the function is made of: model version, outputs, markers, subject …), or None where
+    it cannot be had (module docstring).  ``purpose`` names the model in a compiler warning."""
+    if key in _KERNELS:
+        return _KERNELS[key]
+    kernel = None
+    if compiler() is not None:
+        try:
+            functions = traced_functions(function, shape)
+        except TypeError:  # NotTraceable, or numpy refusing an operation on symbols (np.isfinite)
+            functions = None
+        if functions is not None:
+            version = ca.__version__  # type: ignore[attr-defined]  # set at import, absent from casadi's stub
+            text = "|".join([version, OPTIMISATION, ROWS_SOURCE.read_text(), *(f.serialize() for f in functions)])
+            target = cache_dir() / f"fg_rows_{hashlib.sha256(text.encode()).hexdigest()[:20]}.so"
+            path = target if target.exists() else build_library(
+                target, functions, sources=[ROWS_SOURCE], optimisation=OPTIMISATION, purpose=purpose)  # fmt: skip
+            if path is not None:
+                kernel = RowKernel(_load(path), shape)
+    _KERNELS[key] = kernel
+    return kernel
