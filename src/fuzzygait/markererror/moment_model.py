@@ -48,12 +48,15 @@ Gradients are exact (reverse-mode through the kinematic chain and the dynamics,
 
 from __future__ import annotations
 
+import hashlib
+import pickle
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import autograd.numpy as anp
 import numpy as np
+from autograd.tracer import isbox
 from numpy.typing import NDArray
 
 from fuzzygait.core.arrays import floats
@@ -69,6 +72,7 @@ from fuzzygait.kinetics.inverse_dynamics import GRAVITY
 from fuzzygait.kinetics.plug_in_gait import JOINTS, MOMENT_AXES, foot_length
 from fuzzygait.kinetics.segments import MM, PLUG_IN_GAIT_TABLE
 from fuzzygait.markererror.angle_model import AXES, fixed_subject, row_gradients
+from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel
 from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODES, TIME_STEP, Evaluation, Output
 
 Array = NDArray[np.float64]
@@ -152,6 +156,8 @@ class LegKineticsModel:
         kind: ``"Moment"`` (N·m/kg) or ``"Power"`` (W/kg).
         markers: the markers whose deviations are parameters (default: all the leg's).
         model: the model version (``"cgm1.0"``, ``"cgm1.1"``, ``"cgm2.1"``).
+        compiled: evaluate by the compiled kernel (:meth:`kernel`) where there is one;
+            False: always numpy (the same numbers, slower).
     """
 
     trial: Trial
@@ -165,6 +171,7 @@ class LegKineticsModel:
     kind: str = "Moment"
     markers: list[str] = field(default_factory=list)
     model: str = "cgm1.0"
+    compiled: bool = True
 
     capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP})
 
@@ -237,11 +244,16 @@ class LegKineticsModel:
     def _chain(self, P: np.ndarray, frames: np.ndarray) -> dict[str, np.ndarray]:
         """Joint centres (m) and frames of the leg at the nine frames around each row's
         frame, the row's deviation applied: each ``(k, 9, 3)`` or ``(k, 9, 3, 3)``."""
-        k, m = len(frames), len(self.markers)
         window = frames[:, None] + _OFFSETS[None, :]
-        positions = self._positions[window] + anp.reshape(P[:, : 3 * m], (k, 1, m, 3))
+        return self._parts(self._positions[window], self._fixed[window], P[:, : 3 * len(self.markers)])
+
+    def _parts(self, positions: np.ndarray, fixed: np.ndarray, deviations: np.ndarray) -> dict[str, np.ndarray]:
+        """:meth:`_chain` of the window's positions ``(k, 9, m, 3)`` and ``(k, 9, n_fixed, 3)``
+        (mm) and the rows' marker deviations ``(k, 3 m)`` (numbers, traced or symbolic)."""
+        k, m = len(positions), len(self.markers)
+        positions = positions + anp.reshape(deviations, (k, 1, m, 3))
         if self.fixed_markers:
-            positions = anp.concatenate([positions, self._fixed[window]], axis=2)
+            positions = anp.concatenate([positions, fixed], axis=2)
         flat = anp.reshape(positions, (k * _OFFSETS.size, -1, 3))
         rows = Trial(markers=flat, marker_labels=[*self.markers, *self.fixed_markers], rate=self.trial.rate)
         chain = model_chain(rows, self.subject, self.model)
@@ -256,18 +268,28 @@ class LegKineticsModel:
         joint (ankle, knee, hip) and axis the moment (N·m/kg; Nexus X, Y, Z) or the power
         (W/kg, in Z; X = Y = 0)."""
         P, frames = floats(P), np.asarray(frames, dtype=int)
-        parts = self._chain(P, frames)
-        rate, mass = self.trial.rate, self.subject.body_mass
-        shifts = anp.reshape(P[:, 3 * len(self.markers) :], (len(frames), len(self.plates), 3))
-        moment = self._moment[frames]
+        window = frames[:, None] + _OFFSETS[None, :]
+        loads = _Loads(self._force[frames], self._moment[frames], self._shares[:, frames])
+        constants = _Constants(self.trial.rate, self.subject.body_mass, self.foot_length * MM, self._plane)
+        return self._dynamics(self._positions[window], self._fixed[window], loads, P, constants)
+
+    def _dynamics(self, positions: np.ndarray, fixed: np.ndarray, loads: _Loads, P: np.ndarray,
+                  constants: _Constants) -> np.ndarray:  # fmt: skip
+        """:meth:`outputs` from the rows' window positions ``(k, 9, m, 3)``, ``(k, 9,
+        n_fixed, 3)`` mm, their loads and deviations ``P`` (numbers, traced or symbolic)."""
+        m = len(self.markers)
+        parts = self._parts(positions, fixed, P[:, : 3 * m])
+        rate, mass = constants.rate, constants.mass
+        shifts = anp.reshape(P[:, 3 * m :], (len(P), len(self.plates), 3))
+        moment = loads.moment
         for p in range(len(self.plates)):
-            offset = anp.dot(shifts[:, p, :2], self._plane[p]) * MM
-            moment = moment + anp.cross(offset, self._shares[p][frames])
+            offset = anp.dot(shifts[:, p, :2], constants.plane[p]) * MM
+            moment = moment + anp.cross(offset, loads.shares[p])
         # foot, tibia, femur, pelvis at the window's even offsets −4, −2, 0, 2, 4 (the rotations' differences)
         rotations = anp.stack([parts[name][:, ::2] for name in ("foot", "tibia", "thigh", "pelvis")], axis=1)
         omega = _omega(rotations, rate)  # (k, 4 segments, offsets −2, 0, 2, 3)
-        moments = _newton_euler(_segments(parts, self.foot_length * MM, mass), rotations, omega,
-                                self._force[frames], moment, rate)  # fmt: skip
+        moments = _newton_euler(_segments(parts, constants.foot_length, mass), rotations, omega, loads.force, moment,
+                                rate)  # fmt: skip
         if self.kind == "Power":
             relative = omega[:, :3, 1] - omega[:, 1:, 1]
             power = anp.sum(moments * relative, axis=2) / mass
@@ -276,19 +298,89 @@ class LegKineticsModel:
         local = _apply(anp.swapaxes(rotations[:, :3, 2], -1, -2), moments)
         return anp.einsum("sca,ksa->ksc", self._picks, local) / mass
 
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
-        (k, n_p)."""
+    def _selected(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each node's frame index (into :attr:`frames`) and output (``3 joint + axis``)."""
         block, j = np.divmod(np.asarray(nodes, dtype=int), self.frames.size)
         joints = np.array([JOINTS.index(joint) for joint, _ in self.components], dtype=int)
         axes = np.array([axis for _, axis in self.components], dtype=int)
-        pick = np.zeros((len(j), 3, 3))
-        pick[np.arange(len(j)), joints[block], axes[block]] = 1.0
-        return anp.sum(self.outputs(P, self.frames[j]) * pick, axis=(1, 2))
+        return j, 3 * joints[block] + axes[block]
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
+        (k, n_p): by the compiled kernel where there is one, else numpy."""
+        j, selected = self._selected(nodes)
+        kernel = None if isbox(P) else self.kernel()
+        if kernel is None:
+            pick = np.zeros((len(j), 9))
+            pick[np.arange(len(j)), selected] = 1.0
+            return anp.sum(anp.reshape(self.outputs(P, self.frames[j]), (len(j), 9)) * pick, axis=1)
+        P = np.asarray(P, dtype=float)
+        out, status = kernel.values(self._kernel_rows(), j, P, self._kernel_shared())
+        values = out[np.arange(len(j)), selected]
+        redo = status == UNSETTLED
+        if redo.any():
+            values[redo] = self.evaluate_nodes(P[redo], np.asarray(nodes)[redo])
+        return values
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Values and exact gradients (per mm) per row."""
-        return row_gradients(self.evaluate_nodes, P, nodes)
+        """Values and exact gradients (per mm) per row: compiled, else a reverse sweep of
+        autograd (:func:`~fuzzygait.markererror.angle_model.row_gradients`)."""
+        kernel = self.kernel()
+        P, nodes = np.asarray(P, dtype=float), np.asarray(nodes, dtype=int)
+        if kernel is None or P.shape[0] == 0:
+            return row_gradients(self.evaluate_nodes, P, nodes)
+        j, selected = self._selected(nodes)
+        out, gradients, status = kernel.gradients(self._kernel_rows(), j, P, self._kernel_shared(), selected)
+        values = out[np.arange(len(j)), selected]
+        redo = status == UNSETTLED
+        if redo.any():
+            values[redo], gradients[redo] = row_gradients(self.evaluate_nodes, P[redo], nodes[redo])
+        return values, gradients
+
+    def kernel(self) -> RowKernel | None:
+        """The compiled model (:mod:`.row_kernel`), or None where it cannot be had.  Its row:
+        ``x`` a frame's window (the markers' and the fixed markers' positions at the nine
+        frames, mm; the ground's force N and moment N·m; each plate's share of the force),
+        ``p`` the deviations, ``q`` the rate, body mass, foot length and the plates'
+        in-plane axes; out the 3 × 3 joint (ankle, knee, hip) and axis outputs."""
+        if not self.compiled:
+            return None
+        if "_kernel" not in self.__dict__:
+            identity = ("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers, len(self.plates),
+                        self.subject)  # fmt: skip
+            key = hashlib.sha256(pickle.dumps(identity)).hexdigest()
+            shape = Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9)
+            self._kernel = compile_kernel(key, self._row_outputs, shape, "a joint-kinetics model")
+        return self._kernel
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickled without the loaded kernel (a process loads its own)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
+
+    def _kernel_rows(self) -> np.ndarray:
+        """``(n_frames, n_x)``: the kernel's ``x`` at each of :attr:`frames`."""
+        if "_rows" not in self.__dict__:
+            window = self.frames[:, None] + _OFFSETS[None, :]
+            k = self.frames.size
+            shares = np.swapaxes(self._shares[:, self.frames], 0, 1).reshape(k, -1)
+            parts = [self._positions[window].reshape(k, -1), self._fixed[window].reshape(k, -1),
+                     self._force[self.frames], self._moment[self.frames], shares]  # fmt: skip
+            self._rows = np.ascontiguousarray(np.concatenate(parts, axis=1))
+        return self._rows
+
+    def _kernel_shared(self) -> np.ndarray:
+        """The kernel's ``q``: rate (Hz), body mass (kg), foot length (m), plate axes."""
+        return np.concatenate([[self.trial.rate, self.subject.body_mass, self.foot_length * MM], self._plane.ravel()])
+
+    def _row_outputs(self, x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The kernel's row function (:meth:`kernel`): :meth:`_dynamics` of one row."""
+        m, n_fixed, n_plates, w = len(self.markers), len(self.fixed_markers), len(self.plates), _OFFSETS.size
+        a, b = w * m * 3, w * (m + n_fixed) * 3
+        loads = _Loads(x[b : b + 3].reshape(1, 3), x[b + 3 : b + 6].reshape(1, 3), x[b + 6 :].reshape(n_plates, 1, 3))
+        constants = _Constants(q[0], q[1], q[2], q[3:].reshape(n_plates, 2, 3))
+        out = self._dynamics(x[:a].reshape(1, w, m, 3), x[a:b].reshape(1, w, n_fixed, 3), loads, p.reshape(1, -1),
+                             constants)  # fmt: skip
+        return np.reshape(out, 9)
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
@@ -308,6 +400,26 @@ class LegKineticsModel:
             trace = np.einsum("kwij,kwij->kw", moved[name], still[name])
             turns.append(np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))).max(axis=1))
         return np.max(turns, axis=0)
+
+
+class _Loads(NamedTuple):
+    """The ground's load on the foot at the rows' frames: ``force`` ``(k, 3)`` N,
+    ``moment`` ``(k, 3)`` N·m about the laboratory origin, ``shares`` ``(plates, k, 3)``
+    N each plate's share of the force."""
+
+    force: np.ndarray
+    moment: np.ndarray
+    shares: np.ndarray
+
+
+class _Constants(NamedTuple):
+    """What every row shares: ``rate`` Hz, body ``mass`` kg, ``foot_length`` m and the
+    plates' in-plane axes ``plane`` ``(plates, 2, 3)``."""
+
+    rate: float
+    mass: float
+    foot_length: float
+    plane: np.ndarray
 
 
 def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:

@@ -36,43 +36,40 @@ def _sx(value: Any) -> ca.SX:
     raise NotTraceable(f"cannot combine a symbol with {type(value).__name__}")
 
 
+def _binary(operation: Any, reflected: bool = False) -> Any:
+    """A Symbol operator: with an array the array's own (element by element), else
+    ``operation`` on the two expressions."""
+
+    def apply(self: Symbol, other: Any) -> Any:
+        if isinstance(other, np.ndarray):
+            return NotImplemented
+        a, b = (_sx(other), self.sx) if reflected else (self.sx, _sx(other))
+        return Symbol(operation(a, b))
+
+    return apply
+
+
 class Symbol:
     """One scalar of a traced computation: a CasADi ``SX`` expression with the operators
     and numpy ufunc methods the kinematic chain uses."""
 
     __slots__ = ("sx",)
-    __array_priority__ = 100.0
 
     def __init__(self, sx: ca.SX) -> None:
         self.sx = sx
 
-    # arithmetic
-    def __add__(self, other: Any) -> Symbol:
-        return Symbol(self.sx + _sx(other))
-
-    def __radd__(self, other: Any) -> Symbol:
-        return Symbol(_sx(other) + self.sx)
-
-    def __sub__(self, other: Any) -> Symbol:
-        return Symbol(self.sx - _sx(other))
-
-    def __rsub__(self, other: Any) -> Symbol:
-        return Symbol(_sx(other) - self.sx)
-
-    def __mul__(self, other: Any) -> Symbol:
-        return Symbol(self.sx * _sx(other))
-
-    def __rmul__(self, other: Any) -> Symbol:
-        return Symbol(_sx(other) * self.sx)
-
-    def __truediv__(self, other: Any) -> Symbol:
-        return Symbol(self.sx / _sx(other))
-
-    def __rtruediv__(self, other: Any) -> Symbol:
-        return Symbol(_sx(other) / self.sx)
+    # arithmetic (an array on the other side applies the operation element by element)
+    __add__ = _binary(lambda a, b: a + b)
+    __radd__ = _binary(lambda a, b: a + b, reflected=True)
+    __sub__ = _binary(lambda a, b: a - b)
+    __rsub__ = _binary(lambda a, b: a - b, reflected=True)
+    __mul__ = _binary(lambda a, b: a * b)
+    __rmul__ = _binary(lambda a, b: a * b, reflected=True)
+    __truediv__ = _binary(lambda a, b: a / b)
+    __rtruediv__ = _binary(lambda a, b: a / b, reflected=True)
 
     def __pow__(self, other: Any) -> Symbol:
-        if other == 2:
+        if isinstance(other, int | float) and other == 2:
             return Symbol(self.sx * self.sx)
         return Symbol(self.sx ** _sx(other))
 
