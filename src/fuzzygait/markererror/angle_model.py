@@ -40,6 +40,10 @@ the angle on the branch through the measured one, never the ±180° representati
 band that passes 180° stays one band.  Where a deviation inside the ball turns the
 segment frame so far that this excursion approaches ±180° (the frame can flip) the
 hull is not a band any more; :func:`undetermined` marks it.
+
+Evaluation: the model's chain compiled to C where it can be (:meth:`JointAngleModel.kernel`,
+:mod:`.row_kernel`: the Plug-in Gait versions, and the pelvis of every version), else the
+chain on numpy with autograd's exact gradients — the same numbers to rounding (1e-12°).
 """
 
 from __future__ import annotations

@@ -42,8 +42,9 @@ N·m/kg and 0.0010 W/kg on the sample trial; on unfiltered markers by about 0.04
 (``PiGKad_Motion.c3d``, ``docs/kinetics.md``).  Outputs
 in N·m/kg (moments: Nexus' X, Y, Z in the distal segment's frame with
 :data:`~fuzzygait.kinetics.plug_in_gait.MOMENT_AXES`' signs) or W/kg (powers, Nexus' Z).
-Gradients are exact (reverse-mode through the kinematic chain and the dynamics,
-:func:`~fuzzygait.markererror.angle_model.row_gradients`).
+Gradients are exact: the model's row — chain and dynamics — compiled to C with CasADi's
+reverse-mode gradient (:meth:`LegKineticsModel.kernel`, :mod:`.row_kernel`), else autograd
+through the same code on numpy (:func:`~fuzzygait.markererror.angle_model.row_gradients`).
 """
 
 from __future__ import annotations
