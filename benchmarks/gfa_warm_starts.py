@@ -25,7 +25,8 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, component_tasks  # noqa: E402
-from fuzzygait.markererror.angle_model import AXES, undetermined  # noqa: E402
+from fuzzygait.markererror.angle_model import AXES  # noqa: E402
+from fuzzygait.markererror.undetermined import undetermined  # noqa: E402
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower  # noqa: E402
 from fuzzygait.workflows.angles import run_angles  # noqa: E402
 

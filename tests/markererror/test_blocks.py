@@ -38,10 +38,10 @@ def test_blocks_at_their_own_levels_equal_the_runs_alone(sparse_run: AnglesRun, 
     parameters times ``1 - α``; the run alone has balls of radius ``(1 - α) r``), as the
     solvers amplify it.  Frank–Wolfe (its settings before issue 40): measured up to 1.7e-10
     deg with the numpy chain, and with the compiled model (a different rounding of the
-    same angles) 3e-14 deg and deviation norms up to 1.1e-9 mm apart, so 1e-8 (deg, mm).  The spectral solver's Barzilai–Borwein
-    steps and non-monotone search amplify more along the points still moving at the
-    iteration cap: measured up to 1.4e-4 deg (numpy chain) and 2.8e-3 deg (compiled; knee,
-    α = 0.9, 50 iterations), so 1e-2 deg."""
+    same angles) 3e-14 deg and deviation norms up to 1.1e-9 mm apart, so 1e-8 (deg, mm).
+    The spectral solver's Barzilai–Borwein steps and non-monotone search amplify more
+    along the points still moving at the iteration cap: measured up to 1.4e-4 deg (numpy
+    chain) and 2.8e-3 deg (compiled; knee, α = 0.9, 50 iterations), so 1e-2 deg."""
     options = FuzzyAngleOptions(alphas=(0.0, 1.0), workers=1, solver=solver, iterations=iterations,
                                 follow=iterations // 5)  # fmt: skip
     tasks, _ = component_tasks(sparse_run.trial, sparse_run.subject, sparse_run.result, options, [name])

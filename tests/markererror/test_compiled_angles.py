@@ -5,8 +5,9 @@ Independent truth: the numpy chain itself (``compiled=False``: the same code run
 numbers) and autograd's reverse sweep through it, for every angle of every Plug-in Gait
 version and with non-zero static offsets (the rotated chord's fixed steps); the central
 differences of ``test_exact_gradients.py`` check the compiled gradients too, since those
-models now run compiled.  A chain that decides on its data (the cluster fits) is refused
-and runs on numpy; a row the fixed steps do not settle is handed back to the chain.
+models now run compiled.  A row the fixed steps do not settle (the rotated chord, the
+cluster fits' polar rotation), or a cluster row with a marker missing, is handed back to
+the chain.
 """
 
 from __future__ import annotations
@@ -27,7 +28,6 @@ from support import SAMPLE_DATA
 
 FRAMES = np.array([3, 40, 77, 150, 210])
 CGM24 = dict(static=SAMPLE_DATA / "cgm24_static.c3d", subject_file=SAMPLE_DATA / "cgm24_subject.toml")
-CLUSTERS = {"cgm2.3", "cgm2.4"}
 
 
 @pytest.fixture(scope="module")
@@ -69,18 +69,36 @@ def deviations(model: JointAngleModel, scale: float, rows: int = 20, seed: int =
 
 @pytest.mark.parametrize("version", MODEL_VERSIONS)
 def test_every_angle_compiled_equals_the_chain(runs: dict[str, AnglesRun], version: str) -> None:
-    """Every angle and component of the Plug-in Gait versions at deviations of 5 and 40 mm;
-    the cluster versions have no kernel for the angles their fits enter (the knee), and
-    still evaluate (on numpy)."""
+    """Every angle and component of every version at deviations of 5 and 40 mm (CGM 2.3/2.4:
+    the cluster fits' polar rotation in its fixed Newton steps; cgm2.4: the forefoot)."""
     run = runs[version]
     for name in run.result.angles:
         for axis in range(3):
             model = model_of(run, name, axis)
-            if version in CLUSTERS and name[1:] != "PelvisAngles":
-                assert model.kernel() is None, name
-                continue
             assert model.kernel() is not None, f"{version} {name}"
             assert_same_as_chain(model, np.vstack([deviations(model, 5.0), deviations(model, 40.0, seed=1)]))
+
+
+def test_a_cluster_marker_missing_is_fitted_from_the_others(runs: dict[str, AnglesRun]) -> None:
+    """CGM 2.4 knee with one thigh cluster marker missing at a frame: the kernel assumes
+    every marker seen, so that row goes to the chain, which fits the cluster from the
+    others — a finite angle, the chain's."""
+    run = runs["cgm2.4"]
+    clusters = run.clusters
+    assert clusters is not None
+    label = clusters.segment("L", "thigh").markers[0]
+    markers = run.trial.markers.copy()
+    markers[FRAMES[1], run.trial.marker_labels.index(label)] = np.nan
+    gapped = dataclasses.replace(run, trial=run.trial.with_markers(markers))
+    model = model_of(gapped, "LKneeAngles", 0)
+    kernel = model.kernel()
+    assert kernel is not None and label in model.markers
+    P = deviations(model, 5.0, rows=FRAMES.size)
+    _, status = kernel.values(model._rows, np.arange(FRAMES.size), P, model.progression)
+    assert status.tolist() == [0, row_kernel.MISSING, 0, 0, 0]
+    values = model.evaluate_nodes(P, np.arange(FRAMES.size))
+    assert np.isfinite(values).all()
+    assert_same_as_chain(model, P)
 
 
 @pytest.mark.parametrize("name", ["LHipAngles", "LKneeAngles", "LAnkleAngles", "LFootProgressAngles"])

@@ -1,5 +1,5 @@
 """The Cardan-singularity rule of the undetermined mask
-(:func:`fuzzygait.markererror.angle_model.gimbal_undetermined`)."""
+(:func:`fuzzygait.markererror.undetermined.gimbal_undetermined`)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 
 from fuzzygait.kinematics.angles import cardan_yxz
 from fuzzygait.kinematics.vectors import axis_rotation
-from fuzzygait.markererror.angle_model import (
+from fuzzygait.markererror.undetermined import (
     GIMBAL_MARGIN_DEG,
     gimbal_undetermined,
     middle_component,

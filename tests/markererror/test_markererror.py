@@ -453,7 +453,7 @@ def test_a_band_across_180_degrees_is_one_band(angles_run: AnglesRun, sparse_tri
 
 
 def test_undetermined_marks_bounds_more_than_a_quarter_turn_away() -> None:
-    from fuzzygait.markererror.angle_model import UNDETERMINED_DEG, undetermined
+    from fuzzygait.markererror.undetermined import UNDETERMINED_DEG, undetermined
 
     measured = np.array([10.0, 10.0, 10.0, 170.0])
     lower = np.array([-79.0, -81.0, 5.0, 100.0])

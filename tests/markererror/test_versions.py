@@ -68,7 +68,8 @@ def test_zero_deviation_reproduces_compute_lower_body(runs: dict[str, AnglesRun]
             np.testing.assert_array_equal(values, angle[FRAMES, axis], err_msg=f"{model} {name} {axis}")
             m = model_of(run, name, axis)
             values = m.evaluate(np.zeros(m.n_parameters)).values
-            np.testing.assert_allclose(values, angle[FRAMES, axis], rtol=0, atol=1e-10, err_msg=f"{model} {name} {axis}")
+            np.testing.assert_allclose(values, angle[FRAMES, axis], rtol=0, atol=1e-10,
+                                       err_msg=f"{model} {name} {axis}")  # fmt: skip
 
 
 def test_cluster_models_need_their_calibration(runs: dict[str, AnglesRun]) -> None:

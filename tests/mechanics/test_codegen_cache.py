@@ -45,3 +45,33 @@ def test_concurrent_builds_of_one_library_compile_it_once(tmp_path, monkeypatch)
     assert codegen.build_library(target, [doubled]) == target  # cached: not compiled again
     assert log.read_text(encoding="utf-8").splitlines() == ["call"]
     assert sorted(p.name for p in target.parent.iterdir()) == ["fg_test.so", "fg_test.so.lock"]
+
+
+def test_the_compiler_keeps_its_temporary_files_in_the_build_folder(tmp_path, monkeypatch):
+    """A compiler killed mid-build (an interrupted run) must leave nothing in the user's
+    TMPDIR: it runs with TMPDIR set to the build's own folder in the cache (``-pipe``
+    besides), and a build folder left behind is swept once it is an hour old."""
+    script = tmp_path / "cc.sh"
+    seen = tmp_path / "tmpdir.txt"
+    script.write_text(f'#!/bin/sh\necho "$TMPDIR" > "{seen}"\nexec gcc "$@"\n', encoding="utf-8")
+    script.chmod(0o755)
+    user_tmp = tmp_path / "user-tmp"
+    user_tmp.mkdir()
+    monkeypatch.setenv("CC", str(script))
+    monkeypatch.setenv("TMPDIR", str(user_tmp))
+    monkeypatch.delenv("FUZZYGAIT_NO_COMPILE", raising=False)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    stale, fresh = cache / "tmpstale", cache / "tmpfresh"
+    stale.mkdir()
+    fresh.mkdir()
+    old = codegen.time.time() - 2 * codegen.STALE_BUILD_SECONDS
+    import os
+
+    os.utime(stale, (old, old))
+    x = ca.SX.sym("x", 2)
+    assert codegen.build_library(cache / "fg_tmp.so", [ca.Function("twice", [x], [2 * x])]) is not None
+    compiler_tmp = Path(seen.read_text(encoding="utf-8").strip())
+    assert compiler_tmp.parent == cache and compiler_tmp.name.startswith("tmp")
+    assert list(user_tmp.iterdir()) == []
+    assert not stale.exists() and fresh.exists()

@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
-from fuzzygait.markererror.angle_model import EXCURSION_LIMIT_DEG, UNDETERMINED_DEG, JointAngleModel
+from fuzzygait.markererror.angle_model import JointAngleModel
+from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG, UNDETERMINED_DEG
 from fuzzygait.markererror.result import component_hull, component_undetermined
 from fuzzygait.testing import check_model
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower

@@ -17,6 +17,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -87,10 +88,27 @@ def build_library(target: Path, functions: Sequence[ca.Function], sources: Seque
     if cc is None:
         return None
     target.parent.mkdir(parents=True, exist_ok=True)
+    _sweep_stale_builds(target.parent)
     with _compiling(target):
         if target.exists():  # another process compiled it while this one waited
             return target
         return _build(cc, target, functions, sources, optimisation, header, purpose)
+
+
+#: Age (s) past which a build folder left in the cache (its process killed mid-build) is removed.
+STALE_BUILD_SECONDS = 3600.0
+
+
+def _sweep_stale_builds(folder: Path) -> None:
+    """Remove the build folders (``tmp*``) older than :data:`STALE_BUILD_SECONDS` that a
+    killed process left in the cache ``folder``; a build in progress is younger."""
+    now = time.time()
+    for stale in folder.glob("tmp*"):
+        try:
+            if stale.is_dir() and now - stale.stat().st_mtime > STALE_BUILD_SECONDS:
+                shutil.rmtree(stale, ignore_errors=True)
+        except OSError:
+            continue
 
 
 @contextmanager
@@ -123,9 +141,11 @@ def _build(cc: str, target: Path, functions: Sequence[ca.Function], sources: Seq
             generator.add(f)
         generator.generate(tmp + os.sep)
         library = Path(tmp) / "lib.so"
-        command = [cc, optimisation, "-fPIC", "-shared", "-I", tmp, str(Path(tmp) / f"{base}.c"),
+        command = [cc, optimisation, "-pipe", "-fPIC", "-shared", "-I", tmp, str(Path(tmp) / f"{base}.c"),
                    *map(str, sources), "-o", str(library), "-lm"]  # fmt: skip
-        result = subprocess.run(command, capture_output=True, text=True)
+        # the compiler's own temporary files in this folder, not the user's TMPDIR: a run
+        # interrupted while compiling leaves nothing there
+        result = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "TMPDIR": tmp})
         if result.returncode != 0:
             lines = result.stderr.strip().splitlines()
             first_error = next((line for line in lines if "error" in line), lines[-1] if lines else "?")

@@ -53,6 +53,9 @@ class Axis(StrEnum):
         return (cls.X, cls.Y, cls.Z)[index]
 
 
+#: The axes' labels by column (0, 1, 2 of an angle's ``(frames, 3)`` array).
+AXES: tuple[str, ...] = tuple(axis.value for axis in Axis)
+
 #: The angles whose X component is a flexion (hip, knee) or dorsiflexion (ankle).
 FLEXION_JOINTS = frozenset({"HipAngles", "KneeAngles", "AnkleAngles"})
 

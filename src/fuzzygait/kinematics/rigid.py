@@ -26,7 +26,7 @@ import autograd.numpy as anp
 import numpy as np
 from autograd.extend import defvjp, primitive
 
-from fuzzygait.core.arrays import floats, plain
+from fuzzygait.core.arrays import floats, plain, symbolic, undefined_above
 
 #: Fewest visible markers that fix a rigid pose.
 MIN_MARKERS = 3
@@ -79,7 +79,10 @@ def fit_rigid(local: np.ndarray, observed: np.ndarray, weights: np.ndarray | Non
     w = np.ones(m) if weights is None else np.asarray(weights, dtype=float)
     if w.shape != (m,) or np.any(w < 0) or not np.all(np.isfinite(w)):
         raise ValueError(f"fit_rigid: weights must be {m} finite non-negative numbers")
-    visible = np.all(np.isfinite(plain(observed)), axis=2) & (w > 0)
+    if symbolic(observed):  # traced for a compiled model: every marker seen (a row missing one takes numpy)
+        visible = np.ones(observed.shape[:2], dtype=bool) & (w > 0)
+    else:
+        visible = np.all(np.isfinite(plain(observed)), axis=2) & (w > 0)
     wv = np.where(visible, w, 0.0)  # (n, m)
     total = wv.sum(axis=1)  # (n,)
     safe_total = np.where(total > 0, total, 1.0)
@@ -146,7 +149,10 @@ def polar_rotation(covariance: np.ndarray) -> np.ndarray:
     and by the SVD elsewhere (module docstring).
 
     Traced for derivatives (:mod:`fuzzygait.core.arrays`), its reverse sweep is the
-    closed form of :func:`_polar_rotation_vjp`, not the iteration's."""
+    closed form of :func:`_polar_rotation_vjp`, not the iteration's.  Symbolic
+    (:func:`_fixed_polar_rotation`): the iteration's fixed steps."""
+    if symbolic(covariance):
+        return _fixed_polar_rotation(covariance)
     covariance = np.asarray(covariance, dtype=float)
     entries = np.ascontiguousarray(np.moveaxis(covariance, 0, -1))  # (3, 3, n)
     _, det = _cofactor([[entries[i, j] for j in range(3)] for i in range(3)])
@@ -175,6 +181,31 @@ def polar_rotation(covariance: np.ndarray) -> np.ndarray:
         u[:, :, 2] *= np.where(sign == 0.0, 1.0, sign)[:, None]
         out[rest] = u @ vt
     return out
+
+
+#: Largest entry change of the last Newton step for which a row counts as settled (as in
+#: :func:`polar_rotation`, whose rows above it take the SVD).
+POLAR_SETTLED = 1e-9
+
+
+def _fixed_polar_rotation(covariance: np.ndarray) -> np.ndarray:
+    """:func:`polar_rotation` of a symbolic ``(n, 3, 3)`` ``covariance`` (a chain traced
+    for a compiled model, :mod:`fuzzygait.markererror.row_kernel`): all
+    :data:`POLAR_ITERATIONS` Newton steps (no test can stop them), and NaN where numpy
+    would take the SVD — ``det C <= 0`` or a last step larger than :data:`POLAR_SETTLED`
+    in sum of squares — so those rows are computed by numpy."""
+    entries = np.moveaxis(covariance, 0, -1)  # (3, 3, n)
+    a = [[entries[i, j] for j in range(3)] for i in range(3)]
+    _, det = _cofactor(a)
+    previous = a
+    for _ in range(POLAR_ITERATIONS):
+        cof, d = _cofactor(a)
+        inverse_t = [[cof[i][j] / d for j in range(3)] for i in range(3)]
+        gamma = (sum(v * v for row in inverse_t for v in row) / sum(v * v for row in a for v in row)) ** 0.25
+        previous, a = a, [[0.5 * (gamma * a[i][j] + inverse_t[i][j] / gamma) for j in range(3)] for i in range(3)]
+    step = sum((a[i][j] - previous[i][j]) ** 2 for i in range(3) for j in range(3))
+    unsettled = undefined_above(step, POLAR_SETTLED**2) + undefined_above(-det, 0.0)
+    return np.moveaxis(np.array(a), -1, 0) + unsettled[:, None, None]
 
 
 def _hat(x: np.ndarray) -> np.ndarray:

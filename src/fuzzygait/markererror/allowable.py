@@ -68,7 +68,7 @@ from fuzzygait.markererror.analysis import (
     FuzzyAngleOptions,
     fuzzy_joint_angles,
 )
-from fuzzygait.markererror.angle_model import AXES, undetermined
+from fuzzygait.markererror.angle_model import AXES
 from fuzzygait.markererror.refinement import Progress, component_setups, evaluator_or_own, refine
 from fuzzygait.markererror.result import (
     MarkerErrorResult,
@@ -79,6 +79,7 @@ from fuzzygait.markererror.result import (
 )
 from fuzzygait.markererror.scale_search import ScaleSearch
 from fuzzygait.markererror.sources import SOURCES, TABLE_3_1, marker_segment, parse_sources
+from fuzzygait.markererror.undetermined import undetermined
 from fuzzygait.uncertainty.execution import Evaluator
 from fuzzygait.uncertainty.postprocess import repair_nesting
 

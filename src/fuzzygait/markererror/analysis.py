@@ -21,10 +21,10 @@ a ``component`` dimension, on the trial's frames:
   component does not use;
 * ``undetermined (component, alpha, frame)``: True where the band is not a band — a
   bound more than 90° from the measured angle on its continuous branch (the segment frame
-  can flip inside the ball, :func:`~fuzzygait.markererror.angle_model.undetermined`), or,
+  can flip inside the ball, :func:`~fuzzygait.markererror.undetermined.undetermined`), or,
   for every component of an angle, its middle Cardan component's band within 15° of ±90°
   (the Cardan singularity; the middle band is closed at ±90° there,
-  :func:`~fuzzygait.markererror.angle_model.gimbal_undetermined`);
+  :func:`~fuzzygait.markererror.undetermined.gimbal_undetermined`);
 * ``ball_radius (marker)``: α = 0 ball radius Σ (mm);
 * coordinate ``error_source`` (its own dim): the error sources summed into the balls, in
   order (read with :func:`~fuzzygait.markererror.result.error_sources`);
@@ -54,14 +54,7 @@ from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import ALL_ANGLE_NAMES, CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
-from fuzzygait.markererror.angle_model import (
-    AXES,
-    AngleComponentsModel,
-    JointAngleModel,
-    fixed_subject,
-    gimbal_undetermined,
-    undetermined,
-)
+from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, JointAngleModel, fixed_subject
 from fuzzygait.markererror.result import (
     AngleAxes,
     angle_components,
@@ -72,6 +65,7 @@ from fuzzygait.markererror.result import (
 )
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
 from fuzzygait.markererror.spherical import SphericalDeviationModel
+from fuzzygait.markererror.undetermined import gimbal_undetermined, undetermined
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, FuzzyNumber, FuzzyVector, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 
@@ -310,7 +304,7 @@ def split_component(requested: str) -> tuple[str, list[int]]:
     """``"LKneeAngles"`` -> ``("LKneeAngles", [0, 1, 2])``; ``"LKneeAngles_X"`` ->
     ``("LKneeAngles", [0])``.  A component analysed without its angle's middle Cardan
     component gets the 90° rule of the undetermined mask only, not the singularity rule
-    (:func:`~fuzzygait.markererror.angle_model.gimbal_undetermined` needs the middle band)."""
+    (:func:`~fuzzygait.markererror.undetermined.gimbal_undetermined` needs the middle band)."""
     component = AngleComponent.maybe(requested)
     if component is not None:
         return component.angle, [component.axis.column]

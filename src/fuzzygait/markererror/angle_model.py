@@ -48,9 +48,7 @@ chain on numpy with autograd's exact gradients — the same numbers to rounding 
 
 from __future__ import annotations
 
-import hashlib
 import math
-import pickle
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -61,16 +59,17 @@ from autograd.tracer import isbox
 
 from fuzzygait.core.arrays import floats
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.core.names import angle_names
+from fuzzygait.core.names import AXES
 from fuzzygait.core.subject import SubjectParameters
 from fuzzygait.core.trial import Trial
-from fuzzygait.kinematics.angles import ANGLE_TABLE, wrap_degrees
+from fuzzygait.kinematics.angles import wrap_degrees
 from fuzzygait.kinematics.chain import pelvis_markers
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel
+from fuzzygait.markererror.row_kernel import MISSING, UNSETTLED, RowKernel, Shape, compile_kernel, model_key
+from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
     EXCURSION_LIMIT,
@@ -80,8 +79,6 @@ from fuzzygait.uncertainty.protocol import (
     Evaluation,
     Output,
 )
-
-AXES = ("X", "Y", "Z")
 
 
 def model_angle_markers(
@@ -213,7 +210,7 @@ class JointAngleModel:
     @property
     def excursion_limit(self) -> float:
         """Degrees from the measured angle beyond which a bound makes the band undetermined
-        (:data:`EXCURSION_LIMIT_DEG`; the optimisers stop a bound there); ``inf`` without
+        (:data:`~.undetermined.EXCURSION_LIMIT_DEG`; the optimisers stop a bound there); ``inf`` without
         ``reference`` (no continuous branch to measure it on)."""
         return math.inf if self.reference is None else EXCURSION_LIMIT_DEG
 
@@ -246,13 +243,17 @@ class JointAngleModel:
         if not self.compiled:
             return None
         if "_kernel" not in self.__dict__:
-            # what the chain is made of, exactly (its numbers pickled)
-            identity = ("angle", self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers,
-                        self.subject, self.clusters)  # fmt: skip
-            key = hashlib.sha256(pickle.dumps(identity)).hexdigest()
+            key = model_key("angle", self.model, self.name, self.markers, self.fixed_markers,
+                            self.use_medial_markers, self.subject, self.clusters)  # fmt: skip
             n, n_x = 3 * len(self.markers), self._rows.shape[1]
             self._kernel = compile_kernel(key, self._row_angles, Shape(n_x, n, 9, 3), "a joint-angle model")
         return self._kernel
+
+    def _by_chain(self, status: np.ndarray) -> np.ndarray:
+        """The kernel's rows the chain computes: those it did not settle, and for a cluster
+        model those with a marker missing (the cluster fit takes the markers it sees; the
+        kernel assumes all)."""
+        return (status == UNSETTLED) | ((status == MISSING) & (self.clusters is not None))
 
     def _row_angles(self, x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The kernel's row function (:meth:`kernel`)."""
@@ -290,7 +291,7 @@ class JointAngleModel:
         if kernel is not None:
             P, nodes = np.asarray(P, dtype=float), np.asarray(nodes, dtype=int)
             angles, status = kernel.values(self._rows, nodes, P, self.progression)
-            redo = status == UNSETTLED
+            redo = self._by_chain(status)
             if redo.any():
                 angles[redo] = self.angles_of(self._base[nodes[redo]] + P[redo].reshape(int(redo.sum()), -1, 3),
                                               self._fixed[nodes[redo]])  # fmt: skip
@@ -319,7 +320,7 @@ class JointAngleModel:
         angle = angles[rows, axes]
         if reference is not None:
             angle = reference + wrap_degrees(angle - reference)
-        redo = status == UNSETTLED
+        redo = self._by_chain(status)
         if redo.any():
             at = None if reference is None else reference[redo]
             angle[redo], gradients[redo] = row_gradients(
@@ -370,7 +371,7 @@ class AngleComponentsModel:
     @property
     def excursion_limit(self) -> float:
         """Degrees from the measured component beyond which a bound makes its band
-        undetermined (:data:`EXCURSION_LIMIT_DEG`; the optimisers stop a bound there)."""
+        undetermined (:data:`~.undetermined.EXCURSION_LIMIT_DEG`; the optimisers stop a bound there)."""
         return EXCURSION_LIMIT_DEG
 
     def __post_init__(self) -> None:
@@ -435,83 +436,3 @@ def row_gradients(function: Callable[[np.ndarray, np.ndarray], np.ndarray], P: n
     vjp, values = make_vjp(lambda rows: function(rows, nodes))(P)
     values = np.asarray(values, dtype=float)
     return values, np.asarray(vjp(np.ones_like(values)), dtype=float)
-
-
-#: Excursion (degrees) of a hull bound from the measured angle beyond which the band is
-#: *undetermined*: the segment frame turns more than a quarter turn inside the ball, which
-#: for a frame built from two markers and a joint centre means it can flip (the angle
-#: then jumps by about 180°; a bound found on the far side of the jump is not an extreme
-#: of a continuous band).
-UNDETERMINED_DEG = 90.0
-#: Where the optimisers stop a bound (the angle models' ``excursion_limit``, degrees from
-#: the model's own angle at zero deviation): a bound beyond :data:`UNDETERMINED_DEG` makes
-#: the band undetermined whatever its value, so searching further only costs time (a
-#: quarter of the gradient rows of the sample trial's bands went into such bounds,
-#: ``benchmarks/RESULTS.md``).  The 1° margin keeps the flag where the measured angle
-#: and the model's angle at zero deviation differ by rounding.
-EXCURSION_LIMIT_DEG = UNDETERMINED_DEG + 1.0
-
-
-def undetermined(lower: np.ndarray, upper: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """Where a band ``[lower, upper]`` around ``measured`` (degrees, broadcasting) is
-    undetermined: a bound more than :data:`UNDETERMINED_DEG` from the measured angle."""
-    with np.errstate(invalid="ignore"):
-        return (np.asarray(upper) - measured > UNDETERMINED_DEG) | (measured - np.asarray(lower) > UNDETERMINED_DEG)
-
-
-#: Margin (degrees) from the Cardan singularity: where the band of an angle's middle
-#: Cardan component (the ``asin`` one, within ±90°) comes this close to ±90°, the segment
-#: frame passes (near) the singularity inside the ball and all three components are
-#: *undetermined* at that α-level and frame.  At the singularity only the sum or difference
-#: of the first and third is defined — each alone can take any value inside the ball — and
-#: close to it they turn so fast that their extremes sit in slivers of the ball the local
-#: optimiser does not reliably find (benchmarks/RESULTS.md, "Soundness": every missed
-#: extreme of the real CGM 2.4 session had its middle angle at 75.7-89.5°); the middle
-#: component's far bound is then short too (SLSQP from the Graph Follower's extremisers
-#: widened 861 of 1,148 such forefoot bounds, by up to 19.5°).
-GIMBAL_MARGIN_DEG = 15.0
-
-
-def middle_component(name: str) -> int:
-    """Output index (0, 1, 2 = X, Y, Z) of the middle Cardan angle of ``name``
-    (``"LKneeAngles"``: Y; ankle, foot progression, forefoot: Z)."""
-    joint = name[1:].removesuffix("Angles")
-    return ANGLE_TABLE[joint][0].index(1)
-
-
-def _near_caps(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Where the lower / upper bound (degrees) comes within :data:`GIMBAL_MARGIN_DEG` of
-    −90° / +90° (NaN: False)."""
-    with np.errstate(invalid="ignore"):
-        return np.asarray(lower) < GIMBAL_MARGIN_DEG - 90.0, np.asarray(upper) > 90.0 - GIMBAL_MARGIN_DEG
-
-
-def near_gimbal_lock(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Where a middle Cardan component's band ``[lower, upper]`` (degrees) comes within
-    :data:`GIMBAL_MARGIN_DEG` of ±90°."""
-    low, high = _near_caps(lower, upper)
-    return low | high
-
-
-def gimbal_undetermined(hulls: dict[str, np.ndarray], flags: dict[str, np.ndarray], measured_index: int) -> None:
-    """The Cardan-singularity rule, in place, for every angle whose middle component is in
-    ``hulls`` (``{"LKneeAngles_Y": (alpha, bound, frame)}``, degrees) and ``flags``
-    (``(alpha, frame)`` bool): where the middle component's band comes within
-    :data:`GIMBAL_MARGIN_DEG` of ±90° (:func:`near_gimbal_lock`), every component of the
-    angle present in ``flags`` is marked undetermined, and the middle band is closed at
-    ±90° there (the ``asin`` cannot pass it: the stored bound is a sound one).  The α-level
-    ``measured_index`` (α = 1, the measured angle) is left as it is."""
-    for name in angle_names(hulls):
-        columns = [f"{name}_{a}" for a in AXES]
-        middle = middle_component(name)
-        if columns[middle] not in hulls:
-            continue
-        band = hulls[columns[middle]]
-        lower, upper = _near_caps(band[:, 0], band[:, 1])
-        upper[measured_index] = lower[measured_index] = False
-        lock = upper | lower
-        band[:, 1][upper] = 90.0
-        band[:, 0][lower] = -90.0
-        for column in columns:
-            if column in flags:
-                flags[column] = flags[column] | lock

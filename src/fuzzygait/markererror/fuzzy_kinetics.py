@@ -23,7 +23,7 @@ schema) with the kinetic units:
 * ``undetermined (component, alpha, frame)``: at a bound's deviation a segment frame the
   leg's kinetics use (pelvis, thigh, tibia, foot, over the nine frames) is turned more
   than 90° from the measured one — it can flip inside the ball, the band is no band
-  (the angles' rule, :data:`~fuzzygait.markererror.angle_model.UNDETERMINED_DEG`);
+  (the angles' rule, :data:`~fuzzygait.markererror.undetermined.UNDETERMINED_DEG`);
 * attributes as the angles' (``trial``, ``sources``, ``strategy``, counts, ``seconds``),
   ``output`` ``"joint moment"``/``"joint power"``, ``units``, ``cop_error_mm``.
 
@@ -49,7 +49,6 @@ from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinetics.assignment import PlateContact, assigned_ground
 from fuzzygait.kinetics.plug_in_gait import JOINTS
 from fuzzygait.markererror.analysis import SearchOptions
-from fuzzygait.markererror.angle_model import UNDETERMINED_DEG
 from fuzzygait.markererror.moment_model import (
     DEFAULT_COP_ERROR_MM,
     HALF_WINDOW,
@@ -60,6 +59,7 @@ from fuzzygait.markererror.moment_model import (
 )
 from fuzzygait.markererror.result import AngleAxes, fuzzy_angles_dataset, with_error_sources
 from fuzzygait.markererror.sources import parse_sources
+from fuzzygait.markererror.undetermined import UNDETERMINED_DEG
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 
 Array = NDArray[np.float64]

@@ -49,8 +49,6 @@ through the same code on numpy (:func:`~fuzzygait.markererror.angle_model.row_gr
 
 from __future__ import annotations
 
-import hashlib
-import pickle
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -73,7 +71,7 @@ from fuzzygait.kinetics.inverse_dynamics import GRAVITY
 from fuzzygait.kinetics.plug_in_gait import JOINTS, MOMENT_AXES, foot_length
 from fuzzygait.kinetics.segments import MM, PLUG_IN_GAIT_TABLE
 from fuzzygait.markererror.angle_model import AXES, fixed_subject, row_gradients
-from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel
+from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel, model_key
 from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODES, TIME_STEP, Evaluation, Output
 
 Array = NDArray[np.float64]
@@ -347,9 +345,8 @@ class LegKineticsModel:
         if not self.compiled:
             return None
         if "_kernel" not in self.__dict__:
-            identity = ("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers, len(self.plates),
-                        self.subject)  # fmt: skip
-            key = hashlib.sha256(pickle.dumps(identity)).hexdigest()
+            key = model_key("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers,
+                            len(self.plates), self.subject)  # fmt: skip
             shape = Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9)
             self._kernel = compile_kernel(key, self._row_outputs, shape, "a joint-kinetics model")
         return self._kernel

@@ -56,7 +56,6 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import ComponentTask, FuzzyAngleOptions, component_tasks, run_component_task
-from fuzzygait.markererror.angle_model import undetermined
 from fuzzygait.markererror.refinement import BlockJob, Run, evaluator_or_own, map_blocks
 from fuzzygait.markererror.result import (
     MarkerErrorResult,
@@ -65,6 +64,7 @@ from fuzzygait.markererror.result import (
     component_undetermined,
 )
 from fuzzygait.markererror.sources import SOURCE_TITLES, SOURCES, parse_sources
+from fuzzygait.markererror.undetermined import undetermined
 from fuzzygait.uncertainty.execution import Evaluator
 
 __all__ = [

@@ -31,8 +31,9 @@ from fuzzygait.io.subject import SubjectParameters
 from fuzzygait.kinematics import CGMResult
 from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.analysis import ComponentTask, FuzzyAngleOptions, component_tasks, run_component_task
-from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, undetermined
+from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel
 from fuzzygait.markererror.scale_search import ScaleSearch
+from fuzzygait.markererror.undetermined import undetermined
 from fuzzygait.uncertainty import FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.execution import Evaluator
 

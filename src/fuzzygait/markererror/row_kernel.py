@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -139,6 +140,15 @@ def _load(path: Path) -> ctypes.CDLL:
 
 
 _KERNELS: dict[str, RowKernel | None] = {}
+
+
+def model_key(*parts: object) -> str:
+    """A digest of what a model's row function is made of (version, outputs, markers,
+    subject, calibration …): their ``repr`` with every array in full and every float exact
+    (shortest round-trip digits), for :func:`compile_kernel`'s memo."""
+    with np.printoptions(threshold=sys.maxsize, floatmode="unique"):
+        text = repr(parts)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def compile_kernel(key: str, function: RowFunction, shape: Shape, purpose: str) -> RowKernel | None:
