@@ -42,8 +42,8 @@ segment frame so far that this excursion approaches ±180° (the frame can flip)
 hull is not a band any more; :func:`undetermined` marks it.
 
 Evaluation: the model's chain compiled to C where it can be (:meth:`JointAngleModel.kernel`,
-:mod:`.row_kernel`: the Plug-in Gait versions, and the pelvis of every version), else the
-chain on numpy with autograd's exact gradients — the same numbers to rounding (1e-12°).
+:mod:`.row_kernel`: every version), else the chain on numpy with autograd's exact
+gradients — the same numbers to rounding (1e-12°).
 """
 
 from __future__ import annotations

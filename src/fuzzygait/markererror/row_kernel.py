@@ -23,9 +23,11 @@ A row function ``f(x, p, q)`` takes three flat inputs:
 and returns ``(n_out,)`` outputs; the gradient is that of the output a row selects.
 
 No kernel (the model runs on numpy, same numbers, slower): without a C compiler or with
-``FUZZYGAIT_NO_COMPILE=1``, and for code that decides on its data — the cluster fits of
-CGM 2.3/2.4 (visibility masks, an iteration) — where tracing stops with
-:class:`~.symbols.NotTraceable` or numpy refuses an operation on symbols.
+``FUZZYGAIT_NO_COMPILE=1``, and for code that decides on its data, where tracing stops with
+:class:`~.symbols.NotTraceable` or numpy refuses an operation on symbols.  The kinematic
+code's iterations (the rotated chord, the cluster fits' polar rotation) run fixed steps when
+traced and make a row they have not settled NaN: status :data:`UNSETTLED`, which the model
+computes on numpy.
 """
 
 from __future__ import annotations
