@@ -217,3 +217,20 @@ def test_a_model_with_its_kernel_pickles(angles_run: AnglesRun) -> None:
     nodes = np.arange(P.shape[0]) % FRAMES.size
     np.testing.assert_array_equal(copy.evaluate_nodes(P, nodes), model.evaluate_nodes(P, nodes))
     assert copy.kernel() is not None
+
+
+def test_a_cache_that_cannot_be_written_means_numpy_with_a_warning(angles_run: AnglesRun, tmp_path: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    """``FUZZYGAIT_CACHE_DIR`` pointing into a file: one warning naming the folder and what to
+    do, the chain's numbers."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder", encoding="utf-8")
+    monkeypatch.setenv("FUZZYGAIT_CACHE_DIR", str(blocker / "cache"))
+    monkeypatch.setattr(row_kernel, "_KERNELS", {})
+    model = model_of(angles_run, "LHipAngles", 1)
+    with pytest.warns(UserWarning, match="FUZZYGAIT_CACHE_DIR to a writable folder"):
+        assert model.kernel() is None
+    P = deviations(model, 5.0)
+    nodes = np.arange(P.shape[0]) % FRAMES.size
+    np.testing.assert_array_equal(model.evaluate_nodes(P, nodes),
+                                  dataclasses.replace(model, compiled=False).evaluate_nodes(P, nodes))  # fmt: skip

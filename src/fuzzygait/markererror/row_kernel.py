@@ -35,6 +35,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -169,9 +170,12 @@ def compile_kernel(key: str, function: RowFunction, shape: Shape, purpose: str) 
             version = ca.__version__  # type: ignore[attr-defined]  # set at import, absent from casadi's stub
             text = "|".join([version, OPTIMISATION, ROWS_SOURCE.read_text(), *(f.serialize() for f in functions)])
             target = cache_dir() / f"fg_rows_{hashlib.sha256(text.encode()).hexdigest()[:20]}.so"
-            path = target if target.exists() else build_library(
-                target, functions, sources=[ROWS_SOURCE], optimisation=OPTIMISATION, purpose=purpose)  # fmt: skip
-            if path is not None:
-                kernel = RowKernel(_load(path), shape)
+            try:
+                path = target if target.exists() else build_library(
+                    target, functions, sources=[ROWS_SOURCE], optimisation=OPTIMISATION, purpose=purpose)  # fmt: skip
+                kernel = None if path is None else RowKernel(_load(path), shape)
+            except OSError as error:  # a cache folder that cannot be written, a library that cannot be loaded
+                warnings.warn(f"cannot compile {purpose} in {cache_dir()} ({error}); running uncompiled (slower); "
+                              "set FUZZYGAIT_CACHE_DIR to a writable folder", stacklevel=3)  # fmt: skip
     _KERNELS[key] = kernel
     return kernel

@@ -49,6 +49,15 @@ def _binary(operation: Any, reflected: bool = False) -> Any:
     return apply
 
 
+def _unary(operation: Any) -> Any:
+    """A Symbol method applying ``operation`` to its expression."""
+
+    def apply(self: Symbol) -> Symbol:
+        return Symbol(operation(self.sx))
+
+    return apply
+
+
 class Symbol:
     """One scalar of a traced computation: a CasADi ``SX`` expression with the operators
     and numpy ufunc methods the kinematic chain uses."""
@@ -85,41 +94,14 @@ class Symbol:
         return Symbol(self.sx - divisor * ca.floor(self.sx / divisor))
 
     # numpy ufunc methods (``np.sqrt(array)`` calls ``element.sqrt()``)
-    def sqrt(self) -> Symbol:
-        return Symbol(ca.sqrt(self.sx))
-
-    def square(self) -> Symbol:
-        return Symbol(self.sx * self.sx)
-
-    def sin(self) -> Symbol:
-        return Symbol(ca.sin(self.sx))
-
-    def cos(self) -> Symbol:
-        return Symbol(ca.cos(self.sx))
-
-    def tan(self) -> Symbol:
-        return Symbol(ca.tan(self.sx))
-
-    def arcsin(self) -> Symbol:
-        return Symbol(ca.asin(self.sx))
-
-    def arccos(self) -> Symbol:
-        return Symbol(ca.acos(self.sx))
-
-    def arctan(self) -> Symbol:
-        return Symbol(ca.atan(self.sx))
-
-    def arctan2(self, other: Any) -> Symbol:
-        return Symbol(ca.atan2(self.sx, _sx(other)))
-
-    def degrees(self) -> Symbol:
-        return Symbol(self.sx * (180.0 / math.pi))
-
-    def radians(self) -> Symbol:
-        return Symbol(self.sx * (math.pi / 180.0))
-
-    def sign(self) -> Symbol:
-        return Symbol(ca.sign(self.sx))
+    sqrt = _unary(ca.sqrt)
+    square = _unary(lambda x: x * x)
+    sin, cos, tan = _unary(ca.sin), _unary(ca.cos), _unary(ca.tan)
+    arcsin, arccos, arctan = _unary(ca.asin), _unary(ca.acos), _unary(ca.atan)
+    arctan2 = _binary(ca.atan2)
+    degrees = _unary(lambda x: x * (180.0 / math.pi))
+    radians = _unary(lambda x: x * (math.pi / 180.0))
+    sign = _unary(ca.sign)
 
     def capped_arcsin(self) -> Symbol:
         """``arcsin`` of the value clipped to [-1, 1]; NaN stays NaN."""
