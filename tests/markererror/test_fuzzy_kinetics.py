@@ -312,3 +312,29 @@ def test_the_compiled_leg_equals_numpy(sample: tuple[Trial, object], kind: str) 
         assert np.isnan(gradients[~defined]).all()
         np.testing.assert_allclose(compiled.evaluate_nodes(P, nodes), expected, rtol=0, atol=1e-11)
     assert np.isnan(gapped.evaluate_nodes(P[:3], nodes[:3])[:2]).all() and np.isfinite(values[2])
+
+
+def test_unsettled_compiled_rows_take_numpy(sample: tuple[Trial, object]) -> None:
+    """With the KAD's rotation offsets the rotated chord runs fixed steps in C; rows far
+    outside any ball (100 mm) that they do not settle are computed by numpy — the same
+    values and gradients as the numpy model's."""
+    from fuzzygait.markererror.row_kernel import UNSETTLED
+
+    trial, subject = sample
+    kad = subject.with_side("R", thigh_rotation=0.12, shank_rotation=-0.09)  # type: ignore[attr-defined]
+    model = leg((trial, kad))
+    kernel = model.kernel()
+    assert kernel is not None
+    rng = np.random.default_rng(11)
+    P = rng.normal(0.0, 100.0, (60, model.n_parameters))
+    nodes = rng.integers(0, model.times.size, P.shape[0])
+    j, _ = model._selected(nodes)
+    _, status = kernel.values(model._kernel_rows(), j, P, model._kernel_shared())
+    assert np.any(status == UNSETTLED)
+    plain = replace(model, compiled=False)
+    expected, expected_gradients = plain.evaluate_nodes_gradients(P, nodes)
+    np.testing.assert_allclose(model.evaluate_nodes(P, nodes), expected, rtol=0, atol=1e-9)
+    values, gradients = model.evaluate_nodes_gradients(P, nodes)
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-9)
+    defined = np.isfinite(expected)
+    np.testing.assert_allclose(gradients[defined], expected_gradients[defined], rtol=1e-8, atol=1e-9)

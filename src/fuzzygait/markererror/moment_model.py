@@ -310,16 +310,21 @@ class LegKineticsModel:
         j, selected = self._selected(nodes)
         kernel = None if isbox(P) else self.kernel()
         if kernel is None:
-            pick = np.zeros((len(j), 9))
-            pick[np.arange(len(j)), selected] = 1.0
-            return anp.sum(anp.reshape(self.outputs(P, self.frames[j]), (len(j), 9)) * pick, axis=1)
+            return self._selected_outputs(P, j, selected)
         P = np.asarray(P, dtype=float)
         out, status = kernel.values(self._kernel_rows(), j, P, self._kernel_shared())
         values = out[np.arange(len(j)), selected]
         redo = status == UNSETTLED
         if redo.any():
-            values[redo] = self.evaluate_nodes(P[redo], np.asarray(nodes)[redo])
+            values[redo] = self._selected_outputs(P[redo], j[redo], selected[redo])
         return values
+
+    def _selected_outputs(self, P: np.ndarray, j: np.ndarray, selected: np.ndarray) -> np.ndarray:
+        """On numpy (numbers or traced): output ``selected[i]`` of :meth:`outputs` at frame
+        index ``j[i]`` for row ``i`` of ``P``."""
+        pick = np.zeros((len(j), 9))
+        pick[np.arange(len(j)), selected] = 1.0
+        return anp.sum(anp.reshape(self.outputs(P, self.frames[j]), (len(j), 9)) * pick, axis=1)
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Values and exact gradients (per mm) per row: compiled, else a reverse sweep of
