@@ -29,7 +29,7 @@ from autograd.numpy.numpy_boxes import ArrayBox
 from autograd.numpy.numpy_vjps import untake
 from autograd.tracer import getval, isbox
 
-__all__ = ["floats", "plain", "signs", "symbolic", "undefined_above"]
+__all__ = ["each", "floats", "plain", "signs", "symbolic", "undefined_above"]
 
 
 def symbolic(x: Any) -> bool:
@@ -55,13 +55,17 @@ def plain(x: Any) -> np.ndarray:
     return np.asarray(getval(x), dtype=float)
 
 
+def each(x: np.ndarray, method: str, *args: Any) -> np.ndarray:
+    """Of a symbolic array, each element's own ``method(*args)``, in an array of its shape
+    (where numpy's object loop would compare symbols or has no such loop)."""
+    return np.array([getattr(e, method)(*args) for e in x.ravel()], dtype=object).reshape(x.shape)
+
+
 def signs(x: Any) -> np.ndarray:
     """``np.sign`` of plain values (:func:`plain`: not differentiated); of a symbolic
-    array, each symbol's own ``sign()`` (numpy's object loop would compare symbols)."""
+    array, each symbol's own ``sign()``."""
     values = plain(x)
-    if symbolic(values):
-        return np.array([e.sign() for e in values.ravel()], dtype=object).reshape(values.shape)
-    return np.sign(values)
+    return each(values, "sign") if symbolic(values) else np.sign(values)
 
 
 def undefined_above(x: np.ndarray, limit: float) -> np.ndarray:
@@ -69,7 +73,7 @@ def undefined_above(x: np.ndarray, limit: float) -> np.ndarray:
     it marks the rows a fixed-step computation has not settled.  Of a symbolic array, each
     symbol's own ``undefined_above(limit)``."""
     if symbolic(x):
-        return np.array([e.undefined_above(limit) for e in x.ravel()], dtype=object).reshape(x.shape)
+        return each(x, "undefined_above", limit)
     with np.errstate(invalid="ignore"):
         return np.where(np.asarray(x) <= limit, 0.0, np.nan)
 

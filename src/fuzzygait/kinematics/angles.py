@@ -41,7 +41,7 @@ import autograd.numpy as anp
 import numpy as np
 from autograd.extend import defvjp, primitive
 
-from fuzzygait.core.arrays import symbolic
+from fuzzygait.core.arrays import each, symbolic
 from fuzzygait.kinematics.vectors import relative_rotation
 
 #: Joint / segment name -> (component index per output X,Y,Z; right-side signs;
@@ -94,7 +94,7 @@ def capped_arcsin(x: np.ndarray) -> np.ndarray:
     the α-level optimiser (the plain chain rule gives ``inf · 0 = NaN`` there).  A
     symbolic array's elements give their own (``element.capped_arcsin()``)."""
     if symbolic(x):
-        return np.array([e.capped_arcsin() for e in x.ravel()], dtype=object).reshape(x.shape)
+        return each(x, "capped_arcsin")
     return np.arcsin(np.clip(x, -1.0, 1.0))
 
 

@@ -135,6 +135,15 @@ def _cofactor(a: Entries) -> tuple[Entries, np.ndarray]:
     return cof, a[0][0] * cof[0][0] + a[0][1] * cof[0][1] + a[0][2] * cof[0][2]
 
 
+def _newton_step(a: Entries) -> Entries:
+    """One scaled Newton step ``X <- (γX + (γX)⁻ᵀ)/2`` of the polar factor, entry-wise
+    (``γ = (|X⁻ᵀ|_F / |X|_F)^½``; numbers or symbols alike)."""
+    cof, d = _cofactor(a)
+    inverse_t = [[cof[i][j] / d for j in range(3)] for i in range(3)]
+    gamma = (sum(v * v for row in inverse_t for v in row) / sum(v * v for row in a for v in row)) ** 0.25
+    return [[0.5 * (gamma * a[i][j] + inverse_t[i][j] / gamma) for j in range(3)] for i in range(3)]
+
+
 #: Scaled Newton iterations of :func:`polar_rotation` (quadratic convergence: condition
 #: numbers up to ~1e6 settle within 10) and the entry change that counts as settled.
 POLAR_ITERATIONS = 12
@@ -163,10 +172,7 @@ def polar_rotation(covariance: np.ndarray) -> np.ndarray:
     out = np.empty_like(covariance)
     previous = a
     for _ in range(POLAR_ITERATIONS if len(newton) else 0):
-        cof, d = _cofactor(a)
-        inverse_t = [[cof[i][j] / d for j in range(3)] for i in range(3)]
-        gamma = (sum(v * v for row in inverse_t for v in row) / sum(v * v for row in a for v in row)) ** 0.25
-        previous, a = a, [[0.5 * (gamma * a[i][j] + inverse_t[i][j] / gamma) for j in range(3)] for i in range(3)]
+        previous, a = a, _newton_step(a)
         if max(float(np.abs(a[i][j] - previous[i][j]).max()) for i in range(3) for j in range(3)) < POLAR_TOLERANCE:
             break
     settled = np.zeros(out.shape[0], dtype=bool)
@@ -199,10 +205,7 @@ def _fixed_polar_rotation(covariance: np.ndarray) -> np.ndarray:
     _, det = _cofactor(a)
     previous = a
     for _ in range(POLAR_ITERATIONS):
-        cof, d = _cofactor(a)
-        inverse_t = [[cof[i][j] / d for j in range(3)] for i in range(3)]
-        gamma = (sum(v * v for row in inverse_t for v in row) / sum(v * v for row in a for v in row)) ** 0.25
-        previous, a = a, [[0.5 * (gamma * a[i][j] + inverse_t[i][j] / gamma) for j in range(3)] for i in range(3)]
+        previous, a = a, _newton_step(a)
     step = sum((a[i][j] - previous[i][j]) ** 2 for i in range(3) for j in range(3))
     unsettled = undefined_above(step, POLAR_SETTLED**2) + undefined_above(-det, 0.0)
     return np.moveaxis(np.array(a), -1, 0) + unsettled[:, None, None]

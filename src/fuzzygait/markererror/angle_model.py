@@ -68,7 +68,15 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
-from fuzzygait.markererror.row_kernel import MISSING, UNSETTLED, RowKernel, Shape, compile_kernel, model_key
+from fuzzygait.markererror.row_kernel import (
+    MISSING,
+    UNSETTLED,
+    CompiledModel,
+    RowKernel,
+    Shape,
+    compile_kernel,
+    model_key,
+)
 from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG
 from fuzzygait.uncertainty.protocol import (
     BLOCKS,
@@ -132,7 +140,7 @@ def fixed_subject(trial: Trial, subject: SubjectParameters) -> SubjectParameters
 
 
 @dataclass
-class JointAngleModel:
+class JointAngleModel(CompiledModel):
     """Angle component ``name_axis`` as a function of the deviations of ``markers``.
 
     Attributes:
@@ -240,14 +248,11 @@ class JointAngleModel:
         positions (the perturbed markers' x, y, z, then the fixed markers'), ``p`` the
         deviations of the perturbed ones, ``q`` the progression frame; out the three
         components (degrees, on the chain's own branch)."""
-        if not self.compiled:
-            return None
-        if "_kernel" not in self.__dict__:
-            key = model_key("angle", self.model, self.name, self.markers, self.fixed_markers,
-                            self.use_medial_markers, self.subject, self.clusters)  # fmt: skip
-            n, n_x = 3 * len(self.markers), self._rows.shape[1]
-            self._kernel = compile_kernel(key, self._row_angles, Shape(n_x, n, 9, 3), "a joint-angle model")
-        return self._kernel
+        return self.held_kernel(lambda: compile_kernel(
+            model_key("angle", self.model, self.name, self.markers, self.fixed_markers, self.use_medial_markers,
+                      self.subject, self.clusters),
+            self._row_angles, Shape(self._rows.shape[1], 3 * len(self.markers), 9, 3),
+            "a joint-angle model"))  # fmt: skip
 
     def _by_chain(self, status: np.ndarray) -> np.ndarray:
         """The kernel's rows the chain computes: those it did not settle, and for a cluster
@@ -260,10 +265,6 @@ class JointAngleModel:
         n = p.size
         positions = (x[:n] + p).reshape(1, -1, 3)
         return self.chain_angles(positions, x[n:].reshape(1, -1, 3), q.reshape(3, 3))[0]
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickled without the loaded kernel (a process loads its own)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
 
     def measured_angles(self) -> np.ndarray:
         """All three components (degrees) at zero deviation, ``(n_frames, 3)`` on

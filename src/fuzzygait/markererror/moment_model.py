@@ -71,7 +71,7 @@ from fuzzygait.kinetics.inverse_dynamics import GRAVITY
 from fuzzygait.kinetics.plug_in_gait import JOINTS, MOMENT_AXES, foot_length
 from fuzzygait.kinetics.segments import MM, PLUG_IN_GAIT_TABLE
 from fuzzygait.markererror.angle_model import AXES, fixed_subject, row_gradients
-from fuzzygait.markererror.row_kernel import UNSETTLED, RowKernel, Shape, compile_kernel, model_key
+from fuzzygait.markererror.row_kernel import UNSETTLED, CompiledModel, RowKernel, Shape, compile_kernel, model_key
 from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODES, TIME_STEP, Evaluation, Output
 
 Array = NDArray[np.float64]
@@ -133,7 +133,7 @@ def plate_shares(plates: Sequence[object], plate: NDArray[np.int_], rate: float)
 
 
 @dataclass
-class LegKineticsModel:
+class LegKineticsModel(CompiledModel):
     """Joint moments or powers of one leg as a function of marker and centre-of-pressure
     deviations (module docstring).
 
@@ -347,18 +347,11 @@ class LegKineticsModel:
         frames, mm; the ground's force N and moment N·m; each plate's share of the force),
         ``p`` the deviations, ``q`` the rate, body mass, foot length and the plates'
         in-plane axes; out the 3 × 3 joint (ankle, knee, hip) and axis outputs."""
-        if not self.compiled:
-            return None
-        if "_kernel" not in self.__dict__:
-            key = model_key("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers,
-                            len(self.plates), self.subject)  # fmt: skip
-            shape = Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9)
-            self._kernel = compile_kernel(key, self._row_outputs, shape, "a joint-kinetics model")
-        return self._kernel
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickled without the loaded kernel (a process loads its own)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
+        return self.held_kernel(lambda: compile_kernel(
+            model_key("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers, len(self.plates),
+                      self.subject),
+            self._row_outputs, Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9),
+            "a joint-kinetics model"))  # fmt: skip
 
     def _kernel_rows(self) -> np.ndarray:
         """``(n_frames, n_x)``: the kernel's ``x`` at each of :attr:`frames`."""

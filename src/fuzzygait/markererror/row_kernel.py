@@ -120,6 +120,27 @@ class RowKernel:
         return out, gradients, status
 
 
+class CompiledModel:
+    """A model with a compiled row function: its kernel looked up once per instance
+    (:meth:`held_kernel`) and left behind when the instance is pickled (a worker process
+    loads its own)."""
+
+    #: False: always numpy (the same numbers, slower).
+    compiled: bool
+
+    def held_kernel(self, make: Callable[[], RowKernel | None]) -> RowKernel | None:
+        """``make()`` the first time (None when not :attr:`compiled`), then the same."""
+        if not self.compiled:
+            return None
+        if "_kernel" not in self.__dict__:
+            self._kernel = make()
+        return self._kernel
+
+    def __getstate__(self) -> dict[str, object]:
+        """The instance's state without the loaded kernel."""
+        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
+
+
 def traced_functions(function: RowFunction, shape: Shape) -> tuple[ca.Function, ca.Function]:
     """The values and selected-gradient functions of ``function`` for one row (raises
     :class:`~.symbols.NotTraceable`, or numpy a ``TypeError``, where it decides on its data)."""
