@@ -9,9 +9,12 @@ random starting points and scipy bounds/constraints.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.optimize import NonlinearConstraint
+
+if TYPE_CHECKING:  # scipy.optimize is imported where a constraint is made: 0.25 s a worker process otherwise
+    from scipy.optimize import NonlinearConstraint
 
 
 @dataclass(frozen=True)
@@ -139,6 +142,8 @@ class BallsDomain:
             for k in range(self.radii.size):
                 out[k, k * self.block : (k + 1) * self.block] = blocks[k]
             return out
+
+        from scipy.optimize import NonlinearConstraint
 
         return [NonlinearConstraint(squared, -np.inf, self.radii**2, jac=jac)]
 

@@ -7,7 +7,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import xarray as xr
-from scipy.optimize import linprog
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
@@ -166,6 +165,8 @@ def _cover_sizes(cover: np.ndarray) -> tuple[int, int]:
         best = int(np.argmax((cover & uncovered).sum(axis=1)))
         uncovered &= ~cover[best]
         greedy += 1
+    from scipy.optimize import linprog  # here: scipy.optimize costs a worker process 0.25 s to import
+
     relaxed = linprog(np.ones(cover.shape[0]), A_ub=-cover.T.astype(float), b_ub=-np.ones(cover.shape[1]),
                       bounds=(0.0, 1.0), method="highs")  # fmt: skip
     bound = int(np.ceil(relaxed.fun - 1e-9)) if relaxed.status == 0 else 1

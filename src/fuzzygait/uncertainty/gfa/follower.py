@@ -18,7 +18,6 @@ from collections.abc import Callable, Generator
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from fuzzygait.core.schema import BOUNDS, SENSES
 from fuzzygait.uncertainty.counting import CountedModel
@@ -172,6 +171,8 @@ class _Follower:
             if trajectory is not None:  # a full simulation was needed: keep it
                 library.add(p.copy(), trajectory)
             return -sense * value
+
+        from scipy.optimize import minimize  # here: scipy.optimize costs a worker process 0.25 s to import
 
         method = "L-BFGS-B" if isinstance(domain, BoxDomain) else "SLSQP"
         best_p, best_v = starts[0], objective(starts[0])

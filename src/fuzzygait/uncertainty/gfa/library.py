@@ -11,9 +11,12 @@ entries.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:  # imported where a tree is built: scipy.spatial costs a worker process 0.16 s to import
+    from scipy.spatial import cKDTree
 
 #: Entries added since the last k-d tree build that are scanned linearly before the
 #: tree is rebuilt.
@@ -87,6 +90,8 @@ class Library:
         if not self._size:
             return -1, np.inf
         if self._size - self._tree_size > _TREE_SLACK:
+            from scipy.spatial import cKDTree
+
             self._tree = cKDTree(self.parameters / self.scale)
             self._tree_size = self._size
         best, distance = -1, np.inf
