@@ -58,8 +58,6 @@ from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, JointA
 from fuzzygait.markererror.result import (
     AngleAxes,
     angle_components,
-    component_hull,
-    component_undetermined,
     fuzzy_angles_dataset,
     with_error_sources,
 )
@@ -385,13 +383,26 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
 def undetermined_levels(fuzzy: xr.Dataset) -> pd.DataFrame:
     """Per angle component (rows) and α-level < 1 (columns): True when the band is
     undetermined at some frame (ΔΦ is then "undetermined", not a number)."""
-    rows = {}
-    for name in angle_components(fuzzy):
-        mask = component_undetermined(fuzzy, name)
-        rows[name] = {float(a): bool(mask.sel(alpha=a).any()) for a in fuzzy["alpha"].to_numpy() if a < 1.0}
-    table = pd.DataFrame.from_dict(rows, orient="index")
-    table.index.name = "angle"
-    return table[sorted(table.columns, reverse=True)]
+    flags = _undetermined(fuzzy).any("frame")
+    return _by_level(flags.sel(alpha=fuzzy["alpha"] < 1.0).transpose("component", "alpha"), bool)
+
+
+def _undetermined(fuzzy: xr.Dataset) -> xr.DataArray:
+    """The undetermined flags of every component, dims ``(component, alpha, frame)`` (all
+    False for datasets written before the flag existed)."""
+    angle_components(fuzzy)  # the layout is checked
+    if "undetermined" in fuzzy.data_vars:
+        return fuzzy["undetermined"].astype(bool)
+    return xr.zeros_like(fuzzy["hull"].isel(bound=0, drop=True), dtype=bool)
+
+
+def _by_level(table: xr.DataArray, kind: type) -> pd.DataFrame:
+    """A ``(component, alpha)`` array as the tables' frame: rows the components
+    (index "angle"), columns the α-levels as floats, highest first."""
+    frame = pd.DataFrame(table.to_numpy().astype(kind), index=[str(c) for c in table["component"].to_numpy()],
+                         columns=[float(a) for a in table["alpha"].to_numpy()])  # fmt: skip
+    frame.index.name = "angle"
+    return frame[sorted(frame.columns, reverse=True)]
 
 
 def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
@@ -403,16 +414,9 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     The thesis divides by the largest angle; the magnitude is used here so angles that
     stay negative get a positive reference.
     """
-    rows = {}
-    for name in angle_components(fuzzy):
-        hull = component_hull(fuzzy, name)
-        measured = hull.sel(alpha=1.0, bound="upper")
-        reference = float(np.nanmax(np.abs(measured)))
-        spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~component_undetermined(fuzzy, name))
-        width = spread.max("frame", skipna=True)
-        rows[name] = {float(a): 100.0 * float(width.sel(alpha=a)) / reference
-                      for a in fuzzy["alpha"].to_numpy() if a < 1.0}  # fmt: skip
-    table = pd.DataFrame.from_dict(rows, orient="index")
-    table.index.name = "angle"
-    return table[sorted(table.columns, reverse=True)]
+    hull = fuzzy["hull"]
+    reference = abs(hull.sel(alpha=1.0, bound="upper")).max("frame")  # NaN frames skipped
+    spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~_undetermined(fuzzy))
+    width = spread.sel(alpha=fuzzy["alpha"] < 1.0).max("frame")
+    return _by_level((100.0 * width / reference).transpose("component", "alpha"), float)
 

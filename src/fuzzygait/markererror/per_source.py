@@ -216,17 +216,17 @@ def source_undetermined(result: MarkerErrorResult, source: str, component: str) 
 def _nesting_excess(result: MarkerErrorResult) -> float:
     """Largest distance (deg) a source's bound lies outside the all-sources band at the
     same α, over the frames where both are determined (0 when nested)."""
-    excess = 0.0
-    for component in source_components(result):
-        outer, outer_flags = source_hull(result, ALL, component), source_undetermined(result, ALL, component)
-        for source in source_names(result):
-            inner, flags = source_hull(result, source, component), source_undetermined(result, source, component)
-            keep = ~(flags | outer_flags)
-            beyond = xr.concat([inner.sel(bound="upper") - outer.sel(bound="upper"),
-                                outer.sel(bound="lower") - inner.sel(bound="lower")], "side").where(keep)  # fmt: skip
-            value = float(beyond.max(skipna=True)) if bool(np.isfinite(beyond).any()) else 0.0
-            excess = max(excess, value)
-    return excess
+    sources = _require(result)
+    components = source_components(result)
+    levels = sources["alpha"].to_numpy().astype(float)
+    main = [_main_levels(result.bands, component, levels) for component in components]
+    outer = xr.concat([hull for hull, _ in main], "component").assign_coords(component=components)
+    outer_flags = xr.concat([flags for _, flags in main], "component").assign_coords(component=components)
+    inner, flags = sources["hull"], sources["undetermined"]  # dims (source, component, alpha, …)
+    keep = ~(flags | outer_flags)
+    beyond = xr.concat([inner.sel(bound="upper") - outer.sel(bound="upper"),
+                        outer.sel(bound="lower") - inner.sel(bound="lower")], "side").where(keep)  # fmt: skip
+    return max(0.0, float(beyond.max(skipna=True))) if bool(np.isfinite(beyond).any()) else 0.0
 
 
 # ---------------------------------------------------------------------------- the runs
