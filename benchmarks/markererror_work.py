@@ -1,6 +1,7 @@
 """Where the marker-error analysis' work goes (issue 40, item 1): counts, not wall times.
 
 Run:  .venv/bin/python benchmarks/markererror_work.py [--trial walking|cgm24] [--frames N] [--profile] [--row-costs]
+      .venv/bin/python benchmarks/markererror_work.py --scaling [--trial walking|cgm24] [--repeats 3]
 
 The default analysis of ``fuzzygait uncertainty sample_data/walking.c3d`` (Table 3.1,
 all sources, α = 0, 0.25, 0.5, 0.75, 1, the allowable error for ±2.5°, the per-source
@@ -17,6 +18,15 @@ flip (undetermined).  ``--profile``: a cProfile of the whole analysis, the funct
 own time (proportions; the machine is shared, so only the proportions mean something).
 CPU seconds (``time.process_time``) are printed for reference.  ``--row-costs``: the
 angle model's CPU per call and per row (values, exact gradients).
+
+``--scaling``: the cost per frame and the fixed cost per trial as a batch pays them
+(issue 40, item 4: start-up and imports once per batch): in this one process, after one
+analysis of another cut of the trial (its last 64 frames: the modules imported, the
+compiled models loaded), the default analysis of the trial's first 128 frames and of the
+whole trial (512 frames) alternated ``--repeats`` times; medians of the CPU seconds, their
+ratio, and the line through them (seconds per frame; the fixed cost per trial, its
+intercept).  The first analysis in a fresh process (what one ``fuzzygait uncertainty``
+pays on top) is the default mode's CPU, ``--frames 128`` and without.
 """
 
 from __future__ import annotations
@@ -138,16 +148,17 @@ def table(recorder: Recorder) -> list[str]:
     return rows
 
 
-def trial_run(name: str, frames: int | None = None) -> AnglesRun:
-    """The sample trial's joint-angle run (``frames``: its first ``frames`` frames only,
-    events after them dropped, without its force plates)."""
+def trial_run(name: str, frames: int | None = None, first: int = 0) -> AnglesRun:
+    """The sample trial's joint-angle run (``frames``: its ``frames`` frames from ``first``
+    only, the events outside them dropped, without its force plates)."""
     prefix = "" if name == "walking" else "cgm24_"
     model = "cgm1.0" if name == "walking" else "cgm2.4"
     dynamic: Path | Trial = DATA / f"{prefix}walking.c3d"
     if frames is not None:
         trial = read_c3d(dynamic)
-        dynamic = replace(trial, markers=trial.markers[:frames], source=None,
-                          events=[e for e in trial.events if e.time < frames / trial.rate])  # fmt: skip
+        t0, t1 = first / trial.rate, (first + frames) / trial.rate
+        dynamic = replace(trial, markers=trial.markers[first:first + frames], source=None,
+                          events=[replace(e, time=e.time - t0) for e in trial.events if t0 <= e.time < t1])  # fmt: skip
     return run_angles(dynamic, static=DATA / f"{prefix}static.c3d", subject_file=DATA / f"{prefix}subject.toml",
                       model=model)  # fmt: skip
 
@@ -175,13 +186,43 @@ def row_costs(run: AnglesRun) -> None:
               f"{1e3 * cost[1]:.2f} ms ({1e6 * cost[1] / k:.2f} µs)")  # fmt: skip
 
 
+def scaling(trial: str, repeats: int) -> None:
+    """Per-trial CPU of the default analysis on 128 and all frames in a warm process
+    (``--scaling``, see the module docstring)."""
+    whole = trial_run(trial)
+    n = whole.trial.n_frames
+    settings = MarkerErrorSettings(workers=1)
+    start = time.process_time()
+    analyse_run(trial_run(trial, 64, n - 64), settings)
+    print(f"{trial}: warm-up analysis of frames {n - 64}-{n - 1} (the first in this process): "
+          f"{time.process_time() - start:.2f} s CPU")  # fmt: skip
+    runs = {128: trial_run(trial, 128), n: whole}
+    cpu: dict[int, list[float]] = {128: [], n: []}
+    for _ in range(repeats):
+        for frames, run in runs.items():
+            start = time.process_time()
+            analyse_run(run, settings)
+            cpu[frames].append(time.process_time() - start)
+    small, large = (float(np.median(cpu[f])) for f in (128, n))
+    per_frame = (large - small) / (n - 128)
+    print(f"  128 frames: {small:.2f} s CPU (runs {', '.join(f'{c:.2f}' for c in cpu[128])})")
+    print(f"  {n} frames: {large:.2f} s CPU (runs {', '.join(f'{c:.2f}' for c in cpu[n])})")
+    print(f"  time({n})/time(128) = {large / small:.2f}; {1e3 * per_frame:.1f} ms per frame; "
+          f"fixed cost per trial {small - 128 * per_frame:.2f} s")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trial", default="walking", choices=("walking", "cgm24"))
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--frames", type=int, default=None, help="the trial's first N frames only")
     parser.add_argument("--row-costs", action="store_true", help="also the model's CPU per call and per row")
+    parser.add_argument("--scaling", action="store_true", help="per-trial cost on 128 and all frames, warm process")
+    parser.add_argument("--repeats", type=int, default=3, help="alternations of --scaling")
     args = parser.parse_args()
+    if args.scaling:
+        scaling(args.trial, args.repeats)
+        return
     run = trial_run(args.trial, args.frames)
     if args.row_costs:
         row_costs(run)
