@@ -10,6 +10,8 @@ those frames for :func:`fuzzy_joint_angles`, which skips frames with missing mar
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -275,6 +277,24 @@ def test_relative_envelope_width_by_hand() -> None:
     assert table.loc["LKneeAngles_X", 0.5] == pytest.approx(100.0 * 18 / 40)
     assert table.loc["LHipAngles_Y", 0.0] == pytest.approx(100.0)
     assert table.loc["LHipAngles_Y", 0.5] == pytest.approx(45.0)
+
+
+def test_relative_envelope_width_of_an_angle_zero_throughout_is_infinite_without_a_warning() -> None:
+    """A band around an angle that is 0° at every frame has no relative width: inf (NaN
+    where the band has no width either), quietly, beside a normal component."""
+    zero = np.zeros(3)
+    hull = np.array([[zero - 2.0, zero + 2.0], [zero, zero], [zero, zero]])  # α = 0: width 4; α = 0.5: none
+    knee = np.array([[[8.0, 18.0, 28.0], [12.0, 22.0, 32.0]], [[9.0, 19.0, 29.0], [11.0, 21.0, 31.0]],
+                     [[10.0, 20.0, 30.0], [10.0, 20.0, 30.0]]])  # fmt: skip
+    fuzzy = fuzzy_angles_dataset({"LKneeAngles_X": knee, "LFootProgressAngles_Y": hull},
+                                 AngleAxes(alphas=[0.0, 0.5, 1.0], frames=[1, 2, 3], times=[0.0, 0.01, 0.02],
+                                           markers=["LKNE"], ball_radius=[32.0]))  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        table = relative_envelope_width(fuzzy)
+    assert table.loc["LFootProgressAngles_Y", 0.0] == np.inf and np.isnan(table.loc["LFootProgressAngles_Y", 0.5])
+    assert table.loc["LKneeAngles_X", 0.0] == pytest.approx(100.0 * 4 / 30)
+    assert table.loc["LKneeAngles_X", 0.5] == pytest.approx(100.0 * 2 / 30)
 
 
 # ---------------------------------------------------------------------------- result layout

@@ -418,5 +418,6 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     reference = abs(hull.sel(alpha=1.0, bound="upper")).max("frame")  # NaN frames skipped
     spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~_undetermined(fuzzy))
     width = spread.sel(alpha=fuzzy["alpha"] < 1.0).max("frame")
-    return _by_level((100.0 * width / reference).transpose("component", "alpha"), float)
+    with np.errstate(divide="ignore", invalid="ignore"):  # an angle zero throughout: inf (NaN if no width)
+        return _by_level((100.0 * width / reference).transpose("component", "alpha"), float)
 
