@@ -314,6 +314,7 @@ def test_the_compiled_leg_equals_numpy(sample: tuple[Trial, object], kind: str) 
     assert np.isnan(gapped.evaluate_nodes(P[:3], nodes[:3])[:2]).all() and np.isfinite(values[2])
 
 
+@pytest.mark.slow  # compiles the KAD subject's leg kinetics (12 s on a fresh clone)
 def test_unsettled_compiled_rows_take_numpy(sample: tuple[Trial, object]) -> None:
     """With the KAD's rotation offsets the rotated chord runs fixed steps in C; rows far
     outside any ball (100 mm) that they do not settle are computed by numpy — the same
