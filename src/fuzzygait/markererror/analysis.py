@@ -57,8 +57,8 @@ from fuzzygait.kinematics.clusters import ClusterCalibration
 from fuzzygait.markererror.angle_model import AXES, AngleComponentsModel, JointAngleModel, fixed_subject
 from fuzzygait.markererror.result import (
     AngleAxes,
-    angle_components,
     fuzzy_angles_dataset,
+    undetermined_flags,
     with_error_sources,
 )
 from fuzzygait.markererror.sources import SOURCES, ErrorModel, parse_sources
@@ -383,17 +383,8 @@ def _assemble(trial: Trial, tasks: list[ComponentTask], outputs: list[tuple], ma
 def undetermined_levels(fuzzy: xr.Dataset) -> pd.DataFrame:
     """Per angle component (rows) and α-level < 1 (columns): True when the band is
     undetermined at some frame (ΔΦ is then "undetermined", not a number)."""
-    flags = _undetermined(fuzzy).any("frame")
+    flags = undetermined_flags(fuzzy).any("frame")
     return _by_level(flags.sel(alpha=fuzzy["alpha"] < 1.0).transpose("component", "alpha"), bool)
-
-
-def _undetermined(fuzzy: xr.Dataset) -> xr.DataArray:
-    """The undetermined flags of every component, dims ``(component, alpha, frame)`` (all
-    False for datasets written before the flag existed)."""
-    angle_components(fuzzy)  # the layout is checked
-    if "undetermined" in fuzzy.data_vars:
-        return fuzzy["undetermined"].astype(bool)
-    return xr.zeros_like(fuzzy["hull"].isel(bound=0, drop=True), dtype=bool)
 
 
 def _by_level(table: xr.DataArray, kind: type) -> pd.DataFrame:
@@ -416,7 +407,7 @@ def relative_envelope_width(fuzzy: xr.Dataset) -> pd.DataFrame:
     """
     hull = fuzzy["hull"]
     reference = abs(hull.sel(alpha=1.0, bound="upper")).max("frame")  # NaN frames skipped
-    spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~_undetermined(fuzzy))
+    spread = (hull.sel(bound="upper") - hull.sel(bound="lower")).where(~undetermined_flags(fuzzy))
     width = spread.sel(alpha=fuzzy["alpha"] < 1.0).max("frame")
     with np.errstate(divide="ignore", invalid="ignore"):  # an angle zero throughout: inf (NaN if no width)
         return _by_level((100.0 * width / reference).transpose("component", "alpha"), float)

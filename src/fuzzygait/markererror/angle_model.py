@@ -294,15 +294,16 @@ class JointAngleModel(CompiledModel):
             angles, status = kernel.values(self._rows, nodes, P, self.progression)
             redo = self._by_chain(status)
             if redo.any():
-                angles[redo] = self.angles_of(self._base[nodes[redo]] + P[redo].reshape(int(redo.sum()), -1, 3),
-                                              self._fixed[nodes[redo]])  # fmt: skip
+                angles[redo] = self._chain_rows(P[redo], nodes[redo])
         else:
-            positions = self._base[nodes] + floats(P).reshape(len(nodes), -1, 3)
-            angles = self.angles_of(positions, self._fixed[nodes])
+            angles = self._chain_rows(P, nodes)
         angle = angles[:, axes] if np.ndim(axes) == 0 else angles[np.arange(len(nodes)), axes]
-        if reference is None:
-            return angle
-        return reference + wrap_degrees(angle - reference)
+        return _on_branch(angle, reference)
+
+    def _chain_rows(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """All three components (degrees) by the numpy chain for deviations ``P`` (k, n_p)
+        at time nodes ``nodes`` (k,) (numbers or traced)."""
+        return self.angles_of(self._base[nodes] + floats(P).reshape(len(nodes), -1, 3), self._fixed[nodes])
 
     def component_gradients(self, P: np.ndarray, nodes: np.ndarray, axes: int | np.ndarray,
                             reference: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
@@ -318,9 +319,7 @@ class JointAngleModel(CompiledModel):
         rows = np.arange(len(nodes))
         axes = np.broadcast_to(axes, rows.shape)
         angles, gradients, status = kernel.gradients(self._rows, nodes, P, self.progression, axes)
-        angle = angles[rows, axes]
-        if reference is not None:
-            angle = reference + wrap_degrees(angle - reference)
+        angle = _on_branch(angles[rows, axes], reference)
         redo = self._by_chain(status)
         if redo.any():
             at = None if reference is None else reference[redo]
@@ -422,6 +421,11 @@ class AngleComponentsModel:
         """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
         nodes = np.arange(self.times.size)
         return Evaluation(self.evaluate_nodes(np.tile(np.asarray(p, dtype=float), (nodes.size, 1)), nodes))
+
+
+def _on_branch(angle: np.ndarray, reference: np.ndarray | None) -> np.ndarray:
+    """``angle`` (degrees) on the continuous branch through ``reference`` (None: as it is)."""
+    return angle if reference is None else reference + wrap_degrees(angle - reference)
 
 
 def row_gradients(function: Callable[[np.ndarray, np.ndarray], np.ndarray], P: np.ndarray,

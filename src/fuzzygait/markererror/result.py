@@ -168,14 +168,19 @@ def component_hull(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
     return fuzzy["hull"].sel(component=component, drop=True)
 
 
-def component_undetermined(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
-    """Where the band of one component is undetermined, dims ``(alpha, frame)`` (all
-    False for datasets written before the flag existed)."""
+def undetermined_flags(fuzzy: xr.Dataset) -> xr.DataArray:
+    """Where the band of each component is undetermined, dims ``(component, alpha,
+    frame)`` (all False for datasets written before the flag existed)."""
     _require_layout(fuzzy)
     if "undetermined" not in fuzzy.data_vars:
-        hull = component_hull(fuzzy, component)
-        return xr.zeros_like(hull.isel(bound=0, drop=True), dtype=bool)
-    return fuzzy["undetermined"].sel(component=component, drop=True)
+        return xr.zeros_like(fuzzy["hull"].isel(bound=0, drop=True), dtype=bool)
+    return fuzzy["undetermined"].astype(bool)
+
+
+def component_undetermined(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
+    """Where the band of one component is undetermined, dims ``(alpha, frame)``
+    (:func:`undetermined_flags`)."""
+    return undetermined_flags(fuzzy).sel(component=component, drop=True)
 
 
 def component_deviation(fuzzy: xr.Dataset, component: str) -> xr.DataArray | None:
