@@ -6,6 +6,13 @@ re-run on the same folder (every trial reused).  Optionally also the
 ``--uncertainty none`` run over ``../shared/data/vicon`` and ``pig-options`` (--shared).
 
     .venv/bin/python benchmarks/batch_report_scaling.py [--trials 20] [--frames 40] [--shared]
+    .venv/bin/python benchmarks/batch_report_scaling.py --commands [--trials 10] [--frames 40] [--repeats 3]
+
+In the default mode the 2-worker batch runs after the 1-worker one in the same process, so
+its pool starts from a process that has already imported and loaded everything.
+``--commands``: instead, ``fuzzygait report SESSION --uncertainty fast --workers W`` as a
+user types it, each run a fresh process, ``W`` = 1 and 2 alternated ``--repeats`` times;
+wall seconds per run and the medians' ratio.
 """
 
 from __future__ import annotations
@@ -14,6 +21,9 @@ import argparse
 import dataclasses
 import os
 import shutil
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
 import warnings
@@ -60,17 +70,44 @@ def timed(label: str, **kwargs: object) -> float:
     return seconds
 
 
+def command_wall(session: Path, out: Path, workers: int) -> float:
+    """Wall seconds of one ``fuzzygait report`` of ``session`` into a new ``out``."""
+    argv = [sys.executable, "-m", "fuzzygait", "report", str(session), "--out", str(out), "--uncertainty", "fast",
+            "--workers", str(workers)]  # fmt: skip
+    start = time.perf_counter()
+    subprocess.run(argv, check=True, capture_output=True)
+    return time.perf_counter() - start
+
+
+def commands(root: Path, session: Path, repeats: int) -> None:
+    """The user's command, fresh processes, 1 and 2 workers alternated (``--commands``)."""
+    walls: dict[int, list[float]] = {1: [], 2: []}
+    for i in range(repeats):
+        for workers in (1, 2):
+            walls[workers].append(command_wall(session, root / f"out-{workers}-{i}", workers))
+            print(f"run {i + 1}, --workers {workers}: {walls[workers][-1]:.1f} s wall", flush=True)
+    one, two = statistics.median(walls[1]), statistics.median(walls[2])
+    trials = len(list(session.glob("walk*.c3d")))
+    print(f"`fuzzygait report`: --workers 1 median {one:.1f} s, --workers 2 median {two:.1f} s "
+          f"({two / trials:.2f} s per trial): speed-up {one / two:.2f}x")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--frames", type=int, default=40)
     parser.add_argument("--shared", action="store_true")
+    parser.add_argument("--commands", action="store_true", help="the user's command, fresh processes, alternated")
+    parser.add_argument("--repeats", type=int, default=3, help="alternations of --commands")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         session = make_session(root / "session", args.trials, args.frames)
         print(f"{args.trials} synthetic trials of {args.frames} frames, --uncertainty fast; {os.cpu_count()} cores")
+        if args.commands:
+            commands(root, session, args.repeats)
+            return
         one = timed("1 worker (in process)", inputs=[session], out_dir=root / "one", uncertainty="fast", workers=1)
         two = timed("2 workers (LocalCluster)", inputs=[session], out_dir=root / "two", uncertainty="fast", workers=2)
         print(f"speed-up {one / two:.2f}x")

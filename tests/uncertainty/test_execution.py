@@ -9,6 +9,8 @@ naming the row."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -129,6 +131,49 @@ def test_pool_workers_keep_no_profile_between_tasks(evaluators) -> None:
     states = pool.client.run(_profile_state)
     assert len(states) == 2
     assert all(state == (False, 0) for state in states.values()), states
+
+
+def _worker_facts(_: int) -> tuple[str, int, bool]:
+    """A worker's program (``/proc/self/exe`` and arguments), the most BLAS/OpenMP threads
+    of its loaded libraries, and whether it can take the model cache's build lock."""
+    import threadpoolctl
+
+    from fuzzygait.uncertainty.execution import workers
+
+    with open("/proc/self/cmdline", "rb") as handle:
+        cmdline = handle.read().decode()
+    threads = max(info["num_threads"] for info in threadpoolctl.threadpool_info())
+    free = workers._BUILD_LOCK.acquire(timeout=5)
+    if free:
+        workers._BUILD_LOCK.release()
+    return cmdline, threads, free
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_pool_workers_are_forked_with_one_blas_thread_and_free_locks(tmp_path, monkeypatch) -> None:
+    """On Linux the local pool's workers are copies of this process (no new interpreter
+    importing everything again: issue 40's start-up cost): their command line is this
+    process's.  They compute with one BLAS thread even when this process uses more (a
+    copy inherits the libraries' thread counts, which WORKER_ENV cannot change once they
+    are loaded), and the model cache's lock, held here by another thread at the moment
+    of the copy, is free in them."""
+    import tempfile
+
+    import threadpoolctl
+
+    from fuzzygait.uncertainty.execution import workers
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with open("/proc/self/cmdline", "rb") as handle:
+        own = handle.read().decode()
+    with threadpoolctl.threadpool_limits(limits=2), Evaluator(workers=2) as evaluator:
+        assert max(info["num_threads"] for info in threadpoolctl.threadpool_info()) == 2
+        with workers._BUILD_LOCK:  # held by this (another) thread while the workers are made
+            evaluator.n_workers()
+        facts = evaluator.map(_worker_facts, [0, 1, 2, 3])
+    assert {cmdline for cmdline, _, _ in facts} == {own}
+    assert [threads for _, threads, _ in facts] == [1, 1, 1, 1]
+    assert all(free for _, _, free in facts)
 
 
 def _slow_square(x: int) -> int:

@@ -145,16 +145,21 @@ def test_a_cluster_cut_short_while_starting_is_released(tmp_path, monkeypatch, e
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("method", ["spawn", "fork"])
 @pytest.mark.parametrize("main", ["script", "worker", "command", "notebook"])
-def test_a_pool_that_cannot_start_from_a_script_says_how_to_guard_it(tmp_path, monkeypatch, main):
+def test_a_pool_that_cannot_start_from_a_script_says_how_to_guard_it(tmp_path, monkeypatch, main, method):
     """A script that runs its analysis at top level makes every spawned worker run it again,
     and the pool fails to start ("Nanny failed to start"): the one-line error then names the
     script and the ``if __name__ == "__main__":`` guard (or workers=1); the ``fuzzygait``
-    command and a notebook (no file) get the plain message."""
+    command and a notebook (no file) get the plain message, and so does every program whose
+    workers are forked (Linux): they import nothing again."""
     import types
 
     distributed = pytest.importorskip("distributed")
+    from fuzzygait.uncertainty.execution import evaluator as evaluator_module
     from fuzzygait.uncertainty.execution.evaluator import ParallelEvaluationError
+
+    monkeypatch.setattr(evaluator_module, "start_method", lambda: method)
 
     module = types.ModuleType("__main__")
     if main == "script":
@@ -175,7 +180,9 @@ def test_a_pool_that_cannot_start_from_a_script_says_how_to_guard_it(tmp_path, m
     evaluator.close()
     message = str(caught.value)
     assert message.startswith("cannot start a local Dask cluster: cut short while starting")
-    if main == "script":
+    if method == "fork":
+        assert message == "cannot start a local Dask cluster: cut short while starting"
+    elif main == "script":
         assert 'if the script gait_analysis.py starts this run at its top level, put that code under `if __name__ == ' \
                '"__main__":`' in message and "workers=1" in message
     elif main == "worker":

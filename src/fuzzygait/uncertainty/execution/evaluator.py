@@ -55,6 +55,7 @@ from fuzzygait.uncertainty.execution.teardown import (
     pre_spawn_environ,
     release_at_exit,
     start_loop,
+    start_method,
     started_clusters,
     tear_down,
 )
@@ -206,7 +207,10 @@ def _script_hint() -> str:
     """Advice for the commonest reason a local pool does not start from a script: its
     worker processes are started by re-importing the script (``spawn``), and a script that
     runs its analysis at top level starts it again in every worker, which Python stops.
-    Empty when the program is not a plain script (the ``fuzzygait`` command, a notebook)."""
+    Empty when the program is not a plain script (the ``fuzzygait`` command, a notebook),
+    and when the workers are forked copies of this process, which import nothing again."""
+    if start_method() == "fork":
+        return ""
     main = sys.modules.get("__main__")
     guard = "`if __name__ == \"__main__\":`"
     script = sys.modules.get("__mp_main__")  # the same module as __main__, except in a spawned process
@@ -283,6 +287,7 @@ class Evaluator:
                 # made on the loop, read them, also after an interrupt took this thread out of here
                 clear_pool_variable()  # a former cluster's token must not mark this one's workers
                 res.settings = dask.config.set({"distributed.nanny.pre-spawn-environ": pre_spawn_environ(res.token),
+                                                "distributed.worker.multiprocessing-method": start_method(),
                                                 "temporary-directory": scratch,  # the scheduler's scratch too
                                                 **WORKER_SETTINGS})  # fmt: skip
                 cluster = LocalCluster(

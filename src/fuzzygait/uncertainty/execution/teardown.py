@@ -12,10 +12,14 @@ outlives the evaluator.
   (:func:`start_loop`): the processes the cluster starts from that loop inherit the
   blocked mask through ``fork``/``exec``, so they never see either signal, from their
   first instruction on, nor do the processes they start; their parent stops them.
+* **Forked, on Linux** (:func:`start_method`): a worker is a copy of this process, with
+  its imports and compiled models, instead of a new interpreter importing them again.
 * **Known from birth**: each worker starts with :data:`POOL_VARIABLE` set to its
   cluster's token in its environment (:func:`pre_spawn_environ`), so that a worker
   still starting — of a cluster cut short while starting, whose close closes nothing —
-  is found as surely as a running one (:func:`worker_processes`).
+  is found as surely as a running one (:func:`worker_processes`).  A forked worker's
+  environment as the system shows it is this process's at its own start, so a forked
+  worker is found by the token in the environment its nanny gave it.
 * **Stopped at once when interrupted** (:func:`tear_down`): the worker processes and
   everything they started (a C compiler building a simulator, a C3D reader child) are
   frozen and listed, so that none can escape as an orphan, then killed, then the nannies
@@ -43,8 +47,10 @@ import contextlib
 import importlib
 import os
 import signal
+import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -160,6 +166,34 @@ def stop_loop(runner: Any) -> None:
         pass
 
 
+def start_method() -> str:
+    """How a local cluster starts its worker processes (Dask's
+    ``distributed.worker.multiprocessing-method``): ``fork`` on Linux in place of Dask's
+    default ``spawn``; any other setting, and every setting elsewhere, as configured.
+
+    A spawned worker is a new interpreter that imports ``distributed``, numpy, scipy,
+    CasADi and the engine's modules again and loads the compiled models: about 2 s of CPU
+    per worker, paid on the same two cores as the work.  A forked one is a copy of this
+    process, which has them all already.  Measured (``benchmarks/RESULTS.md``, issue 40):
+    ``fuzzygait uncertainty`` on the sample trial 11.4 → 9.6 s wall, a report of 10
+    trials on 2 workers 1.49× → 1.83× one.  The answers are bit-identical: a worker
+    computes with one BLAS thread either way (:func:`~.workers.dask_setup`).  The copy is
+    made while this process's other threads run; what a worker uses of this process's
+    state (the model cache and its locks) is made afresh in the copy
+    (:func:`~.workers.fresh_after_fork`), and a worker never uses the rest (the scheduler,
+    the client, the terminal).  macOS and Windows keep ``spawn``: their system libraries
+    are not safe to use in a forked copy."""
+    import dask
+
+    configured = str(dask.config.get("distributed.worker.multiprocessing-method", default="spawn"))
+    if configured != "spawn" or not sys.platform.startswith("linux"):
+        return configured
+    # Python ≥ 3.12 warns at every fork of a process with threads; the paragraph above is why it is safe here
+    warnings.filterwarnings("ignore", message=r"This process \(pid=\d+\) is multi-threaded, use of fork\(\)",
+                            category=DeprecationWarning)  # fmt: skip
+    return "fork"
+
+
 #: The environment variable marking a local cluster's worker processes: its value is the
 #: cluster's token, set by Dask in the environment each worker starts with.
 POOL_VARIABLE = "FUZZYGAIT_POOL"
@@ -243,19 +277,54 @@ def stop_workers_now(cluster: Any) -> None:
 
 def _marked_children(token: str | None) -> list[Any]:
     """This process's children that are worker processes of the local cluster ``token``
-    (None: of any), by :data:`POOL_VARIABLE` in the environment they started with."""
+    (None: of any), by :data:`POOL_VARIABLE` in the environment they started with: the
+    one the system shows (a spawned worker) or the one their nanny gave them (a forked
+    worker, :func:`_forked_worker_pids`)."""
     psutil = _psutil()
     if psutil is None:  # pragma: no cover
         return []
-    marked = []
+    marked = {}
     for child in psutil.Process().children():
         try:
             value = child.environ().get(POOL_VARIABLE)
         except psutil.Error:
             continue
         if value is not None and (token is None or value == token):
-            marked.append(child)
-    return marked
+            marked[child.pid] = child
+    for pid in _forked_worker_pids(token):
+        if pid in marked:
+            continue
+        try:
+            child = psutil.Process(pid)
+            if child.ppid() == os.getpid():  # still this process's child (not a pid reused since)
+                marked[pid] = child
+        except psutil.Error:
+            continue
+    return list(marked.values())
+
+
+def _forked_worker_pids(token: str | None) -> list[int]:
+    """The pids of the worker processes of the local cluster ``token`` (None: of any)
+    started by the nannies of this process, running or being started.
+
+    A forked worker's environment in ``/proc`` is this process's as it started, not the
+    one Dask gave the worker; that one is kept by the nanny's ``WorkerProcess`` (its
+    ``env``), whose ``AsyncProcess`` holds the multiprocessing process, whose pid is known
+    as soon as its ``fork`` has returned.  Every nanny of this process is in
+    ``Nanny._instances`` from its making on, whether or not its cluster has listed it."""
+    nanny_module = sys.modules.get("distributed.nanny")
+    if nanny_module is None:  # no nanny was ever made here
+        return []
+    pids = []
+    for nanny in list(nanny_module.Nanny._instances):
+        worker_process = getattr(nanny, "process", None)
+        environ = getattr(worker_process, "env", None)
+        value = environ.get(POOL_VARIABLE) if isinstance(environ, dict) else None
+        process = getattr(getattr(worker_process, "process", None), "_process", None)  # multiprocessing's
+        pid = getattr(getattr(process, "_popen", None), "pid", None)
+        if value is not None and (token is None or value == token) and pid:
+            pids.append(int(pid))
+    return pids
 
 
 def _worker_roots(cluster: Any, token: str | None) -> list[Any]:

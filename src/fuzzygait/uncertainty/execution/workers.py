@@ -67,12 +67,20 @@ class _ShutdownNoise(logging.Filter):
 
 def dask_setup(worker: object) -> None:
     """Run by Dask in every worker process of the local cluster as it starts: the worker
-    ignores SIGINT, and logs nothing about its own shutdown.  A Ctrl-C in a terminal goes
+    computes with one BLAS/OpenMP thread, ignores SIGINT, and logs nothing about its own
+    shutdown.
+
+    One thread: :data:`WORKER_ENV` says so to a spawned worker before it loads the
+    libraries; a forked one (:func:`~.teardown.start_method`) has them loaded already,
+    with the driver's thread counts, so they are set here (``threadpoolctl``).  A Ctrl-C in a terminal goes
     to the whole process group; the driver (the ``fuzzygait`` command) then shuts the pool
     down itself, so a worker has nothing to do with it but print a traceback of the task
     it was running.  (The worker was born with SIGINT and SIGTERM blocked, before this
     runs: :func:`fuzzygait.uncertainty.execution.teardown.start_loop`; ignoring SIGINT
     keeps it so should anything unblock it.)"""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1)  # kept for the process's life (not used as a context)
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     noise = _ShutdownNoise(worker)
@@ -153,6 +161,21 @@ def model_for(recipe: ModelRecipe) -> tuple[Any, threading.Lock, float]:
             _MODELS[key] = model
             _MODEL_LOCKS[key] = threading.Lock()
         return model, _MODEL_LOCKS[key], seconds
+
+
+def fresh_after_fork() -> None:
+    """In a forked copy of this process (a local cluster's worker,
+    :func:`~.teardown.start_method`): new locks for the model cache.  The models the copy
+    inherits are used as they are (they are the same models); a lock another thread of
+    the original held at the moment of the copy would be held for ever in it."""
+    global _BUILD_LOCK
+    _BUILD_LOCK = threading.Lock()
+    for key in list(_MODEL_LOCKS):
+        _MODEL_LOCKS[key] = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=fresh_after_fork)
 
 
 def clear_model_cache() -> None:
