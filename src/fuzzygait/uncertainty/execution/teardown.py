@@ -174,15 +174,16 @@ def start_method() -> str:
     A spawned worker is a new interpreter that imports ``distributed``, numpy, scipy,
     CasADi and the engine's modules again and loads the compiled models: about 2 s of CPU
     per worker, paid on the same two cores as the work.  A forked one is a copy of this
-    process, which has them all already.  Measured (``benchmarks/RESULTS.md``, issue 40):
-    ``fuzzygait uncertainty`` on the sample trial 11.4 → 9.6 s wall, a report of 10
-    trials on 2 workers 1.49× → 1.83× one.  The answers are bit-identical: a worker
+    process, which has them all already.  Measured (``benchmarks/RESULTS.md``, issue 40,
+    sixth round): ``fuzzygait uncertainty`` on the sample trial 9.4 → 8.1 s wall; a
+    ``fuzzygait report`` of 10 trials on 2 workers 1.41× → 1.63× one.  The answers are
+    bit-identical: a worker
     computes with one BLAS thread either way (:func:`~.workers.dask_setup`).  The copy is
     made while this process's other threads run; what a worker uses of this process's
     state (the model cache and its locks) is made afresh in the copy
     (:func:`~.workers.fresh_after_fork`), and a worker never uses the rest (the scheduler,
-    the client, the terminal).  macOS and Windows keep ``spawn``: their system libraries
-    are not safe to use in a forked copy."""
+    the client, the terminal).  Elsewhere ``spawn`` is kept: Windows has no ``fork``, and
+    macOS's system libraries are not safe to use in a forked copy."""
     import dask
 
     configured = str(dask.config.get("distributed.worker.multiprocessing-method", default="spawn"))

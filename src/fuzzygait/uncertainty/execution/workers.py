@@ -72,12 +72,14 @@ def dask_setup(worker: object) -> None:
 
     One thread: :data:`WORKER_ENV` says so to a spawned worker before it loads the
     libraries; a forked one (:func:`~.teardown.start_method`) has them loaded already,
-    with the driver's thread counts, so they are set here (``threadpoolctl``).  A Ctrl-C in a terminal goes
-    to the whole process group; the driver (the ``fuzzygait`` command) then shuts the pool
-    down itself, so a worker has nothing to do with it but print a traceback of the task
-    it was running.  (The worker was born with SIGINT and SIGTERM blocked, before this
-    runs: :func:`fuzzygait.uncertainty.execution.teardown.start_loop`; ignoring SIGINT
-    keeps it so should anything unblock it.)"""
+    with the driver's thread counts, so they are set here (``threadpoolctl``).
+
+    SIGINT: a Ctrl-C in a terminal goes to the whole process group; the driver (the
+    ``fuzzygait`` command) then shuts the pool down itself, so a worker has nothing to do
+    with it but print a traceback of the task it was running.  (The worker was born with
+    SIGINT and SIGTERM blocked, before this runs:
+    :func:`fuzzygait.uncertainty.execution.teardown.start_loop`; ignoring SIGINT keeps it
+    so should anything unblock it.)"""
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1)  # kept for the process's life (not used as a context)
