@@ -9,6 +9,7 @@ naming the row."""
 
 from __future__ import annotations
 
+import os
 import sys
 
 import numpy as np
@@ -174,6 +175,58 @@ def test_pool_workers_are_forked_with_one_blas_thread_and_free_locks(tmp_path, m
     assert {cmdline for cmdline, _, _ in facts} == {own}
     assert [threads for _, threads, _ in facts] == [1, 1, 1, 1]
     assert all(free for _, _, free in facts)
+
+
+def _flushes_in_time(logger_name: str) -> bool:
+    """Whether a worker's copy of ``logger_name``'s handler can flush within 10 s."""
+    import logging
+    import threading
+
+    handler = logging.getLogger(logger_name).handlers[0]
+    done = threading.Event()
+    threading.Thread(target=lambda: (handler.flush(), done.set()), daemon=True).start()
+    return done.wait(10)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_a_stream_locked_by_a_driver_thread_at_the_copy_is_free_in_the_workers(tmp_path, monkeypatch) -> None:
+    """A driver thread blocked inside a write (its pipe full) holds the stream's lock while
+    the workers are made, as Dask's event loop logging or a progress bar can at that moment:
+    a worker's copy of that logging handler must not wait for that lock for ever (the suite
+    once hung so, in a Dask preload's log line through pytest's log file)."""
+    import array
+    import fcntl
+    import logging
+    import tempfile
+    import termios
+    import threading
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    read_end, write_end = os.pipe()
+    stream = os.fdopen(write_end, "w")
+    logger = logging.getLogger("fuzzygait.test-fork-streams")
+    handler = logging.StreamHandler(stream)
+    logger.addHandler(handler)
+    writer = threading.Thread(target=lambda: (stream.write("x" * (1 << 20)), stream.flush()), daemon=True)
+    writer.start()
+    try:
+        capacity = fcntl.fcntl(read_end, 1032)  # F_GETPIPE_SZ
+        held = array.array("i", [0])
+        while held[0] < capacity:  # until the pipe is full: the writer is blocked inside its write
+            fcntl.ioctl(read_end, termios.FIONREAD, held)
+        with Evaluator(workers=2) as evaluator:
+            answers = evaluator.map(_flushes_in_time, ["fuzzygait.test-fork-streams"] * 2)
+    finally:
+        logger.removeHandler(handler)
+        os.set_blocking(read_end, False)
+        while writer.is_alive():  # let the writer finish
+            try:
+                os.read(read_end, 1 << 16)
+            except BlockingIOError:
+                writer.join(0.01)
+        stream.close()
+        os.close(read_end)
+    assert answers == [True, True]
 
 
 def _slow_square(x: int) -> int:

@@ -14,12 +14,12 @@ outlives the evaluator.
   first instruction on, nor do the processes they start; their parent stops them.
 * **Forked, on Linux** (:func:`start_method`): a worker is a copy of this process, with
   its imports and compiled models, instead of a new interpreter importing them again.
-* **Known from birth**: each worker starts with :data:`POOL_VARIABLE` set to its
-  cluster's token in its environment (:func:`pre_spawn_environ`), so that a worker
-  still starting — of a cluster cut short while starting, whose close closes nothing —
-  is found as surely as a running one (:func:`worker_processes`).  A forked worker's
-  environment as the system shows it is this process's at its own start, so a forked
-  worker is found by the token in the environment its nanny gave it.
+* **Known from birth**: each worker is given :data:`POOL_VARIABLE` set to its cluster's
+  token in its environment (:func:`pre_spawn_environ`), which its nanny keeps from its
+  making on, so that a worker still starting — of a cluster cut short while starting,
+  whose close closes nothing — is found as surely as a running one
+  (:func:`worker_processes`).  The nanny's record is read, not the worker's environment
+  as the system shows it: a forked worker's is this process's at its own start.
 * **Stopped at once when interrupted** (:func:`tear_down`): the worker processes and
   everything they started (a C compiler building a simulator, a C3D reader child) are
   frozen and listed, so that none can escape as an orphan, then killed, then the nannies
@@ -202,7 +202,7 @@ POOL_VARIABLE = "FUZZYGAIT_POOL"
 
 def pre_spawn_environ(token: str) -> dict[str, object]:
     """Dask's environment for new worker processes, with :data:`POOL_VARIABLE` set to
-    ``token`` (so that a worker is known as the cluster's from its first instruction,
+    ``token`` (so that a worker is known as the cluster's from the moment it is made,
     :func:`worker_processes`) and without Dask's ``MALLOC_TRIM_THRESHOLD_``.
 
     Dask sets glibc's trim threshold to 64 KiB in every worker so that memory goes back
@@ -276,77 +276,57 @@ def stop_workers_now(cluster: Any) -> None:
         pass
 
 
-def _marked_children(token: str | None) -> list[Any]:
-    """This process's children that are worker processes of the local cluster ``token``
-    (None: of any), by :data:`POOL_VARIABLE` in the environment they started with: the
-    one the system shows (a spawned worker) or the one their nanny gave them (a forked
-    worker, :func:`_forked_worker_pids`)."""
-    psutil = _psutil()
-    if psutil is None:  # pragma: no cover
-        return []
-    marked = {}
-    for child in psutil.Process().children():
-        try:
-            value = child.environ().get(POOL_VARIABLE)
-        except psutil.Error:
-            continue
-        if value is not None and (token is None or value == token):
-            marked[child.pid] = child
-    for pid in _forked_worker_pids(token):
-        if pid in marked:
-            continue
-        try:
-            child = psutil.Process(pid)
-            if child.ppid() == os.getpid():  # still this process's child (not a pid reused since)
-                marked[pid] = child
-        except psutil.Error:
-            continue
-    return list(marked.values())
-
-
-def _forked_worker_pids(token: str | None) -> list[int]:
-    """The pids of the worker processes of the local cluster ``token`` (None: of any)
-    started by the nannies of this process, running or being started.
-
-    A forked worker's environment in ``/proc`` is this process's as it started, not the
-    one Dask gave the worker; that one is kept by the nanny's ``WorkerProcess`` (its
-    ``env``), whose ``AsyncProcess`` holds the multiprocessing process, whose pid is known
-    as soon as its ``fork`` has returned.  Every nanny of this process is in
-    ``Nanny._instances`` from its making on, whether or not its cluster has listed it."""
+def _marked_nannies(token: str | None) -> list[Any]:
+    """The nannies of this process whose worker environment carries :data:`POOL_VARIABLE`
+    equal to ``token`` (None: any): every nanny is in ``Nanny._instances`` from its making
+    on, whether or not its cluster has listed it, and its ``WorkerProcess`` keeps the
+    environment it gives its worker (``env``)."""
     nanny_module = sys.modules.get("distributed.nanny")
     if nanny_module is None:  # no nanny was ever made here
         return []
-    pids = []
+    marked = []
     for nanny in list(nanny_module.Nanny._instances):
-        worker_process = getattr(nanny, "process", None)
-        environ = getattr(worker_process, "env", None)
+        environ = getattr(getattr(nanny, "process", None), "env", None)
         value = environ.get(POOL_VARIABLE) if isinstance(environ, dict) else None
-        process = getattr(getattr(worker_process, "process", None), "_process", None)  # multiprocessing's
+        if value is not None and (token is None or value == token):
+            marked.append(nanny)
+    return marked
+
+
+def _worker_children(nannies: list[Any]) -> list[Any]:
+    """The worker processes of ``nannies`` (``psutil`` processes) that are children of this
+    process: each nanny's multiprocessing process, whose pid is known as soon as its
+    ``fork`` has returned (before distributed's own record of it)."""
+    psutil = _psutil()
+    if psutil is None:  # pragma: no cover
+        return []
+    found: dict[int, Any] = {}
+    for nanny in nannies:
+        process = getattr(getattr(getattr(nanny, "process", None), "process", None), "_process", None)  # AsyncProcess's
         pid = getattr(getattr(process, "_popen", None), "pid", None)
-        if value is not None and (token is None or value == token) and pid:
-            pids.append(int(pid))
-    return pids
+        if not pid or pid in found:
+            continue
+        try:
+            child = psutil.Process(pid)
+            if child.ppid() == os.getpid():  # a worker is a child of this process (not a pid reused since)
+                found[pid] = child
+        except psutil.Error:
+            continue
+    return list(found.values())
+
+
+def _marked_children(token: str | None) -> list[Any]:
+    """This process's children that are worker processes of the local cluster ``token``
+    (None: of any), by the environment their nannies give them (:func:`_marked_nannies`)."""
+    return _worker_children(_marked_nannies(token))
 
 
 def _worker_roots(cluster: Any, token: str | None) -> list[Any]:
     """The worker processes of a local cluster: its nannies' (running or starting) and
-    this process's children marked with ``token`` (one being started right now)."""
-    psutil = _psutil()
-    if psutil is None:  # pragma: no cover
-        return []
-    roots = {p.pid: p for p in (_marked_children(token) if token else [])}
-    for nanny in _nannies(cluster) if cluster is not None else []:
-        process = getattr(getattr(nanny, "process", None), "process", None)  # distributed's AsyncProcess
-        pid = getattr(process, "pid", None)
-        if not pid or pid in roots or not getattr(process, "is_alive", lambda: True)():
-            continue
-        try:
-            root = psutil.Process(pid)
-            if root.ppid() == os.getpid():  # a worker is a child of this process (not a pid reused since)
-                roots[pid] = root
-        except psutil.Error:
-            continue
-    return list(roots.values())
+    those of every nanny marked with ``token`` (a cluster distributed has not listed)."""
+    nannies = {id(n): n for n in [*(_marked_nannies(token) if token else []),
+                                  *(_nannies(cluster) if cluster is not None else [])]}  # fmt: skip
+    return _worker_children(list(nannies.values()))
 
 
 def worker_processes(cluster: Any, token: str | None = None, freeze: bool = False) -> list[Any]:

@@ -167,13 +167,58 @@ def model_for(recipe: ModelRecipe) -> tuple[Any, threading.Lock, float]:
 
 def fresh_after_fork() -> None:
     """In a forked copy of this process (a local cluster's worker,
-    :func:`~.teardown.start_method`): new locks for the model cache.  The models the copy
-    inherits are used as they are (they are the same models); a lock another thread of
-    the original held at the moment of the copy would be held for ever in it."""
+    :func:`~.teardown.start_method`): new locks for the model cache and new file objects
+    for the streams it writes to (:func:`_fresh_streams`).  The models the copy inherits
+    are used as they are (they are the same models); a lock another thread of the
+    original held at the moment of the copy would be held for ever in it."""
     global _BUILD_LOCK
     _BUILD_LOCK = threading.Lock()
     for key in list(_MODEL_LOCKS):
         _MODEL_LOCKS[key] = threading.Lock()
+    _fresh_streams()
+
+
+#: The copy's inherited stream objects, replaced by :func:`_fresh_streams` and kept so
+#: that none is ever closed (its close would flush through its inherited lock).
+_INHERITED_STREAMS: list[object] = []
+
+
+def _fresh_streams() -> None:
+    """``sys.stdout``, ``sys.stderr`` and every logging handler's stream replaced by a new
+    file object on a duplicate of the same descriptor, buffer empty.
+
+    A buffered file's lock is taken by whichever thread writes through it: another thread
+    of the original (Dask's event loop logging, a progress bar) writing at the moment of
+    the copy left it held for ever in the copy, whose first log line or warning then
+    waited for ever (seen in the test suite: a worker stuck in its Dask preload's log line
+    through pytest's log file handler).  Streams without a descriptor (``StringIO``, a
+    capture) hold no such lock and are kept."""
+    import sys
+
+    made: dict[int, object] = {}
+
+    def fresh(stream: Any) -> Any:
+        if id(stream) in made:
+            return made[id(stream)]
+        try:
+            descriptor = stream.fileno()
+            lines = bool(getattr(stream, "line_buffering", False))
+            copy = os.fdopen(os.dup(descriptor), "w", buffering=1 if lines else -1, encoding=stream.encoding,
+                             errors=stream.errors)  # fmt: skip
+        except (AttributeError, OSError, ValueError):  # no descriptor, or not a text stream
+            return stream
+        _INHERITED_STREAMS.append(stream)
+        made[id(stream)] = copy
+        return copy
+
+    sys.stdout, sys.stderr = fresh(sys.stdout), fresh(sys.stderr)
+    for reference in list(logging._handlerList):  # type: ignore[attr-defined]  # weak references to every handler
+        handler = reference()
+        if isinstance(handler, logging.StreamHandler) and handler.stream is not None:
+            try:
+                handler.stream = fresh(handler.stream)  # not setStream: it flushes the old one
+            except AttributeError:  # a handler whose stream is looked up (logging's last resort: sys.stderr)
+                continue
 
 
 if hasattr(os, "register_at_fork"):
