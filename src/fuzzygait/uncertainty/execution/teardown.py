@@ -180,9 +180,10 @@ def start_method() -> str:
     bit-identical: a worker
     computes with one BLAS thread either way (:func:`~.workers.dask_setup`).  The copy is
     made while this process's other threads run; what a worker uses of this process's
-    state (the model cache and its locks) is made afresh in the copy
+    state with a lock another thread may hold at that moment (the model cache, the
+    standard streams and the logging handlers' streams) is made afresh in the copy
     (:func:`~.workers.fresh_after_fork`), and a worker never uses the rest (the scheduler,
-    the client, the terminal).  Elsewhere ``spawn`` is kept: Windows has no ``fork``, and
+    the client).  Elsewhere ``spawn`` is kept: Windows has no ``fork``, and
     macOS's system libraries are not safe to use in a forked copy."""
     import dask
 
