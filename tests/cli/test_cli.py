@@ -3,13 +3,16 @@ checks in this process, ``support.run_here``)."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from support import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
 
 from fuzzygait.io import read_c3d, write_c3d
+from support import SAMPLE_DATA, SHARED_DATA, assert_one_line_error, needs_shared, run, run_here, shared_file
 
 
 @needs_shared
@@ -153,6 +156,22 @@ def test_version_and_help() -> None:
     assert result.returncode == 0
     for command in ("info", "preprocess", "sample-data"):
         assert command in result.stdout
+
+
+def test_the_command_list_gives_each_command_one_row() -> None:
+    """``fuzzygait --help`` at 80 columns: every command's summary fits its row (a
+    command's full description is its own ``--help``)."""
+    from typer.main import get_command
+
+    from fuzzygait.cli.app import app
+
+    names = sorted(get_command(app).commands)  # type: ignore[attr-defined]
+    assert len(names) >= 14
+    result = subprocess.run([sys.executable, "-m", "fuzzygait", "--help"], capture_output=True, text=True,
+                            env={**os.environ, "COLUMNS": "80", "TERM": "dumb"}, timeout=60)  # fmt: skip
+    listing = result.stdout.split("Commands")[1].split("╰")[0]
+    rows = listing.splitlines()[1:]  # after the box's top line
+    assert sorted(row.split()[1] for row in rows) == names, result.stdout
 
 
 @pytest.mark.parametrize("args", [("preprocess",), ("info",)])

@@ -22,7 +22,7 @@ from fuzzygait.cli.options import (
 _PLANES = {"X": "sagittal", "Y": "frontal", "Z": "transverse"}
 
 
-@app.command()
+@app.command(short_help="Our joint angles against the ones the file stores.")
 @with_option_groups
 def compare(
     dynamic: Annotated[Path, typer.Argument(metavar="TRIAL.c3d", help="A trial holding another tool's angles.")],

@@ -10,7 +10,7 @@ import typer
 from fuzzygait.cli.app import app, out, user_errors
 
 
-@app.command("sample-data")
+@app.command("sample-data", short_help="Regenerate the synthetic sample trials into a folder.")
 def sample_data(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder to write.")] = Path(
         "sample_data"

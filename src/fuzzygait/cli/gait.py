@@ -32,6 +32,7 @@ from fuzzygait.cli.options import (
 )
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import FindingKind
+from fuzzygait.core.output_paths import check_c3d_path, check_subject_path, check_table_path
 
 if TYPE_CHECKING:
     from fuzzygait.io.subject import SubjectParameters
@@ -39,7 +40,7 @@ if TYPE_CHECKING:
 
 
 # --------------------------------------------------------------------------- info
-@app.command()
+@app.command(short_help="Summarise C3D files: rate, frames, markers, gaps, events.")
 def info(
     files: Annotated[list[Path], typer.Argument(help="C3D files to summarise.")],
 ) -> None:
@@ -65,7 +66,7 @@ def info(
 
 
 # --------------------------------------------------------------------------- preprocess
-@app.command()
+@app.command(short_help="Fill marker gaps, low-pass filter (zero-lag Butterworth).")
 def preprocess(
     input_file: Annotated[Path, typer.Argument(metavar="IN.c3d", help="Trial to clean.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Output C3D file.")],
@@ -85,12 +86,11 @@ def preprocess(
     no_filter: Annotated[bool, typer.Option("--no-filter", help="Fill gaps only.")] = False,
 ) -> None:
     """Fill marker gaps (spline or inter-marker pattern) and low-pass filter (Butterworth, zero lag)."""
-    from fuzzygait.mocap.gaps import METHODS, methods_used
-    from fuzzygait.workflows.angles import Preprocessing, preprocess_file
-
     with user_errors():
-        if out_file.suffix.lower() != ".c3d":
-            raise FuzzyGaitError(f"{out_file}: --out must name a .c3d file")
+        check_c3d_path(out_file)
+        from fuzzygait.mocap.gaps import METHODS, methods_used
+        from fuzzygait.workflows.angles import Preprocessing, preprocess_file
+
         if fill_method not in METHODS:
             raise FuzzyGaitError(f"--fill-method must be one of {', '.join(METHODS)}; got {fill_method!r}")
         options = Preprocessing(max_gap=max_gap, cutoff=cutoff, filter=not no_filter, fill_method=fill_method,
@@ -123,7 +123,7 @@ _CALIBRATED = (("thigh_rotation", "ThighRotation"), ("shank_rotation", "ShankRot
                ("static_plant_flex", "StaticPlantFlex"), ("static_rot_off", "StaticRotOff"))  # fmt: skip
 
 
-@app.command()
+@app.command(short_help="Static calibration to a subject file (.toml or .vsk).")
 @with_option_groups
 def calibrate(
     static: Annotated[Path, typer.Argument(metavar="STATIC.c3d", help="Static (standing) trial.")],
@@ -153,11 +153,12 @@ def calibrate(
     the TOML file; beside a .vsk in OUT.clusters.toml). Gaps are filled; a static trial is
     not low-pass filtered (each offset is a mean over its frames). `angles --subject OUT`
     then gives what `angles --static STATIC.c3d` gives."""
-    from fuzzygait.workflows.angles import Preprocessing
-    from fuzzygait.workflows.calibrate import calibrate_to_file
-
     with user_errors():
+        check_subject_path(out_file)
         check_knee_ankle_centres(knee_ankle_centres)
+        from fuzzygait.workflows.angles import Preprocessing
+        from fuzzygait.workflows.calibrate import calibrate_to_file
+
         written = calibrate_to_file(static, out_file, subject_file=subject, marker_diameter=marker_diameter,
                                     preprocessing=Preprocessing(max_gap=max_gap), flat_foot=flat_foot,
                                     model=model, knee_ankle_centres=knee_ankle_centres)  # fmt: skip
@@ -221,7 +222,7 @@ class AngleFileOptions:
 DEFAULT_ANGLE_FILES = AngleFileOptions()
 
 
-@app.command()
+@app.command(short_help="Joint angles of a walking trial (Plug-in Gait, CGM 2.x).")
 @with_option_groups
 def angles(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
@@ -244,16 +245,15 @@ def angles(
     version (Plug-in Gait for a Plug-in Gait marker set). Every output names the model:
     a last column `model` in the tables (Parquet: also its metadata), the FUZZYGAIT:MODEL
     parameter in the C3D."""
-    from fuzzygait.io.tables import check_table_path
-    from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
-    from fuzzygait.workflows.trial_inputs import TrialInputs
-
     with user_errors():
         for path, option in ((files.out_table, "--out"), (files.cycles, "--cycles")):
             if path is not None:
                 check_table_path(path, option)
-        if files.c3d_out is not None and files.c3d_out.suffix.lower() != ".c3d":
-            raise FuzzyGaitError(f"{files.c3d_out}: --c3d-out must name a .c3d file")
+        if files.c3d_out is not None:
+            check_c3d_path(files.c3d_out, "--c3d-out")
+        from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
+        from fuzzygait.workflows.trial_inputs import TrialInputs
+
         output_suffix(files.suffix, "cgm1.0")  # checked before any work
         check_knee_ankle_centres(knee_ankle_centres)
         trial = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
@@ -289,7 +289,7 @@ def print_run_summary(run: AnglesRun) -> None:
 
 
 # --------------------------------------------------------------------------- demo
-@app.command()
+@app.command(short_help="The main job on the bundled sample data.")
 def demo(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for the results.")] = Path(
         "results/demo"

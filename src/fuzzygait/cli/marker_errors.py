@@ -123,7 +123,7 @@ def _check_workers(workers: int) -> None:
 
 
 # --------------------------------------------------------------------------- uncertainty
-@app.command()
+@app.command(short_help="Fuzzy joint angles from fuzzy marker errors.")
 @with_option_groups
 def uncertainty(
     dynamic: Annotated[Path, typer.Argument(metavar="DYNAMIC.c3d", help="Walking trial.")],
@@ -140,18 +140,16 @@ def uncertainty(
     model version of the angles (--model; the dataset's `model` attribute names it), the
     allowable marker error of each (--tolerance; its refined α-levels saved too) and the
     flexion bands of each error source alone (--per-source, the default)."""
-    from fuzzygait.uncertainty.storage import SUFFIXES
-    from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
-    from fuzzygait.workflows.trial_inputs import TrialInputs
+    from fuzzygait.workflows.outputs import check_output_suffixes
 
     with user_errors():
-        if out_file.suffix.lower() not in SUFFIXES:
-            raise FuzzyGaitError(f"{out_file}: --out must end in .nc or .zarr")
-        if rrd is not None and rrd.suffix.lower() != ".rrd":
-            raise FuzzyGaitError(f"{rrd}: --rrd must end in .rrd")
+        check_output_suffixes(out_file, rrd, {})
         engine.check()
         check_model(model)
         selected = parse_angles(marker_errors.angle_names)
+        from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
+        from fuzzygait.workflows.trial_inputs import TrialInputs
+
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=parse_alphas(marker_errors.alphas), angles=selected,
                                               method=engine.method, workers=engine.workers,
@@ -274,7 +272,7 @@ def kinetics_text(kinetics: xr.Dataset) -> str:
 
 
 # --------------------------------------------------------------------------- report
-@app.command()
+@app.command(short_help="Clinicians' HTML report of whole sessions.")
 @with_option_groups
 def report(
     inputs: Annotated[

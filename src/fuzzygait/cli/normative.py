@@ -11,7 +11,7 @@ from fuzzygait.cli.app import EXIT_USER_ERROR, app, err, out, user_errors
 from fuzzygait.cli.options import ModelOption, StaticOption, SubjectOption, check_model
 
 
-@app.command("normative")
+@app.command("normative", short_help="Normative mean ± SD per % gait cycle from reference trials.")
 def normative(
     inputs: Annotated[
         list[Path],
@@ -38,16 +38,17 @@ def normative(
     others are used.
     """
     from fuzzygait.core.errors import FuzzyGaitError
-    from fuzzygait.gait.cycles import gait_cycles
-    from fuzzygait.gait.normative import build_normative, normalised_cycles, write_normative
-    from fuzzygait.workflows.angles import run_angles
-    from fuzzygait.workflows.report_folder import run_kinetic_cycles
-    from fuzzygait.workflows.session import find_sessions
 
     with user_errors():
-        check_model(model)
         if out_file.suffix.lower() != ".csv":
             raise FuzzyGaitError(f"{out_file}: the normative file is a .csv file")
+        check_model(model)
+        from fuzzygait.gait.cycles import gait_cycles
+        from fuzzygait.gait.normative import build_normative, normalised_cycles, write_normative
+        from fuzzygait.workflows.angles import run_angles
+        from fuzzygait.workflows.report_folder import run_kinetic_cycles
+        from fuzzygait.workflows.session import find_sessions
+
         trials = [t for s in find_sessions(inputs, static, subject) for t in s.trials]
     stacks, kinetic_stacks, failures, names = [], [], 0, []
     for trial in trials:

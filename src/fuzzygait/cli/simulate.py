@@ -29,7 +29,7 @@ from fuzzygait.core.errors import FuzzyGaitError
 if TYPE_CHECKING:
     import xarray as xr
 
-@app.command()
+@app.command(short_help="Simulate the leg with the prosthesis blade.")
 @with_option_groups
 def simulate(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
@@ -53,19 +53,20 @@ def simulate(
     repeated with 2, 4 or 8 sub-steps per --dt. Nothing is written when the simulation
     fails; the error names the options that fix it.
     """
-    from fuzzygait.mechanics.presets import thesis_setting_note
-    from fuzzygait.workflows.fuzzy_dynamics import (
-        SimulationOutputs,
-        check_scenario,
-        command_setup,
-        simulate_leg,
-        simulation_timing,
-    )
     from fuzzygait.workflows.outputs import check_output_suffixes
 
     with user_errors():
-        check_scenario(scenario)
         check_output_suffixes(out_file, rrd, {"--plot": plot})
+        from fuzzygait.mechanics.presets import thesis_setting_note
+        from fuzzygait.workflows.fuzzy_dynamics import (
+            SimulationOutputs,
+            check_scenario,
+            command_setup,
+            simulate_leg,
+            simulation_timing,
+        )
+
+        check_scenario(scenario)
         if leg.nodes is not None and leg.nodes < 2:
             raise FuzzyGaitError(f"--nodes must be at least 2; got {leg.nodes}")
         step, span = simulation_timing(scenario, leg.dt, leg.duration)
@@ -85,7 +86,7 @@ def simulate(
     _print_written(written)
 
 
-@app.command("fuzzy-sim")
+@app.command("fuzzy-sim", short_help="Fuzzy forward dynamics: Graph Follower hulls.")
 @with_option_groups
 def fuzzy_sim(
     scenario: Annotated[str, typer.Argument(metavar="SCENARIO", help="swing or stance (thesis Tables 4.3 / 4.4).")],
@@ -104,21 +105,22 @@ def fuzzy_sim(
 
     Before it starts, one line estimates the work: at most how many forward simulations
     (the novelty check skips most) and how long one takes (its first steps timed)."""
-    from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
-    from fuzzygait.workflows.fuzzy_dynamics import (
-        FuzzySimOutputs,
-        FuzzySimRequest,
-        check_scenario,
-        command_setup,
-        command_strategy,
-        fuzzy_simulation,
-    )
     from fuzzygait.workflows.outputs import check_output_suffixes
 
     with user_errors():
-        check_scenario(scenario)
         plots = {"--plot": outputs.plot, "--parameter-plot": outputs.parameter_plot}
         check_output_suffixes(out_file, outputs.rrd, plots)
+        from fuzzygait.mechanics.fuzzy_dynamics import parse_fuzzy
+        from fuzzygait.workflows.fuzzy_dynamics import (
+            FuzzySimOutputs,
+            FuzzySimRequest,
+            check_scenario,
+            command_setup,
+            command_strategy,
+            fuzzy_simulation,
+        )
+
+        check_scenario(scenario)
         spreads = parse_fuzzy(fuzzy)
         levels = parse_alphas(gfa.alphas)
         setup, note = command_setup(scenario, leg.nodes, leg.dt, leg.duration, parse_overrides(leg.overrides or []),
@@ -140,7 +142,7 @@ _RECORDED = {"parameter": "frv", "value": "value", "disc": "disc", "alphas": "al
              "dt": "dt", "duration": "duration", "scheme": "scheme"}  # fmt: skip
 
 
-@app.command("frv-sim")
+@app.command("frv-sim", short_help="FRV-GFA: a leg parameter as a fuzzy random variable.")
 @with_option_groups
 def frv_sim(
     ctx: typer.Context,

@@ -10,9 +10,10 @@ import typer
 from rich.table import Table
 
 from fuzzygait.cli.app import EXIT_USER_ERROR, app, err, out, user_errors
+from fuzzygait.core.output_paths import check_table_path
 
 
-@app.command("gait-parameters")
+@app.command("gait-parameters", short_help="Spatio-temporal parameters as Vicon Nexus names them.")
 def gait_parameters(
     files: Annotated[list[Path], typer.Argument(metavar="TRIAL.c3d...", help="Walking trials with gait events.")],
     out_file: Annotated[Path, typer.Option("--out", "-o", help="Table to write (.csv or .parquet).")],
@@ -34,10 +35,11 @@ def gait_parameters(
     lengths from the toe markers at the foot strikes. One row per trial and side, units
     in the column names. A trial that fails gets one error line; the others are written.
     """
-    from fuzzygait.gait.spatiotemporal import NAMES, column_name
-    from fuzzygait.workflows.gait_parameters import gait_parameters_files
-
     with user_errors():
+        check_table_path(out_file)
+        from fuzzygait.gait.spatiotemporal import NAMES, column_name
+        from fuzzygait.workflows.gait_parameters import gait_parameters_files
+
         run = gait_parameters_files(files, out_file, cycles)
     for message in run.failures:
         err.print(f"fuzzygait: error: {message}", markup=False)

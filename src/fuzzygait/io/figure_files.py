@@ -17,12 +17,10 @@ from pathlib import Path
 from typing import Protocol
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.output_paths import FIGURE_SUFFIXES
 from fuzzygait.io.atomic import atomic_output
 
 __all__ = ["FIGURE_SUFFIXES", "SavableFigure", "save_figure", "save_figure_files"]
-
-#: Suffixes (formats) :func:`save_figure` writes.
-FIGURE_SUFFIXES = ("png", "svg", "pdf")
 
 
 class SavableFigure(Protocol):

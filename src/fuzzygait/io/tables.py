@@ -17,20 +17,11 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.core.options import Option
+from fuzzygait.core.output_paths import check_table_path
 from fuzzygait.io.atomic import atomic_output
 
-TABLE_SUFFIXES = (".csv", ".parquet")
 #: Parquet schema metadata key prefix of :func:`write_table`'s ``metadata``.
 METADATA_PREFIX = "fuzzygait."
-
-
-def check_table_path(path: str | os.PathLike[str], option: Option | str = Option.OUT) -> Path:
-    """``path`` if its suffix is a table format, else a clear error naming ``option``."""
-    path = Path(path)
-    if path.suffix.lower() not in TABLE_SUFFIXES:
-        raise FuzzyGaitError(f"{path}: {option} must end in .csv or .parquet")
-    return path
 
 
 def write_table(

@@ -20,14 +20,13 @@ from pathlib import Path
 import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.output_paths import DATASET_SUFFIXES
 from fuzzygait.io.atomic import atomic_output, replace_folder, temporary_folder
-
-SUFFIXES = (".nc", ".zarr")
 
 
 def _kind(path: Path) -> str:
     suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
+    if suffix not in DATASET_SUFFIXES:
         raise FuzzyGaitError(f"{path}: results are saved as .nc (netCDF) or .zarr")
     return suffix
 

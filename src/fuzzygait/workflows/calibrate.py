@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzygait import __version__
-from fuzzygait.core.errors import FuzzyGaitError, ParameterError
+from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import Finding
 from fuzzygait.core.options import Option
+from fuzzygait.core.output_paths import check_subject_path
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidecar
 from fuzzygait.io.subject import write_subject
@@ -39,15 +40,6 @@ from fuzzygait.workflows.subject_resolution import (
     settle_marker_diameter,
     subject_warnings,
 )
-
-#: Subject file types ``calibrate`` writes.
-SUBJECT_SUFFIXES = (".toml", ".vsk")
-
-
-def check_subject_path(path: Path, option: Option | str = Option.OUT) -> None:
-    """Refuse an output path that is not ``.toml`` or ``.vsk`` (before any work)."""
-    if path.suffix.lower() not in SUBJECT_SUFFIXES:
-        raise FuzzyGaitError(f"{path}: {option} must name a .toml or .vsk subject file")
 
 
 def _has_all(trial: Trial, names: tuple[str, ...]) -> bool:

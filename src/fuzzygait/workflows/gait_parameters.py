@@ -15,6 +15,7 @@ import pandas as pd
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.options import Option
+from fuzzygait.core.output_paths import check_table_path
 from fuzzygait.gait.spatiotemporal import (
     SELECTIONS,
     TrialParameters,
@@ -22,7 +23,7 @@ from fuzzygait.gait.spatiotemporal import (
     spatiotemporal_parameters,
 )
 from fuzzygait.io import read_c3d
-from fuzzygait.io.tables import check_table_path, write_table
+from fuzzygait.io.tables import write_table
 from fuzzygait.mocap.sanity import check_trial
 
 __all__ = ["GaitParametersRun", "gait_parameters_files"]

@@ -1,4 +1,4 @@
-"""Output files of the simulation workflows: their suffixes checked before any work, and
+"""Output files of the workflows: their suffixes checked before any work, and
 all of them written or none."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ from pathlib import Path
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.options import Option
+from fuzzygait.core.output_paths import DATASET_SUFFIXES, FIGURE_SUFFIXES
 
 __all__ = ["check_output_suffixes", "write_all_or_none"]
 
@@ -17,13 +18,11 @@ Writer = tuple[Path | None, Callable[[Path], object]]
 
 
 def check_output_suffixes(out_file: Path, rrd: Path | None, plots: Mapping[str, Path | None]) -> None:
-    """One clear error, before any work, for an output path with the wrong suffix
-    (``plots`` maps the option name to its path)."""
-    from fuzzygait.io.figure_files import FIGURE_SUFFIXES
-    from fuzzygait.uncertainty.storage import SUFFIXES
-
-    if out_file.suffix.lower() not in SUFFIXES:
-        raise FuzzyGaitError(f"{out_file}: {Option.OUT} must end in {' or '.join(SUFFIXES)}")
+    """One clear error, before any work (and before the imports of the libraries that
+    write the files), for an output path with the wrong suffix (``plots`` maps the option
+    name to its path)."""
+    if out_file.suffix.lower() not in DATASET_SUFFIXES:
+        raise FuzzyGaitError(f"{out_file}: {Option.OUT} must end in {' or '.join(DATASET_SUFFIXES)}")
     if rrd is not None and rrd.suffix.lower() != ".rrd":
         raise FuzzyGaitError(f"{rrd}: {Option.RRD} must end in .rrd")
     for option, plot in plots.items():
