@@ -18,6 +18,7 @@ from fuzzygait.cli.options import (
     check_knee_ankle_centres,
     with_option_groups,
 )
+from fuzzygait.core.paths import check_c3d_input, check_table_path
 
 _PLANES = {"X": "sagittal", "Y": "frontal", "Z": "transverse"}
 
@@ -40,11 +41,15 @@ def compare(
     Gait, pyCGM2's): RMS and largest difference per component, ours computed on the
     file's own markers with the same subject parameters; differences over 0.1° flagged
     with their likeliest cause (marker diameter, subject values, static offsets)."""
-    from fuzzygait.workflows.compare import compare_trial
-    from fuzzygait.workflows.trial_inputs import TrialInputs
-
     with user_errors():
+        if out_table is not None:
+            check_table_path(out_table)
+        check_c3d_input(dynamic)
+        calibration.check_files()
         check_knee_ankle_centres(knee_ankle_centres)
+        from fuzzygait.workflows.compare import compare_trial
+        from fuzzygait.workflows.trial_inputs import TrialInputs
+
         inputs = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
                              preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
                              marker_diameter=calibration.marker_diameter, model=model,

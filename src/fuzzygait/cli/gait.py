@@ -32,7 +32,13 @@ from fuzzygait.cli.options import (
 )
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import FindingKind
-from fuzzygait.core.output_paths import check_c3d_path, check_subject_path, check_table_path
+from fuzzygait.core.paths import (
+    check_c3d_input,
+    check_c3d_path,
+    check_subject_input,
+    check_subject_path,
+    check_table_path,
+)
 
 if TYPE_CHECKING:
     from fuzzygait.io.subject import SubjectParameters
@@ -88,6 +94,7 @@ def preprocess(
     """Fill marker gaps (spline or inter-marker pattern) and low-pass filter (Butterworth, zero lag)."""
     with user_errors():
         check_c3d_path(out_file)
+        check_c3d_input(input_file)
         from fuzzygait.mocap.gaps import METHODS, methods_used
         from fuzzygait.workflows.angles import Preprocessing, preprocess_file
 
@@ -155,6 +162,9 @@ def calibrate(
     then gives what `angles --static STATIC.c3d` gives."""
     with user_errors():
         check_subject_path(out_file)
+        check_c3d_input(static)
+        if subject is not None:
+            check_subject_input(subject)
         check_knee_ankle_centres(knee_ankle_centres)
         from fuzzygait.workflows.angles import Preprocessing
         from fuzzygait.workflows.calibrate import calibrate_to_file
@@ -251,6 +261,8 @@ def angles(
                 check_table_path(path, option)
         if files.c3d_out is not None:
             check_c3d_path(files.c3d_out, "--c3d-out")
+        check_c3d_input(dynamic)
+        calibration.check_files()
         from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
         from fuzzygait.workflows.trial_inputs import TrialInputs
 

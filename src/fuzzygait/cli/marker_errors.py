@@ -27,6 +27,7 @@ from fuzzygait.cli.options import (
     with_option_groups,
 )
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.paths import check_c3d_input
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -144,6 +145,8 @@ def uncertainty(
 
     with user_errors():
         check_output_suffixes(out_file, rrd, {})
+        check_c3d_input(dynamic)
+        calibration.check_files()
         engine.check()
         check_model(model)
         selected = parse_angles(marker_errors.angle_names)

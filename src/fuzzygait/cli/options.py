@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Annotated, Any, get_type_hints
 import typer
 
 from fuzzygait.core.errors import FuzzyGaitError
+from fuzzygait.core.paths import check_c3d_input, check_subject_input
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -165,6 +166,13 @@ class CalibrationOptions:
     subject: SubjectOption = None
     marker_diameter: MarkerDiameterOption = None
     flat_foot: FlatFootOption = None
+
+    def check_files(self) -> None:
+        """One line, before any work, for a ``--static`` or ``--subject`` that is not there."""
+        if self.static is not None:
+            check_c3d_input(self.static)
+        if self.subject is not None:
+            check_subject_input(self.subject)
 
 
 DEFAULT_CALIBRATION = CalibrationOptions()

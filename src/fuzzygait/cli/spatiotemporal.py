@@ -10,7 +10,7 @@ import typer
 from rich.table import Table
 
 from fuzzygait.cli.app import EXIT_USER_ERROR, app, err, out, user_errors
-from fuzzygait.core.output_paths import check_table_path
+from fuzzygait.core.paths import check_table_path
 
 
 @app.command("gait-parameters", short_help="Spatio-temporal parameters as Vicon Nexus names them.")

@@ -31,6 +31,7 @@ import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.paths import check_c3d_input
 from fuzzygait.core.trial import OUTPUT_UNITS, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
@@ -106,13 +107,7 @@ def read_c3d(path: str | os.PathLike[str]) -> Trial:
         C3DError: the file is missing, unreadable, corrupt or inconsistent; the message
             names the file and the problem.
     """
-    path = Path(path)
-    if not path.exists():
-        raise _fail(path, "no such file; check the path")
-    if not path.is_file():
-        raise _fail(path, "is not a file; give a .c3d file")
-    if path.stat().st_size < 512:
-        raise _fail(path, "too short to be a C3D file (under 512 bytes); the file is damaged")
+    path = check_c3d_input(path)
     try:
         raw = decode(path)
     except BackendError as exc:

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Protocol
 
 from fuzzygait.core.errors import FuzzyGaitError, ParameterError
-from fuzzygait.core.output_paths import FIGURE_SUFFIXES
+from fuzzygait.core.paths import FIGURE_SUFFIXES
 from fuzzygait.io.atomic import atomic_output
 
 __all__ = ["FIGURE_SUFFIXES", "SavableFigure", "save_figure", "save_figure_files"]

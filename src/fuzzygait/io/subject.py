@@ -32,6 +32,7 @@ from xml.sax.saxutils import escape as xml_escape
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.names import Side
 from fuzzygait.core.options import Option
+from fuzzygait.core.paths import check_subject_input
 from fuzzygait.core.subject import (  # the definitions; the names importable from here too
     ANGLE_FIELDS,
     DEFAULT_MARKER_DIAMETER,
@@ -182,9 +183,6 @@ def _vicon_name(name: str) -> str:
     return name
 
 
-_KINDS = ".toml, .vsk, a Vicon Nexus or pyCGM2 .mp or a QTM session.xml"
-
-
 def is_subject_file(path: Path) -> bool:
     """``path`` is a subject file a session folder may hold: ``.toml``, ``.vsk``, ``.mp``
     (Vicon Nexus' or pyCGM2's) or QTM's ``session.xml`` (other XML files of a folder are
@@ -210,14 +208,10 @@ def read_subject(path: str | os.PathLike[str]) -> SubjectParameters:
         ParameterError: a folder, a missing or unreadable file, another extension, or
             implausible parameters (one line naming the file and the parameter).
     """
-    if Path(path).is_dir():
-        raise ParameterError(f"{path}: is a folder, not a subject file; give the subject file itself ({_KINDS})")
-    suffix = Path(path).suffix.lower()
+    suffix = check_subject_input(path).suffix.lower()
     from fuzzygait.io.subject_mp import read_mp  # imports this module: here, not at the top
 
     readers = {".toml": read_subject_toml, ".vsk": read_vsk, ".mp": read_mp, ".xml": read_qtm_session}
-    if suffix not in readers:
-        raise ParameterError(f"{path}: unknown subject file type {suffix!r}; use {_KINDS}")
     return readers[suffix](path)
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.core.output_paths import check_table_path
+from fuzzygait.core.paths import check_table_path
 from fuzzygait.io.atomic import atomic_output
 
 #: Parquet schema metadata key prefix of :func:`write_table`'s ``metadata``.

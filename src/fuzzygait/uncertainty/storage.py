@@ -20,7 +20,7 @@ from pathlib import Path
 import xarray as xr
 
 from fuzzygait.core.errors import FuzzyGaitError
-from fuzzygait.core.output_paths import DATASET_SUFFIXES
+from fuzzygait.core.paths import DATASET_SUFFIXES
 from fuzzygait.io.atomic import atomic_output, replace_folder, temporary_folder
 
 

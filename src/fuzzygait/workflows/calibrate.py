@@ -19,7 +19,7 @@ from fuzzygait import __version__
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import Finding
 from fuzzygait.core.options import Option
-from fuzzygait.core.output_paths import check_subject_path
+from fuzzygait.core.paths import check_subject_path
 from fuzzygait.io import Trial, read_c3d
 from fuzzygait.io.calibration_table import sidecar_path, write_calibration_sidecar
 from fuzzygait.io.subject import write_subject

@@ -15,7 +15,7 @@ import pandas as pd
 from fuzzygait import __version__
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.options import Option
-from fuzzygait.core.output_paths import check_table_path
+from fuzzygait.core.paths import check_table_path
 from fuzzygait.gait.spatiotemporal import (
     SELECTIONS,
     TrialParameters,

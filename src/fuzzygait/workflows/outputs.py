@@ -9,7 +9,7 @@ from pathlib import Path
 
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.options import Option
-from fuzzygait.core.output_paths import DATASET_SUFFIXES, FIGURE_SUFFIXES
+from fuzzygait.core.paths import DATASET_SUFFIXES, FIGURE_SUFFIXES
 
 __all__ = ["check_output_suffixes", "write_all_or_none"]
 
