@@ -44,9 +44,9 @@ def compare(
     with user_errors():
         if out_table is not None:
             check_table_path(out_table)
+        check_knee_ankle_centres(knee_ankle_centres)
         check_c3d_input(dynamic)
         calibration.check_files()
-        check_knee_ankle_centres(knee_ankle_centres)
         from fuzzygait.workflows.compare import compare_trial
         from fuzzygait.workflows.trial_inputs import TrialInputs
 

@@ -162,10 +162,10 @@ def calibrate(
     then gives what `angles --static STATIC.c3d` gives."""
     with user_errors():
         check_subject_path(out_file)
+        check_knee_ankle_centres(knee_ankle_centres)
         check_c3d_input(static)
         if subject is not None:
             check_subject_input(subject)
-        check_knee_ankle_centres(knee_ankle_centres)
         from fuzzygait.workflows.angles import Preprocessing
         from fuzzygait.workflows.calibrate import calibrate_to_file
 
@@ -261,13 +261,13 @@ def angles(
                 check_table_path(path, option)
         if files.c3d_out is not None:
             check_c3d_path(files.c3d_out, "--c3d-out")
+        check_knee_ankle_centres(knee_ankle_centres)
         check_c3d_input(dynamic)
         calibration.check_files()
         from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
         from fuzzygait.workflows.trial_inputs import TrialInputs
 
         output_suffix(files.suffix, "cgm1.0")  # checked before any work
-        check_knee_ankle_centres(knee_ankle_centres)
         trial = TrialInputs(dynamic, static=calibration.static, subject_file=calibration.subject,
                             preprocessing=preprocessing.preprocessing(), flat_foot=calibration.flat_foot,
                             marker_diameter=calibration.marker_diameter, model=model,

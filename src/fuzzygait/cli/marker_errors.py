@@ -145,11 +145,11 @@ def uncertainty(
 
     with user_errors():
         check_output_suffixes(out_file, rrd, {})
-        check_c3d_input(dynamic)
-        calibration.check_files()
         engine.check()
         check_model(model)
         selected = parse_angles(marker_errors.angle_names)
+        check_c3d_input(dynamic)
+        calibration.check_files()
         from fuzzygait.workflows.marker_uncertainty import MarkerErrorRequest, MarkerErrorSettings, analyse_to_files
         from fuzzygait.workflows.trial_inputs import TrialInputs
 
