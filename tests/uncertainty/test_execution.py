@@ -249,6 +249,7 @@ def test_shared_array_inputs_are_memory_mapped_by_the_workers(evaluators, tmp_pa
 
 def test_leg_model_in_parallel_is_bit_identical_and_not_recompiled(evaluators) -> None:
     from fuzzygait.core.codegen import cache_dir
+    from fuzzygait.markererror.row_kernel import ROW_LIBRARY_PREFIX
     from fuzzygait.mechanics.scenarios import LegSimulator
 
     # the driver builds the simulator once: this populates the on-disk cache if needed
@@ -267,8 +268,11 @@ def test_leg_model_in_parallel_is_bit_identical_and_not_recompiled(evaluators) -
     assert np.array_equal(values, serial_values) and np.array_equal(sens, serial_sens)
     assert np.array_equal(values[2], direct)
     assert not np.array_equal(values[0], values[3])
-    # no worker recompiled: same libraries, untouched; each worker process built once
-    assert {p: p.stat().st_mtime_ns for p in cache_dir().glob("fg_*.so")} == libraries
+    # no worker recompiled: the libraries untouched and no simulator library added (the other
+    # test process may compile marker-error row kernels into the same cache meanwhile)
+    after = {p: p.stat().st_mtime_ns for p in cache_dir().glob("fg_*.so")}
+    assert {p: after.get(p) for p in libraries} == libraries
+    assert not [p for p in set(after) - set(libraries) if not p.name.startswith(ROW_LIBRARY_PREFIX)]
     assert 1 <= len(batch.builds) <= 2 and len({b["pid"] for b in batch.builds}) == len(batch.builds), batch.builds
 
 

@@ -47,6 +47,8 @@ from fuzzygait.core.codegen import build_library, cache_dir, compiler
 from fuzzygait.markererror.symbols import NotTraceable, expressions, symbol_array
 
 ROWS_SOURCE = Path(__file__).with_name("native") / "rows.c"
+#: File-name prefix of the row kernels' libraries in the compiled-code cache.
+ROW_LIBRARY_PREFIX = "fg_rows_"
 #: Compiler optimisation of the kernels (part of the cache key).
 OPTIMISATION = "-O2"
 VALUES, GRADIENT = "fg_values", "fg_gradient"
@@ -190,7 +192,7 @@ def compile_kernel(key: str, function: RowFunction, shape: Shape, purpose: str) 
         if functions is not None:
             version = ca.__version__  # type: ignore[attr-defined]  # set at import, absent from casadi's stub
             text = "|".join([version, OPTIMISATION, ROWS_SOURCE.read_text(), *(f.serialize() for f in functions)])
-            target = cache_dir() / f"fg_rows_{hashlib.sha256(text.encode()).hexdigest()[:20]}.so"
+            target = cache_dir() / f"{ROW_LIBRARY_PREFIX}{hashlib.sha256(text.encode()).hexdigest()[:20]}.so"
             try:
                 path = target if target.exists() else build_library(
                     target, functions, sources=[ROWS_SOURCE], optimisation=OPTIMISATION, purpose=purpose)  # fmt: skip
