@@ -1,2 +1,3 @@
-"""The lowest layer: the trial data model, the package's error types and the compiled-code
-cache (:mod:`.codegen`). Imports no other part of fuzzygait."""
+"""The lowest layer: the trial data model, the package's error types, the compiled-code
+cache (:mod:`.codegen`) and the checks of a command's paths before any work
+(:mod:`.paths`). Imports no other part of fuzzygait."""
