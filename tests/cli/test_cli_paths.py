@@ -53,6 +53,9 @@ CASES = [
     (("preprocess", "nope.c3d", "--out", "x.c3d"), "nope.c3d: no such file"),
     (("calibrate", "nope.c3d", "--out", "x.toml"), "nope.c3d: no such file"),
     (("calibrate", STATIC, "--subject", ".", "--out", "x.toml"), ".: is a folder, not a subject file"),
+    (("report", SAMPLE_DATA, "--static", "nope.c3d", "--out", "rep"), "nope.c3d: no such file"),
+    (("report", SAMPLE_DATA, "--subject", "nope.toml", "--out", "rep"), "nope.toml: no such subject file"),
+    (("normative", WALKING, "--static", "nope.c3d", "--out", "n.csv"), "nope.c3d: no such file"),
 ]  # fmt: skip
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.errors import FuzzyGaitError, ParameterError
 from fuzzygait.workflows.angles import Preprocessing
 from fuzzygait.workflows.batch_report import BatchReportRequest
 from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS
@@ -17,6 +17,7 @@ SESSION = Path("visit-1")
 
 
 def test_request_normalises_paths_and_sequences(tmp_path: Path) -> None:
+    (tmp_path / "s.c3d").write_bytes(bytes(512))  # a static trial must be there (its reading is a trial's)
     request = BatchReportRequest([str(tmp_path / "a.c3d")], str(tmp_path / "out"), static=str(tmp_path / "s.c3d"))  # type: ignore[list-item, arg-type]
     assert request.inputs == (tmp_path / "a.c3d",) and request.out_dir == tmp_path / "out"
     assert request.static == tmp_path / "s.c3d" and request.subject_file is None and request.normative is None
@@ -45,6 +46,20 @@ def test_request_rejects_each_impossible_field(tmp_path: Path, field: str, value
     arguments: dict[str, object] = {"inputs": [SESSION], "out_dir": tmp_path / "out", field: value}
     with pytest.raises(ParameterError, match=f"^{message}") as raised:
         BatchReportRequest(**arguments)  # type: ignore[arg-type]
+    assert "\n" not in str(raised.value) and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("field", "name", "message"), [
+    ("static", "absent.c3d", "absent.c3d: no such file; check the path"),
+    ("subject_file", "absent.vsk", "absent.vsk: no such subject file; check the path"),
+    ("subject_file", "notes.txt", "notes.txt: unknown subject file type '.txt'"),
+    ("normative", "absent.csv", "absent.csv: no such normative file; check the path (normative=)"),
+])  # fmt: skip
+def test_request_refuses_a_file_that_is_not_there(tmp_path: Path, field: str, name: str, message: str) -> None:
+    """Once an internal error of the report's re-run check (the static trial's digest)."""
+    with pytest.raises(FuzzyGaitError) as raised:
+        BatchReportRequest([SESSION], tmp_path / "out", **{field: tmp_path / name})  # type: ignore[arg-type]
+    assert str(raised.value).startswith(str(tmp_path / message.split(":")[0])) and message in str(raised.value)
     assert "\n" not in str(raised.value) and not (tmp_path / "out").exists()
 
 

@@ -301,10 +301,6 @@ def report(
     others are still reported; a re-run on the same --out skips unchanged trials (--force recomputes).
     Exit code 0 when at least one trial succeeded, 1 when all failed.
     """
-    from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
-    from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
-    from fuzzygait.workflows.work_estimate import report_work
-
     def failed(path: Path, error: str) -> None:
         where = "" if path.name in error else f"{path}: "
         err.print(f"fuzzygait: failed: {where}{error}", markup=False)
@@ -313,9 +309,12 @@ def report(
         alpha_levels = parse_alphas(marker_errors.alphas)
         _check_workers(batch.workers)
         check_model(model)
+        calibration.check_files()
+        from fuzzygait.workflows.batch_report import BatchReportRequest, write_batch_report
+        from fuzzygait.workflows.marker_uncertainty import MarkerErrorSettings
+        from fuzzygait.workflows.work_estimate import report_work
+
         normative = contents.normative
-        if normative is not None and not normative.is_file():
-            raise FuzzyGaitError(f"{normative}: no such normative file; check the path (--normative)")
         settings = MarkerErrorSettings.create(errors_file=marker_errors.errors, sources=marker_errors.sources,
                                               alphas=alpha_levels, angles=parse_angles(marker_errors.angle_names),
                                               workers=batch.workers, tolerance=marker_errors.tolerance_deg(),

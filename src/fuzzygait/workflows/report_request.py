@@ -1,7 +1,8 @@
 """What the clinicians' batch report is asked for (:class:`BatchReportRequest`): its
 inputs, its report folder, the joint-angle options shared by every trial, the
-marker-error analysis and how the trials run.  Checked when made: an impossible value
-is refused in one line naming the field, before any trial is read."""
+marker-error analysis and how the trials run.  Checked when made: an impossible value,
+or a static trial, subject file or normative file that is not there, is refused in one
+line naming it, before any trial is read."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzygait.core.errors import ParameterError
+from fuzzygait.core.options import Option
+from fuzzygait.core.paths import check_c3d_input, check_subject_input
 from fuzzygait.workflows.angles import DEFAULT_PREPROCESSING, Preprocessing
 from fuzzygait.workflows.marker_uncertainty import DEFAULT_SETTINGS, MarkerErrorSettings
 from fuzzygait.workflows.trial_job import mode_settings
@@ -81,6 +84,12 @@ class BatchReportRequest:
         for name in ("static", "subject_file", "normative"):
             if (value := getattr(self, name)) is not None:
                 object.__setattr__(self, name, Path(value))
+        if self.static is not None:
+            check_c3d_input(self.static)
+        if self.subject_file is not None:
+            check_subject_input(self.subject_file)
+        if self.normative is not None and not self.normative.is_file():
+            raise ParameterError(f"{self.normative}: no such normative file; check the path ({Option.NORMATIVE})")
         diameter = self.marker_diameter
         if diameter is not None and not (isinstance(diameter, int | float) and not isinstance(diameter, bool)
                                          and math.isfinite(diameter) and diameter > 0):  # fmt: skip
