@@ -38,6 +38,7 @@ CASES: list[tuple[str | Path, ...]] = [
     ("uncertainty", "nope.c3d", "--out", "x.nc"),
     ("angles", WALKING, "--static", "nope.c3d"),
     ("calibrate", "nope.c3d", "--out", "x.toml"),
+    ("report", ROOT / "sample_data", "--static", "nope.c3d", "--out", "report"),
 ]
 
 
