@@ -49,6 +49,7 @@ from fuzzygait.uncertainty.execution.batches import EvaluatedModel, RecipeBatch
 from fuzzygait.uncertainty.execution.errors import ParallelEvaluationError
 from fuzzygait.uncertainty.execution.teardown import (
     CLOSE_TIMEOUT,
+    allow_threaded_fork,
     clear_pool_variable,
     interrupts_held,
     new_loop,
@@ -286,8 +287,11 @@ class Evaluator:
                 # in force until the cluster has started or its loop is stopped (release): its nannies,
                 # made on the loop, read them, also after an interrupt took this thread out of here
                 clear_pool_variable()  # a former cluster's token must not mark this one's workers
+                method = start_method()
+                if method == "fork":
+                    allow_threaded_fork()
                 res.settings = dask.config.set({"distributed.nanny.pre-spawn-environ": pre_spawn_environ(res.token),
-                                                "distributed.worker.multiprocessing-method": start_method(),
+                                                "distributed.worker.multiprocessing-method": method,
                                                 "temporary-directory": scratch,  # the scheduler's scratch too
                                                 **WORKER_SETTINGS})  # fmt: skip
                 cluster = LocalCluster(

@@ -190,10 +190,14 @@ def start_method() -> str:
     configured = str(dask.config.get("distributed.worker.multiprocessing-method", default="spawn"))
     if configured != "spawn" or not sys.platform.startswith("linux"):
         return configured
-    # Python ≥ 3.12 warns at every fork of a process with threads; the paragraph above is why it is safe here
+    return "fork"
+
+
+def allow_threaded_fork() -> None:
+    """Silence Python's (≥ 3.12) warning at every fork of a process with threads, for a
+    local cluster whose workers are forked: :func:`start_method` says why that is safe."""
     warnings.filterwarnings("ignore", message=r"This process \(pid=\d+\) is multi-threaded, use of fork\(\)",
                             category=DeprecationWarning)  # fmt: skip
-    return "fork"
 
 
 #: The environment variable marking a local cluster's worker processes: its value is the

@@ -166,11 +166,13 @@ def model_for(recipe: ModelRecipe) -> tuple[Any, threading.Lock, float]:
 
 
 def fresh_after_fork() -> None:
-    """In a forked copy of this process (a local cluster's worker,
-    :func:`~.teardown.start_method`): new locks for the model cache and new file objects
-    for the streams it writes to (:func:`_fresh_streams`).  The models the copy inherits
-    are used as they are (they are the same models); a lock another thread of the
-    original held at the moment of the copy would be held for ever in it."""
+    """In a forked copy of this process: new locks for the model cache and new file objects
+    for the streams it writes to (:func:`_fresh_streams`).  Registered for every fork of a
+    process that imported this module (``os.register_at_fork``), so in a local cluster's
+    forked worker (:func:`~.teardown.start_method`) and in any other forked child alike,
+    where the new objects write to the same descriptors as before.  The models the copy
+    inherits are used as they are (they are the same models); a lock another thread of
+    the original held at the moment of the copy would be held for ever in it."""
     global _BUILD_LOCK
     _BUILD_LOCK = threading.Lock()
     for key in list(_MODEL_LOCKS):
