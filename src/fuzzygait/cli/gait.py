@@ -27,6 +27,7 @@ from fuzzygait.cli.options import (
     MaxGapOption,
     PreprocessingOptions,
     SubjectOption,
+    check_calibration_files,
     check_knee_ankle_centres,
     with_option_groups,
 )
@@ -35,7 +36,6 @@ from fuzzygait.core.findings import FindingKind
 from fuzzygait.core.paths import (
     check_c3d_input,
     check_c3d_path,
-    check_subject_input,
     check_subject_path,
     check_table_path,
 )
@@ -163,9 +163,7 @@ def calibrate(
     with user_errors():
         check_subject_path(out_file)
         check_knee_ankle_centres(knee_ankle_centres)
-        check_c3d_input(static)
-        if subject is not None:
-            check_subject_input(subject)
+        check_calibration_files(static, subject)
         from fuzzygait.workflows.angles import Preprocessing
         from fuzzygait.workflows.calibrate import calibrate_to_file
 

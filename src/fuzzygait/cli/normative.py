@@ -8,8 +8,7 @@ from typing import Annotated
 import typer
 
 from fuzzygait.cli.app import EXIT_USER_ERROR, app, err, out, user_errors
-from fuzzygait.cli.options import ModelOption, StaticOption, SubjectOption, check_model
-from fuzzygait.core.paths import check_c3d_input, check_subject_input
+from fuzzygait.cli.options import ModelOption, StaticOption, SubjectOption, check_calibration_files, check_model
 
 
 @app.command("normative", short_help="Normative mean ± SD per % gait cycle from reference trials.")
@@ -44,10 +43,7 @@ def normative(
         if out_file.suffix.lower() != ".csv":
             raise FuzzyGaitError(f"{out_file}: the normative file is a .csv file")
         check_model(model)
-        if static is not None:
-            check_c3d_input(static)
-        if subject is not None:
-            check_subject_input(subject)
+        check_calibration_files(static, subject)
         from fuzzygait.gait.cycles import gait_cycles
         from fuzzygait.gait.normative import build_normative, normalised_cycles, write_normative
         from fuzzygait.workflows.angles import run_angles

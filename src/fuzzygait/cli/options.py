@@ -169,10 +169,15 @@ class CalibrationOptions:
 
     def check_files(self) -> None:
         """One line, before any work, for a ``--static`` or ``--subject`` that is not there."""
-        if self.static is not None:
-            check_c3d_input(self.static)
-        if self.subject is not None:
-            check_subject_input(self.subject)
+        check_calibration_files(self.static, self.subject)
+
+
+def check_calibration_files(static: Path | None, subject: Path | None) -> None:
+    """One line, before any work, for a static trial or subject file given but not there."""
+    if static is not None:
+        check_c3d_input(static)
+    if subject is not None:
+        check_subject_input(subject)
 
 
 DEFAULT_CALIBRATION = CalibrationOptions()
