@@ -232,3 +232,40 @@ def synthetic_session(folder: Path, frames: int) -> Path:
     trial_window(SAMPLE_DATA / "walking.c3d", folder / "walk01.c3d", 0, frames)
     trial_window(SAMPLE_DATA / "walking.c3d", folder / "walk02.c3d", 100, frames)
     return folder
+
+
+def stored_points(path: Path) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, str]]:
+    """Per label: coordinates ``(3, frames)`` as stored, residuals, camera masks
+    ``(7, frames)`` and description, as ezc3d reads them."""
+    import ezc3d
+
+    c = ezc3d.c3d(str(path))
+    point = c["parameters"]["POINT"]
+    descriptions = list(point["DESCRIPTIONS"]["value"])
+    points = np.nan_to_num(c["data"]["points"][:3], nan=0.0)  # ezc3d: NaN where the residual is < 0
+    residuals, masks = c["data"]["meta_points"]["residuals"][0], c["data"]["meta_points"]["camera_masks"]
+    return {str(label).strip(): (points[:, i], residuals[i], masks[:, i], descriptions[i])
+            for i, label in enumerate(point["LABELS"]["value"])}  # fmt: skip
+
+
+def assert_points_kept(src: Path, out: Path) -> int:
+    """Every marker of ``src`` in ``out`` keeps its description; a sample with the same
+    coordinates keeps its residual, a changed or filled one has residual 0 (computed); a
+    sample that replaces a measured one keeps its cameras, a filled one has none.
+    Returns the number of changed samples."""
+    from fuzzygait.io import read_c3d
+
+    before, after = stored_points(src), stored_points(out)
+    changed = 0
+    trial = read_c3d(src)
+    for label in (trial.label_prefix + name for name in trial.marker_labels):
+        (p_in, r_in, m_in, d_in), (p_out, r_out, m_out, d_out) = before[label], after[label]
+        assert d_out.strip() == d_in.strip(), label
+        measured, valid = (r_in >= 0) & np.any(p_in != 0.0, axis=0), r_out >= 0
+        same = measured & valid & np.all(p_in.astype(np.float32) == p_out.astype(np.float32), axis=0)
+        assert np.array_equal(r_out[same], r_in[same]), label
+        assert np.all(r_out[valid & ~same] == 0.0), label  # filtered or filled: computed
+        assert np.array_equal(m_out[:, measured & valid], m_in[:, measured & valid]), label
+        assert not m_out[:, valid & ~measured].any(), label  # a filled sample was seen by no camera
+        changed += int(np.count_nonzero(valid & ~same))
+    return changed

@@ -26,7 +26,7 @@ from fuzzygait.io.c3d_guard import inspect
 from fuzzygait.io.c3d_params import Parameter, read_section
 from fuzzygait.io.c3d_writeback import splice
 from fuzzygait.io.subject import PROCESSING_NAMES
-from support import SAMPLE_DATA, needs_shared, run_here, shared_file
+from support import SAMPLE_DATA, assert_points_kept, needs_shared, run_here, shared_file
 
 CGM2 = "cgm2/qualisys-cgm24-input"
 #: Every shared file with analog data that ezc3d reads: carried over completely.
@@ -200,6 +200,7 @@ def test_angles_c3d_out_carries_the_input_over(name: str, tmp_path: Path) -> Non
     assert_carried_over(src, out, "angles")
     assert_force_platforms_carried(src, out)
     assert "FUZZYGAIT" in ezc3d.c3d(str(out))["parameters"]
+    assert_points_kept(src, out)  # the markers the model saw: changed samples marked computed
 
 
 @needs_shared
@@ -303,8 +304,8 @@ def test_frames_outside_the_input_give_one_note_and_a_valid_file(tmp_path: Path)
     notes = write_c3d(replace(trial, first_frame=trial.first_frame + 50), out, source=src)
     assert [note.kind for note in notes] == [FindingKind.OUTPUT_FILE]
     assert messages(notes) == [
-        f"{out}: the analog channels and force platforms of in.c3d could not be carried over (the trial's "
-        f"frames 51-{50 + trial.n_frames} are not all among the file's analog frames 1-{trial.n_frames})"
+        f"{out}: the analog channels, force platforms and point residuals of in.c3d could not be carried over (the "
+        f"trial's frames 51-{50 + trial.n_frames} are not all among the file's frames 1-{trial.n_frames})"
     ]
     back = ezc3d.c3d(str(out))
     assert back["data"]["analogs"].shape == (1, 0, 0)
@@ -320,8 +321,8 @@ def test_an_input_ezc3d_cannot_read_gives_one_note_line(tmp_path: Path) -> None:
     result = run_here("preprocess", src, "--out", out)
     assert result.returncode == 0, result.stderr
     assert carried_notes(result.stdout) == [
-        f"  note: {out}: the analog channels and force platforms of in.c3d could not be carried over "
-        "(ezc3d cannot read the file: character parameter NOTE has no dimensions (ezc3d crashes on it))"
+        f"  note: {out}: the analog channels, force platforms and point residuals of in.c3d could not be carried "
+        "over (ezc3d cannot read the file: character parameter NOTE has no dimensions (ezc3d crashes on it))"
     ]
     assert read_c3d(out).n_frames == read_c3d(src).n_frames
     back = ezc3d.c3d(str(out))

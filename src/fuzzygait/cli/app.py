@@ -152,11 +152,13 @@ def user_errors() -> Iterator[None]:
         if _state["debug"]:
             raise
         raise fail(str(exc) + _left_out(held)) from None
-    except Exception as exc:  # a bug: still one line, unless debugging
+    except Exception as exc:  # a bug (still one line, unless debugging), or a file the system refuses
         _drop(held)
         _interrupted_instead()
         if _state["debug"]:
             raise
+        if (problem := _file_problem(exc)) is not None:
+            raise fail(problem + _left_out(held)) from None
         raise fail(
             f"internal error {type(exc).__name__}: {exc} (rerun with --debug and report it)" + _left_out(held),
             EXIT_INTERNAL_ERROR,
@@ -165,6 +167,15 @@ def user_errors() -> Iterator[None]:
         _drop(held)
         raise
     _drop(held, failed=False)
+
+
+def _file_problem(exc: Exception) -> str | None:
+    """The line of an operating system's refusal on a named file (no permission, a
+    read-only or full disk, a file where a folder should be ...): the user's to mend, not
+    a bug; None for any other exception."""
+    if not isinstance(exc, OSError) or exc.filename is None:
+        return None
+    return f"{exc.filename}: {exc.strerror or exc}; check the path, its folder and its permissions"
 
 
 def _interrupted_instead() -> None:

@@ -33,9 +33,11 @@ from fuzzygait.cli.options import (
 )
 from fuzzygait.core.errors import FuzzyGaitError
 from fuzzygait.core.findings import FindingKind
+from fuzzygait.core.options import Option
 from fuzzygait.core.paths import (
     check_c3d_input,
     check_c3d_path,
+    check_not_input,
     check_subject_path,
     check_table_path,
 )
@@ -95,6 +97,7 @@ def preprocess(
     with user_errors():
         check_c3d_path(out_file)
         check_c3d_input(input_file)
+        check_not_input(out_file, [input_file])
         from fuzzygait.mocap.gaps import METHODS, methods_used
         from fuzzygait.workflows.angles import Preprocessing, preprocess_file
 
@@ -258,10 +261,12 @@ def angles(
             if path is not None:
                 check_table_path(path, option)
         if files.c3d_out is not None:
-            check_c3d_path(files.c3d_out, "--c3d-out")
+            check_c3d_path(files.c3d_out, Option.C3D_OUT)
         check_knee_ankle_centres(knee_ankle_centres)
         check_c3d_input(dynamic)
         calibration.check_files()
+        if files.c3d_out is not None:
+            check_not_input(files.c3d_out, [dynamic, calibration.static], Option.C3D_OUT)
         from fuzzygait.workflows.angles import AngleOutputs, angles_to_files, output_suffix
         from fuzzygait.workflows.trial_inputs import TrialInputs
 

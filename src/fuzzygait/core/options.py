@@ -26,6 +26,7 @@ class Option(StrEnum):
     give it as the running edge names it."""
 
     ALPHAS = "alphas"
+    C3D_OUT = "c3d-out"
     CYCLES = "cycles"
     DEBUG = "debug"
     DISC = "disc"
@@ -81,6 +82,7 @@ class Option(StrEnum):
 
 #: Where the library's keyword differs from the command-line name.
 _KEYWORDS = {
+    Option.C3D_OUT: "c3d",
     Option.SUBJECT: "subject_file",
     Option.SET: "values",
     Option.FRV: "parameters",

@@ -13,7 +13,7 @@ from fuzzygait.core.errors import C3DError, FuzzyGaitError, ParameterError
 from fuzzygait.core.options import Option
 
 __all__ = ["DATASET_SUFFIXES", "FIGURE_SUFFIXES", "SUBJECT_INPUT_KINDS", "SUBJECT_SUFFIXES", "TABLE_SUFFIXES",
-           "check_c3d_input", "check_c3d_path", "check_subject_input", "check_subject_path",
+           "check_c3d_input", "check_c3d_path", "check_not_input", "check_subject_input", "check_subject_path",
            "check_table_path"]  # fmt: skip
 
 #: Fuzzy results: netCDF files or zarr stores (:mod:`fuzzygait.uncertainty.storage`).
@@ -51,6 +51,20 @@ def check_subject_path(path: str | os.PathLike[str], option: Option | str = Opti
 def check_c3d_path(path: str | os.PathLike[str], option: Option | str = Option.OUT) -> Path:
     """``path`` if it names a ``.c3d`` file, else a clear error naming ``option``."""
     return _check(path, (".c3d",), f"{option} must name a .c3d file")
+
+
+def check_not_input(path: str | os.PathLike[str], inputs: Sequence[str | os.PathLike[str] | None],
+                    option: Option | str = Option.OUT) -> Path:  # fmt: skip
+    """``path`` unless it is the same file as one of ``inputs`` by any name (``./x.c3d``,
+    a hard or symbolic link): an output never replaces a file the command reads.  Else a
+    clear error naming ``option`` and the input."""
+    path = Path(path)
+    if path.exists():
+        for source in inputs:
+            if source is not None and Path(source).exists() and os.path.samefile(path, source):
+                raise FuzzyGaitError(f"{path}: {option} is the input file {source}; writing it would replace the "
+                                     "input: choose another name")  # fmt: skip
+    return path
 
 
 def check_c3d_input(path: str | os.PathLike[str]) -> Path:

@@ -31,7 +31,7 @@ import numpy as np
 
 from fuzzygait.core.errors import C3DError, FuzzyGaitError
 from fuzzygait.core.findings import Finding, FindingKind, Severity
-from fuzzygait.core.paths import check_c3d_input
+from fuzzygait.core.paths import check_c3d_input, check_c3d_path, check_not_input
 from fuzzygait.core.trial import OUTPUT_UNITS, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
@@ -39,7 +39,7 @@ from fuzzygait.io.c3d_groups import read_analysis_values, read_events, read_proc
 from fuzzygait.io.c3d_params import check_blocks, event_parameters
 
 if TYPE_CHECKING:
-    from fuzzygait.io.c3d_writeback import Analogs
+    from fuzzygait.io.c3d_writeback import Analogs, InputPoints
 
 
 class _EzC3D(Protocol):
@@ -65,6 +65,8 @@ _TYPE_LISTS = {
     "MODELED_MARKERS": "modeled_marker",
 }
 _KIND_TO_LIST = {kind: name for name, kind in _TYPE_LISTS.items()}
+#: Output kinds that are positions (written in the file's length unit, as the markers).
+LENGTH_KINDS = ("modeled_marker", "segment_frame")
 _KIND_UNIT_PARAM = {
     "angle": "ANGLE_UNITS",
     "force": "FORCE_UNITS",
@@ -148,7 +150,7 @@ def _interpret(path: Path, raw: RawC3D) -> Trial:
     outputs: dict[str, np.ndarray] = {}
     for i, lbl in enumerate(labels):
         if lbl in kinds:
-            scale = to_mm if kinds[lbl] in ("modeled_marker", "segment_frame") else 1.0
+            scale = to_mm if kinds[lbl] in LENGTH_KINDS else 1.0
             outputs[lbl] = points[:, i, :] * scale
 
     return Trial(
@@ -278,8 +280,9 @@ def write_c3d(
 ) -> list[Finding]:
     """Write ``trial`` to a float C3D file at ``path``.
 
-    Markers are written in mm with ``POINT:UNITS = mm``; missing samples get a residual
-    of -1. Model outputs follow Vicon's conventions (angles in degrees listed in
+    Markers are written in mm with ``POINT:UNITS = mm`` (with ``source``: in its length
+    unit); missing samples get a residual of -1, others 0 (computed) unless they are
+    ``source``'s own unchanged. Model outputs follow Vicon's conventions (angles in degrees listed in
     ``POINT:ANGLES``, etc.). Labels carry ``trial.label_prefix``. Events beyond the
     255th go to ``EVENT:TIMES2``, ``LABELS2``, ... (C3D's ``POINT:LABELS2`` convention;
     the reader joins them). The file appears atomically: on any error nothing is left at ``path``.
@@ -288,7 +291,8 @@ def write_c3d(
     writer does not change is carried over (:mod:`fuzzygait.io.c3d_writeback`): its analog
     channels (samples and ``ANALOG`` parameters, cut to the trial's frames), force
     platforms, the ``EVENT`` group when the trial's events are the file's, and every
-    other parameter group and parameter, byte for byte.
+    other parameter group and parameter, byte for byte; of its points, those the trial
+    holds unchanged keep their residuals, and each its cameras and description.
 
     Args:
         text_parameters: more parameters, ``{GROUP: {NAME: text}}`` (e.g. ``{"FUZZYGAIT":
@@ -302,58 +306,93 @@ def write_c3d(
         everything was, or without ``source``).
 
     Raises:
-        C3DError: the file cannot be written (names the path and the cause).
+        C3DError: the file cannot be written (names the path and the cause), ``path`` is
+            not a ``.c3d`` file or is ``source`` itself.
     """
     path = Path(path)
+    try:
+        check_c3d_path(path, "the output")
+        check_not_input(path, [source], "the output")
+    except FuzzyGaitError as exc:
+        raise _fail(path, str(exc).removeprefix(f"{path}: ")) from None
     prefix = trial.label_prefix
     too_long = [n for n in [*trial.marker_labels, *trial.outputs] if len(prefix + n) > _MAX_LABEL]
     if too_long:
         raise _fail(path, f"labels longer than {_MAX_LABEL} characters: {too_long}; shorten them")
-
-    def write_stage(target: Path, analogs: Analogs | None = None) -> None:
-        _write_with_ezc3d(_ezc3d_trial(trial, text_parameters, analogs), target)
-        check_blocks(target)
-
     if source is None:
-        _atomic_write(path, write_stage)
+        _atomic_write(path, lambda tmp: _write_stage(tmp, trial, text_parameters))
         return []
     from fuzzygait.io.c3d_writeback import open_source, write_back
 
     back = open_source(Path(source), trial)
+
+    def write_stage(target: Path, analogs: Analogs | None) -> None:
+        _write_stage(target, trial, text_parameters, analogs, back.points)
+
     lost: list[str] = []
     _atomic_write(path, lambda tmp: lost.extend(write_back(tmp, path, back, trial, write_stage)))
     return [Finding(FindingKind.OUTPUT_FILE, line, Severity.WARNING) for line in lost]
 
 
+def _write_stage(target: Path, trial: Trial, text_parameters: Mapping[str, Mapping[str, str]] | None,
+                 analogs: Analogs | None = None, points: InputPoints | None = None) -> None:  # fmt: skip
+    """ezc3d writes the trial to ``target`` (:func:`_ezc3d_trial`); its blocks checked."""
+    _write_with_ezc3d(_ezc3d_trial(trial, text_parameters, analogs, points), target)
+    check_blocks(target)
+
+
 def _ezc3d_trial(
-    trial: Trial, text_parameters: Mapping[str, Mapping[str, str]] | None, analogs: Analogs | None
+    trial: Trial,
+    text_parameters: Mapping[str, Mapping[str, str]] | None,
+    analogs: Analogs | None,
+    points: InputPoints | None = None,
 ) -> _EzC3D:
-    """``trial`` as an ezc3d object: points (mm, residual -1 where missing), output type
-    lists, subject, first frame, ``text_parameters`` and events; with ``analogs``, the
-    input's analog samples as stored (scale 1, offset 0: the input's ``ANALOG`` group
-    replaces these parameters afterwards, :mod:`fuzzygait.io.c3d_writeback`)."""
+    """``trial`` as an ezc3d object: points (residual -1 where missing, 0 where valid),
+    output type lists, subject, first frame, ``text_parameters`` and events; with
+    ``analogs``, the input's analog samples as stored (scale 1, offset 0: the input's
+    ``ANALOG`` group replaces these parameters afterwards, :mod:`fuzzygait.io.c3d_writeback`).
+
+    Positions (markers, modelled markers, segment frames) are in mm, or with ``points``
+    (the input's point block) in the input's length unit, as its other parameters (force
+    plates' corners and origin) are; its own points keep their residuals, cameras and
+    descriptions (:func:`~fuzzygait.io.c3d_writeback.point_meta`)."""
     import ezc3d
 
     names = list(trial.marker_labels) + list(trial.outputs)
+    labels = [trial.label_prefix + n for n in names]
     data = np.concatenate(
         [trial.markers, np.stack(list(trial.outputs.values()), axis=1)]
         if trial.outputs
         else [trial.markers],
         axis=1,
     )  # (frames, points, 3)
+    unit = "mm"
+    if points is not None and points.to_mm != 1.0:
+        unit = points.unit
+        lengths = [True] * trial.n_markers + [trial.output_kinds.get(n) in LENGTH_KINDS for n in trial.outputs]
+        data = np.where(np.array(lengths)[None, :, None], data / points.to_mm, data)
     valid = np.all(np.isfinite(data), axis=2)
     block = np.zeros((4, data.shape[1], data.shape[0]))
     block[:3] = np.where(valid[:, :, None], data, 0.0).transpose(2, 1, 0)
     block[3] = 1.0
+    if points is not None:
+        from fuzzygait.io.c3d_writeback import point_meta
+
+        residuals, masks, descriptions = point_meta(points, labels, data)
+    else:
+        residuals, masks = np.where(valid, 0.0, -1.0), np.zeros((7, data.shape[1], data.shape[0]), dtype=bool)
+        descriptions = [""] * len(names)
 
     c = ezc3d.c3d()
     c["parameters"]["POINT"]["RATE"]["value"] = np.array([trial.rate])
-    c["parameters"]["POINT"]["LABELS"]["value"] = [trial.label_prefix + n for n in names]
-    c["parameters"]["POINT"]["DESCRIPTIONS"]["value"] = [""] * len(names)
-    c["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    c["parameters"]["POINT"]["LABELS"]["value"] = labels
+    c["parameters"]["POINT"]["DESCRIPTIONS"]["value"] = descriptions
+    c["parameters"]["POINT"]["UNITS"]["value"] = [unit]
+    if points is not None:  # a float file (negative scale) whose residuals are in the input's unit
+        c["parameters"]["POINT"]["SCALE"]["value"] = np.array([-points.residual_scale])
     c["data"]["points"] = block
-    c["data"]["meta_points"]["residuals"] = np.where(valid.T[None], 0.0, -1.0)
-    c["data"]["meta_points"]["camera_masks"] = np.zeros((7, data.shape[1], data.shape[0]), dtype=bool)
+    c["data"]["meta_points"]["residuals"] = residuals.T[None]
+    c["data"]["meta_points"]["camera_masks"] = masks
     _write_output_lists(c, trial)
     _write_subject(c, trial)
     _write_trial_frames(c, trial)

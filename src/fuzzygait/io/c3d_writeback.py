@@ -32,6 +32,7 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -41,12 +42,18 @@ from fuzzygait.io.c3d_groups import read_events  # the reader's own rules
 from fuzzygait.io.c3d_guard import BLOCK, Layout, inspect
 from fuzzygait.io.c3d_params import Group, Parameter, Section, SectionError, int16s, read_section, section_bytes
 
+#: ``POINT`` parameters naming the unit of a model-output type: the input's is kept where
+#: the writer writes none.
+OUTPUT_UNIT_PARAMETERS = frozenset(
+    {"ANGLE_UNITS", "FORCE_UNITS", "MOMENT_UNITS", "POWER_UNITS", "SCALAR_UNITS", "MODELED_MARKER_UNITS"}
+)
 #: ``POINT`` parameters the writer owns: they describe its point block (labels, units,
-#: rate, storage, model-output type lists); the input's are never copied.
+#: rate, storage, model-output type lists); the input's values are never copied (its
+#: descriptions and lock flags are, :func:`_point_record`).
 OWNED_POINT = frozenset(
     {"USED", "FRAMES", "SCALE", "DATA_START", "RATE", "UNITS", "LABELS", "DESCRIPTIONS", "TYPE_GROUPS"}
     | {"ANGLES", "FORCES", "MOMENTS", "POWERS", "SCALARS", "MODELED_MARKERS"}
-    | {"ANGLE_UNITS", "FORCE_UNITS", "MOMENT_UNITS", "POWER_UNITS", "SCALAR_UNITS", "MODELED_MARKER_UNITS"}
+    | OUTPUT_UNIT_PARAMETERS
 )
 #: Groups whose written version is kept whole (ezc3d's own bookkeeping of data the
 #: writer does not carry over).
@@ -83,6 +90,69 @@ class Analogs:
 
 
 @dataclass
+class InputPoints:
+    """The input's point block over the trial's frames as ezc3d reads it: what a written
+    point that is one of the input's own keeps (:func:`point_meta`).
+
+    Attributes:
+        columns: each stored label (stripped, subject prefix included) -> its column.
+        values: ``(frames, points, 3)`` positions in the file's units, NaN where invalid.
+        residuals: ``(frames, points)``: -1 invalid, 0 computed or interpolated, > 0 measured.
+        masks: ``(7, points, frames)``: the cameras that saw each sample.
+        descriptions: ``POINT:DESCRIPTIONS`` per column ('' where none).
+        unit: ``POINT:UNITS`` as the reader takes it (``mm`` when not stated).
+        to_mm: its factor to millimetres.
+        residual_scale: ``|POINT:SCALE|``, the unit of a stored residual (1 when not
+            stated): the written file's too, so that residuals are kept exactly.
+    """
+
+    columns: dict[str, int]
+    values: np.ndarray
+    residuals: np.ndarray
+    masks: np.ndarray
+    descriptions: list[str]
+    unit: str = "mm"
+    to_mm: float = 1.0
+    residual_scale: float = 1.0
+
+
+def point_meta(points: InputPoints, labels: list[str],
+               data: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:  # fmt: skip
+    """Residuals ``(frames, n)``, camera masks ``(7, n, frames)`` and descriptions of the
+    written points ``labels`` (prefix included) with positions ``data`` ``(frames, n, 3)``
+    in the file's units.
+
+    A sample the input holds unchanged (the same float32 coordinates, or a gap in both)
+    keeps its residual and cameras;
+    a changed or filled one is valid with residual 0 (C3D's mark of a computed or
+    interpolated point); a gap is -1, except the input's own gaps marked by zeros (0, 0, 0
+    with a residual >= 0, which the reader reads as gaps: Nexus' outputs where it computed
+    none), written back as they were.  A sample that replaces a measured one keeps its
+    cameras; a filled one has none.  A point the input does not hold gets no description."""
+    n_frames, n = data.shape[:2]
+    valid = np.all(np.isfinite(data), axis=2)
+    residuals = np.where(valid, 0.0, -1.0)
+    masks = np.zeros((7, n, n_frames), dtype=bool)
+    descriptions = [""] * n
+    for j, label in enumerate(labels):
+        i = points.columns.get(label)
+        if i is None:
+            continue
+        theirs = points.values[:, i]
+        stated = points.residuals[:, i] >= 0
+        zero = stated & np.all(theirs == 0.0, axis=1)
+        measured = stated & ~zero
+        with np.errstate(invalid="ignore"):
+            same = valid[:, j] & measured & np.all(data[:, j].astype(np.float32) == theirs.astype(np.float32), axis=1)
+        zero_gap = ~valid[:, j] & zero
+        unchanged = same | zero_gap | (~valid[:, j] & ~stated)  # the last: a gap that stays one
+        residuals[unchanged, j] = points.residuals[unchanged, i]
+        masks[:, j] = points.masks[:, i] & (unchanged | (valid[:, j] & measured))[None]
+        descriptions[j] = points.descriptions[i]
+    return residuals, masks, descriptions
+
+
+@dataclass
 class Source:
     """What an input file lets the writer carry over, and what it does not.
 
@@ -90,6 +160,7 @@ class Source:
         path: the input file.
         section: its parameter section (None: it cannot be read).
         analogs: its analog channels over the trial's frames (None: none, or not carried).
+        points: its point block over the trial's frames (None: ezc3d cannot read it).
         same_frames: the trial covers exactly the input's frames.
         same_events: the trial's events are the input's (its ``EVENT`` group is copied).
         lost: what is left out (``"parameters"``, ``"analog channels"``, ...), in order.
@@ -99,6 +170,7 @@ class Source:
     path: Path
     section: Section | None = None
     analogs: Analogs | None = None
+    points: InputPoints | None = None
     same_frames: bool = True
     same_events: bool = False
     lost: list[str] = field(default_factory=list)
@@ -165,12 +237,81 @@ def _open_source(path: Path, trial: Trial) -> Source:
     if _first_number(section, "ROTATION", "USED") > 0:
         source.lose(["rotations"], "fuzzygait does not carry rotation data over")
     parts = source.channel_parts()
+    try:
+        c = _read_ezc3d(source, layout)
+    except CarryError as exc:
+        source.lose([*parts, "point residuals"], str(exc))
+        return source
     if "analog channels" in parts:
         try:
-            source.analogs = _analogs(source, layout, trial)
+            source.analogs = _analogs(source, c, layout, trial)
         except CarryError as exc:
             source.lose(parts, str(exc))
+    try:
+        source.points = _input_points(c, trial)
+    except CarryError as exc:
+        source.lose(["point residuals"], str(exc))
     return source
+
+
+def _read_ezc3d(source: Source, layout: Layout) -> Any:
+    """The input read by ezc3d.
+
+    Raises:
+        CarryError: ezc3d must not (``c3d_guard``'s doubts) or cannot read it."""
+    import ezc3d
+
+    if layout.doubts:  # ezc3d must not run on this file in this process (c3d_guard)
+        raise CarryError(f"ezc3d cannot read the file: {layout.doubts[0]}")
+    try:
+        return ezc3d.c3d(str(source.path))
+    except Exception as exc:  # ezc3d raises ValueError, RuntimeError, ...
+        raise CarryError(f"ezc3d cannot read the file: {_first_sentence(str(exc))}") from None
+
+
+def _trial_window(c: Any, trial: Trial) -> slice:
+    """The input's frames (columns of ezc3d's data) the trial covers.
+
+    Raises:
+        CarryError: the trial's frames are not all the input's."""
+    n_frames = int(np.shape(c["data"]["points"])[2])
+    first = int(c["header"]["points"]["first_frame"]) + 1
+    start = trial.first_frame - first
+    if start < 0 or start + trial.n_frames > n_frames:
+        raise CarryError(
+            f"the trial's frames {trial.first_frame}-{trial.first_frame + trial.n_frames - 1} are not all among "
+            f"the file's frames {first}-{first + n_frames - 1}"
+        )
+    return slice(start, start + trial.n_frames)
+
+
+def _input_points(c: Any, trial: Trial) -> InputPoints:
+    """The input's point block over the trial's frames (:class:`InputPoints`).
+
+    Raises:
+        CarryError: the trial's frames are not the file's, or its units are unknown."""
+    from fuzzygait.io.c3d import LENGTH_UNITS_TO_MM
+
+    window = _trial_window(c, trial)
+    point = c["parameters"]["POINT"]
+    labels = [str(label).strip() for label in point["LABELS"]["value"]] if "LABELS" in point else []
+    stored = point["DESCRIPTIONS"]["value"] if "DESCRIPTIONS" in point else []
+    units = point["UNITS"]["value"] if "UNITS" in point else []
+    unit = str(units[0]).strip().lower() if len(units) else ""
+    if unit and unit not in LENGTH_UNITS_TO_MM:
+        raise CarryError(f"its POINT:UNITS {unit!r} are not a length unit")
+    values = np.asarray(c["data"]["points"], dtype=float)[:3, :, window].transpose(2, 1, 0)
+    columns: dict[str, int] = {}
+    for i, label in enumerate(labels[: values.shape[1]]):
+        columns.setdefault(label, i)
+    descriptions = [str(d).strip() for d in stored] + [""] * max(0, values.shape[1] - len(stored))
+    meta = c["data"]["meta_points"]
+    scale = abs(float(np.ravel(point["SCALE"]["value"])[0])) if "SCALE" in point and np.size(point["SCALE"]["value"]) \
+        else 1.0  # fmt: skip
+    return InputPoints(columns, values, np.asarray(meta["residuals"], dtype=float)[0, :, window].T,
+                       np.asarray(meta["camera_masks"], dtype=bool)[:, :, window], descriptions, unit or "mm",
+                       LENGTH_UNITS_TO_MM.get(unit or "mm", 1.0),
+                       scale if math.isfinite(scale) and scale > 0 else 1.0)  # fmt: skip
 
 
 def _same_events(source: Source, trial: Trial) -> bool:
@@ -196,24 +337,15 @@ def _same_events(source: Source, trial: Trial) -> bool:
         return False
 
 
-def _analogs(source: Source, layout: Layout, trial: Trial) -> Analogs:
-    """The input's analog channels over the trial's frames, read by ezc3d.
+def _analogs(source: Source, c: Any, layout: Layout, trial: Trial) -> Analogs:
+    """The input's analog channels over the trial's frames, from ezc3d's reading ``c``.
 
     Raises:
-        CarryError: ezc3d cannot (safely) read the file, its analog block does not fit
-            the point frames, the trial's frames or rate are not the file's, or the
-            samples cannot be stored exactly.
+        CarryError: its analog block does not fit the point frames, the trial's frames
+            or rate are not the file's, or the samples cannot be stored exactly.
     """
-    import ezc3d
-
     assert source.section is not None
     channels = int(_first_number(source.section, "ANALOG", "USED"))
-    if layout.doubts:  # ezc3d must not run on this file in this process (c3d_guard)
-        raise CarryError(f"ezc3d cannot read the file: {layout.doubts[0]}")
-    try:
-        c = ezc3d.c3d(str(source.path))
-    except Exception as exc:  # ezc3d raises ValueError, RuntimeError, ...
-        raise CarryError(f"ezc3d cannot read the file: {_first_sentence(str(exc))}") from None
     values = np.asarray(c["data"]["analogs"], dtype=float)[0]
     n_frames = int(np.shape(c["data"]["points"])[2])
     per_frame = layout.analog_count // channels if channels else 0
@@ -225,14 +357,8 @@ def _analogs(source: Source, layout: Layout, trial: Trial) -> Analogs:
     rate = _file_rate(c)
     if not math.isclose(trial.rate, rate, rel_tol=1e-6):
         raise CarryError(f"the trial's rate {trial.rate:g} Hz is not the file's {rate:g} Hz")
-    first = int(c["header"]["points"]["first_frame"]) + 1
-    start = trial.first_frame - first
-    if start < 0 or start + trial.n_frames > n_frames:
-        raise CarryError(
-            f"the trial's frames {trial.first_frame}-{trial.first_frame + trial.n_frames - 1} are not all among "
-            f"the file's analog frames {first}-{first + n_frames - 1}"
-        )
-    values = values[:, start * per_frame : (start + trial.n_frames) * per_frame]
+    window = _trial_window(c, trial)
+    values = values[:, window.start * per_frame : window.stop * per_frame]
     return Analogs(_stored(values, source.section["ANALOG"], channels), values, per_frame)
 
 
@@ -388,7 +514,7 @@ def _merge_group(key: str, group: Group, mine: Group, source: Source, trial: Tri
     for name, theirs in group.parameters.items():
         ours = mine.parameters.get(name)
         if key == "POINT" and owned_point(name):
-            chosen = ours
+            chosen = _point_record(name, ours, theirs)
         elif (key, name) in _FRAME_PARAMETERS and not source.same_frames:
             chosen = _FRAME_PARAMETERS[(key, name)](theirs, trial)
         elif ours is not None and ours.value() != theirs.value():
@@ -400,6 +526,15 @@ def _merge_group(key: str, group: Group, mine: Group, source: Source, trial: Tri
     for name, ours in mine.parameters.items():
         params.setdefault(name, ours)
     return params
+
+
+def _point_record(name: str, ours: Parameter | None, theirs: Parameter) -> Parameter | None:
+    """An owned ``POINT`` parameter: the writer's value with the input's description and
+    lock flag; an output-unit parameter the writer did not write (``SCALAR_UNITS`` of a
+    file with no scalars) is the input's."""
+    if ours is None:
+        return theirs if name.upper() in OUTPUT_UNIT_PARAMETERS else None
+    return replace(ours, description=theirs.description or ours.description, locked=theirs.locked)
 
 
 def _frame_field(which: str) -> Callable[[Parameter, Trial], Parameter | None]:

@@ -293,15 +293,20 @@ def output_suffix(suffix: str, model: str) -> str:
 def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
     """The pre-processed trial with the computed angles and virtual markers as model
     outputs, the subject parameters used and the events (for ``--c3d-out``: the trial's
-    own, and the detected gait events when it had none).  The angle
-    outputs keep Vicon's names (``LKneeAngles``) with ``suffix`` appended
-    (:func:`output_suffix`); virtual markers and joint centres are not suffixed.  With
+    own, and the detected gait events when it had none).  The markers are the ones the
+    model saw, filled and filtered, as Vicon Nexus saves a processed trial: the file's
+    outputs are made from its markers (a second run filters them again, as in Nexus; the
+    writer marks every changed sample computed, residual 0).  The angle outputs keep
+    Vicon's names (``LKneeAngles``) with ``suffix`` appended (:func:`output_suffix`);
+    virtual markers and joint centres are not suffixed, except, with a suffix, one the
+    input holds too.  With
     kinetics, their outputs as Nexus stores them (:meth:`TrialKinetics.nexus_outputs
     <fuzzygait.workflows.kinetics.TrialKinetics.nexus_outputs>`: ``LAnkleMoment`` N·mm/kg
     in ``POINT:MOMENTS``, ``LAnklePower`` W/kg in ``POWERS``, ``LAnkleForce``,
     ``LGroundReactionForce`` N/kg and ``LNormalisedGRF`` % BW in ``FORCES``), suffixed like
-    the angles: with a suffix the input's own (Nexus') kinetic outputs are kept beside;
-    the outputs of a side not computed (all NaN) are not written."""
+    the angles: with a suffix the input's own (Nexus') outputs are all kept beside ours
+    (without, ours replace them: :func:`replaced_outputs`); the outputs of a side not
+    computed (all NaN) are not written."""
     out = run.trial.with_markers(run.trial.markers)
     suffix = output_suffix(suffix, run.model)
     for name, values in run.result.angles.items():
@@ -312,11 +317,19 @@ def model_output_trial(run: AnglesRun, suffix: str = "") -> Trial:
             out.outputs[name], out.output_kinds[name] = values, kind
     for name, values in run.result.virtual_markers.items():
         if name not in out.marker_labels:
-            out.outputs[name] = values
-            out.output_kinds[name] = "modeled_marker" if name.endswith("JC") else "segment_frame"
+            kept = name + suffix if suffix and name in run.raw.outputs else name
+            out.outputs[kept] = values
+            out.output_kinds[kept] = "modeled_marker" if name.endswith("JC") else "segment_frame"
     out.parameters.update(run.subject.to_processing())
     out.events = list(run.trial.events) + ([] if run.event_source == SOURCE_FILE else list(run.events))
     return out
+
+
+def replaced_outputs(run: AnglesRun, trial: Trial) -> list[str]:
+    """The input's own model outputs (Nexus' angles, kinetics, virtual markers) that
+    ``trial`` (:func:`model_output_trial`) holds with other values: ours replace them."""
+    return [name for name, values in run.raw.outputs.items()
+            if name in trial.outputs and not np.array_equal(values, trial.outputs[name], equal_nan=True)]  # fmt: skip
 
 
 def model_parameters(run: AnglesRun, suffix: str = "") -> dict[str, dict[str, str]]:
@@ -352,6 +365,11 @@ class AngleOutputs:
     c3d: Path | None = None
     suffix: str = ""
 
+    def __post_init__(self) -> None:
+        for name in ("table", "cycles", "c3d"):  # a path given as text
+            if isinstance(value := getattr(self, name), (str, os.PathLike)):
+                object.__setattr__(self, name, Path(value))
+
     def write(self, run: AnglesRun) -> list[Path]:
         """Write the files asked for (folders created); returns them in that order."""
         written = []
@@ -366,6 +384,10 @@ class AngleOutputs:
             # the input's analog channels, force platforms and parameters carried over; a note if not all
             parameters = model_parameters(run, self.suffix)
             run.notes += write_c3d(trial, self.c3d, text_parameters=parameters, source=trial.source)
+            if replaced := replaced_outputs(run, trial):
+                shown = ", ".join(replaced[:6]) + (f" and {len(replaced) - 6} more" if len(replaced) > 6 else "")
+                run.notes.append(Finding(FindingKind.OUTPUT_FILE, f"{self.c3d.name}: ours replace the input's own "
+                                         f"{shown} ({Option.SUFFIX} keeps them beside ours)"))  # fmt: skip
             written.append(self.c3d)
         return written
 
