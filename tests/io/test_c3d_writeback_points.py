@@ -209,3 +209,20 @@ def test_points_of_a_cut_trial_keep_their_residuals(tmp_path: Path) -> None:
     for label in trial.marker_labels:
         assert np.array_equal(before[label][1][first - 1 : first - 1 + count], after[label][1]), label
     assert struct.unpack("<H", out.read_bytes()[6:8])[0] == first  # header: first frame
+
+
+def test_ground_reaction_outside_the_plates_is_missing_as_nexus_leaves_it(tmp_path: Path) -> None:
+    """The foot's ground reaction is known only where a plate carries it: elsewhere (swing,
+    the floor between plates) the output is missing, not a valid zero."""
+    run = run_angles(SAMPLE_DATA / "walking.c3d", subject_file=SAMPLE_DATA / "subject.toml")
+    assert run.kinetics is not None
+    outputs = run.kinetics.nexus_outputs()
+    for side in "LR":
+        grf = outputs[side + "GroundReactionForce"][0]
+        carried = np.any(run.kinetics.data["ground_force"].sel(side=side).values != 0.0, axis=0)
+        assert 30 < carried.sum() < 100  # one plate contact of the five stances
+        assert np.all(np.isfinite(grf[carried])) and np.all(np.isnan(grf[~carried]))
+    out = tmp_path / "out.c3d"
+    AngleOutputs(c3d=out).write(run)
+    residuals = stored_points(out)["LGroundReactionForce"][1]
+    assert np.array_equal(residuals >= 0, np.isfinite(outputs["LGroundReactionForce"][0]).all(axis=1))

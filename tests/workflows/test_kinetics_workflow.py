@@ -80,7 +80,7 @@ def test_moments_agree_with_nexus_where_the_ground_loads_agree(movement: AnglesR
     assert movement.kinetics is not None
     ours, nexus = movement.kinetics.nexus_outputs(), read_c3d(movement.raw.source).outputs  # type: ignore[arg-type]
     for side in "LR":
-        grf = ours[side + "GroundReactionForce"][0]
+        grf = np.nan_to_num(ours[side + "GroundReactionForce"][0])  # missing where no plate carries the foot: 0
         same = np.all(np.abs(grf - np.nan_to_num(nexus[side + "GroundReactionForce"])) < 0.05, axis=1)
         same = np.convolve(same.astype(int), np.ones(9, dtype=int), "same") == 9
         assert same.sum() > 150

@@ -163,14 +163,16 @@ class TrialKinetics:
             for var in ("ground_force", "grf"):
                 _, quantity, kind, factor = NEXUS_QUANTITIES[var]
                 values = self.data[var].sel(side=side.value).values.T * factor
+                values[np.all(values == 0.0, axis=1)] = np.nan  # no plate under the foot: unknown, as Nexus leaves it
                 out.append((side.value + quantity + suffix, quantity, values, kind))
         return out
 
     def nexus_outputs(self, suffix: str = "") -> dict[str, tuple[Array, str]]:
         """The kinetics as Nexus names and stores them: ``LAnkleMoment`` N·mm/kg,
         ``LAnkleForce`` N/kg, ``LAnklePower`` W/kg (in Z; X = Y = 0 where Z is known), ``LGroundReactionForce``
-        N/kg, ``LNormalisedGRF`` % BW, each ``(n, 3)`` with ``suffix`` appended, and its C3D
-        output kind (``"moment"``, ``"power"``, ``"force"``)."""
+        N/kg, ``LNormalisedGRF`` % BW (missing where no plate carries the foot: in swing
+        and on the floor between plates, as Nexus leaves them), each ``(n, 3)`` with
+        ``suffix`` appended, and its C3D output kind (``"moment"``, ``"power"``, ``"force"``)."""
         return {name: (np.ascontiguousarray(values), kind) for name, _, values, kind in self._nexus(suffix)}
 
     def columns(self) -> dict[str, tuple[Array, str]]:
