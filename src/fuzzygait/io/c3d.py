@@ -36,10 +36,11 @@ from fuzzygait.core.trial import OUTPUT_UNITS, Trial
 from fuzzygait.io.atomic import atomic_output
 from fuzzygait.io.c3d_backends import BackendError, RawC3D, decode
 from fuzzygait.io.c3d_groups import read_analysis_values, read_events, read_processing_parameters, warning
-from fuzzygait.io.c3d_params import check_blocks, event_parameters
+from fuzzygait.io.c3d_params import check_blocks, event_parameters, integer_event_records, read_section
 
 if TYPE_CHECKING:
-    from fuzzygait.io.c3d_writeback import Analogs, InputPoints
+    from fuzzygait.io.c3d_points import InputPoints
+    from fuzzygait.io.c3d_writeback import Analogs
 
 
 class _EzC3D(Protocol):
@@ -336,9 +337,17 @@ def write_c3d(
 
 def _write_stage(target: Path, trial: Trial, text_parameters: Mapping[str, Mapping[str, str]] | None,
                  analogs: Analogs | None = None, points: InputPoints | None = None) -> None:  # fmt: skip
-    """ezc3d writes the trial to ``target`` (:func:`_ezc3d_trial`); its blocks checked."""
+    """ezc3d writes the trial to ``target`` (:func:`_ezc3d_trial`), the event icons and
+    flags stored as integers (:func:`~fuzzygait.io.c3d_params.integer_event_records`);
+    its blocks checked."""
+    from fuzzygait.io.c3d_writeback import splice
+
     _write_with_ezc3d(_ezc3d_trial(trial, text_parameters, analogs, points), target)
     check_blocks(target)
+    data = target.read_bytes()
+    section = read_section(data)
+    if integer_event_records(section):  # smaller records: the section still fits
+        target.write_bytes(splice(data, section))
 
 
 def _ezc3d_trial(
@@ -355,7 +364,7 @@ def _ezc3d_trial(
     Positions (markers, modelled markers, segment frames) are in mm, or with ``points``
     (the input's point block) in the input's length unit, as its other parameters (force
     plates' corners and origin) are; its own points keep their residuals, cameras and
-    descriptions (:func:`~fuzzygait.io.c3d_writeback.point_meta`)."""
+    descriptions (:func:`~fuzzygait.io.c3d_points.point_meta`)."""
     import ezc3d
 
     names = list(trial.marker_labels) + list(trial.outputs)
@@ -376,7 +385,7 @@ def _ezc3d_trial(
     block[:3] = np.where(valid[:, :, None], data, 0.0).transpose(2, 1, 0)
     block[3] = 1.0
     if points is not None:
-        from fuzzygait.io.c3d_writeback import point_meta
+        from fuzzygait.io.c3d_points import point_meta
 
         residuals, masks, descriptions = point_meta(points, labels, data)
     else:

@@ -41,6 +41,7 @@ from fuzzygait.io.c3d_backends import _first_sentence
 from fuzzygait.io.c3d_groups import read_events  # the reader's own rules
 from fuzzygait.io.c3d_guard import BLOCK, Layout, inspect
 from fuzzygait.io.c3d_params import Group, Parameter, Section, SectionError, int16s, read_section, section_bytes
+from fuzzygait.io.c3d_points import CarryError, InputPoints, input_points, trial_window
 
 #: ``POINT`` parameters naming the unit of a model-output type: the input's is kept where
 #: the writer writes none.
@@ -63,10 +64,6 @@ CHANNEL_GROUPS = ("ANALOG", "FORCE_PLATFORM")
 _CHANNEL_PARTS = ("analog channels", "force platforms")
 
 
-class CarryError(Exception):
-    """Something could not be carried over (message: why)."""
-
-
 def owned_point(name: str) -> bool:
     """Whether ``POINT:<name>`` is the writer's (``LABELS2``, ``UNITS3``... included)."""
     name = name.upper()
@@ -87,69 +84,6 @@ class Analogs:
     stored: np.ndarray
     values: np.ndarray
     per_frame: int
-
-
-@dataclass
-class InputPoints:
-    """The input's point block over the trial's frames as ezc3d reads it: what a written
-    point that is one of the input's own keeps (:func:`point_meta`).
-
-    Attributes:
-        columns: each stored label (stripped, subject prefix included) -> its column.
-        values: ``(frames, points, 3)`` positions in the file's units, NaN where invalid.
-        residuals: ``(frames, points)``: -1 invalid, 0 computed or interpolated, > 0 measured.
-        masks: ``(7, points, frames)``: the cameras that saw each sample.
-        descriptions: ``POINT:DESCRIPTIONS`` per column ('' where none).
-        unit: ``POINT:UNITS`` as the reader takes it (``mm`` when not stated).
-        to_mm: its factor to millimetres.
-        residual_scale: ``|POINT:SCALE|``, the unit of a stored residual (1 when not
-            stated): the written file's too, so that residuals are kept exactly.
-    """
-
-    columns: dict[str, int]
-    values: np.ndarray
-    residuals: np.ndarray
-    masks: np.ndarray
-    descriptions: list[str]
-    unit: str = "mm"
-    to_mm: float = 1.0
-    residual_scale: float = 1.0
-
-
-def point_meta(points: InputPoints, labels: list[str],
-               data: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:  # fmt: skip
-    """Residuals ``(frames, n)``, camera masks ``(7, n, frames)`` and descriptions of the
-    written points ``labels`` (prefix included) with positions ``data`` ``(frames, n, 3)``
-    in the file's units.
-
-    A sample the input holds unchanged (the same float32 coordinates, or a gap in both)
-    keeps its residual and cameras;
-    a changed or filled one is valid with residual 0 (C3D's mark of a computed or
-    interpolated point); a gap is -1, except the input's own gaps marked by zeros (0, 0, 0
-    with a residual >= 0, which the reader reads as gaps: Nexus' outputs where it computed
-    none), written back as they were.  A sample that replaces a measured one keeps its
-    cameras; a filled one has none.  A point the input does not hold gets no description."""
-    n_frames, n = data.shape[:2]
-    valid = np.all(np.isfinite(data), axis=2)
-    residuals = np.where(valid, 0.0, -1.0)
-    masks = np.zeros((7, n, n_frames), dtype=bool)
-    descriptions = [""] * n
-    for j, label in enumerate(labels):
-        i = points.columns.get(label)
-        if i is None:
-            continue
-        theirs = points.values[:, i]
-        stated = points.residuals[:, i] >= 0
-        zero = stated & np.all(theirs == 0.0, axis=1)
-        measured = stated & ~zero
-        with np.errstate(invalid="ignore"):
-            same = valid[:, j] & measured & np.all(data[:, j].astype(np.float32) == theirs.astype(np.float32), axis=1)
-        zero_gap = ~valid[:, j] & zero
-        unchanged = same | zero_gap | (~valid[:, j] & ~stated)  # the last: a gap that stays one
-        residuals[unchanged, j] = points.residuals[unchanged, i]
-        masks[:, j] = points.masks[:, i] & (unchanged | (valid[:, j] & measured))[None]
-        descriptions[j] = points.descriptions[i]
-    return residuals, masks, descriptions
 
 
 @dataclass
@@ -248,17 +182,15 @@ def _open_source(path: Path, trial: Trial) -> Source:
         except CarryError as exc:
             source.lose(parts, str(exc))
     try:
-        source.points = _input_points(c, trial)
+        source.points = input_points(c, trial)
     except CarryError as exc:
         source.lose(["point residuals"], str(exc))
     return source
 
 
 def _read_ezc3d(source: Source, layout: Layout) -> Any:
-    """The input read by ezc3d.
-
-    Raises:
-        CarryError: ezc3d must not (``c3d_guard``'s doubts) or cannot read it."""
+    """The input read by ezc3d; :class:`CarryError` where ezc3d must not (``c3d_guard``'s
+    doubts) or cannot read it."""
     import ezc3d
 
     if layout.doubts:  # ezc3d must not run on this file in this process (c3d_guard)
@@ -267,51 +199,6 @@ def _read_ezc3d(source: Source, layout: Layout) -> Any:
         return ezc3d.c3d(str(source.path))
     except Exception as exc:  # ezc3d raises ValueError, RuntimeError, ...
         raise CarryError(f"ezc3d cannot read the file: {_first_sentence(str(exc))}") from None
-
-
-def _trial_window(c: Any, trial: Trial) -> slice:
-    """The input's frames (columns of ezc3d's data) the trial covers.
-
-    Raises:
-        CarryError: the trial's frames are not all the input's."""
-    n_frames = int(np.shape(c["data"]["points"])[2])
-    first = int(c["header"]["points"]["first_frame"]) + 1
-    start = trial.first_frame - first
-    if start < 0 or start + trial.n_frames > n_frames:
-        raise CarryError(
-            f"the trial's frames {trial.first_frame}-{trial.first_frame + trial.n_frames - 1} are not all among "
-            f"the file's frames {first}-{first + n_frames - 1}"
-        )
-    return slice(start, start + trial.n_frames)
-
-
-def _input_points(c: Any, trial: Trial) -> InputPoints:
-    """The input's point block over the trial's frames (:class:`InputPoints`).
-
-    Raises:
-        CarryError: the trial's frames are not the file's, or its units are unknown."""
-    from fuzzygait.io.c3d import LENGTH_UNITS_TO_MM
-
-    window = _trial_window(c, trial)
-    point = c["parameters"]["POINT"]
-    labels = [str(label).strip() for label in point["LABELS"]["value"]] if "LABELS" in point else []
-    stored = point["DESCRIPTIONS"]["value"] if "DESCRIPTIONS" in point else []
-    units = point["UNITS"]["value"] if "UNITS" in point else []
-    unit = str(units[0]).strip().lower() if len(units) else ""
-    if unit and unit not in LENGTH_UNITS_TO_MM:
-        raise CarryError(f"its POINT:UNITS {unit!r} are not a length unit")
-    values = np.asarray(c["data"]["points"], dtype=float)[:3, :, window].transpose(2, 1, 0)
-    columns: dict[str, int] = {}
-    for i, label in enumerate(labels[: values.shape[1]]):
-        columns.setdefault(label, i)
-    descriptions = [str(d).strip() for d in stored] + [""] * max(0, values.shape[1] - len(stored))
-    meta = c["data"]["meta_points"]
-    scale = abs(float(np.ravel(point["SCALE"]["value"])[0])) if "SCALE" in point and np.size(point["SCALE"]["value"]) \
-        else 1.0  # fmt: skip
-    return InputPoints(columns, values, np.asarray(meta["residuals"], dtype=float)[0, :, window].T,
-                       np.asarray(meta["camera_masks"], dtype=bool)[:, :, window], descriptions, unit or "mm",
-                       LENGTH_UNITS_TO_MM.get(unit or "mm", 1.0),
-                       scale if math.isfinite(scale) and scale > 0 else 1.0)  # fmt: skip
 
 
 def _same_events(source: Source, trial: Trial) -> bool:
@@ -357,7 +244,7 @@ def _analogs(source: Source, c: Any, layout: Layout, trial: Trial) -> Analogs:
     rate = _file_rate(c)
     if not math.isclose(trial.rate, rate, rel_tol=1e-6):
         raise CarryError(f"the trial's rate {trial.rate:g} Hz is not the file's {rate:g} Hz")
-    window = _trial_window(c, trial)
+    window = trial_window(c, trial)
     values = values[:, window.start * per_frame : window.stop * per_frame]
     return Analogs(_stored(values, source.section["ANALOG"], channels), values, per_frame)
 
