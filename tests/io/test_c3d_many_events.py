@@ -8,6 +8,7 @@ package fallback read 111 of 367 events. Up to 255 events the file is byte for b
 
 from __future__ import annotations
 
+import struct
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,7 +23,8 @@ from fuzzygait.io import c3d as c3d_module
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.c3d_backends import _decode_c3d
 from fuzzygait.io.c3d_groups import read_events
-from fuzzygait.io.c3d_params import read_section
+from fuzzygait.io.c3d_params import Parameter, read_section
+from fuzzygait.io.c3d_writeback import splice
 from fuzzygait.synthetic.generate import make_walking_trial
 
 EVENT_NAMES = ("TIMES", "CONTEXTS", "LABELS", "DESCRIPTIONS", "SUBJECTS", "ICON_IDS", "GENERIC_FLAGS")
@@ -91,13 +93,28 @@ def test_a_long_walking_trial_keeps_every_gait_event(tmp_path: Path) -> None:
 
 
 def write_with_add_event(trial: Trial, out: Path) -> None:
-    """The writer as it was: events through ezc3d's ``add_event``."""
+    """The writer as it was: events through ezc3d's ``add_event``; then Vicon's icons
+    (1 foot strike, 2 foot off, 0 else) stored as 16-bit integers and the flags as bytes."""
     c = c3d_module._ezc3d_trial(replace(trial, events=[]), None, None)
     for event in trial.events:
         minutes, seconds = divmod(event.time, 60.0)
         c.add_event(time=[float(minutes), float(seconds)], context=event.context, label=event.label,
                     description=event.description, subject=event.subject)  # fmt: skip
+    if trial.events:
+        icons = {"Foot Strike": 1, "Foot Off": 2}
+        c["parameters"]["EVENT"]["ICON_IDS"]["value"] = np.array([icons.get(e.label, 0) for e in trial.events], float)
     c3d_module._write_with_ezc3d(c, out)
+    data = out.read_bytes()
+    section = read_section(data)
+    event = section.get("EVENT")
+    if event is not None:
+        n = len(trial.events)
+        icons_f = event.parameters["ICON_IDS"].numbers()
+        event.parameters["ICON_IDS"] = Parameter("ICON_IDS", 2, (n,), struct.pack(f"<{n}h", *icons_f.astype(int)),
+                                                 event.parameters["ICON_IDS"].description)  # fmt: skip
+        event.parameters["GENERIC_FLAGS"] = Parameter("GENERIC_FLAGS", 1, (n,), bytes(n),
+                                                      event.parameters["GENERIC_FLAGS"].description)  # fmt: skip
+        out.write_bytes(splice(data, section))
 
 
 @pytest.mark.parametrize("n", [0, 1, 43, 255])

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from fuzzygait.core.findings import FindingKind, messages
+from fuzzygait.core.trial import Event
 from fuzzygait.io import read_c3d, write_c3d
 from fuzzygait.io.c3d_guard import inspect
 from fuzzygait.io.c3d_params import Parameter, read_section
@@ -355,3 +356,35 @@ def test_an_upper_case_suffix_is_written_in_full(tmp_path: Path) -> None:
     assert write_c3d(read_c3d(src), out, source=src) == []
     assert_carried_over(src, out)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["OUT.C3D", "in.c3d"]
+
+
+def test_event_icons_and_flags_are_kept_and_stored_as_vicon_does(tmp_path: Path) -> None:
+    """Events added to a file's own (the gait events ``angles`` detects): the file's keep
+    their ``ICON_IDS`` and ``GENERIC_FLAGS``, the new ones get Nexus' icons (1 foot
+    strike, 2 foot off); both are stored as integers (16-bit, byte), as Vicon stores them."""
+    src = tmp_path / "in.c3d"
+    c = ezc3d.c3d(str(SAMPLE_DATA / "walking.c3d"))
+    c.add_event([0, 0.5], context="General", label="Marked", description="by hand")
+    c.add_event([0, 1.0], context="General", label="Marked", description="by hand")
+    c.write(str(src))
+    data = src.read_bytes()
+    section = read_section(data)
+    event = section["EVENT"].parameters
+    n = len(event["LABELS"].strings())
+    icons, flags = [5] * n, [1] * n
+    event["ICON_IDS"] = Parameter("ICON_IDS", 2, (n,), struct.pack(f"<{n}h", *icons))
+    event["GENERIC_FLAGS"] = Parameter("GENERIC_FLAGS", 1, (n,), bytes(flags))
+    src.write_bytes(splice(data, section))
+    trial = read_c3d(src)
+    assert {(e.icon_id(), e.flag) for e in trial.events} == {(5, 1)}
+    added = [Event("Foot Strike", "Left", 2.0), Event("Foot Off", "Right", 2.25)]  # float32-exact times
+    out = tmp_path / "out.c3d"
+    assert write_c3d(replace(trial, events=[*trial.events, *added]), out, source=src) == []
+    back = read_c3d(out).events
+    assert Counter(back) == Counter([*trial.events, *added])
+    assert [(e.icon_id(), e.flag) for e in back if e in added] == [(1, 0), (2, 0)]
+    assert {(e.icon_id(), e.flag) for e in back if e not in added} == {(5, 1)}
+    written = read_section(out.read_bytes())["EVENT"].parameters
+    assert (written["ICON_IDS"].kind, written["GENERIC_FLAGS"].kind) == (2, 1)
+    assert sorted(written["ICON_IDS"].numbers()) == sorted([*icons, 1, 2])
+    assert sorted(written["GENERIC_FLAGS"].numbers()) == sorted([*flags, 0, 0])

@@ -37,6 +37,10 @@ OUTPUT_UNITS = {
 }
 
 
+#: Vicon's ``EVENT:ICON_IDS`` of the gait events, by label.
+LABEL_ICONS = {"Foot Strike": 1, "Foot Off": 2}
+
+
 @dataclass(frozen=True)
 class Event:
     """A gait event as stored in the C3D ``EVENT`` group.
@@ -47,6 +51,9 @@ class Event:
         time: seconds on the C3D clock (C3D frame ``n`` is at ``(n - 1) / rate``).
         subject: subject name the event belongs to (may be empty).
         description: free text.
+        icon: Vicon's ``EVENT:ICON_IDS`` where the file gives another than the label's
+            (:meth:`icon_id`); None: the label's.
+        flag: ``EVENT:GENERIC_FLAGS`` (0 unless the file says otherwise).
     """
 
     label: str
@@ -54,6 +61,13 @@ class Event:
     time: float
     subject: str = ""
     description: str = ""
+    icon: int | None = None
+    flag: int = 0
+
+    def icon_id(self) -> int:
+        """The icon Vicon Nexus shows the event with: :attr:`icon`, else by the label
+        (as Nexus writes them: 1 a foot strike, 2 a foot off, 0 any other event)."""
+        return self.icon if self.icon is not None else LABEL_ICONS.get(self.label, 0)
 
     def frame(self, rate: float) -> float:
         """1-based C3D frame number of the event (may be fractional) at ``rate`` Hz."""

@@ -8,6 +8,7 @@ Each reader is lenient: what a group lacks or holds inconsistently is noted as a
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -60,16 +61,23 @@ def read_events(path: Path, raw: RawC3D, notes: list[Finding]) -> list[Event]:
             values += (got + [default] * part.shape[1])[: part.shape[1]]
         return values[:n]
 
-    return [
-        Event(label=lbl, context=ctx or "General", time=float(t), subject=subj, description=desc)
-        for lbl, ctx, t, subj, desc in zip(
-            texts("LABELS", "Event"),
-            texts("CONTEXTS", "General"),
-            seconds,
-            texts("SUBJECTS", ""),
-            texts("DESCRIPTIONS", ""),
-        )
-    ]
+    def numbers(name: str) -> list[int | None]:  # ICON_IDS, GENERIC_FLAGS: None where not stored
+        values: list[int | None] = []
+        for i, part in enumerate(parts):
+            found = suffixed(raw.get, "EVENT", name)
+            got = found[i] if i < len(found) and not isinstance(found[i], list) else []
+            stored = [int(v) for v in np.ravel(np.asarray(got, dtype=float)) if np.isfinite(v)]
+            values += (stored + [None] * part.shape[1])[: part.shape[1]]
+        return values[:n]
+
+    events = []
+    for lbl, ctx, t, subj, desc, icon, flag in zip(texts("LABELS", "Event"), texts("CONTEXTS", "General"), seconds,
+                                                   texts("SUBJECTS", ""), texts("DESCRIPTIONS", ""),
+                                                   numbers("ICON_IDS"), numbers("GENERIC_FLAGS")):  # fmt: skip
+        event = Event(label=lbl, context=ctx or "General", time=float(t), subject=subj, description=desc,
+                      flag=flag or 0)  # fmt: skip
+        events.append(event if icon is None or icon == event.icon_id() else replace(event, icon=icon))
+    return events
 
 
 def _event_times(found: Any) -> np.ndarray:

@@ -253,14 +253,37 @@ def event_parameters(events: Sequence[Event]) -> list[tuple[str, object]]:
         "LABELS": np.array([e.label for e in events]),
         "DESCRIPTIONS": np.array([e.description for e in events]),
         "SUBJECTS": np.array([e.subject for e in events]),
-        "ICON_IDS": np.zeros(len(events)),
-        "GENERIC_FLAGS": np.zeros(len(events)),
+        "ICON_IDS": np.array([e.icon_id() for e in events], dtype=float),  # stored as integers: integer_records
+        "GENERIC_FLAGS": np.array([e.flag for e in events], dtype=float),
     }
     params: list[tuple[str, object]] = [("USED", len(events))]
     for part, start in enumerate(range(0, len(events), PER_PARAMETER), start=1):
         suffix = str(part) if part > 1 else ""
         params += [(name + suffix, values[..., start : start + PER_PARAMETER]) for name, values in columns.items()]
     return params
+
+
+#: ``EVENT`` parameters Vicon stores as integers (ezc3d's Python API writes floats): C3D type.
+EVENT_INTEGER_KINDS = {"ICON_IDS": 2, "GENERIC_FLAGS": 1}
+
+
+def integer_event_records(section: Section) -> bool:
+    """Store the ``EVENT`` group's float ``ICON_IDS`` (as 16-bit integers) and
+    ``GENERIC_FLAGS`` (as bytes), their continuations ``ICON_IDS2`` ... too, as Vicon
+    Nexus does; True if a record changed."""
+    group = section.get("EVENT")
+    changed = False
+    for name, param in list(group.parameters.items()) if group is not None else []:
+        kind = EVENT_INTEGER_KINDS.get(name.upper().rstrip("0123456789"))
+        if kind is None or param.kind != 4:
+            continue
+        values = [int(v) for v in np.rint(param.numbers())]
+        data = struct.pack(f"<{len(values)}h", *values) if kind == 2 else bytes(v % 256 for v in values)
+        # one event: a 1-vector, as Vicon and ezc3d's add_event store it (ezc3d's add_parameter: a scalar)
+        group.parameters[name] = replace(param, kind=kind, dims=param.dims or (len(values),),  # type: ignore[union-attr]
+                                         data=data)  # fmt: skip
+        changed = True
+    return changed
 
 
 def check_blocks(path: Path) -> None:
