@@ -1,5 +1,5 @@
 """SolverSettings (issue 38.4): one validated object for the simulator's solver settings,
-typed solver failures, and runs unchanged bit for bit.
+typed solver failures, and runs unchanged (to the rounding of the CPU).
 
 Truth: ``data/solver_settings_reference.npz``, written by the code before SolverSettings
 existed (commit ce6009d, ``FUZZYGAIT_NO_COMPILE=1``: CasADi's virtual machine and the Python
@@ -25,6 +25,18 @@ from fuzzygait.mechanics.solver import BladeFolded, NewtonNotConverged, SolverEr
 from fuzzygait.mechanics.targets import LegModelRecipe
 
 REFERENCE = Path(__file__).with_name("data") / "solver_settings_reference.npz"
+#: The reference was written on another CPU: numpy's SIMD kernels and the maths library
+#: round differently on each (measured on two machines: at most 2.5e-11 of a variable's
+#: largest value), so a run agrees with it to rounding; counts and times exactly.
+ROUNDING = 1e-10
+
+
+def assert_same_run(values: np.ndarray, reference: np.ndarray, name: str) -> None:
+    """``values`` are ``reference`` up to the rounding of another CPU (:data:`ROUNDING`
+    of the largest value; NaN where it is NaN)."""
+    assert values.shape == reference.shape and np.array_equal(np.isnan(values), np.isnan(reference)), name
+    scale = float(np.nanmax(np.abs(reference))) if reference.size else 0.0
+    assert np.nanmax(np.abs(values - reference), initial=0.0) <= ROUNDING * scale, name
 VARIABLES = ("position", "total_energy", "dissipated_energy", "total_deformation_energy",
              "total_deformation_energy_sensitivity", "newton_iterations", "time")  # fmt: skip
 
@@ -102,11 +114,13 @@ def test_recipe_is_picklable_hashable_and_keyed_as_before() -> None:
 
 
 @pytest.mark.parametrize("scheme", ["variational", "energy-momentum"])
-def test_a_run_with_settings_is_the_old_run_bit_for_bit(swing: LegSimulator, scheme: str) -> None:
+def test_a_run_with_settings_is_the_old_run(swing: LegSimulator, scheme: str) -> None:
     reference = np.load(REFERENCE)
     ds = swing.run(swing.parameters(eta=1e5), SolverSettings(duration=0.03, scheme=scheme), sensitivities=True)
     key = scheme.replace("-", "_")
     for name in VARIABLES:
+        assert_same_run(ds[name].values, reference[f"{key}__{name}"], name)
+    for name in ("newton_iterations", "time"):
         assert np.array_equal(ds[name].values, reference[f"{key}__{name}"]), name
 
 
@@ -115,7 +129,7 @@ def test_refinement_and_failures_are_the_old_ones(swing: LegSimulator) -> None:
     p = swing.parameters(eta=1e5)
     refined = integrate(swing.model, swing.leg.q0, None, p, SolverSettings(dt=4e-3, n_steps=10, max_iterations=6))
     assert refined.substeps == int(reference["refined__substeps"]) == 4
-    assert np.array_equal(refined.q, reference["refined__q"])
+    assert_same_run(refined.q, reference["refined__q"], "q")
     assert np.array_equal(refined.iterations, reference["refined__iterations"])
     floppy = swing.parameters(E=1e3, eta=0.0)
     with pytest.raises(NewtonNotConverged) as newton:
