@@ -116,11 +116,15 @@ class FuzzyAccessor:
         self._require()
         return self._select(self._ds["hull"], component)
 
+    def _require_alpha(self, alpha: float) -> None:
+        """Refuse an ``alpha`` that is not one of the result's α-levels (names it and them)."""
+        if not np.any(np.isclose(self.alphas, alpha, rtol=0.0, atol=1e-12)):
+            raise ParameterError(f"α = {alpha:g} is not among the result's α-levels {self.alphas.tolist()}")
+
     def band(self, alpha: float, component: str | AngleComponent | None = None) -> xr.DataArray:
         """The band at ``alpha``: ``(..., bound, axis)``."""
         hull = self.hull(component)
-        if not np.any(np.isclose(self.alphas, alpha, rtol=0.0, atol=1e-12)):
-            raise ParameterError(f"α = {alpha:g} is not among the result's α-levels {self.alphas.tolist()}")
+        self._require_alpha(alpha)
         return hull.sel(alpha=alpha, method="nearest", tolerance=1e-12)
 
     def measured(self, component: str | AngleComponent | None = None) -> xr.DataArray:
@@ -142,7 +146,10 @@ class FuzzyAccessor:
             flags = self._select(self._ds["undetermined"], component)
         else:
             flags = xr.zeros_like(hull.isel(bound=0, drop=True), dtype=bool)
-        return flags if alpha is None else flags.sel(alpha=alpha, method="nearest", tolerance=1e-12)
+        if alpha is None:
+            return flags
+        self._require_alpha(alpha)
+        return flags.sel(alpha=alpha, method="nearest", tolerance=1e-12)
 
     def delta_phi(self, component: str | AngleComponent | None = None) -> xr.DataArray:
         """ΔΦ of thesis Eq. 5.3 in %: the widest band over the axis where it is determined,

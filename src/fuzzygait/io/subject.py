@@ -96,6 +96,10 @@ def read_subject_toml(path: str | os.PathLike[str]) -> SubjectParameters:
     data = load_toml(path, "subject file")
     table = data.get("subject", data) if isinstance(data.get("subject"), dict) else data
     numbers = {k: v for k, v in table.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    given = [f"{k} = {v!r}" for k, v in table.items() if k in PROCESSING_NAMES and k not in numbers]
+    if given:
+        raise ParameterError(f"{path}: subject parameters must be numbers (mm, kg, rad), written without quotes, e.g. "
+                             f"LLegLength = 900.0; got {', '.join(given)}")  # fmt: skip
     bad = [k for k, v in table.items() if not isinstance(v, (int, float, dict, str))]
     if bad:
         raise ParameterError(f"{path}: parameters {bad} must be numbers")

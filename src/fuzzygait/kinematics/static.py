@@ -162,12 +162,13 @@ def static_calibration(
     subject.validate()
     version = model_version(model)
     method = knee_method(static)
+    rule = knee_ankle_rule(static, knee_ankle_centres)  # an unknown rule first: it lists the known ones
     if not version.clusters and knee_ankle_centres not in (None, "chord"):
         raise ParameterError(
             f"{version.name} places the knee and ankle centres by the chord; "
             f"knee/ankle centres {knee_ankle_centres!r} are a cluster model's (cgm2.3, cgm2.4)"
         )
-    rule = knee_ankle_rule(static, knee_ankle_centres) if version.clusters else "chord"
+    rule = rule if version.clusters else "chord"
     if method != "plain" and version.name != "cgm1.0":
         raise ParameterError(
             f"{static.name}: the knee alignment device calibration is Plug-in Gait's; use {Option.MODEL} cgm1.0 "
@@ -175,9 +176,11 @@ def static_calibration(
         )
     labels = calibration_markers(static, method, rule)
     columns = [static.marker_labels.index(m) for m in labels]
-    seen = np.all(np.isfinite(static.markers[:, columns, :]), axis=(1, 2))
+    visible = np.all(np.isfinite(static.markers[:, columns, :]), axis=2)  # (frame, marker)
+    seen = np.all(visible, axis=1)
     if not seen.any():
-        raise ParameterError(f"{static.name}: no frame shows every marker {', '.join(labels)}")
+        raise ParameterError(f"{static.name}: no frame shows every calibration marker: {_unseen(labels, visible)}; "
+                             "label or gap-fill them in the static trial")  # fmt: skip
     calibrated = subject
     if subject.inter_asis_distance is None:
         iad = float(np.linalg.norm(static.marker("LASI")[seen].mean(0) - static.marker("RASI")[seen].mean(0)))
@@ -197,6 +200,18 @@ def static_calibration(
     if flat_foot:
         check_upright(static, chain, seen)
     return with_foot_offsets(calibrated, chain, seen, torsion=version.clusters and rule == "medial")
+
+
+def _unseen(labels: list[str], visible: np.ndarray) -> str:
+    """Which of ``labels`` keep a static trial from a frame showing them all (``visible``:
+    ``(frame, marker)`` True where seen): those never seen, else those seen least."""
+    counts = visible.sum(axis=0)
+    never = [m for m, c in zip(labels, counts, strict=True) if c == 0]
+    if never:
+        return f"{', '.join(never)} {'is' if len(never) == 1 else 'are'} missing in every frame"
+    fewest = sorted((int(c), m) for m, c in zip(labels, counts, strict=True) if c < visible.shape[0])
+    return ("every marker is seen somewhere but never all at once; seen least: "
+            f"{', '.join(f'{m} in {c} of {visible.shape[0]} frames' for c, m in fewest[:4])}")  # fmt: skip
 
 
 def with_foot_offsets(

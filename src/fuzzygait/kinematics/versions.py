@@ -88,9 +88,9 @@ def model_version(name: str) -> ModelVersion:
     ``"cgm2.3"``).
 
     Raises:
-        ParameterError: an unknown name (lists the known ones).
+        ParameterError: an unknown name or not a string (lists the known ones).
     """
-    key = name.strip().lower()
+    key = name.strip().lower() if isinstance(name, str) else ""
     key = key if key.startswith("cgm") else "cgm" + key
     if key not in _VERSIONS:
         raise ParameterError(f"unknown model {name!r}; choose one of {', '.join(MODEL_CHOICES)}")

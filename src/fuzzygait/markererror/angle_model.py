@@ -65,7 +65,7 @@ from fuzzygait.core.trial import Trial
 from fuzzygait.kinematics.angles import wrap_degrees
 from fuzzygait.kinematics.chain import pelvis_markers
 from fuzzygait.kinematics.clusters import ClusterCalibration
-from fuzzygait.kinematics.model import angle_from_chain, angle_markers, model_chain
+from fuzzygait.kinematics.model import ALL_ANGLE_NAMES, angle_from_chain, angle_markers, model_chain
 from fuzzygait.kinematics.pelvis import inter_asis_distance
 from fuzzygait.kinematics.versions import model_version
 from fuzzygait.markererror.row_kernel import (
@@ -178,6 +178,11 @@ class JointAngleModel(CompiledModel):
 
     def __post_init__(self) -> None:
         self.model = model_version(self.model).name
+        if self.name not in ALL_ANGLE_NAMES:
+            raise ParameterError(f"unknown angle {self.name!r}; give one of {', '.join(ALL_ANGLE_NAMES)}")
+        if isinstance(self.axis, bool) or not isinstance(self.axis, (int, np.integer)) or not 0 <= self.axis <= 2:
+            raise ParameterError(f"axis must be 0, 1 or 2 (X, Y, Z); got {self.axis!r}")
+        self._check_frames()
         model_chain(self.trial, self.subject, self.model, self.clusters)  # its errors: no calibration, no forefoot
         needed = model_angle_markers(self.trial, self.name, self.model, self.clusters, self.use_medial_markers)
         if not self.markers:
@@ -199,6 +204,19 @@ class JointAngleModel(CompiledModel):
         self.times = self.trial.times[self.frames]
         #: Sampling period of the trial, s (frames further apart are not neighbours).
         self.time_step = 1.0 / self.trial.rate
+
+    def _check_frames(self) -> None:
+        """Refuse :attr:`frames` that are not 0-based sample indices of the trial."""
+        frames = np.asarray(self.frames)
+        n_frames = self.trial.n_frames
+        if frames.ndim == 1 and (frames.dtype.kind in "iu" or (frames.size == 0 and frames.dtype.kind == "f")):
+            bad = frames[(frames < 0) | (frames >= n_frames)]
+        else:
+            bad = frames.ravel() if frames.ndim > 0 else frames.reshape(1)
+        if bad.size:
+            raise ParameterError(f"frames must be whole 0-based sample indices of {self.trial.name or 'the trial'}, "
+                                 f"from 0 to {n_frames - 1} ({n_frames} frames); got {bad[:5].tolist()}"
+                                 f"{' …' if bad.size > 5 else ''}")  # fmt: skip
 
     @property
     def n_parameters(self) -> int:

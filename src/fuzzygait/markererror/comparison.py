@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator, Sequence
+from numbers import Integral
 
 import numpy as np
 import xarray as xr
@@ -194,13 +195,17 @@ def monte_carlo_timed(
     return _envelope(model, radii, np.iinfo(np.int64).max, seed, frames, per_frame, chunk_rows, seconds)
 
 
+def _require_count(name: str, value: int) -> None:
+    """Refuse a count argument ``name`` that is not a whole number >= 1."""
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
+        raise ParameterError(f"{name} must be a whole number >= 1; got {value!r}")
+
+
 def _envelope(model: NodeModel, radii: Sequence[float] | np.ndarray, n_samples: int, seed: int,
               frames: Sequence[int] | np.ndarray | None, per_frame: bool, chunk_rows: int,
               seconds: float | None) -> tuple[np.ndarray, np.ndarray, int]:  # fmt: skip
-    if n_samples < 1:
-        raise ParameterError(f"n_samples must be >= 1; got {n_samples}")
-    if chunk_rows < 1:
-        raise ParameterError(f"chunk_rows must be >= 1; got {chunk_rows}")
+    _require_count("n_samples", n_samples)
+    _require_count("chunk_rows", chunk_rows)
     r = _radii(model, radii)
     nodes = _node_indices(model, frames)
     lower, upper = np.full(nodes.size, np.inf), np.full(nodes.size, -np.inf)
@@ -223,7 +228,12 @@ def random_deviation_curves(
 ) -> np.ndarray:
     """``n_curves`` angle curves ``(n_curves, n_time)`` under uniform random marker
     deviations inside the balls (mm): fresh deviations at every frame (``per_frame``,
-    noisy curves as in Fig. 5.11 b) or one deviation per curve."""
+    noisy curves as in Fig. 5.11 b) or one deviation per curve.
+
+    Raises:
+        ParameterError: ``n_curves`` < 1, or radii not one finite value >= 0 per marker.
+    """
+    _require_count("n_curves", n_curves)
     r = _radii(model, radii)
     nodes = _node_indices(model, None)
     chunks = _sample_chunks(model, r, nodes, n_curves, seed, per_frame, DEFAULT_CHUNK_ROWS)

@@ -162,9 +162,21 @@ def angle_components(fuzzy: xr.Dataset) -> list[str]:
     return [str(c) for c in fuzzy["component"].values]
 
 
+def _require_component(fuzzy: xr.Dataset, component: str) -> None:
+    """Refuse a ``component`` the dataset does not hold (names it and the ones it holds)."""
+    held = angle_components(fuzzy)
+    if not isinstance(component, str) or component not in held:
+        where = f"the dataset of {fuzzy.attrs['trial']}" if "trial" in fuzzy.attrs else "the dataset"
+        raise ParameterError(f"component {component!r} is not in {where}; it holds {', '.join(held) or 'none'}")
+
+
 def component_hull(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
-    """Hull of one component in degrees, dims ``(alpha, bound, frame)``."""
-    _require_layout(fuzzy)
+    """Hull of one component in degrees, dims ``(alpha, bound, frame)``.
+
+    Raises:
+        ParameterError: ``component`` is not in the dataset.
+    """
+    _require_component(fuzzy, component)
     return fuzzy["hull"].sel(component=component, drop=True)
 
 
@@ -179,14 +191,23 @@ def undetermined_flags(fuzzy: xr.Dataset) -> xr.DataArray:
 
 def component_undetermined(fuzzy: xr.Dataset, component: str) -> xr.DataArray:
     """Where the band of one component is undetermined, dims ``(alpha, frame)``
-    (:func:`undetermined_flags`)."""
+    (:func:`undetermined_flags`).
+
+    Raises:
+        ParameterError: ``component`` is not in the dataset.
+    """
+    _require_component(fuzzy, component)
     return undetermined_flags(fuzzy).sel(component=component, drop=True)
 
 
 def component_deviation(fuzzy: xr.Dataset, component: str) -> xr.DataArray | None:
     """Norms (mm) of the marker deviations that give each hull value, dims ``(alpha,
-    bound, frame, marker)`` (Fig. 5.12); None when the dataset has none."""
-    _require_layout(fuzzy)
+    bound, frame, marker)`` (Fig. 5.12); None when the dataset has none.
+
+    Raises:
+        ParameterError: ``component`` is not in the dataset.
+    """
+    _require_component(fuzzy, component)
     if "deviation" not in fuzzy.data_vars:
         return None
     return fuzzy["deviation"].sel(component=component, drop=True)

@@ -31,6 +31,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from numbers import Real
 from pathlib import Path
 
 from fuzzygait.core.errors import ParameterError
@@ -102,6 +103,23 @@ class ErrorModel:
     marker_radius: Mapping[str, float] = field(default_factory=dict)
     source: str = "Table 3.1"
 
+    def __post_init__(self) -> None:
+        """Refuse what :meth:`radius` could not use: a segment of Table 3.1 missing or
+        lacking a source, an unknown segment, a size that is not a distance in mm."""
+        if not isinstance(self.segments, Mapping) or set(self.segments) != set(TABLE_3_1):
+            given = list(self.segments) if isinstance(self.segments, Mapping) else self.segments
+            raise ParameterError(f"ErrorModel: segments must give every segment {', '.join(TABLE_3_1)} (each "
+                                 f"source -> mm, e.g. TABLE_3_1); got {given!r}")  # fmt: skip
+        for name, table in self.segments.items():
+            lacking = [s for s in SOURCES if s not in _check_values("ErrorModel", f"segments.{name}", table, SOURCES)]
+            if lacking:
+                raise ParameterError(f"ErrorModel: [segments.{name}] lacks {', '.join(lacking)}; give every source "
+                                     f"({', '.join(SOURCES)}) in mm")  # fmt: skip
+        for label, table in self.marker_sources.items():
+            _check_values("ErrorModel", f"markers.{label}", table, SOURCES)
+        for label, radius in self.marker_radius.items():
+            _check_values("ErrorModel", f"markers.{label}", {"radius": radius}, ("radius",))
+
     def radius(self, label: str, sources: Sequence[str] = SOURCES) -> float:
         """Cumulative error Σ (mm) of ``label`` for the selected ``sources``."""
         if label in self.marker_radius:
@@ -114,15 +132,17 @@ class ErrorModel:
         return {label: self.radius(label, sources) for label in labels}
 
 
-def _check_values(path: Path, where: str, table: object, allowed: Sequence[str]) -> dict[str, float]:
-    if not isinstance(table, dict):
-        raise ParameterError(f"{path}: [{where}] must be a table of numbers")
+def _check_values(origin: str | Path, where: str, table: object, allowed: Sequence[str]) -> dict[str, float]:
+    """``table`` (``[where]`` of the errors file or model ``origin``) as source -> mm,
+    checked: keys among ``allowed``, values distances in mm (0..500)."""
+    if not isinstance(table, Mapping):
+        raise ParameterError(f"{origin}: [{where}] must be a table of numbers")
     out = {}
     for key, value in table.items():
         if key not in allowed:
-            raise ParameterError(f"{path}: [{where}] has unknown key {key!r}; use {', '.join(allowed)}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0 or value > 500:
-            raise ParameterError(f"{path}: [{where}] {key} = {value!r} must be a distance in mm (0..500)")
+            raise ParameterError(f"{origin}: [{where}] has unknown key {key!r}; use {', '.join(allowed)}")
+        if isinstance(value, bool) or not isinstance(value, Real) or not 0 <= float(value) <= 500:
+            raise ParameterError(f"{origin}: [{where}] {key} = {value!r} must be a distance in mm (0..500)")
         out[key] = float(value)
     return out
 

@@ -35,6 +35,18 @@ class Pendulum:
     gravity: float = GRAVITY
     rtol: float = 1e-10
 
+    def __post_init__(self) -> None:
+        times = np.asarray(self.times, dtype=float) if _numeric(self.times) else np.asarray([np.nan])
+        if times.ndim != 1 or times.size == 0 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
+            raise ParameterError(f"pendulum times must be a non-empty 1-D array of finite, strictly increasing "
+                                 f"times in s, e.g. np.linspace(0, 2, 201); got {self.times!r}")  # fmt: skip
+        for name, value in (("theta0", self.theta0), ("gravity", self.gravity)):
+            if not (_numeric(value) and np.ndim(value) == 0 and np.isfinite(value)):
+                raise ParameterError(f"pendulum {name} must be a finite number; got {value!r}")
+        if not (_numeric(self.rtol) and np.ndim(self.rtol) == 0 and 0 < self.rtol < 1):
+            raise ParameterError(f"pendulum rtol must be a relative tolerance between 0 and 1; got {self.rtol!r}")
+        self.times = times
+
     parameter_names = ("L",)
     output = Output("theta", "rad", "pendulum angle")
     capabilities = frozenset({SENSITIVITIES})
@@ -55,6 +67,8 @@ class Pendulum:
 
         y0 = [self.theta0, 0.0] + ([0.0, 0.0] if sensitivities else [])
         times = np.asarray(self.times, dtype=float)
+        if times.size == 1:  # the initial state only (solve_ivp returns nothing for an empty span)
+            return np.asarray(y0, dtype=float)[:, None]
         solution = solve_ivp(rhs, (times[0], times[-1]), y0, t_eval=times, method="DOP853",
                              rtol=self.rtol, atol=1e-12)  # fmt: skip
         if not solution.success:
@@ -66,3 +80,8 @@ class Pendulum:
         in rad/m (integrated together with the motion: one simulation)."""
         y = self._solve(p, sensitivities=sensitivities)
         return Evaluation(y[0], y[2][:, None] if sensitivities else None)
+
+
+def _numeric(value: object) -> bool:
+    """Whether ``value`` is a number or an array of numbers (not a string, a bool or None)."""
+    return not isinstance(value, (str, bytes, bool)) and np.asarray(value).dtype.kind in "iuf"

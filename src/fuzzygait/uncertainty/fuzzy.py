@@ -89,12 +89,13 @@ class FuzzyNumber:
         )
 
     def membership(self, x: np.ndarray | float) -> np.ndarray:
-        """Membership μ(x) in [0, 1], piecewise linear between the α-cut ends."""
+        """Membership μ(x) in [0, 1], piecewise linear between the α-cut ends; NaN where
+        ``x`` is NaN."""
         x = np.asarray(x, dtype=float)
         left = _branch(x, self.lower, self.alphas)
         right = _branch(x, self.upper[::-1], self.alphas[::-1])
         mu = np.where(x < self.lower[-1], left, np.where(x > self.upper[-1], right, 1.0))
-        return np.where((x < self.lower[0]) | (x > self.upper[0]), 0.0, mu)
+        return np.where(np.isnan(x), np.nan, np.where((x < self.lower[0]) | (x > self.upper[0]), 0.0, mu))
 
     def increments(self) -> tuple[np.ndarray, np.ndarray]:
         """The l_α r_α-increments (Eq. 2.20), from the lowest level up.

@@ -21,9 +21,20 @@ class FuzzyVector:
     numbers: tuple[FuzzyNumber, ...]
 
     def __init__(self, numbers: Sequence[FuzzyNumber]) -> None:
+        if isinstance(numbers, FuzzyNumber):
+            raise ParameterError(f"give the fuzzy parameters as a list, e.g. [{numbers.name or 'p'}]; got one "
+                                 "fuzzy number")  # fmt: skip
         if not numbers:
             raise ParameterError("at least one fuzzy parameter is needed")
+        wrong = [f"{i}: {n!r}" for i, n in enumerate(numbers) if not isinstance(n, FuzzyNumber)]
+        if wrong:
+            raise ParameterError(f"fuzzy parameters must be FuzzyNumber (e.g. triangular(0.9, 1.0, 1.1, 'k')); got "
+                                 f"{', '.join(wrong)} (position: value)")  # fmt: skip
         object.__setattr__(self, "numbers", tuple(numbers))
+        names = self.names
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise ParameterError(f"fuzzy parameter names must differ; {', '.join(repeated)} given more than once")
 
     @property
     def names(self) -> list[str]:
@@ -73,14 +84,26 @@ class FuzzyBalls:
     names_: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        centres = np.atleast_2d(np.asarray(self.centres, dtype=float))
-        radii = np.asarray(self.support_radii, dtype=float).ravel()
-        if radii.size != centres.shape[0]:
-            raise ParameterError(f"one radius per ball needed: {centres.shape[0]} balls, {radii.size} radii")
+        centres = np.asarray(self.centres, dtype=float)
+        radii = np.asarray(self.support_radii, dtype=float)
+        if centres.ndim != 2 or centres.shape[0] < 1 or centres.shape[1] < 1:
+            raise ParameterError(f"centres must be an (n_balls, block) array with at least one ball, e.g. "
+                                 f"np.zeros((2, 3)); got shape {centres.shape}")  # fmt: skip
+        names = tuple(self.names_)
+        if names and len(names) != centres.shape[0]:
+            raise ParameterError(f"one name per ball needed (or none): {centres.shape[0]} balls, {len(names)} names "
+                                 f"{list(names)}")  # fmt: skip
+        unfinite = [names[k] if names else f"ball{k}" for k in np.flatnonzero(~np.all(np.isfinite(centres), axis=1))]
+        if unfinite:
+            raise ParameterError(f"ball centres must be finite; {', '.join(unfinite)} not")
+        if radii.shape != (centres.shape[0],):
+            raise ParameterError(f"one radius per ball needed (shape ({centres.shape[0]},)): {centres.shape[0]} "
+                                 f"balls, radii of shape {radii.shape}")  # fmt: skip
         if np.any(radii < 0) or not np.all(np.isfinite(radii)):
             raise ParameterError(f"ball radii must be finite and >= 0; got {radii.tolist()}")
         object.__setattr__(self, "centres", centres)
         object.__setattr__(self, "support_radii", radii)
+        object.__setattr__(self, "names_", names)
 
     @property
     def names(self) -> list[str]:

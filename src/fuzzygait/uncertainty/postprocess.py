@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from numbers import Real
 
 import numpy as np
 import xarray as xr
@@ -62,7 +63,12 @@ def failure_probability(result: xr.Dataset, limit: float, failure_above: bool = 
     Returns:
         ``v`` over ``time`` in [0, 1]. Where the output is crisp (zero area) ``v`` is 1
         or 0 by which side of the limit the deterministic value lies.
+
+    Raises:
+        ParameterError: ``limit`` is not a finite number, or the α-levels lack 0 or 1.
     """
+    if isinstance(limit, bool) or not isinstance(limit, Real) or not np.isfinite(limit):
+        raise ParameterError(f"limit must be a finite number in the output's units; got {limit!r}")
     alphas = result["alpha"].to_numpy()
     if alphas[0] != 0.0 or alphas[-1] != 1.0:
         raise ParameterError("failure probability needs the α-levels 0 and 1")

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import os
 import shutil
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 
 import xarray as xr
@@ -51,15 +52,33 @@ def save_result(result: xr.Dataset, path: str | os.PathLike[str]) -> Path:
 
 
 def load_result(path: str | os.PathLike[str]) -> xr.Dataset:
-    """Read a result written by :func:`save_result` (fully into memory)."""
+    """Read a result written by :func:`save_result` (fully into memory).
+
+    Raises:
+        FuzzyGaitError: no such file, it cannot be read, or it is not a result dataset.
+    """
     path = Path(path)
     kind = _kind(path)
     if not path.exists():
         raise FuzzyGaitError(f"{path}: no such result; check the path")
-    if kind == ".nc":
-        with xr.open_dataset(path, engine="h5netcdf") as ds:
-            return ds.load()
-    return xr.open_zarr(path).load()
+    with _reading(path):
+        if kind == ".nc":
+            with xr.open_dataset(path, engine="h5netcdf") as ds:
+                return ds.load()
+        return xr.open_zarr(path).load()
+
+
+@contextmanager
+def _reading(path: Path) -> Iterator[None]:
+    """Turn the error of reading ``path`` as a result into one line naming the file: it
+    cannot be read, or it is not a result (not netCDF, an empty or foreign zarr folder)."""
+    try:
+        yield
+    except PermissionError as exc:
+        raise FuzzyGaitError(f"{path}: cannot be read ({exc.strerror or exc}); check its permissions") from exc
+    except (OSError, ValueError) as exc:
+        raise FuzzyGaitError(f"{path}: not a fuzzygait result dataset (a .nc or .zarr written by fuzzygait): "
+                             f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from exc  # fmt: skip
 
 
 def _write_groups(groups: Mapping[str, xr.Dataset], target: Path, kind: str) -> None:
@@ -101,14 +120,19 @@ def save_groups(groups: Mapping[str, xr.Dataset], path: str | os.PathLike[str]) 
 
 def load_groups(path: str | os.PathLike[str]) -> dict[str, xr.Dataset]:
     """Read every group of a file written by :func:`save_groups` (or :func:`save_result`:
-    the root only), fully into memory: ``{"/": root, "/name": group, ...}``."""
+    the root only), fully into memory: ``{"/": root, "/name": group, ...}``.
+
+    Raises:
+        FuzzyGaitError: no such file, it cannot be read, or it is not a result dataset.
+    """
     path = Path(path)
     kind = _kind(path)
     if not path.exists():
         raise FuzzyGaitError(f"{path}: no such result; check the path")
-    groups = xr.open_groups(path, engine="h5netcdf" if kind == ".nc" else "zarr")
-    try:
-        return {name: dataset.load() for name, dataset in groups.items()}
-    finally:
-        for dataset in groups.values():
-            dataset.close()
+    with _reading(path):
+        groups = xr.open_groups(path, engine="h5netcdf" if kind == ".nc" else "zarr")
+        try:
+            return {name: dataset.load() for name, dataset in groups.items()}
+        finally:
+            for dataset in groups.values():
+                dataset.close()

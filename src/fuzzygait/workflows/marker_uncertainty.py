@@ -14,6 +14,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from numbers import Integral, Real
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict, Unpack
 
@@ -22,13 +23,17 @@ import pandas as pd
 import xarray as xr
 
 from fuzzygait.core.errors import ParameterError
-from fuzzygait.core.findings import Finding, FindingKind
+from fuzzygait.core.findings import Finding, FindingKind, Severity
+from fuzzygait.core.names import angle_of
+from fuzzygait.kinematics import ALL_ANGLE_NAMES
 from fuzzygait.markererror.allowable import DEFAULT_TOLERANCE, AllowableRequest, allowable_errors
 from fuzzygait.markererror.analysis import (
     DEFAULT_ALPHAS,
+    METHODS,
     FuzzyAngleOptions,
     fuzzy_joint_angles,
     relative_envelope_width,
+    split_component,
 )
 from fuzzygait.markererror.fuzzy_kinetics import DEFAULT_TOLERANCE as DEFAULT_KINETIC_TOLERANCE
 from fuzzygait.markererror.moment_model import DEFAULT_COP_ERROR_MM
@@ -138,6 +143,15 @@ class MarkerErrorSettings:
     kinetic_tolerance: float = DEFAULT_KINETIC_TOLERANCE
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "alphas", _alpha_levels(self.alphas))
+        object.__setattr__(self, "angles", _angle_selection("angles", self.angles))
+        object.__setattr__(self, "allowable_angles", _angle_selection("allowable_angles", self.allowable_angles))
+        if self.workers is not None and (isinstance(self.workers, bool) or not isinstance(self.workers, Integral)
+                                         or self.workers < 1):  # fmt: skip
+            raise ParameterError(f"workers must be a whole number of processes >= 1 (or None: up to 2); "
+                                 f"got {self.workers!r}")  # fmt: skip
+        if self.method not in METHODS:
+            raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {self.method!r}")
         if self.tolerance is not None and not (math.isfinite(self.tolerance) and self.tolerance > 0):
             raise ParameterError(f"tolerance must be a finite number of degrees > 0 (or None: no "
                                  f"allowable-error table); got {self.tolerance}")  # fmt: skip
@@ -150,16 +164,22 @@ class MarkerErrorSettings:
     @classmethod
     def create(cls, **arguments: Unpack[SettingsArguments]) -> MarkerErrorSettings:
         """Settings with the error sizes read from ``errors_file`` (once) and the sources
-        checked; the other arguments as the attributes (defaults: theirs)."""
+        checked; the other arguments as the attributes (defaults: theirs); ParameterError for
+        an unknown keyword (naming it and the accepted ones) or an impossible value."""
+        accepted = SettingsArguments.__optional_keys__ | SettingsArguments.__required_keys__
+        unknown = [k for k in arguments if k not in accepted]
+        if unknown:
+            raise ParameterError(f"MarkerErrorSettings.create: unknown keyword argument {', '.join(unknown)}; "
+                                 f"it takes {', '.join(k for k in SettingsArguments.__annotations__)}")  # fmt: skip
         names = parse_sources(arguments.get("sources", SOURCES))
         errors_file = arguments.get("errors_file")
         error_model = read_error_model(errors_file) if errors_file is not None else ErrorModel()
-        angles = arguments.get("angles")
-        refined = arguments.get("allowable_angles")
-        return cls(error_model, names, tuple(arguments.get("alphas", DEFAULT_ALPHAS)),
-                   None if angles is None else tuple(angles), arguments.get("method", "cartesian"),
+        angles = _angle_selection("angles", arguments.get("angles"))
+        refined = _angle_selection("allowable_angles", arguments.get("allowable_angles"))
+        return cls(error_model, names, _alpha_levels(arguments.get("alphas", DEFAULT_ALPHAS)),
+                   angles, arguments.get("method", "cartesian"),
                    arguments.get("workers"), arguments.get("tolerance", DEFAULT_TOLERANCE),
-                   None if refined is None else tuple(refined), bool(arguments.get("per_source", True)),
+                   refined, bool(arguments.get("per_source", True)),
                    bool(arguments.get("kinetics", False)), float(arguments.get("cop_error_mm", DEFAULT_COP_ERROR_MM)),
                    float(arguments.get("kinetic_tolerance", DEFAULT_KINETIC_TOLERANCE)))  # fmt: skip
 
@@ -168,6 +188,33 @@ class MarkerErrorSettings:
         workers = self.workers if self.workers is not None else min(2, os.cpu_count() or 1)
         return FuzzyAngleOptions(alphas=self.alphas, sources=self.sources, error_model=self.error_model,
                                  method=self.method, workers=workers)  # fmt: skip
+
+
+def _alpha_levels(alphas: object) -> tuple[float, ...]:
+    """``alphas`` as a tuple of α-levels, checked: finite numbers in [0, 1], at least one
+    below 1 (1, the measured angle, is always added)."""
+    if isinstance(alphas, (str, bytes)) or not isinstance(alphas, (Sequence, np.ndarray)) \
+            or not all(isinstance(a, Real) and not isinstance(a, bool) for a in alphas) \
+            or not all(0.0 <= float(a) <= 1.0 for a in alphas) or not any(float(a) < 1.0 for a in alphas):
+        raise ParameterError(f"alphas must be α-levels from 0 to below 1, e.g. (0, 0.5); got {alphas!r} (1, the "
+                             "measured angle, is always added)")  # fmt: skip
+    return tuple(float(a) for a in alphas)
+
+
+def _angle_selection(field_name: str, names: object) -> tuple[str, ...] | None:
+    """``names`` (a setting ``field_name`` selecting angles) as a tuple, checked: None, or
+    one or more angle names (``"LKneeAngles"``) or components (``"LKneeAngles_X"``)."""
+    if names is None:
+        return None
+    if isinstance(names, (str, bytes)) or not isinstance(names, (Sequence, np.ndarray)) or len(names) == 0:
+        raise ParameterError(f"{field_name} must be a list of one or more angle names or components, e.g. "
+                             f"['LKneeAngles', 'RHipAngles_X'] (None: every angle); got {names!r}")  # fmt: skip
+    unknown = [n for n in names if not isinstance(n, str) or angle_of(n) not in ALL_ANGLE_NAMES]
+    if unknown:
+        raise ParameterError(f"{field_name}: unknown angle {', '.join(map(repr, unknown))}; give angle names such "
+                             f"as {', '.join(ALL_ANGLE_NAMES[:4])}, ... or components such as "
+                             f"{ALL_ANGLE_NAMES[0]}_X")  # fmt: skip
+    return tuple(names)
 
 
 #: The default analysis: Table 3.1 errors, all sources, α = 0, 0.25, 0.5, 0.75 (and 1),
@@ -216,6 +263,7 @@ def analyse_run(
     """
     options = settings.options()
     allowable = None
+    not_computed = _angles_not_computed(run, settings)
 
     def components(done: int, total: int) -> None:
         if progress is not None:
@@ -257,6 +305,9 @@ def analyse_run(
         f"formulation, α-levels {', '.join(f'{a:g}' for a in fuzzy['alpha'].to_numpy())}; {run.model} marker "
         f"model ({fixed}static offsets and subject measures fixed)",
     )]
+    if not_computed:
+        notes.append(Finding(FindingKind.UNCERTAINTY, f"fuzzy angles: {', '.join(not_computed)} not analysed: this "
+                             f"{run.model} run did not compute them", Severity.WARNING))  # fmt: skip
     if per_source_note is not None:
         notes.append(Finding(FindingKind.UNCERTAINTY, per_source_note))
     if allowable is not None:
@@ -272,12 +323,24 @@ def analyse_run(
     return MarkerErrorAnalysis(run, fuzzy, relative_envelope_width(fuzzy), notes, allowable, result)
 
 
+def _angles_not_computed(run: AnglesRun, settings: MarkerErrorSettings) -> list[str]:
+    """The angles (or components) of ``settings.angles`` that ``run`` did not compute (the
+    analysis skips them; empty when every angle is asked for); ParameterError when the run
+    computed none of them (naming them and what it computed)."""
+    wanted = settings.angles or ALL_ANGLE_NAMES
+    missing = [n for n in wanted if split_component(n)[0] not in run.result.angles]
+    if len(missing) == len(wanted):
+        asked = "" if settings.angles is None else f" ({', '.join(settings.angles)})"
+        raise ParameterError(f"{Path(run.trial.name).name}: none of the requested angles{asked} was computed by this "
+                             f"{run.model} run; it computed {', '.join(run.result.angles) or 'no angle'}")  # fmt: skip
+    return missing if settings.angles is not None else []
+
+
 def _estimate(run: AnglesRun, settings: MarkerErrorSettings) -> WorkEstimate | None:
     """The analysis' work on ``run``: per component asked for, the frames it is optimised
     on (measured, and computable from the markers) × the α-levels, and the later runs;
     None when no component asked for is computed (the analysis then says so)."""
-    from fuzzygait.kinematics import ALL_ANGLE_NAMES
-    from fuzzygait.markererror.analysis import component_tasks, split_component
+    from fuzzygait.markererror.analysis import component_tasks
     from fuzzygait.markererror.angle_model import AXES
     from fuzzygait.workflows.work_estimate import marker_error_work
 
