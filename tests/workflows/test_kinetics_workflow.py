@@ -267,3 +267,14 @@ def test_a_leg_without_its_heel_marker_is_a_warning_and_nan(movement: AnglesRun)
                                   movement.kinetics.data["moment"].sel(side="L").values)  # fmt: skip
     assert run.kinetics.summary().startswith("kinetics (4 force plates, 85 kg): left plate 1, 3; right no plate "
                                              "(not computed)")  # fmt: skip
+
+
+def test_a_trial_given_without_its_file_says_why_it_has_no_kinetics() -> None:
+    """The plates are read from the C3D file: a Trial made in memory (no ``source``) gets
+    a note saying so, not silence (the sample trial has two plates)."""
+    trial = dataclasses.replace(read_c3d(SAMPLE_DATA / "walking.c3d"), source=None)
+    run = run_angles(trial, subject_file=SAMPLE_DATA / "subject.toml")
+    assert run.kinetics is None
+    assert [f.message for f in of_kind(run.notes, FindingKind.KINETICS)] == [
+        "the trial was given without its C3D file (Trial.source), where the force plates are read from: no kinetics"
+    ]

@@ -331,8 +331,8 @@ def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *
 def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = None,
                  ) -> tuple[TrialKinetics | None, list[Finding]]:  # fmt: skip
     """:func:`trial_kinetics` as the angles pipeline runs it: the kinetics (None without
-    plates) and the notes for the run. A trial read from a file without force plates gets
-    one note; kinetics that cannot be computed (no body mass, no usable plate, units that
+    plates) and the notes for the run. A trial read from a file without force plates, or
+    given without its file, gets one note; kinetics that cannot be computed (no body mass, no usable plate, units that
     disagree) are a warning note with the error's line and no kinetics - the angles
     stand."""
     from fuzzygait.core.errors import FuzzyGaitError
@@ -343,6 +343,7 @@ def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = N
         return None, [Finding(FindingKind.KINETICS, f"kinetics not computed: {exc}", Severity.WARNING)]
     if kinetics is None:
         source = run.raw.source
-        return None, ([] if source is None else [Finding(FindingKind.KINETICS, f"no force plates in {source.name}: "
-                                                                               "no kinetics")])  # fmt: skip
+        why = ("the trial was given without its C3D file (Trial.source), where the force plates are read from"
+               if source is None else f"no force plates in {source.name}")
+        return None, [Finding(FindingKind.KINETICS, f"{why}: no kinetics")]
     return kinetics, list(kinetics.findings)
