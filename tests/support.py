@@ -269,3 +269,16 @@ def assert_points_kept(src: Path, out: Path) -> int:
         assert not m_out[:, valid & ~measured].any(), label  # a filled sample was seen by no camera
         changed += int(np.count_nonzero(valid & ~same))
     return changed
+
+
+def write_cut(src: Path, out: Path, first: int = 101, count: int = 200) -> Any:
+    """The trial of ``src`` cut to ``count`` frames from C3D frame ``first``, written to
+    ``out`` with ``src`` carried over (nothing noted); returns the uncut trial."""
+    from dataclasses import replace
+
+    from fuzzygait.io import read_c3d, write_c3d
+
+    trial = read_c3d(src)
+    cut = replace(trial, markers=trial.markers[first - 1 : first - 1 + count], first_frame=first)
+    assert write_c3d(cut, out, source=src) == []
+    return trial
