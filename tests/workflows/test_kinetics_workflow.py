@@ -278,3 +278,28 @@ def test_a_trial_given_without_its_file_says_why_it_has_no_kinetics() -> None:
     assert [f.message for f in of_kind(run.notes, FindingKind.KINETICS)] == [
         "the trial was given without its C3D file (Trial.source), where the force plates are read from: no kinetics"
     ]
+
+
+def test_the_cycles_table_takes_the_kinetics_of_the_cycles_on_a_plate() -> None:
+    """``--cycles``: the kinetics are averaged over the cycles whose stance was on a plate,
+    as the pages show them: in the sample trial one per side (plate 1 under the left foot,
+    plate 2 under the right); before, the cycles off the plates entered with a zero ground
+    reaction and moments without one (LKneeMoment_X SD 370 N·mm/kg at 20 %)."""
+    run = run_angles(SAMPLE_DATA / "walking.c3d", subject_file=SAMPLE_DATA / "subject.toml")
+    assert run.kinetics is not None
+    table = run.cycle_statistics()
+    columns = run.kinetics.columns()
+    for side, first_plate_frame in (("L", 122), ("R", 177)):  # 0-based frames of the plate contacts' first frame
+        kinetic = table[table["angle"].str.startswith(side) & table["angle"].isin(list(columns))]
+        assert set(kinetic["n_cycles"]) == {1} and kinetic["sd"].isna().all()
+        # the moment at 0 % is the frame of the foot strike onto the plate: the frame table's value there
+        moment = kinetic[kinetic["angle"] == f"{side}KneeMoment_X"].set_index("percent")["mean"]
+        strike = [e.frame(run.trial.rate) - run.trial.first_frame for e in run.events
+                  if e.context[0] == side and e.label == "Foot Strike"]  # fmt: skip
+        start = min(strike, key=lambda f: abs(f - first_plate_frame))
+        values = columns[f"{side}KneeMoment_X"][0]
+        assert moment[0.0] == pytest.approx(np.interp(start, np.arange(values.size), values), abs=1.0)
+        # the ground reaction over the stance the plate measured: loaded from 0 to 100 %, peak as the frames'
+        vertical = kinetic[kinetic["angle"] == f"{side}NormalisedGRF_Z"]["mean"].to_numpy()
+        frames = columns[f"{side}NormalisedGRF_Z"][0]
+        assert vertical.min() > 0 and vertical.max() == pytest.approx(np.nanmax(frames), rel=0.02)

@@ -105,6 +105,8 @@ STANCE_CHECKS = (20.0, 30.0, 40.0)
 MIN_LOAD_PERCENT = 1.0
 #: The kinetic output cut over the stance phase instead of the whole cycle.
 STANCE_OUTPUT = "NormalisedGRF"
+#: The ground reaction's outputs (% body weight, N/kg): cut into the stance the plate measured.
+GROUND_OUTPUTS = (STANCE_OUTPUT, "GroundReactionForce")
 
 
 @dataclass
@@ -213,10 +215,10 @@ def kinetic_cycles(outputs: Mapping[str, Mapping[str, np.ndarray]],
         Sided component (``"LKneeMoment_X"``) -> ``(n_cycles, 101)`` in its unit, one row
         per counted cycle with a value on every frame of its span (cycles reaching into
         frames without kinetics, e.g. the first and last four, are left out): moments
-        and powers over 0..100 % of the gait cycle, ``NormalisedGRF`` over 0..100 % of
-        the stance phase as the plate measured it (the frames around mid-stance with a
-        vertical ground reaction above :data:`MIN_LOAD_PERCENT`).  Components without any
-        such cycle are absent.
+        and powers over 0..100 % of the gait cycle, ``NormalisedGRF`` (and
+        ``GroundReactionForce``) over 0..100 % of the stance phase as the plate measured
+        it (the frames around mid-stance with a vertical ground reaction above
+        :data:`MIN_LOAD_PERCENT`).  Components without any such cycle are absent.
     """
     out: dict[str, np.ndarray] = {}
     for side, components in outputs.items():
@@ -225,7 +227,7 @@ def kinetic_cycles(outputs: Mapping[str, Mapping[str, np.ndarray]],
             continue
         kept = loaded_cycles(cycles.get(side, ()), vertical)
         stances = [s for s in (_stance(c, vertical) for c in kept) if s is not None]
-        grf = {f"{STANCE_OUTPUT}_{axis}" for axis in "XYZ"}
+        grf = {f"{quantity}_{axis}" for quantity in GROUND_OUTPUTS for axis in "XYZ"}
         for name, values in components.items():
             stack = normalise_cycles(np.asarray(values, dtype=float), stances if name in grf else kept, N_POINTS)
             stack = stack[np.isfinite(stack).all(axis=1)]

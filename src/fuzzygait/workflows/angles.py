@@ -168,12 +168,14 @@ class AnglesRun:
 
     def cycle_statistics(self) -> pd.DataFrame:
         """Mean and SD over cycles per angle component and percent of the cycle, then the
-        kinetics' (:meth:`frame_table`'s names and units) when the run has them."""
+        kinetics' (:meth:`frame_table`'s names and units) over the cycles whose stance was
+        on a force plate, as the pages show them (:meth:`TrialKinetics.cycle_table
+        <fuzzygait.workflows.kinetics.TrialKinetics.cycle_table>`; the ground reaction over
+        the stance) when the run has them."""
         cycles = self.cycle_table()
         if self.kinetics is not None:
-            outputs = {name: values for name, (values, _) in self.kinetics.nexus_outputs().items()}
-            kinetic = normalised_angle_table(outputs, self.trial, self.events)
-            cycles = pd.concat([cycles, kinetic[kinetic["angle"].isin(self.kinetics.columns())]], ignore_index=True)
+            kinetic = self.kinetics.cycle_table(self.trial, self.events)
+            cycles = pd.concat([cycles, kinetic], ignore_index=True) if len(kinetic) else cycles
         table = mean_sd_table(cycles)
         table.attrs["model"] = self.model
         return table

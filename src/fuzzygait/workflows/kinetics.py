@@ -22,13 +22,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 from numpy.typing import NDArray
 
 from fuzzygait.core.errors import ParameterError
 from fuzzygait.core.findings import Finding, FindingKind, Severity, of_kind
 from fuzzygait.core.names import Axis, Side
-from fuzzygait.core.trial import Trial
+from fuzzygait.core.trial import Event, Trial
 from fuzzygait.io.force_plates import ForcePlate, ForcePlateError
 from fuzzygait.io.subject import read_force_plate_assignment
 from fuzzygait.kinetics.assignment import (
@@ -174,6 +175,30 @@ class TrialKinetics:
         and on the floor between plates, as Nexus leaves them), each ``(n, 3)`` with
         ``suffix`` appended, and its C3D output kind (``"moment"``, ``"power"``, ``"force"``)."""
         return {name: (np.ascontiguousarray(values), kind) for name, _, values, kind in self._nexus(suffix)}
+
+    def cycle_table(self, trial: Trial, events: Sequence[Event]) -> pd.DataFrame:
+        """The :meth:`columns` cut into the gait cycles whose stance was on a force plate,
+        as the pages and the normative data take them
+        (:func:`~fuzzygait.gait.normative.kinetic_cycles`): moments, powers and joint forces
+        over 0..100 % of the gait cycle, the ground reaction over 0..100 % of the stance the
+        plate measured; the long table of :func:`~fuzzygait.gait.cycles.normalised_angle_table`
+        (``angle`` the column's name, ``cycle`` its index among the counted cycles), in
+        Nexus' units (:data:`NEXUS_UNITS`)."""
+        from fuzzygait.gait.cycles import TABLE_COLUMNS, gait_cycles, percent_points
+        from fuzzygait.gait.event_labels import gait_events
+        from fuzzygait.gait.normative import N_POINTS, kinetic_cycles
+
+        typed = gait_events(events)
+        columns = self.columns()
+        components = {side.value: {name[1:]: values for name, (values, _) in columns.items() if name[0] == side.value}
+                      for side in Side}  # fmt: skip
+        cycles = {side: gait_cycles(trial, typed, side) for side in components}
+        stacks = kinetic_cycles(components, cycles)
+        percent = percent_points(N_POINTS)
+        parts = [pd.DataFrame({"angle": name, "side": name[0], "cycle": np.repeat(np.arange(len(stack)), percent.size),
+                               "percent": np.tile(percent, len(stack)), "value": stack.ravel()})
+                 for name in columns if (stack := stacks.get(name)) is not None]  # fmt: skip
+        return pd.concat(parts, ignore_index=True)[TABLE_COLUMNS] if parts else pd.DataFrame(columns=TABLE_COLUMNS)
 
     def columns(self) -> dict[str, tuple[Array, str]]:
         """Per-frame table columns named as Nexus (``LAnkleMoment_X`` ...; powers Z only)
