@@ -40,6 +40,11 @@ def test_simulate_writes_dataset(short_run) -> None:
     np.testing.assert_allclose(ds["total_energy"].values, parts.values, rtol=1e-12, atol=1e-12)
     assert ds.attrs["scenario"] == "swing" and int(ds.attrs["nodes"]) == NODES
     assert ds["newton_iterations"].sizes["step"] == n - 1
+    # every variable states its unit (one string, CF), every dimension has its coordinate
+    assert all(isinstance(ds[v].attrs.get("units"), str) for v in ds.data_vars if v != "parameter_value"), [
+        v for v in ds.data_vars if not isinstance(ds[v].attrs.get("units"), str)]
+    assert ds["parameter_unit"].sel(parameter="E") == "Pa" and set(ds.dims) <= set(ds.coords)
+    assert list(ds["step"].values[[0, -1]]) == [1, n - 1]
     assert float(ds["parameter_value"].sel(parameter="E")) == 7e5  # --set applied
     assert float(ds["parameter_value"].sel(parameter="eta")) == 2.0
     assert "blade005" in ds["body"].values

@@ -103,6 +103,7 @@ def test_fuzzy_sim_command(tmp_path):
 
     ds = xr.open_zarr(out).load()
     assert ds["hull"].dims == ("alpha", "bound", "time") and ds.sizes["time"] == 51
+    assert ds["hull"].attrs["units"] == "J" and list(ds["parameter_unit"].values) == ["Pa"]
     assert (tmp_path / "hulls.png").stat().st_size > 0
     bad = run("fuzzy-sim", "swing", "--fuzzy", "nu=abc", "--out", tmp_path / "bad.zarr")
     assert_one_line_error(bad, "nu=abc")

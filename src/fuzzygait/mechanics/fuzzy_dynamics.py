@@ -164,6 +164,13 @@ def fuzzy_forward_dynamics(
         wall_time_s=time.perf_counter() - start,
     )
     result["time"].attrs["units"] = "s"
+    for name in ("hull", "deterministic"):
+        if name in result:
+            result[name].attrs.setdefault("units", result.attrs["target_units"])
+    if "extremiser" in result and "parameter" in result["extremiser"].dims:
+        result = result.assign_coords(parameter_unit=("parameter", [PARAMETER_UNITS[n] for n in names]))
+        result["extremiser"].attrs.update(long_name="the fuzzy parameters' values giving each bound, in their "
+                                          "parameter_unit")  # fmt: skip
     return result
 
 

@@ -156,20 +156,26 @@ class LegSimulator:
             "internal_energy": ("time", energies.internal, {"units": "J"}),
             "dissipated_energy": ("time", energies.dissipated, {"units": "J"}),
             "total_energy": ("time", energies.total, {"units": "J", "long_name": "kinetic + gravitational + internal"}),
-            "newton_iterations": ("step", trajectory.iterations),
+            "newton_iterations": ("step", trajectory.iterations, {"units": "1", "long_name": "Newton iterations"}),
         }
-        coords = {"time": time_coord, "body": names, "xyz": ["x", "y", "z"], "director": ["d1", "d2", "d3"],
-                  "parameter": list(LEG_PARAMETERS)}
+        coords: dict[str, object] = {"time": time_coord, "body": names, "xyz": ["x", "y", "z"], "director": ["d1", "d2", "d3"],
+                  "parameter": list(LEG_PARAMETERS),
+                  "parameter_unit": ("parameter", [PARAMETER_UNITS[k] for k in LEG_PARAMETERS]),
+                  "step": ("step", np.arange(1, len(trajectory.iterations) + 1),
+                           {"long_name": "time step (step 1 ends at dt)"})}  # fmt: skip
         if self.model.groups:
             element = energies.element
             data["element_energy"] = (("time", "element"), element, {"units": "J"})
+            coords["element"] = np.arange(element.shape[1])
             data["total_deformation_energy"] = ("time", element.sum(axis=1), {"units": "J", "long_name": "Eq. 5.1"})
             data["max_element_energy"] = ("time", element.max(axis=1), {"units": "J", "long_name": "Eq. 5.2"})
             data["last_node_position"] = (("time", "xyz"), q[:, -1, :3], {"units": "m"})
-        data["parameter_value"] = ("parameter", p, {"units": [PARAMETER_UNITS[k] for k in LEG_PARAMETERS]})
+        data["parameter_value"] = ("parameter", p, {"long_name": "leg parameter value, in its parameter_unit"})
         if trajectory.sensitivities is not None:
             s = trajectory.sensitivities
-            data["configuration_sensitivity"] = (("time", "dof", "parameter"), s, {"long_name": "dq/dp"})
+            data["configuration_sensitivity"] = (("time", "dof", "parameter"), s,
+                                                 {"long_name": "dq/dp", "units": "per parameter unit"})  # fmt: skip
+            coords["dof"] = np.arange(s.shape[1])
             if self.model.groups:
                 d_total, d_max = self._target_sensitivities(trajectory, p, energies.element)
                 per_unit = "per parameter unit"
@@ -190,6 +196,8 @@ class LegSimulator:
             dt=dt,
             substeps=trajectory.substeps,
             energy_error=energy_error,
+            energy_error_definition="max over t of |E(t) + D(t) - E(0)| / max over t of (kinetic + internal), "
+                                    "E the total and D the dissipated energy",
             duration=float(trajectory.times[-1]),
             wall_time_s=wall,
             compiled=int(self.model.compiled),
