@@ -156,7 +156,9 @@ def test_a_leg_without_its_heel_marker_is_unavailable_not_wrong() -> None:
     trial = replace(trial, markers=trial.markers[:, keep], marker_labels=[trial.marker_labels[k] for k in keep])
     subject = subject_from_processing(trial.parameters)
     kinetics = plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {})
-    assert kinetics.unavailable == {Side.RIGHT: "no kinetics for the right leg: markers RHEE and RTOE are needed"}
+    assert kinetics.unavailable == {
+        Side.RIGHT: "no kinetics for the right leg: RHEE is not in the trial (the foot length is the RHEE-RTOE distance)"
+    }
     assert "RAnkleMoment" not in kinetics.outputs and "LHipMoment" in kinetics.outputs
     with pytest.raises(ParameterError, match="^the left foot's ground load has 10 frames; the trial has 323$"):
         plug_in_gait_kinetics(compute_lower_body(trial, subject), trial, subject, {Side.LEFT: no_load(10)})

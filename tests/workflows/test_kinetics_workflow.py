@@ -303,3 +303,17 @@ def test_the_cycles_table_takes_the_kinetics_of_the_cycles_on_a_plate() -> None:
         vertical = kinetic[kinetic["angle"] == f"{side}NormalisedGRF_Z"]["mean"].to_numpy()
         frames = columns[f"{side}NormalisedGRF_Z"][0]
         assert vertical.min() > 0 and vertical.max() == pytest.approx(np.nanmax(frames), rel=0.02)
+
+
+def test_a_foot_without_its_heel_marker_is_named_where_its_contacts_are_missing() -> None:
+    """A trial without LHEE (the shared gait-pig has no heel markers): the kinetics notes
+    say which marker keeps the left foot's plate contacts from being found."""
+    trial = read_c3d(SAMPLE_DATA / "walking.c3d")
+    keep = [k for k, label in enumerate(trial.marker_labels) if label != "LHEE"]
+    trial = dataclasses.replace(trial, markers=trial.markers[:, keep],
+                                marker_labels=[trial.marker_labels[k] for k in keep])  # fmt: skip
+    run = run_angles(trial, subject_file=SAMPLE_DATA / "subject.toml")
+    notes = [f.message for f in of_kind(run.notes, FindingKind.KINETICS)]
+    assert "the left foot's contacts with the force plates cannot be found: LHEE is not in the trial (a contact is " \
+           "told by the heel, toe and ankle markers)" in notes, notes
+    assert not any("right foot's contacts" in n for n in notes)

@@ -111,8 +111,11 @@ def foot_length(trial: Trial, side: Side, marker_radius: float) -> float:
         ParameterError: HEE or TOE missing or never seen together.
     """
     hee, toe = side.value + "HEE", side.value + "TOE"
-    if not (trial.has_marker(hee) and trial.has_marker(toe)):
-        raise ParameterError(f"no kinetics for the {side.word.lower()} leg: markers {hee} and {toe} are needed")
+    missing = [m for m in (hee, toe) if not trial.has_marker(m)]
+    if missing:
+        raise ParameterError(f"no kinetics for the {side.word.lower()} leg: {' and '.join(missing)} "
+                             f"{'is' if len(missing) == 1 else 'are'} not in the trial (the foot length is the "
+                             f"{hee}-{toe} distance)")  # fmt: skip
     length = foot_bone_length(trial.marker(hee), trial.marker(toe), marker_radius)
     if not np.isfinite(length):
         raise ParameterError(f"no kinetics for the {side.word.lower()} leg: {hee} and {toe} are never seen together")

@@ -158,8 +158,8 @@ class LegSimulator:
             "total_energy": ("time", energies.total, {"units": "J", "long_name": "kinetic + gravitational + internal"}),
             "newton_iterations": ("step", trajectory.iterations, {"units": "1", "long_name": "Newton iterations"}),
         }
-        coords: dict[str, object] = {"time": time_coord, "body": names, "xyz": ["x", "y", "z"], "director": ["d1", "d2", "d3"],
-                  "parameter": list(LEG_PARAMETERS),
+        coords: dict[str, object] = {"time": time_coord, "body": names, "xyz": ["x", "y", "z"],
+                                     "director": ["d1", "d2", "d3"], "parameter": list(LEG_PARAMETERS),
                   "parameter_unit": ("parameter", [PARAMETER_UNITS[k] for k in LEG_PARAMETERS]),
                   "step": ("step", np.arange(1, len(trajectory.iterations) + 1),
                            {"long_name": "time step (step 1 ends at dt)"})}  # fmt: skip

@@ -282,12 +282,28 @@ def _dataset(out: KineticsResult, trial: Trial, plates: Sequence[ForcePlate], bo
     return data
 
 
+#: The markers a foot's contacts with the plates are found from (:func:`_feet`).
+FOOT_MARKERS = ("HEE", "TOE", "ANK")
+
+
+def _unseen_foot_markers(trial: Trial, side: Side) -> list[str]:
+    """The side's :data:`FOOT_MARKERS` the trial lacks or never sees."""
+    return [side.value + m for m in FOOT_MARKERS
+            if not (trial.has_marker(side.value + m) and np.isfinite(trial.marker(side.value + m)).any())]  # fmt: skip
+
+
 def _feet(trial: Trial) -> dict[Side, Foot]:
     """The feet whose heel, toe and ankle markers the trial has (each seen at least once)."""
-    labels = ("HEE", "TOE", "ANK")
-    seen = {side: all(trial.has_marker(side.value + m) and np.isfinite(trial.marker(side.value + m)).any()
-                      for m in labels) for side in Side}  # fmt: skip
-    return {side: Foot(*(trial.marker(side.value + m) for m in labels)) for side in Side if seen[side]}
+    return {side: Foot(*(trial.marker(side.value + m) for m in FOOT_MARKERS))
+            for side in Side if not _unseen_foot_markers(trial, side)}  # fmt: skip
+
+
+def foot_marker_findings(trial: Trial) -> list[Finding]:
+    """One warning per foot whose plate contacts cannot be found for want of a marker."""
+    return [Finding(FindingKind.KINETICS, f"the {side.word.lower()} foot's contacts with the force plates cannot be "
+                    f"found: {', '.join(missing)} {'is' if len(missing) == 1 else 'are'} not in the trial (a "
+                    "contact is told by the heel, toe and ankle markers)", Severity.WARNING)
+            for side in Side if (missing := _unseen_foot_markers(trial, side))]  # fmt: skip
 
 
 def _check_mass(body_mass: float, path: Path, subject_file: str | os.PathLike[str] | None) -> None:
@@ -335,7 +351,8 @@ def trial_kinetics(run: AnglesRun, path: str | os.PathLike[str] | None = None, *
     contacts = automatic_assignment(plates, _feet(trial), trial.rate, threshold_n, override=override)
     ground = {side: contact_ground(plates, contacts, side, trial.n_frames, trial.rate) for side in Side}
     out = plug_in_gait_kinetics(run.result, trial, run.subject, ground, ComDerivative.GCV_SPLINE)  # as Nexus
-    findings = [f for p in plates for f in p.findings] + contact_findings(contacts, trial.first_frame)
+    findings = [f for p in plates for f in p.findings] + foot_marker_findings(trial) + contact_findings(
+        contacts, trial.first_frame)
     if of_kind(run.raw.notes, FindingKind.UNITS) and not any(f.severity is Severity.WARNING
                                                              for f in of_kind(run.raw.notes, FindingKind.UNITS)):
         findings.append(Finding(FindingKind.KINETICS, "kinetics in mm: the marker positions and the plates' corners "

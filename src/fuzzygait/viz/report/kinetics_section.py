@@ -71,7 +71,8 @@ def contact_rows(page: KineticsPage) -> list[list[tuple[str, bool]]]:
 
 def _contacts_table(page: KineticsPage) -> str:
     if not page.contacts:
-        return "<p>No foot contact on any force plate was found in this trial.</p>"
+        return ("<p>No foot contact on any force plate was found in this trial (contacts are told by the heel, "
+                "toe and ankle markers; the kinetics notes below say what was missing).</p>")
     header = [("Plate", True), ("Foot", False), ("C3D frames", True), ("Duration (s)", True), ("Result", False)]
     return ("<h3>Force-plate contacts</h3><p class=\"small\">Each contact goes to the foot whose heel–toe line "
             "the centre of pressure stays within 60 mm of, with the heel and ankle markers over the plate in "

@@ -252,9 +252,11 @@ def sources_section(result: MarkerErrorResult | None, files: str | None) -> str:
         '<h2 id="sources">Which error source dominates: flexion bands per source</h2>'
         f"<p>The flexion angles with the α = {alpha} band of each marker error source on its own and of all "
         f"together{footnote('sources')}. At α = {alpha} every marker lies within its source's error of where it was "
-        f"measured ({radii}, by segment{footnote('bands')}); all together adds the three. A source's band lies "
-        "inside the band of all together, as its balls lie inside theirs; the widest one dominates the "
-        "uncertainty — reducing that error helps most.</p>"
+        f"measured ({radii}, by segment{footnote('bands')}); all together adds the three. Where the band of all "
+        "together is determined, a source's band lies inside it, as its balls lie inside theirs; where it is "
+        "undetermined (no band drawn), a source's own band can still be drawn and be wider than any band of all "
+        "together in the table below. The widest one dominates the uncertainty — reducing that error helps "
+        "most.</p>"
         + figure
         + f"<h3>Widest α = {alpha} band per source (deg)</h3>"
         "<p class=\"small\">The widest band anywhere in the trial (upper minus lower bound) over the frames where "
