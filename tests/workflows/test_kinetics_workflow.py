@@ -317,3 +317,16 @@ def test_a_foot_without_its_heel_marker_is_named_where_its_contacts_are_missing(
     assert "the left foot's contacts with the force plates cannot be found: LHEE is not in the trial (a contact is " \
            "told by the heel, toe and ankle markers)" in notes, notes
     assert not any("right foot's contacts" in n for n in notes)
+
+
+def test_a_contact_the_recording_cuts_says_so() -> None:
+    """The sample trial cut at frame 150, during the left foot's contact on plate 1
+    (frames 123-187): the contact's note and the page's row say the recording ends during
+    it (its duration is not a stance's); the contacts inside the recording say nothing."""
+    trial = read_c3d(SAMPLE_DATA / "walking.c3d")
+    run = run_angles(dataclasses.replace(trial, markers=trial.markers[:150]), subject_file=SAMPLE_DATA / "subject.toml")
+    assert [f.message for f in of_kind(run.notes, FindingKind.FORCE_PLATE_ASSIGNMENT)] == [
+        "force plate 1, frames 123-150 (the recording ends during it): used by the left foot"
+    ]
+    whole = run_angles(trial, subject_file=SAMPLE_DATA / "subject.toml")
+    assert whole.kinetics is not None and not any(c.cut for c in whole.kinetics.contacts)

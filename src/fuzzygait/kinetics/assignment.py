@@ -163,6 +163,8 @@ class PlateContact:
         reason: whether and why (not) it is used.
         foot: of an unused contact, the foot the reason is about (off the plate's edge,
             on two plates), else None.
+        cut: the recording starts or ends while the plate is loaded: the contact is longer
+            than its frames here.
     """
 
     plate: int
@@ -171,6 +173,13 @@ class PlateContact:
     side: Side | None
     reason: ContactUse = ContactUse.USED
     foot: Side | None = None
+    cut: bool = False
+
+    def cut_text(self) -> str:
+        """``" (the recording ends during it)"`` or starts, for a :attr:`cut` contact; else ''."""
+        if not self.cut:
+            return ""
+        return " (the recording starts during it)" if self.first == 0 else " (the recording ends during it)"
 
     def describe(self) -> str:
         """What became of the contact, e.g. ``"not used: left foot off the plate's edge"``."""
@@ -185,7 +194,7 @@ class PlateContact:
         foot = self.side or self.foot
         warn = self.reason in (ContactUse.BOTH_FEET, ContactUse.OTHER_FOOT, ContactUse.OFF_EDGE, ContactUse.TWO_PLATES)
         frames = f"{first_frame + self.first}-{first_frame + self.last}"
-        text = f"force plate {self.plate}, frames {frames}: {self.describe()}"
+        text = f"force plate {self.plate}, frames {frames}{self.cut_text()}: {self.describe()}"
         return Finding(FindingKind.FORCE_PLATE_ASSIGNMENT, text, Severity.WARNING if warn else Severity.INFO,
                        side=foot.word.lower() if foot else None)  # fmt: skip
 
@@ -287,14 +296,15 @@ def automatic_assignment(plates: Sequence[PlateCorners], feet: Mapping[Side, Foo
         weight = frame_means(np.asarray(plate.contact, dtype=float), ratio, n_frames)
         cop = np.where(weight[:, None] > 0, cop / np.maximum(weight, 1e-12)[:, None], np.nan)
         for first, last in frame_contacts(plate, n_frames, rate, threshold_n):
+            cut = first == 0 or last == n_frames - 1  # loaded at the recording's first or last frame
             if plate.number in override:
                 side = override[plate.number]
                 reason = ContactUse.ASSIGNED if side is not None else ContactUse.EXCLUDED
-                contacts.append(PlateContact(plate.number, first, last, side, reason))
+                contacts.append(PlateContact(plate.number, first, last, side, reason, cut=cut))
                 continue
             side, reason = _contact_foot(plate, feet, cop, slice(first, last + 1))
-            contacts.append(PlateContact(plate.number, first, last, side, reason) if reason.used
-                            else PlateContact(plate.number, first, last, None, reason, side))  # fmt: skip
+            contacts.append(PlateContact(plate.number, first, last, side, reason, cut=cut) if reason.used
+                            else PlateContact(plate.number, first, last, None, reason, side, cut))  # fmt: skip
     return _one_plate_per_foot(contacts)
 
 

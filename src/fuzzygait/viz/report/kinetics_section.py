@@ -65,7 +65,8 @@ def contact_rows(page: KineticsPage) -> list[list[tuple[str, bool]]]:
         else:
             used = f"<span class=\"warning\">{_esc(c.describe())}</span>"
         rows.append([(str(c.plate), True), (foot.word if foot is not None else "–", False), (frames, True),
-                     (f"{(c.last - c.first + 1) / page.rate:.2f}", True), (used, False)])  # fmt: skip
+                     (f"{(c.last - c.first + 1) / page.rate:.2f}" + ("+" if c.cut else ""), True),
+                     (used + _esc(c.cut_text()), False)])  # fmt: skip
     return rows
 
 
@@ -78,7 +79,7 @@ def _contacts_table(page: KineticsPage) -> str:
             "the centre of pressure stays within 60 mm of, with the heel and ankle markers over the plate in "
             "mid-stance, unless the subject file assigns the plate; a contact of both feet, of a foot off the "
             "plate's edge or of a foot on two plates at once is not used. Foot: the foot the contact is "
-            "about.</p>"
+            "about. A duration with + is cut by the start or end of the recording.</p>"
             + _table(header, contact_rows(page)))  # fmt: skip
 
 
