@@ -63,8 +63,8 @@ def read_events(path: Path, raw: RawC3D, notes: list[Finding]) -> list[Event]:
 
     def numbers(name: str) -> list[int | None]:  # ICON_IDS, GENERIC_FLAGS: None where not stored
         values: list[int | None] = []
+        found = suffixed(raw.get, "EVENT", name)
         for i, part in enumerate(parts):
-            found = suffixed(raw.get, "EVENT", name)
             got = found[i] if i < len(found) and not isinstance(found[i], list) else []
             stored = [int(v) for v in np.ravel(np.asarray(got, dtype=float)) if np.isfinite(v)]
             values += (stored + [None] * part.shape[1])[: part.shape[1]]

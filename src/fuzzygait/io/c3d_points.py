@@ -118,8 +118,8 @@ def input_points(c: Any, trial: Trial) -> InputPoints:
         columns.setdefault(label, i)
     descriptions = [str(d).strip() for d in stored] + [""] * max(0, values.shape[1] - len(stored))
     meta = c["data"]["meta_points"]
-    scale = abs(float(np.ravel(point["SCALE"]["value"])[0])) if "SCALE" in point and np.size(point["SCALE"]["value"]) \
-        else 1.0  # fmt: skip
+    stated = np.ravel(point["SCALE"]["value"]) if "SCALE" in point else np.zeros(0)
+    scale = abs(float(stated[0])) if stated.size else 1.0
     return InputPoints(columns, values, np.asarray(meta["residuals"], dtype=float)[0, :, window].T,
                        np.asarray(meta["camera_masks"], dtype=bool)[:, :, window], descriptions, unit or "mm",
                        LENGTH_UNITS_TO_MM.get(unit or "mm", 1.0),

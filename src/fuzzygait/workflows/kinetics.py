@@ -374,9 +374,9 @@ def run_kinetics(run: AnglesRun, subject_file: str | os.PathLike[str] | None = N
                  ) -> tuple[TrialKinetics | None, list[Finding]]:  # fmt: skip
     """:func:`trial_kinetics` as the angles pipeline runs it: the kinetics (None without
     plates) and the notes for the run. A trial read from a file without force plates, or
-    given without its file, gets one note; kinetics that cannot be computed (no body mass, no usable plate, units that
-    disagree) are a warning note with the error's line and no kinetics - the angles
-    stand."""
+    given without its file, gets one note; kinetics that cannot be computed (no body
+    mass, no usable plate, units that disagree) are a warning note with the error's line
+    and no kinetics - the angles stand."""
     from fuzzygait.core.errors import FuzzyGaitError
 
     try:
