@@ -336,8 +336,8 @@ class JointAngleModel(CompiledModel):
             return row_gradients(lambda rows, at: self.component_values(rows, at, axes, reference), P, nodes)
         rows = np.arange(len(nodes))
         axes = np.broadcast_to(axes, rows.shape)
-        angles, gradients, status = kernel.gradients(self._rows, nodes, P, self.progression, axes)
-        angle = _on_branch(angles[rows, axes], reference)
+        angle, _, gradients, status = kernel.gradients(self._rows, nodes, P, self.progression, axes)
+        angle = _on_branch(angle, reference)
         redo = self._by_chain(status)
         if redo.any():
             at = None if reference is None else reference[redo]

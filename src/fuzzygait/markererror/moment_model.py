@@ -51,7 +51,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
 
 import autograd.numpy as anp
 import numpy as np
@@ -67,25 +66,42 @@ from fuzzygait.kinematics.chain import segment_markers
 from fuzzygait.kinematics.model import model_chain
 from fuzzygait.kinematics.versions import model_version
 from fuzzygait.kinetics.ground import plate_load
-from fuzzygait.kinetics.inverse_dynamics import GRAVITY
 from fuzzygait.kinetics.plug_in_gait import JOINTS, MOMENT_AXES, foot_length
-from fuzzygait.kinetics.segments import MM, PLUG_IN_GAIT_TABLE
+from fuzzygait.kinetics.segments import MM
 from fuzzygait.markererror.angle_model import AXES, fixed_subject, row_gradients
-from fuzzygait.markererror.row_kernel import UNSETTLED, CompiledModel, RowKernel, Shape, compile_kernel, model_key
-from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODES, TIME_STEP, Evaluation, Output
+from fuzzygait.markererror.leg_dynamics import (
+    HALF_WINDOW,
+    Constants,
+    Loads,
+    angular_velocities,
+    apply_rows,
+    leg_segments,
+    newton_euler,
+    turn_cosines,
+)
+from fuzzygait.markererror.row_kernel import (
+    UNSETTLED,
+    CompiledModel,
+    RowKernel,
+    Shape,
+    compile_kernel,
+    distinct_rows,
+    model_key,
+)
+from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG
+from fuzzygait.uncertainty.protocol import BLOCKS, NODE_GRADIENTS, NODE_LIMITS, NODES, TIME_STEP, Evaluation, Output
 
 Array = NDArray[np.float64]
 
 #: Default centre-of-pressure error ball radius at α = 0, mm (module docstring).
 DEFAULT_COP_ERROR_MM = 10.0
-#: Frames either side of a frame its kinetics need (Nexus' derivatives lose four).
-HALF_WINDOW = 4
 #: Kinds of output and their units.
 KINDS = {"Moment": "N·m/kg", "Power": "W/kg"}
 _OFFSETS = np.arange(-HALF_WINDOW, HALF_WINDOW + 1)
-_FIVE_POINT = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
-#: The five-point first difference applied twice: weights of the nine frames (× rate²).
-SECOND_DIFFERENCE = np.convolve(_FIVE_POINT, _FIVE_POINT)
+#: The kernel's check outputs: the turn of the 4 segments at the row's frame (:func:`_centre_rotations`).
+_TURNS = 4
+#: A row whose segment frame turned beyond the limit: its turn's cosine below this.
+_COS_LIMIT = float(np.cos(np.radians(EXCURSION_LIMIT_DEG)))
 
 
 @dataclass(frozen=True)
@@ -172,7 +188,7 @@ class LegKineticsModel(CompiledModel):
     model: str = "cgm1.0"
     compiled: bool = True
 
-    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP})
+    capabilities = frozenset({NODES, NODE_GRADIENTS, BLOCKS, TIME_STEP, NODE_LIMITS})
 
     def __post_init__(self) -> None:
         version = model_version(self.model)
@@ -266,16 +282,21 @@ class LegKineticsModel(CompiledModel):
         """``(k, 3, 3)``: per row (deviations ``P`` (k, n_p), trial frames ``frames`` (k,)),
         joint (ankle, knee, hip) and axis the moment (N·m/kg; Nexus X, Y, Z) or the power
         (W/kg, in Z; X = Y = 0)."""
+        return self._outputs_and_rotations(P, frames)[0]
+
+    def _outputs_and_rotations(self, P: np.ndarray, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`outputs` and the rows' segment rotations (:func:`_kinetic_rotations`)."""
         P, frames = floats(P), np.asarray(frames, dtype=int)
         window = frames[:, None] + _OFFSETS[None, :]
-        loads = _Loads(self._force[frames], self._moment[frames], self._shares[:, frames])
-        constants = _Constants(self.trial.rate, self.subject.body_mass, self.foot_length * MM, self._plane)
+        loads = Loads(self._force[frames], self._moment[frames], self._shares[:, frames])
+        constants = Constants(self.trial.rate, self.subject.body_mass, self.foot_length * MM, self._plane)
         return self._dynamics(self._positions[window], self._fixed[window], loads, P, constants)
 
-    def _dynamics(self, positions: np.ndarray, fixed: np.ndarray, loads: _Loads, P: np.ndarray,
-                  constants: _Constants) -> np.ndarray:  # fmt: skip
+    def _dynamics(self, positions: np.ndarray, fixed: np.ndarray, loads: Loads, P: np.ndarray,
+                  constants: Constants) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """:meth:`outputs` from the rows' window positions ``(k, 9, m, 3)``, ``(k, 9,
-        n_fixed, 3)`` mm, their loads and deviations ``P`` (numbers, traced or symbolic)."""
+        n_fixed, 3)`` mm, their loads and deviations ``P`` (numbers, traced or symbolic),
+        and the segment rotations the kinetics use (:func:`_kinetic_rotations`)."""
         m = len(self.markers)
         parts = self._parts(positions, fixed, P[:, : 3 * m])
         rate, mass = constants.rate, constants.mass
@@ -284,18 +305,17 @@ class LegKineticsModel(CompiledModel):
         for p in range(len(self.plates)):
             offset = anp.dot(shifts[:, p, :2], constants.plane[p]) * MM
             moment = moment + anp.cross(offset, loads.shares[p])
-        # foot, tibia, femur, pelvis at the window's even offsets −4, −2, 0, 2, 4 (the rotations' differences)
-        rotations = anp.stack([parts[name][:, ::2] for name in ("foot", "tibia", "thigh", "pelvis")], axis=1)
-        omega = _omega(rotations, rate)  # (k, 4 segments, offsets −2, 0, 2, 3)
-        moments = _newton_euler(_segments(parts, constants.foot_length, mass), rotations, omega, loads.force, moment,
+        rotations = _kinetic_rotations(parts)
+        omega = angular_velocities(rotations, rate)  # (k, 4 segments, offsets −2, 0, 2, 3)
+        moments = newton_euler(leg_segments(parts, constants.foot_length, mass), rotations, omega, loads.force, moment,
                                 rate)  # fmt: skip
         if self.kind == "Power":
             relative = omega[:, :3, 1] - omega[:, 1:, 1]
             power = anp.sum(moments * relative, axis=2) / mass
             zero = anp.zeros_like(power)
-            return anp.stack([zero, zero, power], axis=2)
-        local = _apply(anp.swapaxes(rotations[:, :3, 2], -1, -2), moments)
-        return anp.einsum("sca,ksa->ksc", self._picks, local) / mass
+            return anp.stack([zero, zero, power], axis=2), rotations
+        local = apply_rows(anp.swapaxes(rotations[:, :3, 2], -1, -2), moments)
+        return anp.einsum("sca,ksa->ksc", self._picks, local) / mass, rotations
 
     def _selected(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each node's frame index (into :attr:`frames`) and output (``3 joint + axis``)."""
@@ -307,17 +327,29 @@ class LegKineticsModel(CompiledModel):
     def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """The components (N·m/kg or W/kg) at nodes ``nodes`` (k,) for deviations ``P``
         (k, n_p): by the compiled kernel where there is one, else numpy."""
-        j, selected = self._selected(nodes)
-        kernel = None if isbox(P) else self.kernel()
-        if kernel is None:
+        if isbox(P):
+            j, selected = self._selected(nodes)
             return self._selected_outputs(P, j, selected)
+        return self.evaluate_nodes_limited(P, nodes)[0]
+
+    def evaluate_nodes_limited(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`evaluate_nodes` and, per row, whether it lies beyond the model's limits
+        (capability ``"node_limits"``): a segment frame the kinetics use (foot, tibia,
+        thigh, pelvis) turned more than :data:`~.undetermined.EXCURSION_LIMIT_DEG` from the
+        measured one at the row's frame.  The optimisers stop a bound there; :meth:`frame_turn`
+        then flags it undetermined (more than :data:`~.undetermined.UNDETERMINED_DEG` at one
+        of the nine frames)."""
+        j, selected = self._selected(nodes)
         P = np.asarray(P, dtype=float)
+        kernel = self.kernel()
+        if kernel is None:
+            return self._numpy_rows(P, j, selected)
         out, status = kernel.values(self._kernel_rows(), j, P, self._kernel_shared())
-        values = out[np.arange(len(j)), selected]
+        values, beyond = _split_rows(out, selected)
         redo = status == UNSETTLED
         if redo.any():
-            values[redo] = self._selected_outputs(P[redo], j[redo], selected[redo])
-        return values
+            values[redo], beyond[redo] = self._numpy_rows(P[redo], j[redo], selected[redo])
+        return values, beyond
 
     def _selected_outputs(self, P: np.ndarray, j: np.ndarray, selected: np.ndarray) -> np.ndarray:
         """On numpy (numbers or traced): output ``selected[i]`` of :meth:`outputs` at frame
@@ -326,32 +358,58 @@ class LegKineticsModel(CompiledModel):
         pick[np.arange(len(j)), selected] = 1.0
         return anp.sum(anp.reshape(self.outputs(P, self.frames[j]), (len(j), 9)) * pick, axis=1)
 
+    def _numpy_rows(self, P: np.ndarray, j: np.ndarray, selected: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`evaluate_nodes_limited` on numpy (frame indices ``j``, outputs ``selected``)."""
+        if len(j) == 0:
+            return np.empty(0), np.zeros(0, dtype=bool)
+        outputs, rotations = self._outputs_and_rotations(P, self.frames[j])
+        cosines = turn_cosines(_centre_rotations(rotations), self._measured_rotations()[j])
+        return np.reshape(outputs, (len(j), 9))[np.arange(len(j)), selected], cosines.min(axis=1) < _COS_LIMIT
+
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Values and exact gradients (per mm) per row: compiled, else a reverse sweep of
         autograd (:func:`~fuzzygait.markererror.angle_model.row_gradients`)."""
+        values, gradients, _ = self.evaluate_nodes_gradients_limited(P, nodes)
+        return values, gradients
+
+    def evaluate_nodes_gradients_limited(self, P: np.ndarray,
+                                         nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """:meth:`evaluate_nodes_gradients` and the rows beyond the model's limits
+        (:meth:`evaluate_nodes_limited`)."""
         kernel = self.kernel()
         P, nodes = np.asarray(P, dtype=float), np.asarray(nodes, dtype=int)
-        if kernel is None or P.shape[0] == 0:
-            return row_gradients(self.evaluate_nodes, P, nodes)
         j, selected = self._selected(nodes)
-        out, gradients, status = kernel.gradients(self._kernel_rows(), j, P, self._kernel_shared(), selected)
-        values = out[np.arange(len(j)), selected]
+        if kernel is None or P.shape[0] == 0:
+            values, gradients = row_gradients(self.evaluate_nodes, P, nodes)
+            return values, gradients, self._numpy_rows(P, j, selected)[1]
+        values, turns, gradients, status = kernel.gradients(self._kernel_rows(), j, P, self._kernel_shared(), selected)
+        beyond = turns.min(axis=1) < _COS_LIMIT
         redo = status == UNSETTLED
         if redo.any():
             values[redo], gradients[redo] = row_gradients(self.evaluate_nodes, P[redo], nodes[redo])
-        return values, gradients
+            beyond[redo] = self._numpy_rows(P[redo], j[redo], selected[redo])[1]
+        return values, gradients, beyond
+
+    def _measured_rotations(self) -> np.ndarray:
+        """``(n_frames, 4, 3, 3)``: :func:`_centre_rotations` at zero deviation, per frame
+        of :attr:`frames`."""
+        if "_measured" not in self.__dict__:
+            self._measured = _centre_rotations(_kinetic_rotations(self._still_chain(self.frames)))
+        return self._measured
 
     def kernel(self) -> RowKernel | None:
         """The compiled model (:mod:`.row_kernel`), or None where it cannot be had.  Its row:
         ``x`` a frame's window (the markers' and the fixed markers' positions at the nine
         frames, mm; the ground's force N and moment N·m; each plate's share of the force),
         ``p`` the deviations, ``q`` the rate, body mass, foot length and the plates'
-        in-plane axes; out the 3 × 3 joint (ankle, knee, hip) and axis outputs."""
+        in-plane axes, the segments' measured rotations at the frame; out the 3 × 3 joint
+        (ankle, knee, hip) and axis outputs, then the cosines of the 4 segment frames' turns
+        (:func:`turn_cosines`) at the frame."""
         return self.held_kernel(lambda: compile_kernel(
             model_key("leg", self.kind, self.side, self.model, self.markers, self.fixed_markers, len(self.plates),
                       self.subject),
-            self._row_outputs, Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9),
-            "a joint-kinetics model"))  # fmt: skip
+            self._row_outputs, Shape(self._kernel_rows().shape[1], self.n_parameters, self._kernel_shared().size, 9,
+                                     _TURNS), "a joint-kinetics model"))  # fmt: skip
 
     def _kernel_rows(self) -> np.ndarray:
         """``(n_frames, n_x)``: the kernel's ``x`` at each of :attr:`frames`."""
@@ -360,7 +418,8 @@ class LegKineticsModel(CompiledModel):
             k = self.frames.size
             shares = np.swapaxes(self._shares[:, self.frames], 0, 1).reshape(k, -1)
             parts = [self._positions[window].reshape(k, -1), self._fixed[window].reshape(k, -1),
-                     self._force[self.frames], self._moment[self.frames], shares]  # fmt: skip
+                     self._force[self.frames], self._moment[self.frames], shares,
+                     self._measured_rotations().reshape(k, -1)]  # fmt: skip
             self._rows = np.ascontiguousarray(np.concatenate(parts, axis=1))
         return self._rows
 
@@ -372,11 +431,14 @@ class LegKineticsModel(CompiledModel):
         """The kernel's row function (:meth:`kernel`): :meth:`_dynamics` of one row."""
         m, n_fixed, n_plates, w = len(self.markers), len(self.fixed_markers), len(self.plates), _OFFSETS.size
         a, b = w * m * 3, w * (m + n_fixed) * 3
-        loads = _Loads(x[b : b + 3].reshape(1, 3), x[b + 3 : b + 6].reshape(1, 3), x[b + 6 :].reshape(n_plates, 1, 3))
-        constants = _Constants(q[0], q[1], q[2], q[3:].reshape(n_plates, 2, 3))
-        out = self._dynamics(x[:a].reshape(1, w, m, 3), x[a:b].reshape(1, w, n_fixed, 3), loads, p.reshape(1, -1),
-                             constants)  # fmt: skip
-        return np.reshape(out, 9)
+        c = b + 6 + 3 * n_plates
+        loads = Loads(x[b : b + 3].reshape(1, 3), x[b + 3 : b + 6].reshape(1, 3), x[b + 6 : c].reshape(n_plates, 1, 3))
+        constants = Constants(q[0], q[1], q[2], q[3:].reshape(n_plates, 2, 3))
+        out, rotations = self._dynamics(x[:a].reshape(1, w, m, 3), x[a:b].reshape(1, w, n_fixed, 3), loads,
+                                        p.reshape(1, -1), constants)  # fmt: skip
+        centre = _centre_rotations(rotations)
+        cosines = turn_cosines(centre, x[c:].reshape(centre.shape))
+        return np.concatenate([np.reshape(out, 9), np.reshape(cosines, _TURNS)])
 
     def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
         """Every node (each component's curve in turn) for one deviation ``p`` (n_p,)."""
@@ -388,103 +450,48 @@ class LegKineticsModel(CompiledModel):
         """``(k,)`` degrees: the largest rotation of the pelvis, thigh, tibia or foot frame
         from its measured orientation over the nine frames each row's kinetics use, at the
         row's deviation (more than 90°: a frame can flip inside the ball)."""
-        P, frames = np.asarray(P, dtype=float), np.asarray(frames, dtype=int)
-        moved = self._chain(P, frames)
-        still = self._chain(np.zeros_like(P), frames)
+        P = np.asarray(P, dtype=float)[:, : 3 * len(self.markers)]  # a centre of pressure turns no frame
+        frames = np.asarray(frames, dtype=int)
+        turn = np.zeros(len(P))
+        moving = np.flatnonzero(np.any(P != 0.0, axis=1))
+        if moving.size == 0:
+            return turn
+        repeats = distinct_rows(frames[moving], P[moving])  # the blocks' shared random starts: once
+        first, inverse = (np.arange(moving.size), np.arange(moving.size)) if repeats is None else repeats
+        pick = moving[first]
+        moved, still = self._chain(P[pick], frames[pick]), self._still_chain(frames[pick])
         turns = []
         for name in ("pelvis", "thigh", "tibia", "foot"):
             trace = np.einsum("kwij,kwij->kw", moved[name], still[name])
             turns.append(np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))).max(axis=1))
-        return np.max(turns, axis=0)
+        turn[moving] = np.max(turns, axis=0)[inverse]
+        return turn
+
+    def _still_chain(self, frames: np.ndarray) -> dict[str, np.ndarray]:
+        """:meth:`_chain` at zero deviation at trial frames ``frames`` (k,): looked up in
+        the one of :attr:`frames` (computed once) where they are model frames."""
+        if "_still" not in self.__dict__:
+            self._still = self._chain(np.zeros((self.frames.size, self.n_parameters)), self.frames)
+        order = np.argsort(self.frames, kind="stable")
+        at = np.minimum(np.searchsorted(self.frames[order], frames), self.frames.size - 1)
+        if not np.array_equal(self.frames[order][at], frames):
+            return self._chain(np.zeros((len(frames), self.n_parameters)), frames)
+        return {name: value[order[at]] for name, value in self._still.items()}
 
 
-class _Loads(NamedTuple):
-    """The ground's load on the foot at the rows' frames: ``force`` ``(k, 3)`` N,
-    ``moment`` ``(k, 3)`` N·m about the laboratory origin, ``shares`` ``(plates, k, 3)``
-    N each plate's share of the force."""
-
-    force: np.ndarray
-    moment: np.ndarray
-    shares: np.ndarray
+def _kinetic_rotations(parts: dict[str, np.ndarray]) -> np.ndarray:
+    """``(k, 4, 5, 3, 3)``: foot, tibia, femur and pelvis at the window's even offsets −4,
+    −2, 0, 2, 4 — the rotations whose differences the kinetics take — of
+    :meth:`LegKineticsModel._parts`."""
+    return anp.stack([parts[name][:, ::2] for name in ("foot", "tibia", "thigh", "pelvis")], axis=1)
 
 
-class _Constants(NamedTuple):
-    """What every row shares: ``rate`` Hz, body ``mass`` kg, ``foot_length`` m and the
-    plates' in-plane axes ``plane`` ``(plates, 2, 3)``."""
-
-    rate: float
-    mass: float
-    foot_length: float
-    plane: np.ndarray
+def _centre_rotations(rotations: np.ndarray) -> np.ndarray:
+    """``(k, 4, 3, 3)``: the row's own frame of :func:`_kinetic_rotations`."""
+    return rotations[:, :, 2]
 
 
-def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """``matrices @ vectors`` over the leading axes (``(..., 3, 3)`` and ``(..., 3)``)."""
-    return anp.sum(matrices * vectors[..., None, :], axis=-1)
-
-
-def _omega(frames: np.ndarray, rate: float) -> np.ndarray:
-    """``(k, s, 3, 3)`` rad/s: the angular velocity at window offsets −2, 0, +2 of the
-    ``(k, s, 5, 3, 3)`` rotations of ``s`` segments at offsets −4, −2, 0, 2, 4: the axial
-    vector of ``Ṙ Rᵀ`` with ``Ṙ`` the two-frame difference
-    (:func:`~fuzzygait.kinetics.inverse_dynamics.angular_velocity`)."""
-    ahead, behind, centre = frames[:, :, 2:5], frames[:, :, 0:3], frames[:, :, 1:4]
-    w = anp.matmul((ahead - behind) * (rate / 4.0), anp.swapaxes(centre, -1, -2))
-    return 0.5 * anp.stack([w[..., 2, 1] - w[..., 1, 2], w[..., 0, 2] - w[..., 2, 0], w[..., 1, 0] - w[..., 0, 1]],
-                           axis=-1)  # fmt: skip
-
-
-class _Segments(NamedTuple):
-    """Foot, tibia and femur over each row's nine frames, SI units, laboratory frame."""
-
-    mass: np.ndarray  # (3,) kg
-    com: np.ndarray  # (k, 3, 9, 3) m
-    inertia: np.ndarray  # (k, 3, 3) kg·m² at the centre frame, principal x, y, z
-    joint: np.ndarray  # (k, 3, 3) m, each segment's proximal joint centre at the centre frame
-
-
-def _segments(parts: dict[str, np.ndarray], foot_length: float, body_mass: float) -> _Segments:
-    """Foot, tibia and femur as :mod:`fuzzygait.kinetics.segments` builds them (the
-    foot's centre of mass on its long axis, the long segments' lengths per frame)."""
-    foot, tibia, femur = (PLUG_IN_GAIT_TABLE[name] for name in ("foot", "tibia", "femur"))
-    ajc, kjc, hjc = parts["AJC"], parts["KJC"], parts["HJC"]
-    com = anp.stack([ajc - (1.0 - foot.com_from_distal) * foot_length * parts["foot"][..., 2],
-                     ajc + tibia.com_from_distal * (kjc - ajc),
-                     kjc + femur.com_from_distal * (hjc - kjc)], axis=1)  # fmt: skip
-    joint = anp.stack([ajc[:, HALF_WINDOW], kjc[:, HALF_WINDOW], hjc[:, HALF_WINDOW]], axis=1)
-    lengths = anp.stack([foot_length * anp.ones(joint.shape[0]),
-                         anp.sqrt(anp.sum((joint[:, 1] - joint[:, 0]) ** 2, axis=1)),
-                         anp.sqrt(anp.sum((joint[:, 2] - joint[:, 1]) ** 2, axis=1))], axis=1)  # fmt: skip
-    mass = body_mass * np.array([foot.mass_fraction, tibia.mass_fraction, femur.mass_fraction])
-    gyration = np.array([foot.gyration, tibia.gyration, femur.gyration])
-    across = mass * (gyration * lengths) ** 2
-    return _Segments(mass, com, anp.stack([across, across, anp.zeros_like(across)], axis=2), joint)
-
-
-def _newton_euler(segments: _Segments, rotations: np.ndarray, omega: np.ndarray, force: np.ndarray,
-                  moment: np.ndarray, rate: float) -> np.ndarray:  # fmt: skip
-    """``(k, 3, 3)``: per joint (ankle, knee, hip) the joint moment (N·m about the joint
-    centre, laboratory frame, of the proximal segment on the distal one) at the window's
-    centre, from the ground load (``force`` N, ``moment`` N·m about the laboratory
-    origin) up: :func:`~fuzzygait.kinetics.inverse_dynamics.newton_euler` with its
-    derivatives (``rotations`` ``(k, 4, 5, 3, 3)`` at the even offsets and ``omega``
-    :func:`_omega` of foot, tibia, femur and pelvis)."""
-    acceleration = anp.einsum("w,kswi->ksi", SECOND_DIFFERENCE * rate**2, segments.com)
-    alpha = (omega[:, :3, 2] - omega[:, :3, 0]) * (rate / 4.0)
-    rotation, inertia = rotations[:, :3, 2], segments.inertia
-    transposed = anp.swapaxes(rotation, -1, -2)
-    w_local = _apply(transposed, omega[:, :3, 1])
-    a_local = _apply(transposed, alpha)
-    h_dot = _apply(rotation, inertia * a_local + anp.cross(w_local, inertia * w_local))
-    weight = segments.mass[None, :, None] * (acceleration - GRAVITY)
-    centre = segments.com[:, :, HALF_WINDOW]
-    out = []
-    point: np.ndarray = np.zeros(np.shape(force))
-    distal_force, distal_moment = force, moment
-    for s in range(3):
-        f = weight[:, s] - distal_force
-        joint, c = segments.joint[:, s], centre[:, s]
-        m = h_dot[:, s] - distal_moment - anp.cross(point - c, distal_force) - anp.cross(joint - c, f)
-        out.append(m)
-        point, distal_force, distal_moment = joint, -f, -m
-    return anp.stack(out, axis=1)
+def _split_rows(out: np.ndarray, selected: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A kernel's ``(k, 9 + 4)`` rows: the selected output of each and whether it lies
+    beyond the model's limits (a turn's cosine below :data:`_COS_LIMIT`)."""
+    return out[np.arange(len(out)), selected], out[:, 9:].min(axis=1) < _COS_LIMIT

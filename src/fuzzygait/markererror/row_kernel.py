@@ -20,7 +20,9 @@ A row function ``f(x, p, q)`` takes three flat inputs:
 * ``q`` ``(n_q,)``: shared by every row (the progression frame, the sampling rate …), an
   input rather than a constant so that one library serves every trial;
 
-and returns ``(n_out,)`` outputs; the gradient is that of the output a row selects.
+and returns ``(n_out + n_checks,)`` outputs; the gradient is that of the output a row
+selects among the first ``n_out`` (the last ``n_checks`` are values only: what tells a row
+beyond the model's limits).
 
 No kernel (the model runs on numpy, same numbers, slower): without a C compiler or with
 ``FUZZYGAIT_NO_COMPILE=1``, and for code that decides on its data, where tracing stops with
@@ -68,12 +70,19 @@ _status_p = np.ctypeslib.ndpointer(dtype=np.int8, flags="C_CONTIGUOUS")
 
 @dataclass(frozen=True)
 class Shape:
-    """The sizes of a row function's inputs and outputs."""
+    """The sizes of a row function's inputs and outputs: ``n_out`` outputs a gradient can
+    select, then ``n_checks`` values only (module docstring)."""
 
     n_x: int
     n_p: int
     n_q: int
     n_out: int
+    n_checks: int = 0
+
+    @property
+    def n_values(self) -> int:
+        """Every output of a row: the selectable ones and the checks."""
+        return self.n_out + self.n_checks
 
 
 @dataclass(frozen=True)
@@ -99,27 +108,66 @@ class RowKernel:
 
     def values(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray,
                q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-        """``(k, n_out)`` outputs and the ``(k,)`` status."""
+        """``(k, n_out + n_checks)`` outputs and the ``(k,)`` status.  A row that repeats
+        another (the same node and deviations: the blocks of one model screening the same
+        random points) is computed once (:func:`distinct_rows`)."""
         base, nodes, P, q = self._rows(base, nodes, P, q)
+        repeats = distinct_rows(nodes, P)
+        if repeats is not None:
+            first, inverse = repeats
+            out, status = self.values(base, nodes[first], P[first], q)
+            return out[inverse], status[inverse]
         k, s = len(nodes), self.shape
-        out, status = np.empty((k, s.n_out)), np.empty(k, dtype=np.int8)
-        if self.library.fg_value_rows(k, s.n_x, s.n_p, s.n_out, base, nodes, P, q, out, status):
+        out, status = np.empty((k, s.n_values)), np.empty(k, dtype=np.int8)
+        if self.library.fg_value_rows(k, s.n_x, s.n_p, s.n_values, base, nodes, P, q, out, status):
             raise MemoryError("a compiled model could not allocate its workspace")
         return out, status
 
     def gradients(self, base: np.ndarray, nodes: np.ndarray, P: np.ndarray, q: np.ndarray,
-                  select: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-        """``(k, n_out)`` outputs, ``(k, n_p)`` gradients of output ``select[i]`` of row
-        ``i`` with respect to its deviations, and the ``(k,)`` status."""
+                  select: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """Per row ``i`` output ``select[i]`` (< ``n_out``) ``(k,)``, the checks ``(k,
+        n_checks)``, the gradient of that output with respect to the row's deviations ``(k,
+        n_p)`` and the ``(k,)`` status.  Each output has its own compiled gradient, computing
+        only what that output needs (:func:`traced_functions`)."""
         base, nodes, P, q = self._rows(base, nodes, P, q)
         k, s = len(nodes), self.shape
         select = np.ascontiguousarray(np.broadcast_to(select, (k,)), dtype=np.int64)
         if k and (select.min() < 0 or select.max() >= s.n_out):
             raise IndexError(f"a row selects an output outside 0..{s.n_out - 1}")
-        out, gradients, status = np.empty((k, s.n_out)), np.empty((k, s.n_p)), np.empty(k, dtype=np.int8)
-        if self.library.fg_gradient_rows(k, s.n_x, s.n_p, s.n_out, base, nodes, P, q, select, out, gradients, status):
+        values, checks, gradients = np.empty(k), np.empty((k, s.n_checks)), np.empty((k, s.n_p))
+        status = np.empty(k, dtype=np.int8)
+        if self.library.fg_gradient_rows(k, s.n_x, s.n_p, s.n_checks, base, nodes, P, q, select, values, checks,
+                                         gradients, status):  # fmt: skip
             raise MemoryError("a compiled model could not allocate its workspace")
-        return out, gradients, status
+        return values, checks, gradients, status
+
+
+#: :func:`distinct_rows` looks for repeated rows from this many rows on.
+MIN_ROWS_TO_SHARE = 256
+
+
+def distinct_rows(nodes: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(first, inverse)``: the first of each distinct row ``(nodes[i], P[i])`` and each
+    row's index among them (row ``i`` equals row ``first[inverse[i]]`` exactly), or None
+    where fewer than a quarter of the rows repeat, or there are fewer than
+    :data:`MIN_ROWS_TO_SHARE` rows, or the first row does not repeat (the cheap test that
+    spares a call without repeats the sort: where blocks share rows, each of the first
+    block's rows has its twins).  Rows are told apart by a fixed random projection, and the
+    match is checked element by element (a collision, or a NaN, gives None)."""
+    k = len(nodes)
+    if k < MIN_ROWS_TO_SHARE:
+        return None
+    weights = np.random.default_rng(0).uniform(0.5, 1.5, P.shape[1] + 1)
+    key = P @ weights[1:] + weights[0] * nodes
+    if np.count_nonzero(key == key[0]) < 2:
+        return None
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    if first.size > 0.75 * k:
+        return None
+    inverse = inverse.ravel()
+    if not (np.array_equal(P[first][inverse], P) and np.array_equal(nodes[first][inverse], nodes)):
+        return None
+    return first, inverse
 
 
 class CompiledModel:
@@ -145,15 +193,20 @@ class CompiledModel:
 
 def traced_functions(function: RowFunction, shape: Shape) -> tuple[ca.Function, ca.Function]:
     """The values and selected-gradient functions of ``function`` for one row (raises
-    :class:`~.symbols.NotTraceable`, or numpy a ``TypeError``, where it decides on its data)."""
-    x, p, q, w = (ca.SX.sym(name, size) for name, size in (("x", shape.n_x), ("p", shape.n_p), ("q", shape.n_q),
-                                                           ("w", shape.n_out)))  # fmt: skip
+    :class:`~.symbols.NotTraceable`, or numpy a ``TypeError``, where it decides on its data).
+    The gradient function ``(index, x, p, q) -> (output index, the checks, its gradient)``
+    switches between one function per output, each holding only that output's part of the
+    expression (a reverse sweep through every output cost up to a fifth more)."""
+    x, p, q = (ca.SX.sym(name, size) for name, size in (("x", shape.n_x), ("p", shape.n_p), ("q", shape.n_q)))
     out = np.ravel(function(symbol_array(x, (shape.n_x,)), symbol_array(p, (shape.n_p,)),
                             symbol_array(q, (shape.n_q,))))  # fmt: skip
-    if out.shape != (shape.n_out,):
-        raise NotTraceable(f"the row function gave {out.shape} outputs, not ({shape.n_out},)")
+    if out.shape != (shape.n_values,):
+        raise NotTraceable(f"the row function gave {out.shape} outputs, not ({shape.n_values},)")
     y = expressions(out)
-    return ca.Function(VALUES, [x, p, q], [y]), ca.Function(GRADIENT, [x, p, q, w], [y, ca.gradient(ca.dot(w, y), p)])
+    checks = y[shape.n_out :]
+    branches = [ca.Function(f"{GRADIENT}_{c}", [x, p, q], [y[c], checks, ca.gradient(y[c], p)])
+                for c in range(shape.n_out)]  # fmt: skip
+    return ca.Function(VALUES, [x, p, q], [y]), ca.Function.conditional(GRADIENT, branches, branches[0])
 
 
 def _load(path: Path) -> ctypes.CDLL:
@@ -161,7 +214,7 @@ def _load(path: Path) -> ctypes.CDLL:
     n = [ctypes.c_long] * 4
     library.fg_value_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _double_p, _status_p]
     library.fg_gradient_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _long_p, _double_p, _double_p,
-                                         _status_p]  # fmt: skip
+                                         _double_p, _status_p]  # fmt: skip
     return library
 
 

@@ -26,6 +26,7 @@ from fuzzygait.uncertainty.protocol import (
     CAPABILITY_MEMBERS,
     MANY,
     NODE_GRADIENTS,
+    NODE_LIMITS,
     NODES,
     SENSITIVITIES,
     TIME_STEP,
@@ -58,9 +59,12 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     ``sensitivity_rtol`` of the largest derivative; with ``"many"``, ``evaluate_many``
     (and with sensitivities ``evaluate_many_with_sensitivities``) gives ``evaluate``'s
     rows; with ``"time_step"``, every step between time nodes of a block is a whole
-    number of time steps. A model that has the members of a capability it does not
-    declare (``evaluate_nodes`` without ``"nodes"``, a ``blocks`` attribute without
-    ``"blocks"``, ...) is rejected: the engine would ignore them.
+    number of time steps; with ``"node_limits"``, ``evaluate_nodes_limited`` (and with
+    node gradients ``evaluate_nodes_gradients_limited``) gives the values (and gradients)
+    of the methods without limits at those pairs, and one boolean per row. A model that
+    has the members of a capability it does not declare (``evaluate_nodes`` without
+    ``"nodes"``, a ``blocks`` attribute without ``"blocks"``, ...) is rejected: the engine
+    would ignore them.
 
     Returns:
         The measured figures: ``n_time``, ``sensitivity_error`` (relative, or 0),
@@ -96,11 +100,36 @@ def check_model(model: object, p: np.ndarray, *, scale: np.ndarray | None = None
     if NODE_GRADIENTS in capabilities:
         report["node_gradients_error"] = _check_node_gradients(model, p, scale, n_time, n_nodes, seed, fd_step,
                                                                sensitivity_rtol)  # fmt: skip
+    if NODE_LIMITS in capabilities:
+        _check_node_limits(model, p, scale, n_time, n_nodes, seed, NODE_GRADIENTS in capabilities)
     if MANY in capabilities:
         _check_many(model, p, scale, n_time, seed, SENSITIVITIES in capabilities)
     if TIME_STEP in capabilities:
         _check_time_step(model, n_time)
     return report
+
+
+def _check_node_limits(model: Any, p: np.ndarray, scale: np.ndarray, n_time: int, n_nodes: int, seed: int,
+                       gradients: bool) -> None:  # fmt: skip
+    """``evaluate_nodes_limited`` (and ``evaluate_nodes_gradients_limited``) give the values
+    (and gradients) of the methods without limits, and a boolean per row."""
+    P, nodes = _random_pairs(p, scale, n_time, n_nodes, seed)
+    values, beyond = model.evaluate_nodes_limited(P, nodes)
+    beyond = np.asarray(beyond)
+    if beyond.shape != (n_nodes,) or beyond.dtype != bool:
+        raise ModelCheckError(f"evaluate_nodes_limited gave {beyond.dtype} flags of shape {beyond.shape} for "
+                              f"{n_nodes} pairs; one boolean per row is needed")  # fmt: skip
+    if not np.array_equal(np.asarray(values, dtype=float), np.asarray(model.evaluate_nodes(P, nodes), dtype=float)):
+        raise ModelCheckError("evaluate_nodes_limited's values differ from evaluate_nodes'")
+    if not gradients:
+        return
+    limited = model.evaluate_nodes_gradients_limited(P, nodes)
+    plain = model.evaluate_nodes_gradients(P, nodes)
+    same = all(np.array_equal(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+               for a, b in zip(limited[:2], plain, strict=True))  # fmt: skip
+    if not same or not np.array_equal(np.asarray(limited[2]), beyond):
+        raise ModelCheckError("evaluate_nodes_gradients_limited differs from evaluate_nodes_gradients or from "
+                              "evaluate_nodes_limited's flags")  # fmt: skip
 
 
 def _check_many(model: Any, p: np.ndarray, scale: np.ndarray, n_time: int, seed: int, sensitivities: bool) -> None:

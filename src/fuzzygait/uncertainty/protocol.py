@@ -31,6 +31,16 @@ and, only when it declares the capability in brackets::
                                                 found beyond it means the same as any other
                                                 beyond it (a joint angle whose segment frame
                                                 can flip), so the optimisers stop there
+    model.evaluate_nodes_limited(P, nodes) -> ((k,), (k,) bool)
+                                                ["node_limits"] ``evaluate_nodes``' outputs
+                                                and whether each row lies beyond the model's
+                                                limits (a joint moment whose segment frame
+                                                turned past 90°): no band there, whatever
+                                                the value; the batched optimisers stop a
+                                                bound at such a row
+    model.evaluate_nodes_gradients_limited(P, nodes) -> ((k,), (k, n_p), (k,) bool)
+                                                ["node_limits" with "node_gradients"] the same
+                                                with the gradients
 
 The engine uses a method or attribute of this list only when its capability is declared
 (an undeclared one is ignored, and :func:`fuzzygait.testing.check_model` rejects a model
@@ -68,7 +78,8 @@ MANY = "many"
 BLOCKS = "blocks"
 TIME_STEP = "time_step"
 EXCURSION_LIMIT = "excursion_limit"
-CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS, MANY, BLOCKS, TIME_STEP, EXCURSION_LIMIT})
+NODE_LIMITS = "node_limits"
+CAPABILITIES = frozenset({SENSITIVITIES, NODES, NODE_GRADIENTS, MANY, BLOCKS, TIME_STEP, EXCURSION_LIMIT, NODE_LIMITS})
 
 #: What each capability needs the model to have: methods (callable) and attributes.
 CAPABILITY_MEMBERS: dict[str, tuple[str, ...]] = {
@@ -78,6 +89,7 @@ CAPABILITY_MEMBERS: dict[str, tuple[str, ...]] = {
     BLOCKS: ("blocks",),
     TIME_STEP: ("time_step",),
     EXCURSION_LIMIT: ("excursion_limit",),
+    NODE_LIMITS: ("evaluate_nodes_limited",),
 }
 
 

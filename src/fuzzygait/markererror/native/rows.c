@@ -3,8 +3,8 @@
  *   x = base[nodes[i]] (n_x: what the row's frame gives: marker positions, loads),
  *   p = P[i]           (n_p: the row's deviations, the parameters),
  *   q                  (n_q: shared by every row: the progression frame, constants);
- * fg_values gives its n_out outputs, fg_gradient the outputs and the gradient with respect
- * to p of the output selected by select[i]. */
+ * fg_values gives its n_out outputs (the selectable ones, then the checks), fg_gradient the
+ * output selected by select[i], the checks and the gradient of that output with respect to p. */
 #include <math.h>
 #include <stdlib.h>
 
@@ -20,7 +20,6 @@ typedef struct {
     double** res;
     casadi_int* iw;
     double* w;
-    double* weights;
 } workspace;
 
 static void release(workspace* space) {
@@ -28,18 +27,16 @@ static void release(workspace* space) {
     free(space->res);
     free(space->iw);
     free(space->w);
-    free(space->weights);
 }
 
-static int reserve(workspace* space, int (*work)(casadi_int*, casadi_int*, casadi_int*, casadi_int*), long n_out) {
+static int reserve(workspace* space, int (*work)(casadi_int*, casadi_int*, casadi_int*, casadi_int*)) {
     casadi_int n_arg, n_res, n_iw, n_w;
     work(&n_arg, &n_res, &n_iw, &n_w);
     space->arg = malloc(sizeof(double*) * (size_t)(n_arg > 0 ? n_arg : 1));
     space->res = malloc(sizeof(double*) * (size_t)(n_res > 0 ? n_res : 1));
     space->iw = malloc(sizeof(casadi_int) * (size_t)(n_iw > 0 ? n_iw : 1));
     space->w = malloc(sizeof(double) * (size_t)(n_w > 0 ? n_w : 1));
-    space->weights = malloc(sizeof(double) * (size_t)(n_out > 0 ? n_out : 1));
-    if (space->arg && space->res && space->iw && space->w && space->weights) return 0;
+    if (space->arg && space->res && space->iw && space->w) return 0;
     release(space);
     return 1;
 }
@@ -52,18 +49,18 @@ static int all_finite(const double* v, long n) {
 
 /* status: 0 outputs, 1 an input missing (outputs and gradients NaN), 2 outputs NaN from
  * measured inputs (the caller computes those rows another way) */
-static void settle(long i, int measured, long n_out, double* out, long n_p, double* gradients, signed char* status) {
-    status[i] = measured ? (all_finite(out + i * n_out, n_out) ? 0 : 2) : 1;
-    if (measured) return;
-    for (long c = 0; c < n_out; ++c) out[i * n_out + c] = NAN;
-    if (gradients)
-        for (long j = 0; j < n_p; ++j) gradients[i * n_p + j] = NAN;
+static signed char row_status(int measured, const double* out, long n_out) {
+    return measured ? (all_finite(out, n_out) ? 0 : 2) : 1;
+}
+
+static void fill_nan(double* v, long n) {
+    for (long j = 0; j < n; ++j) v[j] = NAN;
 }
 
 int fg_value_rows(long k, long n_x, long n_p, long n_out, const double* base, const long* nodes, const double* P,
                   const double* q, double* out, signed char* status) {
     workspace space;
-    if (reserve(&space, fg_values_work, n_out)) return 1;
+    if (reserve(&space, fg_values_work)) return 1;
     for (long i = 0; i < k; ++i) {
         const double* x = base + nodes[i] * n_x;
         const double* p = P + i * n_p;
@@ -72,28 +69,40 @@ int fg_value_rows(long k, long n_x, long n_p, long n_out, const double* base, co
         space.arg[2] = q;
         space.res[0] = out + i * n_out;
         fg_values(space.arg, space.res, space.iw, space.w, 0);
-        settle(i, all_finite(x, n_x) && all_finite(p, n_p), n_out, out, n_p, 0, status);
+        status[i] = row_status(all_finite(x, n_x) && all_finite(p, n_p), out + i * n_out, n_out);
+        if (status[i] == 1) fill_nan(out + i * n_out, n_out);
     }
     release(&space);
     return 0;
 }
 
-int fg_gradient_rows(long k, long n_x, long n_p, long n_out, const double* base, const long* nodes, const double* P,
-                     const double* q, const long* select, double* out, double* gradients, signed char* status) {
+/* fg_gradient(index, x, p, q) -> (output index, the checks, its gradient with respect to p):
+ * one branch per output, each computing only what that output needs */
+int fg_gradient_rows(long k, long n_x, long n_p, long n_checks, const double* base, const long* nodes,
+                     const double* P, const double* q, const long* select, double* values, double* checks,
+                     double* gradients, signed char* status) {
     workspace space;
-    if (reserve(&space, fg_gradient_work, n_out)) return 1;
+    if (reserve(&space, fg_gradient_work)) return 1;
     for (long i = 0; i < k; ++i) {
         const double* x = base + nodes[i] * n_x;
         const double* p = P + i * n_p;
-        for (long c = 0; c < n_out; ++c) space.weights[c] = c == select[i] ? 1.0 : 0.0;
-        space.arg[0] = x;
-        space.arg[1] = p;
-        space.arg[2] = q;
-        space.arg[3] = space.weights;
-        space.res[0] = out + i * n_out;
-        space.res[1] = gradients + i * n_p;
+        double index = (double)select[i];
+        space.arg[0] = &index;
+        space.arg[1] = x;
+        space.arg[2] = p;
+        space.arg[3] = q;
+        space.res[0] = values + i;
+        space.res[1] = checks + i * n_checks;
+        space.res[2] = gradients + i * n_p;
         fg_gradient(space.arg, space.res, space.iw, space.w, 0);
-        settle(i, all_finite(x, n_x) && all_finite(p, n_p), n_out, out, n_p, gradients, status);
+        int measured = all_finite(x, n_x) && all_finite(p, n_p);
+        status[i] = row_status(measured, values + i, 1);
+        if (status[i] == 0 && !all_finite(checks + i * n_checks, n_checks)) status[i] = 2;
+        if (status[i] == 1) {
+            values[i] = NAN;
+            fill_nan(checks + i * n_checks, n_checks);
+            fill_nan(gradients + i * n_p, n_p);
+        }
     }
     release(&space);
     return 0;

@@ -28,7 +28,7 @@ because whole trajectories are not needed).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,11 +43,12 @@ from fuzzygait.uncertainty.gfa.objective import (
     BatchedObjective,
     NodeObjective,
     best_of_starts,
+    reported_values,
     stacked_starts,
 )
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls, FuzzyVector
-from fuzzygait.uncertainty.protocol import declared_blocks, declared_excursion_limit, declared_time_step
+from fuzzygait.uncertainty.protocol import NODE_LIMITS, declared_blocks, declared_excursion_limit, declared_time_step
 
 #: A point stops once its step scale has shrunk below this (steps < 1e-6 of the set).
 MIN_REACH = 1e-6
@@ -146,18 +147,24 @@ def neighbour_pass(objective: NodeObjective, curves: list[np.ndarray], points: n
 
 
 def screened_starts(objective: NodeObjective, domain: BoxDomain | BallsDomain, nodes: np.ndarray,
-                    rng: np.random.Generator, n_starts: int, n_screen: int) -> list[np.ndarray]:  # fmt: skip
+                    block_of: np.ndarray, rngs: Sequence[np.random.Generator], n_starts: int,
+                    n_screen: int) -> list[np.ndarray]:  # fmt: skip
     """``n_starts`` starting points per node: the best of ``n_screen`` seeded random
     points per node (half inside the set, half on its boundary, where extremes of angle
-    functions mostly lie), evaluated in one call."""
+    functions mostly lie).  Each block's points (``block_of``: each node's block) are drawn
+    by its own generator ``rngs[block]`` as if it ran alone; all are evaluated in one call,
+    so a model whose blocks share rows (the same deviation at the same frame, one pass of
+    its chain giving every block) computes each such row once."""
     if n_starts <= 0:
         return []
-    k = nodes.size
     n_screen = max(n_screen, n_starts)
     half = n_screen // 2
-    candidates = np.concatenate(
-        [domain.sample(rng, k * half), domain.sample(rng, k * (n_screen - half), surface=True)]
-    ).reshape(n_screen, k, -1)
+    k = nodes.size
+    candidates = np.empty((n_screen, k, domain.centre.size))
+    for block, rng in enumerate(rngs):
+        mine = np.flatnonzero(block_of == block)
+        drawn = [domain.sample(rng, mine.size * half), domain.sample(rng, mine.size * (n_screen - half), surface=True)]
+        candidates[:, mine] = np.concatenate(drawn).reshape(n_screen, mine.size, -1)
     values = objective.values(candidates.reshape(n_screen * k, -1), np.tile(nodes, n_screen)).reshape(n_screen, k)
     order = np.argsort(-values, axis=0)[:n_starts]  # (n_starts, k)
     return [candidates[order[i], np.arange(k)] for i in range(n_starts)]
@@ -282,7 +289,8 @@ def layout(model: CountedModel, params: FuzzyVector | FuzzyBalls, strategy: Batc
     senses = np.array([SENSES[bound] for bound in BOUNDS])
     exact = strategy.gradients == "auto" and model.has_node_gradients
     objective = BatchedObjective(model, senses, n_time, params.scale, 1e-6, BatchCounts(), exact,
-                                 ceilings(deterministic, senses, declared_excursion_limit(model.model)))  # fmt: skip
+                                 ceilings(deterministic, senses, declared_excursion_limit(model.model)),
+                                 NODE_LIMITS in getattr(model.model, "capabilities", ()))  # fmt: skip
     return Layout(deterministic, n_time, n_block, spans, nodes, np.setdiff1d(np.arange(n_time), nodes), tolerance,
                   senses, objective, exact)  # fmt: skip
 
@@ -321,12 +329,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
             higher = [previous, domain.rescale_from(previous_domain, previous)]  # type: ignore[arg-type]
         first = [np.tile(params.deterministic, (nodes_b.size, 1))] + [h[nodes_b] for h in higher]
         n_extra = max(0, strategy.starts - len(first))
-        extra = [np.empty((nodes_b.size, params.dim)) for _ in range(n_extra)]
-        for i, rng in enumerate(rngs):  # each block's random starts as if it ran alone
-            mine = block_of == i
-            for slot, start in zip(extra, screened_starts(objective, domain, nodes_b[mine], rng, n_extra,
-                                                          strategy.screen), strict=True):  # fmt: skip
-                slot[mine] = start
+        extra = screened_starts(objective, domain, nodes_b, block_of, rngs, n_extra, strategy.screen)
         points = np.empty((both * n_time, params.dim))
         values = np.empty(both * n_time)
         points[nodes_b], values[nodes_b] = maximise(objective, domain, nodes_b, first + extra, strategy.iterations,
@@ -337,6 +340,7 @@ def run_batched(model: CountedModel, params: FuzzyVector | FuzzyBalls, levels: n
                                                               tolerance[others_b % n_time])  # fmt: skip
         points, values = neighbour_pass(objective, plan.curves(), points, values, strategy.window)
         previous = points
+        values = reported_values(objective, points, values, np.arange(values.size))
         hull[a] = senses[:, None] * values.reshape(both, n_time)
         extremiser[a] = points.reshape(both, n_time, params.dim)
         if progress is not None:

@@ -35,7 +35,7 @@ from fuzzygait.uncertainty.gfa.batched import (
     neighbour_pass,
     screened_starts,
 )
-from fuzzygait.uncertainty.gfa.objective import BatchedObjective
+from fuzzygait.uncertainty.gfa.objective import BatchedObjective, reported_values
 from fuzzygait.uncertainty.gfa.spectral import frank_wolfe_gap, maximise_spectral
 from fuzzygait.uncertainty.gfa.strategies import BatchedDirect
 from fuzzygait.uncertainty.parameters import FuzzyBalls
@@ -68,6 +68,10 @@ class LevelObjective:
     def values(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         x, inner, _ = self._at(P, nodes)
         return self.objective.values(x, inner)
+
+    def reported(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        x, inner, _ = self._at(P, nodes)
+        return self.objective.reported(x, inner)
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x, inner, factor = self._at(P, nodes)
@@ -137,15 +141,10 @@ def run_levels_together(model: CountedModel, params: FuzzyBalls, levels: np.ndar
     nodes, others = stacked(plan.nodes), stacked(plan.others)
     tolerance = plan.tolerance[np.arange(n_levels * span) % plan.n_time]
     n_random = max(0, strategy.starts - 1)
-    starts = [np.tile(params.deterministic, (nodes.size, 1))] + [np.empty((nodes.size, params.dim))
-                                                                 for _ in range(n_random)]  # fmt: skip
     block_of = (nodes % plan.n_time) // plan.n_block
-    for i in range(plan.blocks):  # each block's random starts as if it ran alone
-        mine = block_of == i
-        rng = np.random.default_rng(strategy.seed)
-        for slot, start in zip(starts[1:], screened_starts(objective, unit, nodes[mine], rng, n_random,
-                                                           strategy.screen), strict=True):  # fmt: skip
-            slot[mine] = start
+    rngs = [np.random.default_rng(strategy.seed) for _ in range(plan.blocks)]  # each block as if it ran alone
+    starts = [np.tile(params.deterministic, (nodes.size, 1)),
+              *screened_starts(objective, unit, nodes, block_of, rngs, n_random, strategy.screen)]  # fmt: skip
     points = np.empty((n_levels * span, params.dim))
     values = np.empty(n_levels * span)
     points[nodes], values[nodes] = maximise_spectral(objective, unit, nodes, starts, strategy.iterations,
@@ -161,6 +160,7 @@ def run_levels_together(model: CountedModel, params: FuzzyBalls, levels: np.ndar
     points, values = polish_kinks(objective, unit, points, values, tolerance)
     curves = [curve + level * span for level in range(n_levels) for curve in plan.curves()]
     points, values = neighbour_pass(objective, curves, points, values, strategy.window)
+    values = reported_values(objective, points, values, np.arange(values.size))
     hull = np.empty((levels.size, both, plan.n_time))
     extremiser = np.empty((levels.size, both, plan.n_time, params.dim))
     hull[-1], extremiser[-1] = plan.deterministic, params.deterministic

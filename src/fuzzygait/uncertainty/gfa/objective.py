@@ -47,11 +47,15 @@ class BatchedObjective:
     model's exact ones when ``exact`` (it declares ``"node_gradients"``), else forward
     differences of step ``fd_step · scale``.  ``ceiling`` (per bound node, in the
     objective's sense; default none): a value there or above ends the node's optimisation
-    (:meth:`ceilings`)."""
+    (:meth:`ceilings`).  ``limited``: the model declares ``"node_limits"``; a row beyond its
+    limits is worth ``+inf`` in either sense — no band there, so the row wins and its node's
+    optimisation ends, as at a ceiling — and :meth:`reported` gives the model's value
+    there."""
 
     def __init__(self, model: CountedModel, senses: np.ndarray, n_time: int, scale: np.ndarray, fd_step: float,
-                 counts: BatchCounts, exact: bool = False, ceiling: np.ndarray | None = None):  # fmt: skip
-        self.model, self.counts, self.exact = model, counts, exact
+                 counts: BatchCounts, exact: bool = False, ceiling: np.ndarray | None = None,
+                 limited: bool = False):  # fmt: skip
+        self.model, self.counts, self.exact, self.limited = model, counts, exact, limited
         self.senses, self.n_time = np.asarray(senses, dtype=float), int(n_time)
         self.h = fd_step * np.asarray(scale, dtype=float)
         self.ceiling = np.full(self.senses.size * self.n_time, np.inf) if ceiling is None else ceiling
@@ -72,15 +76,34 @@ class BatchedObjective:
             return np.empty(0)
         self.counts.node_evaluations += int(P.shape[0])
         sense, times = self._split(nodes)
-        out: np.ndarray = np.asarray(self.model.model.evaluate_nodes(P, times), dtype=float)  # type: ignore[attr-defined]
-        return sense * out
+        model = self.model.model
+        if not self.limited:
+            plain = model.evaluate_nodes(P, times)  # type: ignore[attr-defined]
+            return sense * np.asarray(plain, dtype=float)
+        out, beyond = model.evaluate_nodes_limited(P, times)  # type: ignore[attr-defined]
+        return np.where(beyond, np.inf, sense * np.asarray(out, dtype=float))
+
+    def reported(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """The model's values in the objective's sense, a row beyond the model's limits
+        included (the value :meth:`values` gives ``+inf``), uncounted: for the hull."""
+        if P.shape[0] == 0:
+            return np.empty(0)
+        sense, times = self._split(nodes)
+        out = self.model.model.evaluate_nodes(P, times)  # type: ignore[attr-defined]
+        return sense * np.asarray(out, dtype=float)
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self.exact:
             self.counts.node_gradients += int(P.shape[0])
             sense, times = self._split(nodes)
-            values, gradients = self.model.model.evaluate_nodes_gradients(P, times)  # type: ignore[attr-defined]
-            return sense * np.asarray(values, dtype=float), sense[:, None] * np.asarray(gradients, dtype=float)
+            model = self.model.model
+            if self.limited:
+                values, gradients, beyond = model.evaluate_nodes_gradients_limited(P, times)  # type: ignore[attr-defined]
+            else:
+                values, gradients = model.evaluate_nodes_gradients(P, times)  # type: ignore[attr-defined]
+                beyond = False
+            value = np.where(beyond, np.inf, sense * np.asarray(values, dtype=float))
+            return value, sense[:, None] * np.asarray(gradients, dtype=float)
         k, n_p = P.shape
         shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
         shifted[:, 1:, :] += np.diag(self.h)[None]
@@ -99,6 +122,21 @@ class NodeObjective(Protocol):
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
     def ceilings(self, nodes: np.ndarray) -> np.ndarray: ...
+
+    def reported(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray: ...
+
+
+def reported_values(objective: NodeObjective, points: np.ndarray, values: np.ndarray,
+                    nodes: np.ndarray) -> np.ndarray:  # fmt: skip
+    """``values`` (per node of ``nodes``, optima ``points``) with each ``+inf`` — a row
+    beyond the model's limits (:class:`BatchedObjective`'s ``limited``) — replaced by the
+    model's value there, in the objective's sense: the hull a limited model reports."""
+    stopped = np.flatnonzero(np.isposinf(values))
+    if stopped.size == 0:
+        return values
+    values = values.copy()
+    values[stopped] = objective.reported(points[stopped], np.asarray(nodes)[stopped])
+    return values
 
 
 def stacked_starts(domain: BoxDomain | BallsDomain, nodes: np.ndarray, starts: list[np.ndarray],
