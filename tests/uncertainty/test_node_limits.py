@@ -134,3 +134,21 @@ def test_the_protocol_check_compares_the_limited_methods() -> None:
     wrong.evaluate_nodes_limited = lambda P, nodes: (wrong.evaluate_nodes(P, nodes), np.zeros(len(P)))  # type: ignore[method-assign]
     with pytest.raises(ModelCheckError, match="one boolean per row"):
         check_model(wrong, np.zeros(3))
+
+
+@pytest.mark.parametrize("solver", [maximise_spectral, maximise])
+def test_a_node_ends_when_one_of_its_starts_is_beyond(solver) -> None:  # noqa: ANN001
+    """Two starts per node: one beyond the limits (p_x = 1.5), one on the sphere at (0, 0, 2).
+    The node's best is the first whatever the second reaches, so the second stops with it:
+    the spectral solver takes no iteration, Frank–Wolfe one (the node is checked after its
+    first step), fewer than the second alone takes without limits."""
+    domain = BallsDomain(np.zeros((1, 3)), np.array([2.0]))
+    nodes = np.arange(4)
+    beyond, inside = np.tile([1.5, 0.0, 0.0], (4, 1)), np.tile([0.0, 0.0, 2.0], (4, 1))
+    alone, together = BatchCounts(), BatchCounts()
+    solver(objective(LimitedBowl(), alone, limited=False), domain, nodes, [inside], 60, 1e-12)
+    points, values = solver(objective(LimitedBowl(), together, limited=True), domain, nodes, [beyond, inside], 60,
+                            1e-12)  # fmt: skip
+    assert np.all(np.isposinf(values)) and np.all(points[:, 0] > 1.0)
+    assert together.point_iterations <= (0 if solver is maximise_spectral else 2 * nodes.size)
+    assert alone.point_iterations > together.point_iterations

@@ -127,8 +127,7 @@ class RowKernel:
                   select: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
         """Per row ``i`` output ``select[i]`` (< ``n_out``) ``(k,)``, the checks ``(k,
         n_checks)``, the gradient of that output with respect to the row's deviations ``(k,
-        n_p)`` and the ``(k,)`` status.  Each output has its own compiled gradient, computing
-        only what that output needs (:func:`traced_functions`)."""
+        n_p)`` and the ``(k,)`` status."""
         base, nodes, P, q = self._rows(base, nodes, P, q)
         k, s = len(nodes), self.shape
         select = np.ascontiguousarray(np.broadcast_to(select, (k,)), dtype=np.int64)
@@ -136,8 +135,8 @@ class RowKernel:
             raise IndexError(f"a row selects an output outside 0..{s.n_out - 1}")
         values, checks, gradients = np.empty(k), np.empty((k, s.n_checks)), np.empty((k, s.n_p))
         status = np.empty(k, dtype=np.int8)
-        if self.library.fg_gradient_rows(k, s.n_x, s.n_p, s.n_checks, base, nodes, P, q, select, values, checks,
-                                         gradients, status):  # fmt: skip
+        if self.library.fg_gradient_rows(k, s.n_x, s.n_p, s.n_out, s.n_checks, base, nodes, P, q, select, values,
+                                         checks, gradients, status):  # fmt: skip
             raise MemoryError("a compiled model could not allocate its workspace")
         return values, checks, gradients, status
 
@@ -165,7 +164,8 @@ def distinct_rows(nodes: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndar
     if first.size > 0.75 * k:
         return None
     inverse = inverse.ravel()
-    if not (np.array_equal(P[first][inverse], P) and np.array_equal(nodes[first][inverse], nodes)):
+    each = first[inverse]
+    if not (np.array_equal(P[each], P) and np.array_equal(nodes[each], nodes)):
         return None
     return first, inverse
 
@@ -194,27 +194,28 @@ class CompiledModel:
 def traced_functions(function: RowFunction, shape: Shape) -> tuple[ca.Function, ca.Function]:
     """The values and selected-gradient functions of ``function`` for one row (raises
     :class:`~.symbols.NotTraceable`, or numpy a ``TypeError``, where it decides on its data).
-    The gradient function ``(index, x, p, q) -> (output index, the checks, its gradient)``
-    switches between one function per output, each holding only that output's part of the
-    expression (a reverse sweep through every output cost up to a fifth more)."""
-    x, p, q = (ca.SX.sym(name, size) for name, size in (("x", shape.n_x), ("p", shape.n_p), ("q", shape.n_q)))
+    The gradient function ``(x, p, q, w) -> (outputs, gradient of w · the selectable outputs)``
+    is one reverse sweep for every output, the row's selection an input: one function
+    per output would take up to a sixth less time a row, but its C code, one copy per
+    output, took nine times as long to compile (a leg's kinetics 28 s against 6 s)."""
+    x, p, q, w = (ca.SX.sym(name, size) for name, size in (("x", shape.n_x), ("p", shape.n_p), ("q", shape.n_q),
+                                                           ("w", shape.n_out)))  # fmt: skip
     out = np.ravel(function(symbol_array(x, (shape.n_x,)), symbol_array(p, (shape.n_p,)),
                             symbol_array(q, (shape.n_q,))))  # fmt: skip
     if out.shape != (shape.n_values,):
         raise NotTraceable(f"the row function gave {out.shape} outputs, not ({shape.n_values},)")
     y = expressions(out)
-    checks = y[shape.n_out :]
-    branches = [ca.Function(f"{GRADIENT}_{c}", [x, p, q], [y[c], checks, ca.gradient(y[c], p)])
-                for c in range(shape.n_out)]  # fmt: skip
-    return ca.Function(VALUES, [x, p, q], [y]), ca.Function.conditional(GRADIENT, branches, branches[0])
+    selectable = y[: shape.n_out]
+    return ca.Function(VALUES, [x, p, q], [y]), ca.Function(GRADIENT, [x, p, q, w],
+                                                             [y, ca.gradient(ca.dot(w, selectable), p)])  # fmt: skip
 
 
 def _load(path: Path) -> ctypes.CDLL:
     library = ctypes.CDLL(str(path))
     n = [ctypes.c_long] * 4
     library.fg_value_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _double_p, _status_p]
-    library.fg_gradient_rows.argtypes = [*n, _double_p, _long_p, _double_p, _double_p, _long_p, _double_p, _double_p,
-                                         _double_p, _status_p]  # fmt: skip
+    library.fg_gradient_rows.argtypes = [*n, ctypes.c_long, _double_p, _long_p, _double_p, _double_p, _long_p,
+                                         _double_p, _double_p, _double_p, _status_p]  # fmt: skip
     return library
 
 

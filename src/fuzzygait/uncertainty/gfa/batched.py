@@ -43,6 +43,7 @@ from fuzzygait.uncertainty.gfa.objective import (
     BatchedObjective,
     NodeObjective,
     best_of_starts,
+    nodes_at_ceiling,
     reported_values,
     stacked_starts,
 )
@@ -117,6 +118,7 @@ def maximise(
         reach[idx[full_step]] = np.minimum(1.0, 4.0 * reach[idx[full_step]])
         reach[idx[~better]] *= STEP_FRACTIONS[-1]  # no gain: the next finer set of steps
         active[idx[(better & (gain <= stop[idx])) | (reach[idx] < MIN_REACH) | (value[idx] >= ceiling[idx])]] = False
+        active &= ~nodes_at_ceiling(value, ceiling, len(starts))
     counts.unconverged += int(np.count_nonzero(active))
     return best_of_starts(counts, P, value, len(starts))
 

@@ -148,6 +148,15 @@ def stacked_starts(domain: BoxDomain | BallsDomain, nodes: np.ndarray, starts: l
     return P, np.tile(nodes, len(starts)), np.tile(stop, len(starts))
 
 
+def nodes_at_ceiling(value: np.ndarray, ceiling: np.ndarray, n_starts: int) -> np.ndarray:
+    """Per point of a start-major ``(n_starts k,)`` stack, whether some point of its node
+    has reached the node's ceiling (or a row beyond the model's limits, ``+inf``): that
+    node's optimisation is over — the best of its starts is that point whatever the others
+    reach — so none of its points need iterate further."""
+    reached = (value >= ceiling).reshape(n_starts, -1).any(axis=0)
+    return np.tile(reached, n_starts)
+
+
 def best_of_starts(counts: BatchCounts, P: np.ndarray, value: np.ndarray,
                    n_starts: int) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Per node the best of its ``n_starts`` optimised points: ``P`` ``(n_starts k, n_p)``

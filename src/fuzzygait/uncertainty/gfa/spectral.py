@@ -23,9 +23,10 @@ so the result is never worse than the start.
 A point stops when its Frank–Wolfe gap ``gᵀ(argmax_{y∈D} gᵀy − x)`` — the most a linear
 model could still gain anywhere in the set, zero at a first-order optimum — or an accepted
 step's change of value falls to the node's tolerance, when its step fraction has shrunk
-below 10⁻⁶, at the iteration cap, or once its value reaches the node's ceiling (the
-model's output is no band there:
-:meth:`~fuzzygait.uncertainty.gfa.objective.BatchedObjective.ceilings`).
+below 10⁻⁶, at the iteration cap, or once its value — or that of another start of the
+same node — reaches the node's ceiling (the model's output is no band there:
+:meth:`~fuzzygait.uncertainty.gfa.objective.BatchedObjective.ceilings`; the best of the
+node's starts is that point whatever the others reach).
 
 On an extreme that lies on a kink of the objective (the gradient does not vanish there)
 the steps crawl; :func:`~fuzzygait.uncertainty.gfa.levels.polish_kinks` finishes such
@@ -39,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from fuzzygait.uncertainty.domains import BallsDomain, BoxDomain
-from fuzzygait.uncertainty.gfa.objective import NodeObjective, best_of_starts, stacked_starts
+from fuzzygait.uncertainty.gfa.objective import NodeObjective, best_of_starts, nodes_at_ceiling, stacked_starts
 
 #: Sufficient increase of the Armijo condition.
 ARMIJO = 1e-4
@@ -109,6 +110,7 @@ def maximise_spectral(
     started = np.zeros(P.shape[0], dtype=bool)  # the point has a direction
     ceiling = objective.ceilings(rows)  # a value there or beyond: no band, nothing more to find
     active = (frank_wolfe_gap(domain, P, gradient) > stop) & (value < ceiling)
+    active &= ~nodes_at_ceiling(value, ceiling, len(starts))
     recent = np.repeat(value[:, None], MEMORY, axis=1)  # the last accepted values: the line search's reference
     best_P, best_value = P.copy(), value.copy()
     for _ in range(iterations - 1):
@@ -156,5 +158,6 @@ def maximise_spectral(
         converged = (gap <= stop[moved]) | (np.abs(gain[accept]) <= stop[moved]) | (to_value >= ceiling[moved])
         active[moved[converged]] = False
         active[held[(fraction[held] < MIN_FRACTION) | (slope[~accept] <= stop[held])]] = False
+        active &= ~nodes_at_ceiling(best_value, ceiling, len(starts))
     counts.unconverged += int(np.count_nonzero(active))
     return best_of_starts(counts, best_P, best_value, len(starts))
