@@ -56,7 +56,7 @@ class EngineOptions:
         bool, typer.Option("--kinetics/--no-kinetics",
                            help="Also the fuzzy sagittal joint moments and the joint powers of ankle, knee and hip "
                            "(both sides) when the trial has force plates: the same α-levels and error sources plus "
-                           "a centre-of-pressure error ball per loaded plate; about 14 times the fuzzy angles' time.")
+                           "a centre-of-pressure error ball per loaded plate; about doubles the command's time.")
     ] = False
     cop_error: Annotated[
         float, typer.Option("--cop-error", metavar="MM",
@@ -97,7 +97,7 @@ class ReportContentOptions:
         bool, typer.Option("--kinetics/--no-kinetics",
                            help="With --uncertainty fast or full: also the fuzzy sagittal joint moments and powers of "
                            "trials with force plates, their bands on the kinetic figures (as uncertainty --kinetics, "
-                           "default centre-of-pressure error and tolerance); about 14 times the fuzzy angles' time.")
+                           "default centre-of-pressure error and tolerance); about doubles the uncertainty's time.")
     ] = False
 
 

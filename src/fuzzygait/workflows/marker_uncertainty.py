@@ -121,8 +121,8 @@ class MarkerErrorSettings:
         kinetics: also the fuzzy sagittal joint moments and the joint powers of ankle,
             knee and hip, both sides, when the trial has force plates
             (:func:`~fuzzygait.markererror.fuzzy_kinetics.fuzzy_joint_moments`, the same
-            α-levels and error sources; about 14 times the fuzzy angles' time on a whole
-            trial, hence off by default).
+            α-levels and error sources; about as long again as the fuzzy angles on a
+            whole trial, hence off by default).
         cop_error_mm: the centre-of-pressure error ball's radius at α = 0, mm
             (:data:`~fuzzygait.markererror.moment_model.DEFAULT_COP_ERROR_MM`).
         kinetic_tolerance: ± N·m/kg of the moments' allowable-error answer

@@ -264,10 +264,11 @@ def frv_work(scenario: str, specs: Sequence[FRVSpec], disc: int | Sequence[int],
 #: The fuzzy kinetics' components (sagittal moment and power of ankle, knee and hip, both
 #: sides; :func:`~fuzzygait.workflows.marker_uncertainty.fuzzy_kinetics`), their progress
 #: stage, and their cost per component and frame relative to an angle component's
-#: (measured on the whole sample trial: 13.9, ``benchmarks/RESULTS.md``, fuzzy moments).
+#: (measured on the whole sample trial, the sagittal moments and the powers against every
+#: angle, one process: 3.2-3.6, ``benchmarks/RESULTS.md``, "Fuzzy moments stop where a frame turns").
 KINETIC_COMPONENTS = 12
 FUZZY_KINETICS_STAGE = "fuzzy kinetics"
-KINETIC_COST_FACTOR = 14
+KINETIC_COST_FACTOR = 3.5
 
 
 @dataclass(frozen=True)
