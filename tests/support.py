@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from fuzzygait.uncertainty.protocol import Evaluation, Output
+
 if TYPE_CHECKING:
     from fuzzygait.core.findings import Finding
 
@@ -282,3 +284,32 @@ def write_cut(src: Path, out: Path, first: int = 101, count: int = 200) -> Any:
     cut = replace(trial, markers=trial.markers[first - 1 : first - 1 + count], first_frame=first)
     assert write_c3d(cut, out, source=src) == []
     return trial
+
+
+#: The peak of :class:`Bowl` (|PEAK| = 5, outside the balls of radius 2 about 0 the tests take).
+PEAK = np.array([3.0, -4.0, 0.0])
+
+
+class Bowl:
+    """``f(p, t) = −|p − PEAK|² + t`` on one 3-vector: over the ball of radius ``r`` about
+    0 its maximum is at ``r PEAK/5``, worth ``−(5 − r)² + t``; at ``p = 0``, ``−25 + t``."""
+
+    def __init__(self, limit: float | None = None, n_time: int = 6) -> None:
+        self.times = np.arange(n_time) / 100.0
+        self.time_step = 0.01
+        self.parameter_names = ("m_x", "m_y", "m_z")
+        self.output = Output("f", "1")
+        self.capabilities = frozenset({"nodes", "node_gradients", "time_step"}
+                                      | ({"excursion_limit"} if limit is not None else set()))  # fmt: skip
+        if limit is not None:
+            self.excursion_limit = limit
+
+    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
+        nodes = np.arange(self.times.size)
+        return Evaluation(self.evaluate_nodes(np.tile(p, (nodes.size, 1)), nodes))
+
+    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        return -np.sum((P - PEAK) ** 2, axis=1) + nodes
+
+    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.evaluate_nodes(P, nodes), -2.0 * (P - PEAK)

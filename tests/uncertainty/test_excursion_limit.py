@@ -20,44 +20,16 @@ import pytest
 
 from fuzzygait.markererror.analysis import FuzzyAngleOptions, fuzzy_joint_angles
 from fuzzygait.markererror.angle_model import JointAngleModel
-from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG, UNDETERMINED_DEG
 from fuzzygait.markererror.result import component_hull, component_undetermined
+from fuzzygait.markererror.undetermined import EXCURSION_LIMIT_DEG, UNDETERMINED_DEG
 from fuzzygait.testing import check_model
 from fuzzygait.uncertainty import BatchedDirect, FuzzyBalls, graph_follower
 from fuzzygait.uncertainty.domains import BallsDomain
 from fuzzygait.uncertainty.gfa.batched import ceilings, maximise
 from fuzzygait.uncertainty.gfa.objective import BatchCounts, BatchedObjective
 from fuzzygait.uncertainty.gfa.spectral import maximise_spectral
-from fuzzygait.uncertainty.protocol import Evaluation, Output
 from fuzzygait.workflows.angles import run_angles
-from support import SAMPLE_DATA
-
-PEAK = np.array([3.0, -4.0, 0.0])  # |PEAK| = 5, outside the unit-radius-2 ball
-
-
-class Bowl:
-    """``f(p, t) = −|p − PEAK|² + t`` on one 3-vector: over the ball of radius ``r`` about
-    0 its maximum is at ``r PEAK/5``, worth ``−(5 − r)² + t``; at ``p = 0``, ``−25 + t``."""
-
-    def __init__(self, limit: float | None = None, n_time: int = 6) -> None:
-        self.times = np.arange(n_time) / 100.0
-        self.time_step = 0.01
-        self.parameter_names = ("m_x", "m_y", "m_z")
-        self.output = Output("f", "1")
-        self.capabilities = frozenset({"nodes", "node_gradients", "time_step"}
-                                      | ({"excursion_limit"} if limit is not None else set()))  # fmt: skip
-        if limit is not None:
-            self.excursion_limit = limit
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(p, (nodes.size, 1)), nodes))
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        return -np.sum((P - PEAK) ** 2, axis=1) + nodes
-
-    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.evaluate_nodes(P, nodes), -2.0 * (P - PEAK)
+from support import SAMPLE_DATA, Bowl
 
 
 def bowl_objective(ceiling: np.ndarray | None, counts: BatchCounts) -> BatchedObjective:

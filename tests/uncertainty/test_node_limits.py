@@ -22,34 +22,20 @@ from fuzzygait.uncertainty.domains import BallsDomain
 from fuzzygait.uncertainty.gfa.batched import maximise
 from fuzzygait.uncertainty.gfa.objective import BatchCounts, BatchedObjective, reported_values
 from fuzzygait.uncertainty.gfa.spectral import maximise_spectral
-from fuzzygait.uncertainty.protocol import Evaluation, Output
-
-PEAK = np.array([3.0, -4.0, 0.0])  # |PEAK| = 5, outside the radius-2 ball about 0
+from support import Bowl
 
 
-class LimitedBowl:
-    """``f(p, t) = −|p − PEAK|² + t``; a row with ``p_x > edge`` lies beyond the model's
-    limits.  Over the ball of radius 2 about 0 the maximum is at ``0.4 PEAK`` (``p_x =
-    1.2``), worth ``−9 + t``; the minimum at ``−0.4 PEAK`` (``p_x = −1.2``), ``−49 + t``."""
+class LimitedBowl(Bowl):
+    """:class:`~support.Bowl` (``f(p, t) = −|p − PEAK|² + t``) whose rows with ``p_x > edge``
+    lie beyond the model's limits.  Over the ball of radius 2 about 0 the maximum is at
+    ``0.4 PEAK`` (``p_x = 1.2``), worth ``−9 + t``; the minimum at ``−0.4 PEAK`` (``p_x =
+    −1.2``), ``−49 + t``."""
 
     def __init__(self, edge: float | None = 1.0, n_time: int = 6) -> None:
+        super().__init__(n_time=n_time)
         self.edge = edge
-        self.times = np.arange(n_time) / 100.0
-        self.time_step = 0.01
-        self.parameter_names = ("m_x", "m_y", "m_z")
-        self.output = Output("f", "1")
-        self.capabilities = frozenset({"nodes", "node_gradients", "time_step"}
-                                      | ({"node_limits"} if edge is not None else set()))  # fmt: skip
-
-    def evaluate(self, p: np.ndarray, *, sensitivities: bool = False) -> Evaluation:
-        nodes = np.arange(self.times.size)
-        return Evaluation(self.evaluate_nodes(np.tile(p, (nodes.size, 1)), nodes))
-
-    def evaluate_nodes(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        return -np.sum((P - PEAK) ** 2, axis=1) + nodes
-
-    def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.evaluate_nodes(P, nodes), -2.0 * (P - PEAK)
+        if edge is not None:
+            self.capabilities = self.capabilities | {"node_limits"}
 
     def beyond(self, P: np.ndarray) -> np.ndarray:
         return np.asarray(P)[:, 0] > (np.inf if self.edge is None else self.edge)
