@@ -138,3 +138,16 @@ def test_a_node_ends_when_one_of_its_starts_is_beyond(solver) -> None:  # noqa: 
     assert np.all(np.isposinf(values)) and np.all(points[:, 0] > 1.0)
     assert together.point_iterations <= (0 if solver is maximise_spectral else 2 * nodes.size)
     assert alone.point_iterations > together.point_iterations
+
+
+def test_forward_differences_take_the_model_values_beyond_the_limits() -> None:
+    """Without exact gradients a row beyond the limits is still +inf, and the differences
+    are those of the model's values (finite, −2 (p − PEAK) to the step's order)."""
+    counts = BatchCounts()
+    fd = BatchedObjective(SimpleNamespace(model=LimitedBowl()), np.array([1.0]), 4, np.ones(3), 1e-6,  # type: ignore[arg-type]
+                          counts, exact=False, limited=True)  # fmt: skip
+    P = np.array([[1.5, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    values, gradients = fd.values_and_gradients(P, np.array([0, 1]))
+    assert np.isposinf(values[0]) and values[1] == LimitedBowl().evaluate_nodes(P[1:], np.array([1]))[0]
+    np.testing.assert_allclose(gradients, -2.0 * (P - np.array([3.0, -4.0, 0.0])), atol=1e-5)
+    assert counts.node_evaluations == 2 * 4

@@ -75,24 +75,30 @@ class BatchedObjective:
         if P.shape[0] == 0:  # e.g. no neighbours at this shift: nothing to evaluate
             return np.empty(0)
         self.counts.node_evaluations += int(P.shape[0])
+        value, beyond = self._evaluate(P, nodes)
+        return np.where(beyond, np.inf, value)
+
+    def _evaluate(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray | bool]:
+        """The model's values in the objective's sense and the rows beyond its limits
+        (False where it declares none), uncounted."""
         sense, times = self._split(nodes)
         model = self.model.model
         if not self.limited:
             plain = model.evaluate_nodes(P, times)  # type: ignore[attr-defined]
-            return sense * np.asarray(plain, dtype=float)
+            return sense * np.asarray(plain, dtype=float), False
         out, beyond = model.evaluate_nodes_limited(P, times)  # type: ignore[attr-defined]
-        return np.where(beyond, np.inf, sense * np.asarray(out, dtype=float))
+        return sense * np.asarray(out, dtype=float), np.asarray(beyond, dtype=bool)
 
     def reported(self, P: np.ndarray, nodes: np.ndarray) -> np.ndarray:
         """The model's values in the objective's sense, a row beyond the model's limits
         included (the value :meth:`values` gives ``+inf``), uncounted: for the hull."""
         if P.shape[0] == 0:
             return np.empty(0)
-        sense, times = self._split(nodes)
-        out = self.model.model.evaluate_nodes(P, times)  # type: ignore[attr-defined]
-        return sense * np.asarray(out, dtype=float)
+        return self._evaluate(P, nodes)[0]
 
     def values_and_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Values (``+inf`` at a row beyond the model's limits) and gradients: exact, or
+        forward differences of the model's values (beyond its limits or not)."""
         if self.exact:
             self.counts.node_gradients += int(P.shape[0])
             sense, times = self._split(nodes)
@@ -107,8 +113,11 @@ class BatchedObjective:
         k, n_p = P.shape
         shifted = np.repeat(P[:, None, :], n_p + 1, axis=1)  # (k, n_p + 1, n_p)
         shifted[:, 1:, :] += np.diag(self.h)[None]
-        values = self.values(shifted.reshape(-1, n_p), np.repeat(nodes, n_p + 1)).reshape(k, n_p + 1)
-        return values[:, 0], (values[:, 1:] - values[:, :1]) / self.h
+        self.counts.node_evaluations += int(shifted.shape[0] * shifted.shape[1])
+        values, beyond = self._evaluate(shifted.reshape(-1, n_p), np.repeat(nodes, n_p + 1))
+        values = values.reshape(k, n_p + 1)
+        at = np.where(np.reshape(beyond, (k, n_p + 1))[:, 0], np.inf, values[:, 0]) if self.limited else values[:, 0]
+        return at, (values[:, 1:] - values[:, :1]) / self.h
 
 
 class NodeObjective(Protocol):
