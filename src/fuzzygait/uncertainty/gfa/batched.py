@@ -96,6 +96,10 @@ def maximise(
         if need.size:
             value[need], gradient[need] = objective.values_and_gradients(P[need], rows[need])
             known[need] = True
+            active &= ~nodes_at_ceiling(value, ceiling, len(starts))  # a start at its ceiling ends its node
+            idx = np.flatnonzero(active)
+            if idx.size == 0:
+                break
         v0, g = value[idx], gradient[idx]
         target = domain.linear_argmax(g)
         tau = STEP_FRACTIONS[None, :, None] * reach[idx, None, None]
