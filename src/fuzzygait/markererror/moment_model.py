@@ -364,7 +364,7 @@ class LegKineticsModel(CompiledModel):
             return np.empty(0), np.zeros(0, dtype=bool)
         outputs, rotations = self._outputs_and_rotations(P, self.frames[j])
         cosines = turn_cosines(_centre_rotations(rotations), self._measured_rotations()[j])
-        return np.reshape(outputs, (len(j), 9))[np.arange(len(j)), selected], cosines.min(axis=1) < _COS_LIMIT
+        return np.reshape(outputs, (len(j), 9))[np.arange(len(j)), selected], _turned(cosines)
 
     def evaluate_nodes_gradients(self, P: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Values and exact gradients (per mm) per row: compiled, else a reverse sweep of
@@ -383,7 +383,7 @@ class LegKineticsModel(CompiledModel):
             values, gradients = row_gradients(self.evaluate_nodes, P, nodes)
             return values, gradients, self._numpy_rows(P, j, selected)[1]
         values, turns, gradients, status = kernel.gradients(self._kernel_rows(), j, P, self._kernel_shared(), selected)
-        beyond = turns.min(axis=1) < _COS_LIMIT
+        beyond = _turned(turns)
         redo = status == UNSETTLED
         if redo.any():
             values[redo], gradients[redo] = row_gradients(self.evaluate_nodes, P[redo], nodes[redo])
@@ -460,11 +460,9 @@ class LegKineticsModel(CompiledModel):
         first, inverse = (np.arange(moving.size), np.arange(moving.size)) if repeats is None else repeats
         pick = moving[first]
         moved, still = self._chain(P[pick], frames[pick]), self._still_chain(frames[pick])
-        turns = []
-        for name in ("pelvis", "thigh", "tibia", "foot"):
-            trace = np.einsum("kwij,kwij->kw", moved[name], still[name])
-            turns.append(np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))).max(axis=1))
-        turn[moving] = np.max(turns, axis=0)[inverse]
+        segments = ("pelvis", "thigh", "tibia", "foot")
+        cosines = np.concatenate([turn_cosines(moved[name], still[name]) for name in segments], axis=1)
+        turn[moving] = np.degrees(np.arccos(np.clip(cosines.min(axis=1), -1.0, 1.0)))[inverse]
         return turn
 
     def _still_chain(self, frames: np.ndarray) -> dict[str, np.ndarray]:
@@ -494,4 +492,9 @@ def _centre_rotations(rotations: np.ndarray) -> np.ndarray:
 def _split_rows(out: np.ndarray, selected: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A kernel's ``(k, 9 + 4)`` rows: the selected output of each and whether it lies
     beyond the model's limits (a turn's cosine below :data:`_COS_LIMIT`)."""
-    return out[np.arange(len(out)), selected], out[:, 9:].min(axis=1) < _COS_LIMIT
+    return out[np.arange(len(out)), selected], _turned(out[:, 9:])
+
+
+def _turned(cosines: np.ndarray) -> np.ndarray:
+    """``(k,)``: whether a row's ``(k, n)`` turn cosines put it beyond the model's limits."""
+    return cosines.min(axis=1) < _COS_LIMIT
